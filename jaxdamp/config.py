@@ -1,0 +1,372 @@
+"""Typed, validated configuration of a particle-damper simulation.
+
+A :class:`Config` is a tree of frozen dataclasses holding plain Python numbers (SI units). It is
+what users write (presets, TOML files, ``--set key=value``), what every output file stores (as
+JSON), and what :mod:`jaxdamp.model` turns into JAX arrays. Nothing here touches JAX.
+
+Two systems (SPEC §1):
+
+* ``system = "primary"`` (S1): the box rides on a 1-DOF primary ``M, K, C`` whose base moves as
+  ``u(t) = U cos(2π f t)``.
+* ``system = "driven"`` (S2): the box itself moves as ``z(t) = A_d cos(2π f t)``.
+
+Contact damping is given per material either directly (``gamma_n``, ``gamma_s``; thesis) or as a
+coefficient of restitution ``restitution`` at impact speed ``v_ref`` for a like-pair collision
+(paper), which :mod:`jaxdamp.restitution` turns into the dissipative constant ``A``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import tomllib
+from dataclasses import dataclass, field, fields, replace
+from typing import Any
+
+
+class ConfigError(ValueError):
+    """A configuration value is invalid. The message names the parameter and the limit."""
+
+
+@dataclass(frozen=True)
+class Material:
+    """Elastic, frictional and dissipative properties of grains or walls.
+
+    Attributes:
+      E: Young's modulus [Pa].
+      nu: Poisson ratio [-], in [0, 0.5).
+      density: mass density [kg/m^3] (ignored for walls).
+      mu: Coulomb friction coefficient [-]. For a pair, the mixing rule combines both sides.
+      gamma_n: normal viscoelastic constant [kg s^-1 m^-1/2] (thesis form ``γ_n sqrt(ξ) ξ'``).
+        Give either ``gamma_n`` or ``restitution``.
+      gamma_s: tangential viscous constant [kg s^-1 m^-1/2] (``γ_s sqrt(ξ) |v_s|``).
+      restitution: coefficient of restitution [-] of a head-on collision of two grains of this
+        material and the species' radius at speed ``v_ref`` (paper form); sets ``A``.
+      v_ref: impact speed [m/s] at which ``restitution`` holds.
+    """
+
+    E: float
+    nu: float
+    density: float
+    mu: float = 0.0
+    gamma_n: float | None = None
+    gamma_s: float = 0.0
+    restitution: float | None = None
+    v_ref: float = 1.0
+
+
+@dataclass(frozen=True)
+class Species:
+    """One kind of grain.
+
+    Attributes:
+      count: number of grains.
+      radius: mean radius [m].
+      radius_spread: relative half-width of a uniform radius distribution (0.04 means radii
+        uniformly in ``radius * [0.96, 1.04]``), drawn with the run's seed.
+      material: the grains' :class:`Material`.
+      name: label used in outputs.
+    """
+
+    count: int
+    radius: float
+    material: Material
+    radius_spread: float = 0.0
+    name: str = "grains"
+
+
+@dataclass(frozen=True)
+class Box:
+    """The container: a rectangular box with flat walls that moves rigidly along z.
+
+    Attributes:
+      Lx, Ly: base side lengths [m].
+      Lz: inner height [m] (floor to lid).
+      wall: wall :class:`Material`; ``None`` means the material of the first species.
+    """
+
+    Lx: float
+    Ly: float
+    Lz: float
+    wall: Material | None = None
+
+
+@dataclass(frozen=True)
+class Primary:
+    """The 1-DOF primary system of S1: ``M z'' = -C(z'-u') - K(z-u) + F_gz``.
+
+    Attributes:
+      M: primary mass [kg] (box included, grains excluded).
+      K: spring stiffness [N/m].
+      C: viscous damping [N s/m].
+      U: base displacement amplitude [m].
+    """
+
+    M: float
+    K: float
+    C: float
+    U: float
+
+
+@dataclass(frozen=True)
+class Drive:
+    """Prescribed box motion of S2: ``z_box(t) = amplitude cos(2π f t)``.
+
+    Attributes:
+      amplitude: ``A_d`` [m].
+    """
+
+    amplitude: float
+
+
+@dataclass(frozen=True)
+class Numerics:
+    """How the equations are integrated and recorded.
+
+    Attributes:
+      dt: time step [s]; ``None`` chooses ``t_c / dt_per_collision`` from the Hertz collision
+        time of the smallest grains at ``v_impact``.
+      dt_per_collision: the minimum number of steps per collision (SPEC §3: 50).
+      v_impact: largest expected impact speed [m/s] used for the collision time.
+      duration: simulated time after settling [s].
+      chunk: simulated time per jitted chunk [s] (checkpoint, progress and overflow checks
+        happen between chunks).
+      record_dt: interval between recorded samples of the time series [s].
+      analysis_window: fraction of the run at its end used for steady-state quantities.
+      seed: seed of every random choice (radii, lattice jitter).
+      skin: neighbour-list skin as a fraction of the largest radius.
+      capacity_multiplier: neighbour-list capacity headroom.
+      stiffness_scale: factor on every Young's modulus. Damping constants ``gamma_n`` and
+        ``gamma_s`` are scaled by ``stiffness_scale**0.6``, which leaves the outcome of every
+        binary collision (restitution, tangential impulse) unchanged and only lengthens the
+        collision time (see :mod:`jaxdamp.restitution`). A visible, recorded choice.
+      settle_time: maximum simulated time for settling the bed before driving [s].
+      settle_speed: settling stops once every grain is slower than this [m/s].
+      settle_drag: viscous drag rate [1/s] on grains during settling only.
+    """
+
+    dt: float | None = None
+    dt_per_collision: float = 50.0
+    v_impact: float = 1.0
+    duration: float = 1.0
+    chunk: float = 0.05
+    record_dt: float = 2.5e-4
+    analysis_window: float = 0.1
+    seed: int = 0
+    skin: float = 0.3
+    capacity_multiplier: float = 1.5
+    stiffness_scale: float = 1.0
+    settle_time: float = 1.0
+    settle_speed: float = 5e-3
+    settle_drag: float = 20.0
+
+
+@dataclass(frozen=True)
+class Config:
+    """A complete simulation.
+
+    Attributes:
+      system: ``"primary"`` (S1) or ``"driven"`` (S2).
+      frequency: excitation frequency ``f`` [Hz] (``Ω = 2π f``).
+      grains: the grain species (an empty tuple means an empty box).
+      box: the container.
+      primary: the primary system (required for S1).
+      drive: the prescribed box motion (required for S2).
+      numerics: integration and recording.
+      gravity: ``g`` [m/s^2] along ``-z``.
+      mixing: how per-species constants combine for a pair: ``"arithmetic"``, ``"harmonic"``
+        or ``"geometric"`` mean (the 2023 paper: arithmetic).
+      name: preset or user label.
+      notes: free text, e.g. deviations from a source.
+    """
+
+    system: str
+    frequency: float
+    grains: tuple[Species, ...]
+    box: Box
+    primary: Primary | None = None
+    drive: Drive | None = None
+    numerics: Numerics = field(default_factory=Numerics)
+    gravity: float = 9.8
+    mixing: str = "arithmetic"
+    name: str = "custom"
+    notes: str = ""
+
+    # -- convenience -------------------------------------------------------------------------
+    @property
+    def n_grains(self) -> int:
+        return sum(s.count for s in self.grains)
+
+    @property
+    def omega(self) -> float:
+        return 2.0 * math.pi * self.frequency
+
+    @property
+    def wall_material(self) -> Material:
+        if self.box.wall is not None:
+            return self.box.wall
+        if not self.grains:
+            return Material(E=1.0, nu=0.0, density=1.0)
+        return self.grains[0].material
+
+    def to_dict(self) -> dict[str, Any]:
+        return dataclasses.asdict(self)
+
+    def to_json(self) -> str:
+        return json.dumps(self.to_dict(), sort_keys=True)
+
+    def replace(self, **changes) -> "Config":
+        return replace(self, **changes)
+
+
+# ---------------------------------------------------------------------------------------------
+# dict <-> Config
+
+
+def _build(cls, data: Any, path: str):
+    """Build dataclass ``cls`` from a (nested) dict, rejecting unknown keys by name."""
+    if data is None:
+        return None
+    if dataclasses.is_dataclass(data):
+        return data
+    if not isinstance(data, dict):
+        raise ConfigError(f"{path or 'config'}: expected a table, got {data!r}")
+    known = {f.name: f for f in fields(cls)}
+    unknown = sorted(set(data) - set(known))
+    if unknown:
+        raise ConfigError(
+            f"{path or 'config'}: unknown key(s) {unknown}; known keys: {sorted(known)}"
+        )
+    kwargs = {}
+    for name, value in data.items():
+        sub = f"{path}.{name}" if path else name
+        kwargs[name] = _convert(cls, name, value, sub)
+    try:
+        return cls(**kwargs)
+    except TypeError as err:  # a required key is missing
+        raise ConfigError(f"{path or 'config'}: {err}") from None
+
+
+_NESTED = {
+    (Config, "box"): Box,
+    (Config, "primary"): Primary,
+    (Config, "drive"): Drive,
+    (Config, "numerics"): Numerics,
+    (Box, "wall"): Material,
+    (Species, "material"): Material,
+}
+
+
+def _convert(cls, name: str, value: Any, path: str):
+    if (cls, name) in _NESTED:
+        return _build(_NESTED[(cls, name)], value, path)
+    if cls is Config and name == "grains":
+        if isinstance(value, dict):
+            value = [value]
+        return tuple(_build(Species, v, f"{path}.{i}") for i, v in enumerate(value))
+    return value
+
+
+def from_dict(data: dict[str, Any]) -> Config:
+    """Build a :class:`Config` from a nested dict (e.g. parsed TOML or stored JSON)."""
+    return _build(Config, data, "")
+
+
+def from_json(text: str) -> Config:
+    return from_dict(json.loads(text))
+
+
+def load_toml(path: str, base: Config | None = None) -> Config:
+    """Read a TOML file. With ``base``, the file's keys override ``base`` (partial files OK)."""
+    with open(path, "rb") as fh:
+        data = tomllib.load(fh)
+    if base is None:
+        return from_dict(data)
+    return from_dict(_deep_merge(base.to_dict(), data))
+
+
+def _deep_merge(base: dict, top: dict) -> dict:
+    out = dict(base)
+    for key, value in top.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict):
+            out[key] = _deep_merge(out[key], value)
+        else:
+            out[key] = value
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# --set key=value overrides
+
+
+def parse_value(text: str) -> Any:
+    """Parse the right-hand side of ``--set``: TOML scalars/arrays, ``none``, or a bare string."""
+    text = text.strip()
+    if text.lower() in ("none", "null"):
+        return None
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return text
+
+
+def apply_overrides(config: Config, overrides: list[str] | dict[str, Any]) -> Config:
+    """Apply dotted-key overrides such as ``box.Lz=0.1225`` or ``grains.0.count=100``.
+
+    ``overrides`` is a list of ``"key=value"`` strings (CLI ``--set``) or a dict of key -> value.
+    Setting a missing optional section (``drive.amplitude=0.02`` on an S1 config) creates it.
+    Raises :class:`ConfigError` naming the key for malformed items or unknown keys.
+    """
+    if isinstance(overrides, dict):
+        items = list(overrides.items())
+    else:
+        items = []
+        for item in overrides:
+            if "=" not in item:
+                raise ConfigError(
+                    f"--set {item!r}: expected key=value, e.g. --set box.Lz=0.1225"
+                )
+            key, value = item.split("=", 1)
+            key = key.strip()
+            if not key:
+                raise ConfigError(f"--set {item!r}: the key before '=' is empty")
+            items.append((key, parse_value(value)))
+    data = config.to_dict()
+    for key, value in items:
+        _set_path(data, key, value)
+    return from_dict(data)
+
+
+def _set_path(data: dict, key: str, value: Any) -> None:
+    parts = key.split(".")
+    node: Any = data
+    for i, part in enumerate(parts[:-1]):
+        where = ".".join(parts[: i + 1])
+        if isinstance(node, list):
+            node = node[_index(part, node, where)]
+            continue
+        if part not in node:
+            raise ConfigError(f"--set {key}: unknown key {where!r}")
+        if node[part] is None:
+            node[part] = {}
+        node = node[part]
+    last = parts[-1]
+    if isinstance(node, list):
+        node[_index(last, node, key)] = value
+    elif isinstance(node, dict):
+        if last not in node and node:  # an existing table: key must exist
+            raise ConfigError(f"--set {key}: unknown key {last!r}; known: {sorted(node)}")
+        node[last] = value
+    else:
+        raise ConfigError(f"--set {key}: {'.'.join(parts[:-1])!r} is not a table")
+
+
+def _index(part: str, node: list, where: str) -> int:
+    try:
+        idx = int(part)
+    except ValueError:
+        raise ConfigError(f"--set: {where!r} indexes a list; use a number 0..{len(node)-1}") from None
+    if not 0 <= idx < len(node):
+        raise ConfigError(f"--set: {where!r} is out of range (list has {len(node)} entries)")
+    return idx

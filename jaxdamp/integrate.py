@@ -1,0 +1,196 @@
+"""The time step: velocity Verlet for grains (translation, rotation) and the box (SPEC §3).
+
+One step from ``t`` to ``t + dt``::
+
+    r(t+dt)  = r + v dt + a dt²/2                       (same for the primary's z in S1)
+    v_pred   = v + a dt                                 velocity-dependent forces use these
+    a(t+dt)  = F(r(t+dt), v_pred, ω_pred, box) / m
+    v(t+dt)  = v + (a + a(t+dt)) dt/2
+    q(t+dt)  = exp(ω_mid dt / 2) ⊗ q, renormalised      ω_mid = ω + α dt/2
+
+The box either follows the primary system of S1, ``M z'' = -C(z'-u') - K(z-u) + F_gz`` with
+``u = U cos Ωt`` (``z = 0`` is the empty box's static equilibrium), or the prescribed motion of
+S2, ``z = z_offset + A_d cos Ωt``. Work channels (:data:`jaxdamp.model.CHANNELS`) are
+integrated with the trapezoid rule over the powers at consecutive force evaluations.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import NamedTuple
+
+import jax.numpy as jnp
+
+from .contact import safe_norm
+from .energy import mechanical_energy
+from .excitation import base_motion, drive_motion
+from .model import N_CHANNELS, Model, Params, State
+from .pairs import pair_forces
+from .walls import wall_forces
+
+
+class Forces(NamedTuple):
+    """Everything one force evaluation yields (single system)."""
+
+    force: jnp.ndarray  # (N, 3) total on grains, gravity and drag included [N]
+    torque: jnp.ndarray  # (N, 3) [N m]
+    box_z: jnp.ndarray  # vertical force of grains on the box [N]
+    floor_lid_z: jnp.ndarray  # on floor + lid only [N]
+    n_floor: jnp.ndarray
+    n_lid: jnp.ndarray
+    elastic_energy: jnp.ndarray  # [J]
+    losses: jnp.ndarray  # (4,) pp_normal, pp_friction, pw_normal, pw_friction powers [W]
+
+
+def forces(r, v, w, z_box, zd_box, idx, p: Params, model: Model) -> Forces:
+    """All forces on the grains of one system for the given (predicted) kinematics."""
+    pf = pair_forces(r, v, w, idx, p, model.mixing)
+    wf = wall_forces(r, v, w, z_box, zd_box, p, model.mixing)
+    gravity = jnp.stack([0.0 * p.gravity, 0.0 * p.gravity, -p.gravity])
+    f = pf.force + wf.force + p.mass[:, None] * (gravity - p.drag * v)
+    return Forces(
+        force=f,
+        torque=pf.torque + wf.torque,
+        box_z=wf.box_z,
+        floor_lid_z=wf.floor_lid_z,
+        n_floor=wf.n_floor,
+        n_lid=wf.n_lid,
+        elastic_energy=pf.elastic_energy + wf.elastic_energy,
+        losses=jnp.stack([pf.normal_loss, pf.friction_loss, wf.normal_loss, wf.friction_loss]),
+    )
+
+
+def _powers(fo: Forces, z, zd, t, v_pred, p: Params, model: Model):
+    """Channel powers [W] at one force evaluation (see :data:`jaxdamp.model.CHANNELS`)."""
+    if model.system == "primary":
+        u, ud = base_motion(t, p)
+        p_in = -ud * (p.K * (z - u) + p.C * (zd - ud))
+        p_c = p.C * (zd - ud) ** 2
+    else:  # work of the moving walls on the grains
+        p_in = -fo.box_z * zd
+        p_c = jnp.zeros_like(p_in)
+    p_drag = p.drag * jnp.sum(p.mass * jnp.sum(v_pred * v_pred, axis=-1))
+    return jnp.concatenate([jnp.stack([p_in, p_c]), fo.losses, p_drag[None]])
+
+
+def _primary_acceleration(z, zd, t, box_z, p: Params):
+    u, ud = base_motion(t, p)
+    return (-p.C * (zd - ud) - p.K * (z - u) + box_z) / p.M
+
+
+def _rotate(q, w, dt):
+    """Quaternions ``(N, 4)`` advanced by a rotation of angular velocity ``w`` over ``dt``."""
+    speed = safe_norm(w)
+    half = 0.5 * speed * dt
+    moving = speed > 0
+    axis_scale = jnp.where(moving, jnp.sin(half) / jnp.where(moving, speed, 1.0), 0.5 * dt)
+    dw = jnp.cos(half)
+    dv = axis_scale[:, None] * w
+    qw, qv = q[:, :1], q[:, 1:]
+    # Hamilton product dq ⊗ q
+    new_w = dw[:, None] * qw - jnp.sum(dv * qv, axis=-1, keepdims=True)
+    new_v = dw[:, None] * qv + qw * dv + jnp.cross(dv, qv)
+    out = jnp.concatenate([new_w, new_v], axis=-1)
+    return out / jnp.linalg.norm(out, axis=-1, keepdims=True)
+
+
+def _finish(state_fields: dict, fo: Forces, power, p: Params) -> State:
+    return State(
+        **state_fields,
+        power=power,
+        e_elastic=fo.elastic_energy,
+        f_floor_lid=fo.floor_lid_z,
+        f_box=fo.box_z,
+        n_floor=fo.n_floor,
+        n_lid=fo.n_lid,
+    )
+
+
+def initial_state(r, v, w, q, z, zd, t, idx, p: Params, model: Model, e_start=None) -> State:
+    """A state at time ``t`` with accelerations and powers evaluated there (single system).
+
+    For S2, ``z`` and ``zd`` are ignored and taken from the drive. ``e_start`` is the reference
+    mechanical energy of the balance; by default the energy of this state.
+    """
+    r, v, w = jnp.asarray(r), jnp.asarray(v), jnp.asarray(w)
+    t = jnp.asarray(t, jnp.float64)
+    if model.system == "primary":
+        z, zd = jnp.asarray(z, jnp.float64), jnp.asarray(zd, jnp.float64)
+    else:
+        z, zd, _ = drive_motion(t, p)
+    fo = forces(r, v, w, z, zd, idx, p, model)
+    if model.system == "primary":
+        zdd = _primary_acceleration(z, zd, t, fo.box_z, p)
+    else:
+        zdd = drive_motion(t, p)[2]
+    power = _powers(fo, z, zd, t, v, p, model)
+    st = _finish(
+        dict(
+            r=r, v=v, w=w, q=jnp.asarray(q), a=fo.force / p.mass[:, None],
+            alpha=fo.torque / p.inertia[:, None], z=z, zd=zd, zdd=zdd, t=t,
+            step=jnp.zeros((), jnp.int64), work=jnp.zeros(N_CHANNELS), e_start=jnp.zeros(()),
+            z_max=jnp.asarray(-jnp.inf), z_min=jnp.asarray(jnp.inf),
+        ),
+        fo,
+        power,
+        p,
+    )
+    e0 = mechanical_energy(st, p, model) if e_start is None else e_start
+    return dataclasses.replace(st, e_start=jnp.asarray(e0, jnp.float64))
+
+
+def step(st: State, idx, p: Params, model: Model) -> State:
+    """Advance one system by one time step ``p.dt``. ``idx``: neighbour block ``(N, K)``."""
+    dt = p.dt
+    t1 = st.t + dt
+    r1 = st.r + dt * st.v + 0.5 * dt * dt * st.a
+    v_pred = st.v + dt * st.a
+    w_pred = st.w + dt * st.alpha
+    if model.system == "primary":
+        z1 = st.z + dt * st.zd + 0.5 * dt * dt * st.zdd
+        zd_pred = st.zd + dt * st.zdd
+    else:
+        z1, zd_pred, zdd1 = drive_motion(t1, p)
+
+    fo = forces(r1, v_pred, w_pred, z1, zd_pred, idx, p, model)
+    a1 = fo.force / p.mass[:, None]
+    alpha1 = fo.torque / p.inertia[:, None]
+    if model.system == "primary":
+        zdd1 = _primary_acceleration(z1, zd_pred, t1, fo.box_z, p)
+        zd1 = st.zd + 0.5 * dt * (st.zdd + zdd1)
+    else:
+        zd1 = zd_pred
+
+    power = _powers(fo, z1, zd_pred, t1, v_pred, p, model)
+    in_window = t1 >= p.t_window
+    return _finish(
+        dict(
+            r=r1,
+            v=st.v + 0.5 * dt * (st.a + a1),
+            w=st.w + 0.5 * dt * (st.alpha + alpha1),
+            q=_rotate(st.q, st.w + 0.5 * dt * st.alpha, dt),
+            a=a1,
+            alpha=alpha1,
+            z=z1,
+            zd=zd1,
+            zdd=zdd1,
+            t=t1,
+            step=st.step + 1,
+            work=st.work + 0.5 * dt * (st.power + power),
+            e_start=st.e_start,
+            z_max=jnp.where(in_window, jnp.maximum(st.z_max, z1), st.z_max),
+            z_min=jnp.where(in_window, jnp.minimum(st.z_min, z1), st.z_min),
+        ),
+        fo,
+        power,
+        p,
+    )
+
+
+def box_frame(st: State):
+    """Grain positions relative to the floor's corner, ``(..., N, 3)`` (for neighbour lists)."""
+    shift = jnp.stack(
+        [jnp.zeros_like(st.z), jnp.zeros_like(st.z), st.z], axis=-1
+    )
+    return st.r - shift[..., None, :]
+

@@ -1,0 +1,190 @@
+"""HDF5 run files: configuration, time series, snapshots, summary and checkpoint.
+
+Schema of a run file (every dataset has a ``units`` attribute; see ``docs/output.md``)::
+
+    /                       attrs: format, jaxdamp_version, created, config (JSON), system,
+                                   preset, status ('running' | 'finished' | 'diverged'), message
+    /grains/radius (N,)     m        /grains/mass (N,) kg      /grains/species (N,)
+    /settle                 attrs: bed_height [m], time [s], max_speed [m/s];
+                            r0 (N,3) settled positions (box frame) [m]
+    /series/<name> (T,)     sampled time series (see jaxdamp.energy.RECORD_UNITS);
+    /series/work (T, 7)     cumulative work channels, attr 'channels'
+    /snapshots/t (S,)       s;  /snapshots/r (S,N,3) m;  /snapshots/q (S,N,4) unit quaternions
+    /summary                attrs: steady-state scalars (units in attr 'units' JSON)
+    /checkpoint             the full state and neighbour list after the last finished chunk
+"""
+
+from __future__ import annotations
+
+import json
+import time
+
+import h5py
+import numpy as np
+
+from . import __version__
+from .config import Config
+from .energy import RECORD_UNITS
+from .model import CHANNELS
+
+FORMAT = "jaxdamp-run/1"
+
+
+def _append(group, name, values, units=None, **attrs):
+    values = np.asarray(values)
+    if name not in group:
+        ds = group.create_dataset(
+            name, data=values, maxshape=(None,) + values.shape[1:], chunks=True
+        )
+        if units is not None:
+            ds.attrs["units"] = units
+        for k, v in attrs.items():
+            ds.attrs[k] = v
+        return
+    ds = group[name]
+    n0 = ds.shape[0]
+    ds.resize(n0 + values.shape[0], axis=0)
+    ds[n0:] = values
+
+
+class RunFile:
+    """A run file open for writing (single system)."""
+
+    def __init__(self, path: str, mode: str = "a"):
+        self.path = path
+        self.h5 = h5py.File(path, mode)
+
+    # -- creation -------------------------------------------------------------------------
+    @classmethod
+    def create(cls, path: str, config: Config, radii, masses, species, bed, extra_attrs=None):
+        f = cls(path, "w")
+        h = f.h5
+        h.attrs["format"] = FORMAT
+        h.attrs["jaxdamp_version"] = __version__
+        h.attrs["created"] = time.strftime("%Y-%m-%dT%H:%M:%S%z")
+        h.attrs["config"] = config.to_json()
+        h.attrs["system"] = config.system
+        h.attrs["preset"] = config.name
+        h.attrs["status"] = "running"
+        h.attrs["message"] = ""
+        h.attrs["units"] = "SI (m, kg, s, N, J, W); angles in rad"
+        for k, v in (extra_attrs or {}).items():
+            h.attrs[k] = v
+        g = h.create_group("grains")
+        g.create_dataset("radius", data=np.asarray(radii)).attrs["units"] = "m"
+        g.create_dataset("mass", data=np.asarray(masses)).attrs["units"] = "kg"
+        g.create_dataset("species", data=np.asarray(species))
+        g.attrs["species_names"] = json.dumps([s.name for s in config.grains])
+        s = h.create_group("settle")
+        s.attrs["bed_height"] = bed.height
+        s.attrs["time"] = bed.time
+        s.attrs["max_speed"] = bed.max_speed
+        s.attrs["units"] = json.dumps({"bed_height": "m", "time": "s", "max_speed": "m/s"})
+        s.create_dataset("r0", data=bed.r).attrs["units"] = "m"
+        h.create_group("series")
+        h.create_group("snapshots")
+        h.create_group("summary")
+        h.flush()
+        return f
+
+    # -- appending -------------------------------------------------------------------------
+    def append_records(self, recs: dict, n: int | None = None) -> None:
+        """Append samples (dict of arrays with leading time axis); only the first ``n``."""
+        g = self.h5["series"]
+        for name, values in recs.items():
+            values = np.asarray(values)[:n] if n is not None else np.asarray(values)
+            if name == "work":
+                _append(g, name, values, RECORD_UNITS[name], channels=json.dumps(CHANNELS))
+            else:
+                _append(g, name, values, RECORD_UNITS[name])
+
+    def n_records(self) -> int:
+        g = self.h5["series"]
+        return g["t"].shape[0] if "t" in g else 0
+
+    def append_snapshot(self, t, r, q) -> None:
+        g = self.h5["snapshots"]
+        _append(g, "t", np.asarray([t]), "s")
+        _append(g, "r", np.asarray(r)[None], "m")
+        _append(g, "q", np.asarray(q)[None], "1")
+
+    def truncate(self, n_records: int, n_snapshots: int) -> None:
+        """Drop samples written after the last checkpoint (a killed run's tail)."""
+        for gname, n in (("series", n_records), ("snapshots", n_snapshots)):
+            for ds in self.h5[gname].values():
+                if ds.shape[0] > n:
+                    ds.resize(n, axis=0)
+
+    # -- checkpoint --------------------------------------------------------------------------
+    def write_checkpoint(self, arrays: dict, attrs: dict) -> None:
+        """Store ``arrays`` (exact float64/int copies) and ``attrs`` under ``/checkpoint``."""
+        if "checkpoint" in self.h5:
+            del self.h5["checkpoint"]
+        g = self.h5.create_group("checkpoint")
+        for k, v in arrays.items():
+            g.create_dataset(k, data=np.asarray(v))
+        for k, v in attrs.items():
+            g.attrs[k] = v
+        self.h5.flush()
+
+    def read_checkpoint(self) -> tuple[dict, dict] | None:
+        if "checkpoint" not in self.h5:
+            return None
+        g = self.h5["checkpoint"]
+        return {k: g[k][()] for k in g}, dict(g.attrs)
+
+    # -- end ---------------------------------------------------------------------------------
+    def write_summary(self, summary: dict, units: dict) -> None:
+        g = self.h5["summary"]
+        for k, v in summary.items():
+            g.attrs[k] = v
+        g.attrs["units"] = json.dumps(units)
+
+    def set_status(self, status: str, message: str = "") -> None:
+        self.h5.attrs["status"] = status
+        self.h5.attrs["message"] = message
+        self.h5.flush()
+
+    def flush(self):
+        self.h5.flush()
+
+    def close(self):
+        self.h5.close()
+
+
+def read_config(path: str) -> Config:
+    """The configuration stored in a run file."""
+    from .config import from_json
+
+    with h5py.File(path, "r") as h:
+        return from_json(h.attrs["config"])
+
+
+def describe(path: str) -> str:
+    """Human-readable overview of a run file (``jaxdamp info``)."""
+    lines = []
+    with h5py.File(path, "r") as h:
+        cfg = json.loads(h.attrs["config"])
+        lines.append(f"{path}: {h.attrs.get('format', '?')}, jaxdamp {h.attrs.get('jaxdamp_version', '?')}")
+        lines.append(f"  preset {h.attrs.get('preset')}, system {h.attrs.get('system')}, "
+                     f"status {h.attrs.get('status')} {h.attrs.get('message', '')}".rstrip())
+        lines.append(f"  frequency {cfg['frequency']} Hz, box {cfg['box']['Lx']} × "
+                     f"{cfg['box']['Ly']} × {cfg['box']['Lz']} m, "
+                     f"{sum(s['count'] for s in cfg['grains'])} grains")
+        if "settle" in h:
+            lines.append(f"  settled bed height {h['settle'].attrs['bed_height']:.5g} m "
+                         f"after {h['settle'].attrs['time']:.4g} s")
+        if "series" in h and "t" in h["series"]:
+            t = h["series/t"]
+            if t.shape[0]:
+                lines.append(f"  {t.shape[0]} samples, t = {t[0]:.5g} … {t[-1]:.5g} s; series: "
+                             + ", ".join(sorted(h["series"])))
+        if "snapshots" in h and "t" in h["snapshots"]:
+            lines.append(f"  {h['snapshots/t'].shape[0]} snapshots")
+        if "summary" in h and len(h["summary"].attrs):
+            units = json.loads(h["summary"].attrs.get("units", "{}"))
+            lines.append("  summary:")
+            for k, v in h["summary"].attrs.items():
+                if k != "units":
+                    lines.append(f"    {k} = {v} {units.get(k, '')}".rstrip())
+    return "\n".join(lines)

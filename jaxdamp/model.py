@@ -1,0 +1,285 @@
+"""From a :class:`~jaxdamp.config.Config` to JAX pytrees: ``Model`` (static), ``Params``, ``State``.
+
+``Params`` and ``State`` are dataclasses registered with JAX whose every field is an array, so
+a batch of systems is the same pytree with a leading batch axis and ``vmap`` maps over it
+(frequency sweeps, ``Lz`` scans, ...). ``Model`` holds what fixes array shapes and code paths
+(number of grains, system kind, mixing rule, neighbour-list geometry); it is hashable and static
+under ``jit``.
+
+Per-pair constants are formed on the fly from per-grain values with the mixing rule
+(:func:`jaxdamp.contact.mix`), which keeps the hot loop free of species tables.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from . import restitution as rst
+from .config import Config, Material
+
+#: Names of the cumulative work channels, in order (all in J).
+#:   input:       work done on the system by the base through spring and damper (S1) or by the
+#:                moving walls on the grains (S2)
+#:   primary_damping: viscous loss in the primary's damper C (S1)
+#:   pp_normal, pp_friction, pw_normal, pw_friction: granular losses, grain–grain / grain–wall
+#:   drag:        loss to the settling drag (zero while driving)
+CHANNELS = ("input", "primary_damping", "pp_normal", "pp_friction", "pw_normal", "pw_friction", "drag")
+N_CHANNELS = len(CHANNELS)
+CH = {name: i for i, name in enumerate(CHANNELS)}
+
+
+def pytree_dataclass(cls):
+    """Frozen dataclass registered as a JAX pytree whose fields are all data (arrays)."""
+    cls = dataclass(frozen=True)(cls)
+    names = [f.name for f in dataclasses.fields(cls)]
+    return jax.tree_util.register_dataclass(cls, data_fields=names, meta_fields=[])
+
+
+@dataclass(frozen=True)
+class Model:
+    """Static description of a system: shapes and code paths (hashable, a ``jit`` static arg).
+
+    Attributes:
+      n: number of grains.
+      system: ``"primary"`` (S1) or ``"driven"`` (S2).
+      mixing: pair mixing rule for per-grain constants.
+      cutoff: neighbour-list cutoff ``2 R_max + skin`` [m].
+      skin: neighbour-list skin [m]; the list is rebuilt once a grain moved more than skin/2.
+    """
+
+    n: int
+    system: str
+    mixing: str
+    cutoff: float
+    skin: float
+
+
+@pytree_dataclass
+class Params:
+    """Every number the step needs, as arrays (vmappable). Units SI.
+
+    Grain arrays have shape ``(N,)``; all else is scalar (per system).
+    ``compliance = (1-ν²)/E`` [1/Pa]; ``A`` [s] the paper's dissipative constant (γ_n = 1.5 A k_n);
+    ``gamma_n``, ``gamma_s`` [kg s^-1 m^-1/2]; ``mu`` [-]. ``wall_*`` are the walls' values.
+    ``omega`` = 2πf [rad/s]; ``U`` base amplitude (S1) [m]; ``amplitude`` box amplitude (S2) [m];
+    ``z_offset`` box position about which it moves (S2) [m]; ``drag`` settling drag rate [1/s];
+    ``t_window`` start of the analysis window [s].
+    """
+
+    radius: jnp.ndarray
+    mass: jnp.ndarray
+    inertia: jnp.ndarray
+    compliance: jnp.ndarray
+    A: jnp.ndarray
+    gamma_n: jnp.ndarray
+    gamma_s: jnp.ndarray
+    mu: jnp.ndarray
+    wall_compliance: jnp.ndarray
+    wall_A: jnp.ndarray
+    wall_gamma_n: jnp.ndarray
+    wall_gamma_s: jnp.ndarray
+    wall_mu: jnp.ndarray
+    Lx: jnp.ndarray
+    Ly: jnp.ndarray
+    Lz: jnp.ndarray
+    gravity: jnp.ndarray
+    M: jnp.ndarray
+    K: jnp.ndarray
+    C: jnp.ndarray
+    U: jnp.ndarray
+    amplitude: jnp.ndarray
+    omega: jnp.ndarray
+    z_offset: jnp.ndarray
+    dt: jnp.ndarray
+    drag: jnp.ndarray
+    t_window: jnp.ndarray
+
+
+@pytree_dataclass
+class State:
+    """The dynamical state of one system at time ``t`` (after a completed step).
+
+    Grains, shapes ``(N, 3)`` (``q``: ``(N, 4)`` unit quaternions ``(w, x, y, z)``):
+    ``r`` position [m], ``v`` velocity [m/s], ``w`` angular velocity [rad/s], ``a`` and
+    ``alpha`` the accelerations at ``t`` [m/s², rad/s²].
+    Box (scalars): ``z``, ``zd``, ``zdd`` position [m], velocity, acceleration of the floor.
+    ``power`` [W] and ``work`` [J], shape ``(N_CHANNELS,)``: the channel powers at ``t`` and
+    their time integrals (trapezoid rule) since the run started (see :data:`CHANNELS`).
+    ``e_elastic`` [J] elastic contact energy at ``t``; ``e_start`` [J] total mechanical energy
+    when accounting started; ``f_floor_lid``, ``f_box`` [N] vertical force of the grains on
+    floor + lid and on the whole box at ``t``; ``n_floor``, ``n_lid`` grains touching them;
+    ``z_max``, ``z_min`` [m] box extrema since ``t_window``; ``step`` steps taken.
+    """
+
+    r: jnp.ndarray
+    v: jnp.ndarray
+    w: jnp.ndarray
+    q: jnp.ndarray
+    a: jnp.ndarray
+    alpha: jnp.ndarray
+    z: jnp.ndarray
+    zd: jnp.ndarray
+    zdd: jnp.ndarray
+    t: jnp.ndarray
+    step: jnp.ndarray
+    power: jnp.ndarray
+    work: jnp.ndarray
+    e_elastic: jnp.ndarray
+    e_start: jnp.ndarray
+    f_floor_lid: jnp.ndarray
+    f_box: jnp.ndarray
+    n_floor: jnp.ndarray
+    n_lid: jnp.ndarray
+    z_max: jnp.ndarray
+    z_min: jnp.ndarray
+
+
+# ---------------------------------------------------------------------------------------------
+# Config -> arrays
+
+
+def grain_radii(config: Config) -> np.ndarray:
+    """Radii of all grains [m], shape ``(N,)``, species after species; spreads drawn with the seed."""
+    rng = np.random.default_rng(config.numerics.seed)
+    out = []
+    for sp in config.grains:
+        r = np.full(sp.count, sp.radius, dtype=np.float64)
+        if sp.radius_spread > 0:
+            r = sp.radius * (1.0 + sp.radius_spread * rng.uniform(-1.0, 1.0, sp.count))
+        out.append(r)
+    return np.concatenate(out) if out else np.zeros(0)
+
+
+def grain_species(config: Config) -> np.ndarray:
+    """Species index of every grain, shape ``(N,)``."""
+    return np.concatenate(
+        [np.full(sp.count, i, dtype=np.int32) for i, sp in enumerate(config.grains)]
+        or [np.zeros(0, np.int32)]
+    )
+
+
+def compliance(mat: Material, stiffness_scale: float) -> float:
+    """``(1 - ν²) / (λ E)`` [1/Pa] with the stiffness scale ``λ``."""
+    return (1.0 - mat.nu**2) / (stiffness_scale * mat.E)
+
+
+def _damping(mat: Material, radius: float, stiffness_scale: float) -> tuple[float, float, float]:
+    """Return ``(A, gamma_n, gamma_s)`` of a material; ``radius`` sets the like-pair calibration."""
+    scale = rst.scale_damping(1.0, stiffness_scale)
+    gamma_s = mat.gamma_s * scale
+    if mat.restitution is not None:
+        E_star = 0.5 / compliance(mat, stiffness_scale)
+        m = mat.density * 4.0 / 3.0 * math.pi * radius**3
+        A = rst.dissipative_constant(mat.restitution, mat.v_ref, 0.5 * m, 0.5 * radius, E_star)
+        return A, 0.0, gamma_s
+    return 0.0, (mat.gamma_n or 0.0) * scale, gamma_s
+
+
+def build(config: Config, radii: np.ndarray | None = None) -> tuple[Model, Params]:
+    """Turn a (validated) configuration into the static ``Model`` and the array ``Params``."""
+    if radii is None:
+        radii = grain_radii(config)
+    species = grain_species(config)
+    lam = config.numerics.stiffness_scale
+    n = len(radii)
+    mass = np.zeros(n)
+    comp, A, gn, gs, mu = (np.zeros(n) for _ in range(5))
+    for i, sp in enumerate(config.grains):
+        sel = species == i
+        mat = sp.material
+        mass[sel] = mat.density * 4.0 / 3.0 * np.pi * radii[sel] ** 3
+        comp[sel] = compliance(mat, lam)
+        A[sel], gn[sel], gs[sel] = _damping(mat, sp.radius, lam)
+        mu[sel] = mat.mu
+    wall = config.wall_material
+    ref_radius = config.grains[0].radius if config.grains else 1.0
+    wA, wgn, wgs = _damping(wall, ref_radius, lam) if config.grains else (0.0, 0.0, 0.0)
+
+    r_max = float(radii.max()) if n else 0.0
+    skin = config.numerics.skin * r_max
+    model = Model(
+        n=n, system=config.system, mixing=config.mixing, cutoff=2.0 * r_max + skin, skin=skin
+    )
+    prim = config.primary
+    f64 = lambda x: jnp.asarray(x, dtype=jnp.float64)  # noqa: E731
+    params = Params(
+        radius=f64(radii),
+        mass=f64(mass),
+        inertia=f64(0.4 * mass * radii**2),
+        compliance=f64(comp),
+        A=f64(A),
+        gamma_n=f64(gn),
+        gamma_s=f64(gs),
+        mu=f64(mu),
+        wall_compliance=f64(compliance(wall, lam)),
+        wall_A=f64(wA),
+        wall_gamma_n=f64(wgn),
+        wall_gamma_s=f64(wgs),
+        wall_mu=f64(wall.mu),
+        Lx=f64(config.box.Lx),
+        Ly=f64(config.box.Ly),
+        Lz=f64(config.box.Lz),
+        gravity=f64(config.gravity),
+        M=f64(prim.M if prim else 1.0),
+        K=f64(prim.K if prim else 0.0),
+        C=f64(prim.C if prim else 0.0),
+        U=f64(prim.U if prim else 0.0),
+        amplitude=f64(config.drive.amplitude if config.drive else 0.0),
+        omega=f64(config.omega),
+        z_offset=f64(0.0),
+        dt=f64(config_dt(config, radii)),
+        drag=f64(0.0),
+        t_window=f64((1.0 - config.numerics.analysis_window) * config.numerics.duration),
+    )
+    return model, params
+
+
+def collision_time_limit(config: Config, radii: np.ndarray) -> float:
+    """Hertz collision time [s] of the stiffest, lightest contact at ``numerics.v_impact``.
+
+    Checks the smallest grain against a like grain and against a wall (SPEC §3); the shorter wins.
+    """
+    if len(radii) == 0:
+        return math.inf
+    lam = config.numerics.stiffness_scale
+    species = grain_species(config)
+    v = config.numerics.v_impact
+    t_c = math.inf
+    wall_c = compliance(config.wall_material, lam)
+    for i, sp in enumerate(config.grains):
+        r = float(radii[species == i].min())
+        m = sp.material.density * 4.0 / 3.0 * math.pi * r**3
+        c = compliance(sp.material, lam)
+        t_c = min(t_c, rst.collision_time(0.5 * m, 0.5 * r, 1.0 / (2 * c), v))
+        t_c = min(t_c, rst.collision_time(m, r, 1.0 / (c + wall_c), v))
+    return t_c
+
+
+def config_dt(config: Config, radii: np.ndarray) -> float:
+    """The time step [s]: ``numerics.dt`` or, if ``None``, ``t_c / dt_per_collision``."""
+    if config.numerics.dt is not None:
+        return config.numerics.dt
+    t_c = collision_time_limit(config, radii)
+    if not math.isfinite(t_c):  # empty box: resolve the drive and the primary's period
+        return 1.0 / (2000.0 * max(config.frequency, primary_frequency(config) or 0.0))
+    return t_c / config.numerics.dt_per_collision
+
+
+def primary_frequency(config: Config) -> float | None:
+    """Undamped natural frequency ``sqrt(K/M)/2π`` of the primary [Hz] (S1), else ``None``."""
+    if config.primary is None or config.primary.K <= 0:
+        return None
+    return math.sqrt(config.primary.K / config.primary.M) / (2 * math.pi)
+
+
+def grain_mass(config: Config) -> float:
+    """Total mass of the granulate [kg] (mean radii; exact masses are in ``Params.mass``)."""
+    return sum(
+        sp.count * sp.material.density * 4.0 / 3.0 * math.pi * sp.radius**3 for sp in config.grains
+    )

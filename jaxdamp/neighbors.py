@@ -1,0 +1,157 @@
+"""Neighbour lists for grain–grain contacts, built by jax-md and rebuilt once per batch.
+
+jax-md's ``NeighborList.update`` decides per system with ``lax.cond`` whether to rebuild; under
+``vmap`` that cond becomes a select, so every system would rebuild at every step. Here the
+decision is made once for the whole batch (``any`` over systems, one ``lax.cond``) and the
+capacity (neighbours per grain, a static shape) is allocated for the whole batch.
+
+Positions given to the list are in the box frame (``z`` measured from the floor): pair
+distances do not change under the box's rigid translation, and a bed that rides with the box
+does not trigger rebuilds.
+
+A rebuild is needed once any grain moved more than ``skin / 2`` since the last build; the list
+holds all pairs closer than ``cutoff = 2 R_max + skin`` (plus a small margin for the one step
+that runs before the next check). Overflow (a grain with more neighbours than the capacity) is
+flagged, sticky, in :attr:`Neighbors.overflow`; the runner re-allocates and redoes the chunk.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import partial
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax_md import partition, space
+
+from .model import Model, pytree_dataclass
+
+#: Extra cutoff beyond 2 R_max + skin, as a fraction of the skin, covering the one step that
+#: moves grains between the rebuild check and the force evaluation.
+_MARGIN = 0.05
+
+
+@pytree_dataclass
+class Neighbors:
+    """A (batch of) neighbour list(s). ``idx``: ``(..., N, K)`` indices padded with ``N``;
+    ``reference``: ``(..., N, 3)`` box-frame positions at the last build [m]; ``overflow``:
+    ``(...)`` bool, true once a build found more than ``K`` neighbours for some grain."""
+
+    idx: jnp.ndarray
+    reference: jnp.ndarray
+    overflow: jnp.ndarray
+
+
+def _jaxmd_fns(model: Model):
+    displacement, _ = space.free()
+    return partition.neighbor_list(
+        displacement,
+        box=1.0,  # unused: cell lists are off (all-pairs candidates, rebuilt rarely)
+        r_cutoff=model.cutoff + _MARGIN * model.skin,
+        dr_threshold=0.0,  # jax-md then always rebuilds; the decision is ours (see module doc)
+        capacity_multiplier=1.0,
+        disable_cell_list=True,
+        format=partition.Dense,
+    )
+
+
+@partial(jax.jit, static_argnums=(0,))
+def _occupancy(model: Model, positions):
+    """Largest number of neighbours within the cutoff of any grain in the batch."""
+    cutoff = model.cutoff + _MARGIN * model.skin
+
+    def one(r):
+        d2 = jnp.sum((r[:, None, :] - r[None, :, :]) ** 2, axis=-1)
+        close = (d2 < cutoff**2) & ~jnp.eye(r.shape[0], dtype=bool)
+        return close.sum(axis=1).max()
+
+    return jax.vmap(one)(positions).max()
+
+
+def _template(model: Model, capacity: int):
+    """jax-md functions and an empty list of the given capacity (no compute: traceable)."""
+    fns = _jaxmd_fns(model)
+    template = partition.NeighborList(
+        idx=jnp.full((model.n, capacity), model.n, jnp.int32),
+        reference_position=jnp.zeros((model.n, 3)),
+        error=partition.PartitionError(jnp.zeros((), jnp.uint8)),
+        cell_list_capacity=None,
+        max_occupancy=capacity,
+        format=partition.Dense,
+        cell_size=None,
+        cell_list_fn=None,
+        update_fn=fns.update,
+    )
+    return fns, template
+
+
+def capacity_for(model: Model, positions, multiplier: float, at_least: int = 0) -> int:
+    """Capacity for a batch of box-frame positions ``(B, N, 3)``: max occupancy × multiplier."""
+    if model.n < 2:
+        return 0
+    occ = int(_occupancy(model, positions))
+    cap = max(int(math.ceil(occ * multiplier)), at_least, 1)
+    return min(cap, model.n - 1)
+
+
+def allocate(model: Model, positions, multiplier: float, at_least: int = 0) -> Neighbors:
+    """Build lists for a batch of box-frame positions ``(B, N, 3)`` with a shared capacity."""
+    positions = jnp.asarray(positions)
+    if model.n < 2:
+        b = positions.shape[0]
+        return Neighbors(
+            idx=jnp.zeros((b, model.n, 0), jnp.int32),
+            reference=positions,
+            overflow=jnp.zeros((b,), bool),
+        )
+    cap = capacity_for(model, positions, multiplier, at_least)
+    return _build(model, cap, positions)
+
+
+def capacity(nbrs: Neighbors) -> int:
+    return int(nbrs.idx.shape[-1])
+
+
+def update(model: Model, nbrs: Neighbors, positions) -> Neighbors:
+    """Rebuild every list of the batch if any grain of any system moved more than skin/2.
+
+    Traceable (use inside ``jit``/``scan``); ``positions`` are box-frame, ``(B, N, 3)``.
+    """
+    if model.n < 2:
+        return nbrs
+    cap = capacity(nbrs)
+    moved2 = jnp.sum((positions - nbrs.reference) ** 2, axis=-1)
+    need = jnp.any(moved2 > (0.5 * model.skin) ** 2)
+
+    def rebuild(nb):
+        fresh = _build_traced(model, cap, positions)
+        return Neighbors(fresh.idx, fresh.reference, nb.overflow | fresh.overflow)
+
+    return jax.lax.cond(need, rebuild, lambda nb: nb, nbrs)
+
+
+def _build_traced(model: Model, capacity: int, positions) -> Neighbors:
+    fns, template = _template(model, capacity)
+
+    def one(r):
+        nb = fns.update(r, template)
+        return nb.idx, nb.did_buffer_overflow > 0
+
+    idx, overflow = jax.vmap(one)(positions)
+    return Neighbors(idx=idx, reference=positions, overflow=overflow)
+
+
+_build = jax.jit(_build_traced, static_argnums=(0, 1))
+
+
+def to_numpy(nbrs: Neighbors) -> dict[str, np.ndarray]:
+    return {k: np.asarray(getattr(nbrs, k)) for k in ("idx", "reference", "overflow")}
+
+
+def from_numpy(d: dict[str, np.ndarray]) -> Neighbors:
+    return Neighbors(
+        idx=jnp.asarray(d["idx"], jnp.int32),
+        reference=jnp.asarray(d["reference"]),
+        overflow=jnp.asarray(d["overflow"], bool),
+    )

@@ -1,0 +1,271 @@
+"""Run one simulation end to end: validate, settle, drive in jitted chunks, write HDF5.
+
+This is the edge of the package where files, progress bars and messages live. Between chunks
+it handles neighbour-list overflow (re-allocate and redo the chunk), stops on non-finite state
+with a message naming time, step and quantity (keeping the data written so far), appends
+samples and a snapshot, and writes a checkpoint from which ``resume=True`` continues
+bit-identically.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import time
+from dataclasses import dataclass
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from . import neighbors as nb
+from .analysis import steady_state_summary
+from .config import Config, ConfigError
+from .integrate import box_frame
+from .io import RunFile
+from .model import Model, Params, State, build, grain_species
+from .packing import SettledBed, jax_tree_batch, settle
+from .simulate import advance, init_states, take
+from .validation import validate
+
+
+class SimulationDiverged(FloatingPointError):
+    """The state became non-finite. The run file keeps every sample before it."""
+
+
+@dataclass(frozen=True)
+class Schedule:
+    """How a run is cut into steps, samples and chunks."""
+
+    dt: float
+    record_every: int  # steps per sample
+    records_per_chunk: int
+    n_chunks: int
+
+    @property
+    def chunk_steps(self) -> int:
+        return self.record_every * self.records_per_chunk
+
+    @property
+    def duration(self) -> float:
+        return self.n_chunks * self.chunk_steps * self.dt
+
+
+def schedule(config: Config, dt: float) -> Schedule:
+    """Sampling every ``record_dt`` (rounded to whole steps), chunks of ``chunk`` seconds
+    (rounded to whole samples), and enough chunks to cover ``duration`` (rounded up)."""
+    num = config.numerics
+    record_every = max(1, int(round(num.record_dt / dt)))
+    per_chunk = max(1, int(round(num.chunk / (record_every * dt))))
+    n_chunks = max(1, int(math.ceil(num.duration / (per_chunk * record_every * dt) - 1e-9)))
+    return Schedule(dt, record_every, per_chunk, n_chunks)
+
+
+def initial_box_position(config: Config, grain_mass: float) -> float:
+    """Box floor height at t = 0: the primary's static equilibrium under the bed's weight (S1),
+    or the drive's starting point ``A_d`` (S2)."""
+    if config.system == "primary":
+        K = config.primary.K
+        return -grain_mass * config.gravity / K if K > 0 else 0.0
+    return config.drive.amplitude
+
+
+@dataclass
+class RunResult:
+    """What :func:`run` returns: the output path (or ``None``), the summary scalars, the samples
+    (dict of numpy arrays), the settled bed and the final state."""
+
+    path: str | None
+    summary: dict
+    records: dict
+    bed: SettledBed
+    state: State
+
+
+def _state_to_arrays(state: State, nbrs: nb.Neighbors) -> dict:
+    out = {f"state/{k}": np.asarray(v) for k, v in dataclasses.asdict(state).items()}
+    out.update({f"nbrs/{k}": v for k, v in nb.to_numpy(nbrs).items()})
+    return out
+
+
+def _arrays_to_state(arrays: dict) -> tuple[State, nb.Neighbors]:
+    st = {k.split("/", 1)[1]: jnp.asarray(v) for k, v in arrays.items() if k.startswith("state/")}
+    nbr = {k.split("/", 1)[1]: v for k, v in arrays.items() if k.startswith("nbrs/")}
+    return State(**st), nb.from_numpy(nbr)
+
+
+def _first_nonfinite(recs: dict, states: State) -> tuple[int | None, str]:
+    """Index of the first non-finite sample and a description of the offending quantities."""
+    bad_at = None
+    names = []
+    for name, values in recs.items():
+        v = np.asarray(values, dtype=float)
+        bad = ~np.isfinite(v.reshape(v.shape[0], -1)).all(axis=1)
+        if bad.any():
+            k = int(np.argmax(bad))
+            if bad_at is None or k < bad_at:
+                bad_at, names = k, [name]
+            elif k == bad_at:
+                names.append(name)
+    what = []
+    for field in ("r", "v", "w", "z", "zd"):
+        arr = np.asarray(getattr(states, field))
+        if not np.isfinite(arr).all():
+            if arr.ndim >= 2:
+                grain = int(np.argmax(~np.isfinite(arr.reshape(arr.shape[0], -1)).all(axis=1)))
+                what.append(f"{field} of grain {grain}")
+            else:
+                what.append(field)
+    if bad_at is None and what:
+        bad_at = 0
+    desc = ", ".join(what) if what else ", ".join(names)
+    if names and what:
+        desc += f" (first non-finite samples: {', '.join(names)})"
+    return bad_at, desc
+
+
+def run(
+    config: Config,
+    out: str | None = None,
+    resume: bool = False,
+    progress: bool = True,
+    echo=print,
+    snapshots: bool = True,
+) -> RunResult:
+    """Simulate ``config`` and (with ``out``) write an HDF5 run file.
+
+    Args:
+      config: the simulation; validated before any compute.
+      out: output path; ``None`` keeps everything in memory.
+      resume: continue from the checkpoint in ``out`` (must hold the same configuration).
+      progress: show a tqdm progress bar.
+      echo: where one-line messages go (``None`` for silence).
+      snapshots: store grain positions after every chunk.
+    """
+    say = echo or (lambda *a, **k: None)
+    validate(config)
+    model, params = build(config)
+    sched = schedule(config, float(params.dt))
+    t_window = (1.0 - config.numerics.analysis_window) * sched.duration
+    params = dataclasses.replace(params, t_window=jnp.asarray(t_window))
+    pb = jax_tree_batch(params)
+    radii = np.asarray(params.radius)
+    masses = np.asarray(params.mass)
+    m_grains = float(masses.sum())
+
+    rf = None
+    start_chunk = 0
+    if resume:
+        if out is None or not os.path.exists(out):
+            raise ConfigError(f"--resume: no run file at {out!r} to resume from")
+        rf = RunFile(out, "a")
+        stored = rf.h5.attrs["config"]
+        if stored != config.to_json():
+            rf.close()
+            raise ConfigError(
+                f"--resume: {out} was written with a different configuration; "
+                "resume with the same preset, file and --set options"
+            )
+        ck = rf.read_checkpoint()
+        if ck is None:
+            rf.close()
+            raise ConfigError(f"--resume: {out} has no checkpoint (the run never finished a chunk)")
+        arrays, attrs = ck
+        state1, nbrs1 = _arrays_to_state(arrays)
+        states = jax_tree_batch(state1)
+        nbrs = jax.tree_util.tree_map(lambda x: x[None], nbrs1)
+        start_chunk = int(attrs["chunk"])
+        rf.truncate(int(attrs["n_records"]), int(attrs["n_snapshots"]))
+        from .packing import SettledBed as _SB
+
+        s = rf.h5["settle"]
+        bed = _SB(s["r0"][()], None, None, None, float(s.attrs["bed_height"]),
+                  float(s.attrs["time"]), float(s.attrs["max_speed"]))
+        say(f"resuming {out} at chunk {start_chunk}/{sched.n_chunks} (t = {float(states.t[0]):.6g} s)")
+    else:
+        t0 = time.perf_counter()
+        bed = settle(config, model, params)
+        say(
+            f"settled {model.n} grains in {bed.time:.3g} s simulated "
+            f"({time.perf_counter() - t0:.1f} s wall): bed height {bed.height:.5g} m"
+        )
+        if model.n and bed.height >= config.box.Lz:
+            raise ConfigError(
+                f"box.Lz = {config.box.Lz} m: the settled bed is {bed.height:.5g} m high and "
+                "does not fit under the lid"
+            )
+        z0 = initial_box_position(config, m_grains)
+        r0 = bed.r + np.array([0.0, 0.0, z0])
+        states = init_states(
+            model, pb, r0[None], bed.v[None], bed.w[None], bed.q[None],
+            jnp.full((1,), z0), jnp.zeros(1),
+        )
+        nbrs = nb.allocate(model, box_frame(states), config.numerics.capacity_multiplier)
+        if out is not None:
+            rf = RunFile.create(out, config, radii, masses, grain_species(config), bed,
+                                extra_attrs={"dt": sched.dt, "duration": sched.duration})
+
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=sched.n_chunks, initial=start_chunk, unit="chunk",
+                   desc=f"{config.name} f={config.frequency:g} Hz", leave=True)
+    all_recs: list[dict] = []
+    if rf is not None and start_chunk > 0:
+        all_recs.append({k: rf.h5["series"][k][()] for k in rf.h5["series"]})
+
+    def realloc(old, new):
+        say(f"neighbour list overflow: capacity {old} -> {new}, chunk redone")
+
+    wall0 = time.perf_counter()
+    steps_done = 0
+    try:
+        for chunk in range(start_chunk, sched.n_chunks):
+            states_new, nbrs, recs = advance(
+                model, states, nbrs, pb, sched.records_per_chunk, sched.record_every,
+                config.numerics.capacity_multiplier, on_realloc=realloc,
+            )
+            recs = {k: v[0] for k, v in recs.items()}
+            bad_at, what = _first_nonfinite(recs, take(states_new, 0))
+            if bad_at is not None:
+                t_bad = float(recs["t"][bad_at]) if bad_at < len(recs["t"]) else float("nan")
+                step_bad = int(states.step[0]) + (bad_at + 1) * sched.record_every
+                msg = (f"simulation went non-finite by t = {t_bad:.6g} s (step {step_bad}): "
+                       f"{what}. Samples before it are kept; try a smaller numerics.dt.")
+                if rf is not None:
+                    rf.append_records(recs, bad_at)
+                    rf.set_status("diverged", msg)
+                raise SimulationDiverged(msg)
+            states = states_new
+            steps_done += sched.chunk_steps
+            all_recs.append(recs)
+            if rf is not None:
+                rf.append_records(recs)
+                if snapshots:
+                    rf.append_snapshot(float(states.t[0]), states.r[0], states.q[0])
+                rf.write_checkpoint(
+                    _state_to_arrays(take(states, 0), take(nbrs, 0)),
+                    {"chunk": chunk + 1, "n_records": rf.n_records(),
+                     "n_snapshots": rf.h5["snapshots"]["t"].shape[0] if snapshots else 0},
+                )
+            if bar is not None:
+                bar.update(1)
+                bar.set_postfix(t=f"{float(states.t[0]):.3f}s")
+    finally:
+        if bar is not None:
+            bar.close()
+    wall = time.perf_counter() - wall0
+
+    records = {k: np.concatenate([r[k] for r in all_recs]) for k in all_recs[0]} if all_recs else {}
+    final = take(states, 0)
+    summary, units = steady_state_summary(config, records, final, t_window, sched.duration)
+    summary.update(bed_height=bed.height, dt=sched.dt, steps=int(final.step),
+                   wall_time=wall, steps_per_second=steps_done / wall if wall > 0 else 0.0)
+    units.update(bed_height="m", dt="s", steps="1", wall_time="s", steps_per_second="1/s")
+    if rf is not None:
+        rf.write_summary(summary, units)
+        rf.set_status("finished")
+        rf.close()
+    return RunResult(path=out, summary=summary, records=records, bed=bed, state=final)

@@ -1,0 +1,114 @@
+"""Batched, jitted chunks of the time loop: ``lax.scan`` over steps, records every few steps.
+
+Everything here works on a *batch* of ``B`` independent systems (``B = 1`` for a single run):
+states, params and neighbour lists carry a leading batch axis. The physics step is
+``vmap``-ed; the neighbour-list rebuild is decided once per batch (:mod:`jaxdamp.neighbors`).
+
+A chunk runs ``n_records × record_every`` steps and returns the states, neighbour lists and
+``n_records`` samples per system (:func:`jaxdamp.energy.record`). The host-side helper
+:func:`advance` re-allocates the neighbour lists and redoes the chunk when they overflowed,
+so no contact is ever dropped.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from . import neighbors as nb
+from .energy import record
+from .integrate import box_frame, initial_state, step
+from .model import Model, Params, State
+
+
+@functools.lru_cache(maxsize=64)
+def chunk_fn(model: Model, n_records: int, record_every: int, remat: bool = False):
+    """Jitted ``(states, nbrs, params) -> (states, nbrs, records)`` for a batch.
+
+    ``records`` is a dict of arrays shaped ``(B, n_records, ...)``. With ``remat`` each
+    inner block of ``record_every`` steps is rematerialised in reverse mode (bounded memory for
+    gradients through long scans).
+    """
+    step_b = jax.vmap(step, in_axes=(0, 0, 0, None))
+    record_b = jax.vmap(record, in_axes=(0, 0, None, 0))
+
+    def block(states, nbrs, params):
+        """``record_every`` steps; returns the mean grain forces on the box over them."""
+
+        def inner(carry, _):
+            states, nbrs, impulse = carry
+            nbrs = nb.update(model, nbrs, box_frame(states))
+            states = step_b(states, nbrs.idx, params, model)
+            impulse = impulse + jnp.stack([states.f_floor_lid, states.f_box], axis=-1)
+            return (states, nbrs, impulse), None
+
+        b = states.t.shape[0]
+        (states, nbrs, impulse), _ = jax.lax.scan(
+            inner, (states, nbrs, jnp.zeros((b, 2))), None, length=record_every
+        )
+        return states, nbrs, impulse / record_every
+
+    if remat:
+        block = jax.checkpoint(block)
+
+    def outer(carry, _, params):
+        states, nbrs = carry
+        states, nbrs, mean_forces = block(states, nbrs, params)
+        return (states, nbrs), record_b(states, params, model, mean_forces)
+
+    @jax.jit
+    def run(states, nbrs, params):
+        (states, nbrs), recs = jax.lax.scan(
+            functools.partial(outer, params=params), (states, nbrs), None, length=n_records
+        )
+        recs = jax.tree_util.tree_map(lambda x: jnp.swapaxes(x, 0, 1), recs)
+        return states, nbrs, recs
+
+    return run
+
+
+def init_states(model: Model, params: Params, r, v, w, q, z, zd, t=0.0) -> State:
+    """Batched initial states (forces evaluated once with all-pairs contacts)."""
+    idx = _all_pairs_idx(model)
+    f = jax.vmap(
+        lambda r_, v_, w_, q_, z_, zd_, p_: initial_state(r_, v_, w_, q_, z_, zd_, t, idx, p_, model)
+    )
+    return jax.jit(f)(r, v, w, q, z, zd, params)
+
+
+def _all_pairs_idx(model: Model):
+    from .pairs import all_pairs
+
+    return all_pairs(model.n) if model.n >= 2 else jnp.zeros((model.n, 0), jnp.int32)
+
+
+def advance(model, states, nbrs, params, n_records, record_every, multiplier, on_realloc=None):
+    """Run one chunk; on neighbour-list overflow re-allocate (larger) and redo it.
+
+    Returns ``(states, nbrs, records)`` with records as numpy arrays. ``on_realloc(old, new)``
+    is called with the capacities whenever the lists are re-allocated.
+    """
+    fn = chunk_fn(model, n_records, record_every)
+    while True:
+        out_states, out_nbrs, recs = fn(states, nbrs, params)
+        if model.n < 2 or not bool(np.any(np.asarray(out_nbrs.overflow))):
+            return out_states, out_nbrs, jax.tree_util.tree_map(np.asarray, recs)
+        old = nb.capacity(nbrs)
+        nbrs = nb.allocate(
+            model, box_frame(states), multiplier, at_least=int(np.ceil(old * 1.5)) + 1
+        )
+        if on_realloc is not None:
+            on_realloc(old, nb.capacity(nbrs))
+
+
+def stack(tree_list):
+    """Stack single-system pytrees into a batch (leading axis)."""
+    return jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *tree_list)
+
+
+def take(tree, i):
+    """System ``i`` of a batched pytree."""
+    return jax.tree_util.tree_map(lambda x: x[i], tree)

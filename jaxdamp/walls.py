@@ -1,0 +1,84 @@
+"""Sphere–wall contacts with the six flat walls of the box (SPEC §2).
+
+The box spans ``x ∈ [0, Lx]``, ``y ∈ [0, Ly]`` and ``z ∈ [z_box, z_box + Lz]``: it moves rigidly
+along ``z`` only, with velocity ``zd_box``. Walls use the same contact law as grain pairs with
+``R* = R_i`` and the wall's material.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax.numpy as jnp
+
+from .contact import contact_force, hertz_stiffness, mix
+
+#: Inward unit normals of floor, lid, x=0, x=Lx, y=0, y=Ly (pointing from the wall to a grain).
+NORMALS = jnp.array(
+    [[0, 0, 1], [0, 0, -1], [1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0]], dtype=jnp.float64
+)
+FLOOR, LID = 0, 1
+
+
+class WallForces(NamedTuple):
+    """Wall forces on the grains and what they do to the box.
+
+    Attributes:
+      force, torque: on each grain [N], [N m], ``(N, 3)``.
+      box_z: vertical force of the grains on the whole box [N] (its weight is carried here).
+      floor_lid_z: vertical force of the grains on floor + lid only [N].
+      n_floor, n_lid: number of grains touching floor / lid.
+      elastic_energy: [J]; normal_loss, friction_loss: dissipated power [W] (all walls).
+    """
+
+    force: jnp.ndarray
+    torque: jnp.ndarray
+    box_z: jnp.ndarray
+    floor_lid_z: jnp.ndarray
+    n_floor: jnp.ndarray
+    n_lid: jnp.ndarray
+    elastic_energy: jnp.ndarray
+    normal_loss: jnp.ndarray
+    friction_loss: jnp.ndarray
+
+
+def wall_forces(r, v, w, z_box, zd_box, p, mixing: str) -> WallForces:
+    """Contacts of grains ``(N, 3)`` with the six walls of a box at height ``z_box``.
+
+    Args:
+      r, v, w: positions [m], velocities [m/s], angular velocities [rad/s], ``(N, 3)``.
+      z_box, zd_box: floor position [m] and box velocity [m/s] (scalars).
+      p: :class:`jaxdamp.model.Params`.
+      mixing: pair mixing rule.
+    """
+    # Signed distance of each centre to each wall plane, (N, 6).
+    x, y, z = r[:, 0], r[:, 1], r[:, 2]
+    floor = z - z_box
+    dist = jnp.stack(
+        (floor, p.Lz - floor, x, p.Lx - x, y, p.Ly - y), axis=-1
+    )
+    R = p.radius[:, None]
+    xi = R - dist
+    k_n = hertz_stiffness(p.compliance[:, None] + p.wall_compliance, R)
+    gamma_n = mix(p.gamma_n, p.wall_gamma_n, mixing)[:, None] + 1.5 * mix(
+        p.A, p.wall_A, mixing
+    )[:, None] * k_n
+    gamma_s = mix(p.gamma_s, p.wall_gamma_s, mixing)[:, None]
+    mu = mix(p.mu, p.wall_mu, mixing)[:, None]
+    v_wall = jnp.stack((0.0 * zd_box, 0.0 * zd_box, zd_box))
+    v_rel = (v - v_wall)[:, None, :]
+    spin = (p.radius[:, None] * w)[:, None, :]
+    c = contact_force(xi, NORMALS, v_rel, spin, R, k_n, gamma_n, gamma_s, mu)
+
+    fz = c.force[..., 2]  # (N, 6): force of wall on grain
+    return WallForces(
+        force=c.force.sum(axis=1),
+        torque=c.torque.sum(axis=1),
+        box_z=-fz.sum(),
+        floor_lid_z=-(fz[:, FLOOR] + fz[:, LID]).sum(),
+        n_floor=c.touching[:, FLOOR].sum(),
+        n_lid=c.touching[:, LID].sum(),
+        elastic_energy=c.elastic_energy.sum(),
+        normal_loss=c.normal_loss.sum(),
+        friction_loss=c.friction_loss.sum(),
+    )
