@@ -211,7 +211,8 @@ class Config:
         return self.grains[0].material
 
     def to_dict(self) -> dict[str, Any]:
-        return dataclasses.asdict(self)
+        """Plain nested dicts and lists (JSON/TOML-ready)."""
+        return _listify(dataclasses.asdict(self))
 
     def to_json(self) -> str:
         return json.dumps(self.to_dict(), sort_keys=True)
@@ -222,6 +223,14 @@ class Config:
 
 # ---------------------------------------------------------------------------------------------
 # dict <-> Config
+
+
+def _listify(x):
+    if isinstance(x, dict):
+        return {k: _listify(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_listify(v) for v in x]
+    return x
 
 
 def _build(cls, data: Any, path: str):

@@ -131,7 +131,10 @@ class RunFile:
         if "checkpoint" not in self.h5:
             return None
         g = self.h5["checkpoint"]
-        return {k: g[k][()] for k in g}, dict(g.attrs)
+        arrays = {}
+        g.visititems(lambda name, obj: arrays.__setitem__(name, obj[()])
+                     if isinstance(obj, h5py.Dataset) else None)
+        return arrays, dict(g.attrs)
 
     # -- end ---------------------------------------------------------------------------------
     def write_summary(self, summary: dict, units: dict) -> None:

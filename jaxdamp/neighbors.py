@@ -86,12 +86,18 @@ def _template(model: Model, capacity: int):
     return fns, template
 
 
+#: Smallest capacity allocated: the kissing number of equal spheres, so that a gas-like start
+#: does not re-allocate as soon as the grains settle into a bed.
+MIN_CAPACITY = 12
+
+
 def capacity_for(model: Model, positions, multiplier: float, at_least: int = 0) -> int:
-    """Capacity for a batch of box-frame positions ``(B, N, 3)``: max occupancy × multiplier."""
+    """Capacity for a batch of box-frame positions ``(B, N, 3)``: max occupancy × multiplier
+    (at least :data:`MIN_CAPACITY` and ``at_least``, at most ``N - 1``)."""
     if model.n < 2:
         return 0
     occ = int(_occupancy(model, positions))
-    cap = max(int(math.ceil(occ * multiplier)), at_least, 1)
+    cap = max(int(math.ceil(occ * multiplier)), at_least, MIN_CAPACITY)
     return min(cap, model.n - 1)
 
 

@@ -12,7 +12,7 @@ from typing import NamedTuple
 
 import jax.numpy as jnp
 
-from .contact import contact_force, hertz_stiffness, mix
+from .contact import Vec, contact_force, hertz_stiffness, mix
 
 #: Where padding entries of the neighbour list point: far away, so they never touch.
 _GHOST = 1.0e6
@@ -29,10 +29,6 @@ class PairForces(NamedTuple):
     friction_loss: jnp.ndarray
 
 
-def _pad(x, value):
-    return jnp.concatenate([x, jnp.full((1,) + x.shape[1:], value, x.dtype)], axis=0)
-
-
 def pair_forces(r, v, w, idx, p, mixing: str) -> PairForces:
     """Contact forces between grains.
 
@@ -47,32 +43,35 @@ def pair_forces(r, v, w, idx, p, mixing: str) -> PairForces:
         zero = jnp.zeros_like(r)
         return PairForces(zero, zero, jnp.zeros(()), jnp.zeros(()), jnp.zeros(()))
 
-    def gather(x, fill):
-        return _pad(x, fill)[idx]
+    def own(x):  # (N,) -> (N, 1): grain i's value against each of its neighbours
+        return x[:, None]
 
-    r_j = gather(r, _GHOST)
-    R_i = p.radius[:, None]
-    R_j = gather(p.radius, 0.0)
-    dr = r[:, None, :] - r_j
-    dist2 = jnp.sum(dr * dr, axis=-1)
-    dist = jnp.sqrt(dist2)  # > 0: grains never coincide, padding is far away
+    def other(x, fill=0.0):  # (N,) -> (N, K): the neighbours' values, padding gets `fill`
+        return jnp.concatenate([x, jnp.full((1,), fill, x.dtype)])[idx]
+
+    def pair_vec(a, fill=0.0):  # own minus other, per component
+        return Vec(*(own(a[:, k]) - other(a[:, k], fill) for k in range(3)))
+
+    dr = pair_vec(r, _GHOST)
+    R_i, R_j = own(p.radius), other(p.radius)
+    dist = jnp.sqrt(dr.dot(dr))  # > 0: grains never coincide, padding is far away
     xi = R_i + R_j - dist
-    nrm = dr / dist[..., None]
+    nrm = dr.scale(1.0 / dist)
 
     r_eff = R_i * R_j / (R_i + R_j + (R_j == 0))  # padding has R_j = 0
-    k_n = hertz_stiffness(p.compliance[:, None] + gather(p.compliance, 1.0), r_eff)
-    gamma_n = mix(p.gamma_n[:, None], gather(p.gamma_n, 0.0), mixing) + 1.5 * mix(
-        p.A[:, None], gather(p.A, 0.0), mixing
+    k_n = hertz_stiffness(own(p.compliance) + other(p.compliance, 1.0), r_eff)
+    gamma_n = mix(own(p.gamma_n), other(p.gamma_n), mixing) + 1.5 * mix(
+        own(p.A), other(p.A), mixing
     ) * k_n
-    gamma_s = mix(p.gamma_s[:, None], gather(p.gamma_s, 0.0), mixing)
-    mu = mix(p.mu[:, None], gather(p.mu, 0.0), mixing)
-    v_rel = v[:, None, :] - gather(v, 0.0)
-    spin = (p.radius[:, None] * w)[:, None, :] + gather(p.radius[:, None] * w, 0.0)
+    gamma_s = mix(own(p.gamma_s), other(p.gamma_s), mixing)
+    mu = mix(own(p.mu), other(p.mu), mixing)
+    Rw = p.radius[:, None] * w
+    spin = Vec(*(own(Rw[:, k]) + other(Rw[:, k]) for k in range(3)))
 
-    c = contact_force(xi, nrm, v_rel, spin, R_i, k_n, gamma_n, gamma_s, mu)
+    c = contact_force(xi, nrm, pair_vec(v), spin, R_i, k_n, gamma_n, gamma_s, mu)
     return PairForces(
-        force=c.force.sum(axis=1),
-        torque=c.torque.sum(axis=1),
+        force=c.force.sum(axis=1).stack(),
+        torque=c.torque.sum(axis=1).stack(),
         elastic_energy=0.5 * c.elastic_energy.sum(),
         normal_loss=0.5 * c.normal_loss.sum(),
         friction_loss=0.5 * c.friction_loss.sum(),

@@ -10,12 +10,13 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import jax.numpy as jnp
+import numpy as np
 
-from .contact import contact_force, hertz_stiffness, mix
+from .contact import Vec, contact_force, hertz_stiffness, mix
 
 #: Inward unit normals of floor, lid, x=0, x=Lx, y=0, y=Ly (pointing from the wall to a grain).
-NORMALS = jnp.array(
-    [[0, 0, 1], [0, 0, -1], [1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0]], dtype=jnp.float64
+_NORMALS = np.array(
+    [[0, 0, 1], [0, 0, -1], [1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0]], dtype=np.float64
 )
 FLOOR, LID = 0, 1
 
@@ -65,15 +66,16 @@ def wall_forces(r, v, w, z_box, zd_box, p, mixing: str) -> WallForces:
     )[:, None] * k_n
     gamma_s = mix(p.gamma_s, p.wall_gamma_s, mixing)[:, None]
     mu = mix(p.mu, p.wall_mu, mixing)[:, None]
-    v_wall = jnp.stack((0.0 * zd_box, 0.0 * zd_box, zd_box))
-    v_rel = (v - v_wall)[:, None, :]
-    spin = (p.radius[:, None] * w)[:, None, :]
-    c = contact_force(xi, NORMALS, v_rel, spin, R, k_n, gamma_n, gamma_s, mu)
+    normals = Vec(*(jnp.asarray(_NORMALS[:, k]) for k in range(3)))  # (6,) each
+    v_rel = Vec(v[:, 0:1], v[:, 1:2], v[:, 2:3] - zd_box)  # the walls move with (0, 0, zd_box)
+    Rw = p.radius[:, None] * w
+    spin = Vec(Rw[:, 0:1], Rw[:, 1:2], Rw[:, 2:3])
+    c = contact_force(xi, normals, v_rel, spin, R, k_n, gamma_n, gamma_s, mu)
 
-    fz = c.force[..., 2]  # (N, 6): force of wall on grain
+    fz = c.force.z  # (N, 6): force of wall on grain
     return WallForces(
-        force=c.force.sum(axis=1),
-        torque=c.torque.sum(axis=1),
+        force=c.force.sum(axis=1).stack(),
+        torque=c.torque.sum(axis=1).stack(),
         box_z=-fz.sum(),
         floor_lid_z=-(fz[:, FLOOR] + fz[:, LID]).sum(),
         n_floor=c.touching[:, FLOOR].sum(),

@@ -1,0 +1,72 @@
+"""Small systems for tests: build configs, place grains by hand, step them."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxdamp import neighbors as nb
+from jaxdamp.config import Box, Config, Drive, Material, Numerics, Primary, Species
+from jaxdamp.integrate import box_frame
+from jaxdamp.model import build
+from jaxdamp.packing import jax_tree_batch
+from jaxdamp.simulate import advance, chunk_fn, init_states, take
+
+STEEL = Material(E=2e9, nu=0.3, density=7850.0, mu=0.0, gamma_n=0.0, gamma_s=0.0)
+
+
+def config(n=2, radius=2.5e-3, material=STEEL, box=(0.05, 0.05, 0.05), system="driven",
+           gravity=0.0, frequency=10.0, amplitude=0.0, primary=None, **numerics) -> Config:
+    num = dict(duration=0.01, chunk=0.005, record_dt=1e-4)
+    num.update(numerics)
+    return Config(
+        system=system,
+        frequency=frequency,
+        grains=(Species(count=n, radius=radius, material=material),) if n else (),
+        box=Box(*box),
+        drive=Drive(amplitude) if system == "driven" else None,
+        primary=primary if system == "primary" else None,
+        numerics=Numerics(**num),
+        gravity=gravity,
+        name="test",
+    )
+
+
+def start(cfg: Config, r, v, w=None, z=0.0, zd=0.0, dt=None, **param_changes):
+    """Model, batched params, batched initial state and neighbour lists for given kinematics."""
+    model, params = build(cfg)
+    if dt is not None:
+        params = dataclasses.replace(params, dt=jnp.asarray(dt))
+    if param_changes:
+        params = dataclasses.replace(params, **{k: jnp.asarray(v_) for k, v_ in param_changes.items()})
+    n = model.n
+    r = np.asarray(r, float).reshape(n, 3)
+    v = np.asarray(v, float).reshape(n, 3)
+    w = np.zeros((n, 3)) if w is None else np.asarray(w, float).reshape(n, 3)
+    q = np.zeros((n, 4))
+    q[:, 0] = 1.0
+    pb = jax_tree_batch(params)
+    st = init_states(model, pb, r[None], v[None], w[None], q[None], jnp.full(1, z), jnp.full(1, zd))
+    nbrs = nb.allocate(model, box_frame(st), cfg.numerics.capacity_multiplier)
+    return model, pb, st, nbrs
+
+
+def run_steps(model, pb, st, nbrs, n_records, record_every):
+    """Advance (re-allocating neighbour lists on overflow) and return
+    (final batched state, nbrs, records of system 0 as numpy)."""
+    st, nbrs, recs = advance(model, st, nbrs, pb, n_records, record_every, 1.5)
+    return st, nbrs, {k: np.asarray(v[0]) for k, v in recs.items()}
+
+
+def trajectory(model, pb, st, nbrs, n_steps, every=1):
+    """States of system 0 after every ``every`` steps, as a list of numpy dicts (slow: tests)."""
+    out = []
+    fn = chunk_fn(model, 1, every)
+    for _ in range(n_steps // every):
+        st, nbrs, _ = fn(st, nbrs, pb)
+        s0 = take(st, 0)
+        out.append({k: np.asarray(getattr(s0, k)) for k in ("r", "v", "w", "t", "e_elastic")})
+    return st, out
