@@ -18,6 +18,7 @@ flagged, sticky, in :attr:`Neighbors.overflow`; the runner re-allocates and redo
 from __future__ import annotations
 
 import math
+import warnings
 from functools import partial
 
 import jax
@@ -144,7 +145,10 @@ def _build_traced(model: Model, capacity: int, positions) -> Neighbors:
         nb = fns.update(r, template)
         return nb.idx, nb.did_buffer_overflow > 0
 
-    idx, overflow = jax.vmap(one)(positions)
+    with warnings.catch_warnings():
+        # jax-md's dense pruning scatters int64 into int32 under x64; harmless, silenced here.
+        warnings.filterwarnings("ignore", "scatter inputs have incompatible types", FutureWarning)
+        idx, overflow = jax.vmap(one)(positions)
     return Neighbors(idx=idx, reference=positions, overflow=overflow)
 
 
