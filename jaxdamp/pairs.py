@@ -58,7 +58,8 @@ def pair_forces(r, v, w, idx, p, mixing: str) -> PairForces:
     xi = R_i + R_j - dist
     nrm = dr.scale(1.0 / dist)
 
-    r_eff = R_i * R_j / (R_i + R_j + (R_j == 0))  # padding has R_j = 0
+    # padding has R_j = 0; give it R* = 1 so that sqrt(R*) has a finite gradient there
+    r_eff = jnp.where(R_j > 0, R_i * R_j / (R_i + R_j), 1.0)
     k_n = hertz_stiffness(own(p.compliance) + other(p.compliance, 1.0), r_eff)
     gamma_n = mix(own(p.gamma_n), other(p.gamma_n), mixing) + 1.5 * mix(
         own(p.A), other(p.A), mixing
