@@ -1,11 +1,12 @@
 """Throughput of the DEM step: µs per step and particle-steps/s (float64, CPU or whatever JAX sees).
 
     python benchmarks/bench_step.py                 # N = 250 (sanchez2012-optimal) and N = 1000
-    python benchmarks/bench_step.py --batch 1 8     # also batched systems (vmap)
+    python benchmarks/bench_step.py --batch 1 8 32  # batched systems (vmap / prange)
+    python benchmarks/bench_step.py --engine native # only the compiled CPU engine
 
 Beds are FCC lattices settled for a short time (realistic contact numbers); the timed loop is
-the production chunk function (neighbour-list checks, rebuilds, records every 100 steps).
-Also prints the cost of the force kernels alone (pairs, walls) for one system.
+the production chunk function (neighbour-list checks, rebuilds, records every 100 steps), with
+the pure-JAX engine and the compiled CPU engine (numba, :mod:`jaxdamp.native`). Also prints the cost of the force kernels alone (pairs, walls) for one system.
 Do not run while other jobs use the cores.
 """
 
@@ -42,13 +43,13 @@ def bed(n: int):
     return cfg, model, params, settled
 
 
-def time_chunk(model, params, settled, batch: int, steps: int, record_every: int = 100):
+def time_chunk(model, params, settled, batch: int, steps: int, engine: str, record_every: int = 100):
     pb = jax.tree_util.tree_map(lambda x: jnp.stack([x] * batch), params)
     rep = lambda x: np.stack([x] * batch)  # noqa: E731
     st = init_states(model, pb, rep(settled.r), rep(settled.v), rep(settled.w), rep(settled.q),
                      jnp.zeros(batch), jnp.zeros(batch))
     nbrs = nb.allocate(model, box_frame(st), 1.5)
-    fn = chunk_fn(model, steps // record_every, record_every)
+    fn = chunk_fn(model, steps // record_every, record_every, engine=engine)
     jax.block_until_ready(fn(st, nbrs, pb))  # compile
     t0 = time.perf_counter()
     out = fn(st, nbrs, pb)
@@ -70,17 +71,19 @@ def main():
     ap.add_argument("--n", type=int, nargs="+", default=[250, 1000])
     ap.add_argument("--batch", type=int, nargs="+", default=[1, 8])
     ap.add_argument("--steps", type=int, default=5000)
+    ap.add_argument("--engine", nargs="+", default=["jax", "native"], choices=["jax", "native"])
     args = ap.parse_args()
     print(f"jaxdamp {jaxdamp.__version__}, jax {jax.__version__}, {jax.devices()}, "
           f"{platform.processor() or platform.machine()}, x64={jax.config.jax_enable_x64}")
-    print(f"{'N':>5} {'batch':>5} {'K':>3} {'us/step':>9} {'us/system-step':>15} "
+    print(f"{'engine':>7} {'N':>5} {'batch':>5} {'K':>3} {'us/step':>9} {'us/system-step':>15} "
           f"{'particle-steps/s':>17}")
     for n in args.n:
         cfg, model, params, settled = bed(n)
-        for b in args.batch:
-            per_step, cap = time_chunk(model, params, settled, b, args.steps)
-            print(f"{n:>5} {b:>5} {cap:>3} {per_step * 1e6:>9.1f} {per_step / b * 1e6:>15.1f} "
-                  f"{n * b / per_step:>17.3g}")
+        for engine in args.engine:
+            for b in args.batch:
+                per_step, cap = time_chunk(model, params, settled, b, args.steps, engine)
+                print(f"{engine:>7} {n:>5} {b:>5} {cap:>3} {per_step * 1e6:>9.1f} "
+                      f"{per_step / b * 1e6:>15.1f} {n * b / per_step:>17.3g}")
         r = jnp.asarray(settled.r)
         v = jnp.zeros_like(r) + 0.01
         w = jnp.ones_like(r)

@@ -144,6 +144,9 @@ class Numerics:
       settle_time: maximum simulated time for settling the bed before driving [s].
       settle_speed: settling stops once every grain is slower than this [m/s].
       settle_drag: viscous drag rate [1/s] on grains during settling only.
+      engine: ``"auto"`` (the compiled CPU kernel of :mod:`jaxdamp.native` when JAX runs on
+        the CPU, else pure JAX), ``"jax"`` or ``"native"``. Both compute the same step;
+        gradients always use JAX.
     """
 
     dt: float | None = None
@@ -160,6 +163,7 @@ class Numerics:
     settle_time: float = 1.0
     settle_speed: float = 5e-3
     settle_drag: float = 20.0
+    engine: str = "auto"
 
 
 @dataclass(frozen=True)

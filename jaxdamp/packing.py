@@ -107,7 +107,7 @@ def settle(config: Config, model: Model, params: Params, progress=None) -> Settl
     while t < config.numerics.settle_time:
         states, nbrs, _ = advance(
             settle_model, states, nbrs, pb, n_rec, record_every,
-            config.numerics.capacity_multiplier,
+            config.numerics.capacity_multiplier, engine=config.numerics.engine,
         )
         t = float(states.t[0])
         max_speed = float(jnp.sqrt(jnp.max(jnp.sum(states.v[0] ** 2, axis=-1))))

@@ -231,6 +231,7 @@ def run(
             states_new, nbrs, recs = advance(
                 model, states, nbrs, pb, sched.records_per_chunk, sched.record_every,
                 config.numerics.capacity_multiplier, on_realloc=realloc,
+                engine=config.numerics.engine,
             )
             recs = {k: v[0] for k, v in recs.items()}
             bad_at, what = _first_nonfinite(recs, take(states_new, 0))

@@ -12,6 +12,7 @@ so no contact is ever dropped.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 
 import jax
@@ -24,35 +25,38 @@ from .integrate import box_frame, initial_state, step
 from .model import Model, Params, State
 
 
+ENGINES = ("auto", "jax", "native")
+
+
+def resolve_engine(engine: str) -> str:
+    """``"auto"`` is the compiled CPU engine (:mod:`jaxdamp.native`) when JAX runs on the CPU
+    and numba is installed, else the pure-JAX engine."""
+    if engine not in ENGINES:
+        raise ValueError(f"engine = {engine!r}: expected one of {ENGINES}")
+    if engine == "auto":
+        from . import native
+
+        return "native" if native.AVAILABLE and jax.default_backend() == "cpu" else "jax"
+    return engine
+
+
 @functools.lru_cache(maxsize=64)
-def chunk_fn(model: Model, n_records: int, record_every: int, remat: bool = False):
+def chunk_fn(model: Model, n_records: int, record_every: int, remat: bool = False,
+             engine: str = "jax"):
     """Jitted ``(states, nbrs, params) -> (states, nbrs, records)`` for a batch.
 
     ``records`` is a dict of arrays shaped ``(B, n_records, ...)``. With ``remat`` each
     inner block of ``record_every`` steps is rematerialised in reverse mode (bounded memory for
-    gradients through long scans).
+    gradients through long scans). ``engine="native"`` advances each block with the compiled
+    CPU kernel (forward only; the neighbour lists in ``nbrs`` are then passed through unused).
     """
-    step_b = jax.vmap(step, in_axes=(0, 0, 0, None))
+    if resolve_engine(engine) == "native":
+        block = _native_block(model, record_every)
+    else:
+        block = _jax_block(model, record_every)
+        if remat:
+            block = jax.checkpoint(block)
     record_b = jax.vmap(record, in_axes=(0, 0, None, 0))
-
-    def block(states, nbrs, params):
-        """``record_every`` steps; returns the mean grain forces on the box over them."""
-
-        def inner(carry, _):
-            states, nbrs, impulse = carry
-            nbrs = nb.update(model, nbrs, box_frame(states))
-            states = step_b(states, nbrs.idx, params, model)
-            impulse = impulse + jnp.stack([states.f_floor_lid, states.f_box], axis=-1)
-            return (states, nbrs, impulse), None
-
-        b = states.t.shape[0]
-        (states, nbrs, impulse), _ = jax.lax.scan(
-            inner, (states, nbrs, jnp.zeros((b, 2))), None, length=record_every
-        )
-        return states, nbrs, impulse / record_every
-
-    if remat:
-        block = jax.checkpoint(block)
 
     def outer(carry, _, params):
         states, nbrs = carry
@@ -70,6 +74,58 @@ def chunk_fn(model: Model, n_records: int, record_every: int, remat: bool = Fals
     return run
 
 
+def _jax_block(model: Model, record_every: int):
+    """``(states, nbrs, params) -> (states, nbrs, mean forces)``: ``record_every`` steps of
+    the pure-JAX step; the mean forces are the grains' vertical forces on floor + lid and on
+    the whole box averaged over the block."""
+    step_b = jax.vmap(step, in_axes=(0, 0, 0, None))
+
+    def block(states, nbrs, params):
+        def inner(carry, _):
+            states, nbrs, impulse = carry
+            nbrs = nb.update(model, nbrs, box_frame(states))
+            states = step_b(states, nbrs.idx, params, model)
+            impulse = impulse + jnp.stack([states.f_floor_lid, states.f_box], axis=-1)
+            return (states, nbrs, impulse), None
+
+        b = states.t.shape[0]
+        (states, nbrs, impulse), _ = jax.lax.scan(
+            inner, (states, nbrs, jnp.zeros((b, 2))), None, length=record_every
+        )
+        return states, nbrs, impulse / record_every
+
+    return block
+
+
+def _native_block(model: Model, record_every: int):
+    """``(states, nbrs, params) -> (states, nbrs, mean forces)`` through the numba kernel.
+
+    State and params cross into Python as two packed float64 arrays: :func:`jax.pure_callback`
+    costs ~35 µs per array per call (measured), so 2 arrays instead of ~50 matter."""
+    from . import native
+
+    def host(state_packed, params_packed):
+        # the callback may hand over jax Arrays: slicing those would dispatch JAX ops (ms)
+        sd = native.unpack(np.asarray(state_packed), state_layout)
+        pd = native.unpack(np.asarray(params_packed), param_layout)
+        new, impulse = native.advance_numpy(model, sd, pd, record_every)
+        return native.pack_numpy(new, state_layout), impulse
+
+    state_layout = param_layout = None
+
+    def block(states, nbrs, params):
+        nonlocal state_layout, param_layout
+        state_layout = native.layout(states)
+        param_layout = native.layout(params)
+        sp, pp = native.pack(states), native.pack(params)
+        shapes = (jax.ShapeDtypeStruct(sp.shape, sp.dtype),
+                  jax.ShapeDtypeStruct((sp.shape[0], 2), jnp.float64))
+        new, impulse = jax.pure_callback(host, shapes, sp, pp)
+        return native.unpack_like(new, states), nbrs, impulse
+
+    return block
+
+
 def init_states(model: Model, params: Params, r, v, w, q, z, zd, t=0.0) -> State:
     """Batched initial states (forces evaluated once with all-pairs contacts)."""
     idx = _all_pairs_idx(model)
@@ -85,13 +141,14 @@ def _all_pairs_idx(model: Model):
     return all_pairs(model.n) if model.n >= 2 else jnp.zeros((model.n, 0), jnp.int32)
 
 
-def advance(model, states, nbrs, params, n_records, record_every, multiplier, on_realloc=None):
+def advance(model, states, nbrs, params, n_records, record_every, multiplier, on_realloc=None,
+            engine="jax"):
     """Run one chunk; on neighbour-list overflow re-allocate (larger) and redo it.
 
     Returns ``(states, nbrs, records)`` with records as numpy arrays. ``on_realloc(old, new)``
     is called with the capacities whenever the lists are re-allocated.
     """
-    fn = chunk_fn(model, n_records, record_every)
+    fn = chunk_fn(model, n_records, record_every, engine=resolve_engine(engine))
     while True:
         out_states, out_nbrs, recs = fn(states, nbrs, params)
         if model.n < 2 or not bool(np.any(np.asarray(out_nbrs.overflow))):

@@ -85,6 +85,13 @@ def validate(config: Config) -> Config:
         raise ConfigError(
             f"numerics.capacity_multiplier = {num.capacity_multiplier}: must be ≥ 1"
         )
+    if num.engine not in ("auto", "jax", "native"):
+        raise ConfigError(f"numerics.engine = {num.engine!r}: expected 'auto', 'jax' or 'native'")
+    if num.engine == "native":
+        from . import native
+
+        if not native.AVAILABLE:
+            raise ConfigError("numerics.engine = 'native' needs numba (pip install numba)")
     if not isinstance(num.seed, int) or num.seed < 0:
         raise ConfigError(f"numerics.seed = {num.seed!r}: must be a non-negative integer")
 
