@@ -49,7 +49,7 @@ def _run_config(args):
     overrides = list(args.set or [])
     if args.quick:
         # A demo of about a minute on 2 cores: short drive, quick settling, coarser samples.
-        overrides = ["numerics.duration=0.3", "numerics.settle_time=0.3", "numerics.chunk=0.05"] + overrides
+        overrides = ["numerics.duration=1.0", "numerics.settle_time=0.3", "numerics.chunk=0.1"] + overrides
     if args.frequency is not None:
         overrides.append(f"frequency={args.frequency}")
     if args.duration is not None:
@@ -152,7 +152,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--seed", type=int, help="seed of radii and lattice jitter")
     r.add_argument("--out", metavar="FILE.h5", help="output HDF5 file (default: none)")
     r.add_argument("--quick", action="store_true",
-                   help="short demo run (0.3 s driven, ~1 minute on 2 cores)")
+                   help="short demo run (1 s driven after settling, under a minute on 2 cores)")
     r.add_argument("--resume", action="store_true", help="continue --out from its checkpoint")
     r.add_argument("--no-progress", action="store_true", help="no progress bar")
     r.set_defaults(func=cmd_run)
