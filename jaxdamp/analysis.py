@@ -18,6 +18,43 @@ def frf_amplitude(f, M, K, C, U):
     return U * np.sqrt((K**2 + (C * w) ** 2) / ((K - M * w**2) ** 2 + (C * w) ** 2))
 
 
+def first_harmonic(t, x, f):
+    """Amplitude and phase [rad] of the component of ``x(t)`` at frequency ``f``:
+    ``x ≈ a cos(2π f t + phase)`` by least squares on ``cos``, ``sin`` and a constant.
+    The phase is relative to the excitation ``cos 2π f t`` (negative: ``x`` lags)."""
+    w = 2 * np.pi * f * np.asarray(t)
+    A = np.stack([np.cos(w), np.sin(w), np.ones_like(w)], axis=1)
+    (c, s, _), *_ = np.linalg.lstsq(A, np.asarray(x), rcond=None)
+    return float(np.hypot(c, s)), float(np.arctan2(-s, c))
+
+
+def fit_frf(f, Z, U, K, M0, C0, weights=None):
+    """Least-squares fit of the analytic FRF to amplitudes ``Z(f)`` with ``U, K`` fixed.
+
+    Returns ``(M_ef, C_ef, stderr_M, stderr_C)`` [kg, N s/m]; standard errors from the
+    Jacobian at the optimum and the residual variance. Residuals are relative
+    (``Z_model/Z - 1``) so that the resonance does not swamp the flanks.
+    """
+    from scipy.optimize import least_squares
+
+    f = np.asarray(f, float)
+    Z = np.asarray(Z, float)
+    wts = np.ones_like(Z) if weights is None else np.asarray(weights, float)
+
+    def resid(x):
+        return wts * (frf_amplitude(f, x[0], K, x[1], U) / Z - 1.0)
+
+    sol = least_squares(resid, [M0, C0], x_scale=[M0, max(C0, 1e-3)], method="lm")
+    dof = max(len(f) - 2, 1)
+    s2 = float(np.sum(sol.fun**2)) / dof
+    try:
+        cov = np.linalg.inv(sol.jac.T @ sol.jac) * s2
+        err = np.sqrt(np.diag(cov))
+    except np.linalg.LinAlgError:
+        err = np.array([np.nan, np.nan])
+    return float(sol.x[0]), float(sol.x[1]), float(err[0]), float(err[1])
+
+
 def _window(records: dict, t_start: float):
     t = records["t"]
     i0 = int(np.searchsorted(t, t_start - 1e-12))
@@ -60,6 +97,9 @@ def steady_state_summary(config: Config, records: dict, final: State, t_window: 
         key = f"{name}_per_cycle"
         summary[key] = float((work[-1, CH[name]] - work[i0, CH[name]]) / cycles)
         units[key] = "J"
+    amp1, phase = first_harmonic(t[i0:], records["z_box"][i0:], config.frequency)
+    summary["phase"] = phase
+    units["phase"] = "rad"
     summary["mean_vz_bed"] = float(np.mean(records["vz_cm"][i0:]))
     units["mean_vz_bed"] = "m/s"
     scale = abs(work[-1, CH["input"]]) + work[-1, CH["primary_damping"]:].sum()
