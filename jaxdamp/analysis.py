@@ -18,6 +18,13 @@ def frf_amplitude(f, M, K, C, U):
     return U * np.sqrt((K**2 + (C * w) ** 2) / ((K - M * w**2) ** 2 + (C * w) ** 2))
 
 
+def analysis_start(config: Config, duration: float) -> float:
+    """Start [s] of the analysis window: the final ``numerics.analysis_window`` of the run, but
+    at least one drive period (an amplitude needs a whole period), at most the whole run."""
+    span = max(config.numerics.analysis_window * duration, 1.0 / config.frequency)
+    return max(0.0, duration - span)
+
+
 def first_harmonic(t, x, f):
     """Amplitude and phase [rad] of the component of ``x(t)`` at frequency ``f``:
     ``x ≈ a cos(2π f t + phase)`` by least squares on ``cos``, ``sin`` and a constant.

@@ -78,6 +78,73 @@ def cmd_run(args) -> int:
     return 0
 
 
+def _float_list(text):
+    try:
+        return [float(x) for x in text.split(",") if x.strip()]
+    except ValueError:
+        raise ConfigError(f"expected a comma-separated list of numbers, got {text!r}") from None
+
+
+def cmd_frf(args) -> int:
+    import h5py
+    import numpy as np
+
+    from .analysis import fit_frf
+    from .model import grain_mass
+    from .plots import frf_figure
+    from .sweep import sweep
+
+    cfg = _base_config(args)
+    overrides = list(args.set or [])
+    if args.quick:
+        overrides = ["numerics.duration=0.5", "numerics.settle_time=0.3", "numerics.chunk=0.1"] + overrides
+    if args.duration is not None:
+        overrides.append(f"numerics.duration={args.duration}")
+    cfg = apply_overrides(cfg, overrides)
+    if cfg.system != "primary":
+        raise ConfigError("jaxdamp frf needs system 'primary' (S1): an FRF is the primary's response")
+    if args.frequencies:
+        freqs = _float_list(args.frequencies)
+    else:
+        n = 6 if args.quick and args.n is None else (args.n or 30)
+        if not 0 < args.fmin < args.fmax:
+            raise ConfigError(f"--fmin {args.fmin} / --fmax {args.fmax}: need 0 < fmin < fmax")
+        freqs = list(np.linspace(args.fmin, args.fmax, n))
+    if any(f <= 0 for f in freqs):
+        raise ConfigError(f"--frequencies: every frequency must be > 0 Hz, got {freqs}")
+    axes = {"frequency": freqs}
+    lz = _float_list(args.lz) if args.lz else None
+    if lz:
+        axes["box.Lz"] = lz
+    res = sweep(cfg, axes, out=args.out, resume=args.resume, progress=not args.no_progress)
+    Z = res.summary["amplitude"].reshape(len(freqs), -1)
+    p = cfg.primary
+    fits, lines = [], []
+    for j in range(Z.shape[1]):
+        M, C, dM, dC = fit_frf(freqs, Z[:, j], p.U, p.K, M0=p.M, C0=max(p.C, 1.0))
+        fits.append((M, C))
+        label = f"Lz = {lz[j]:g} m" if lz else f"Lz = {cfg.box.Lz:g} m"
+        k = int(np.argmax(Z[:, j]))
+        lines.append(f"{label}: peak Z/U = {Z[k, j] / p.U:.4g} at {freqs[k]:.4g} Hz; "
+                     f"fit M_ef = {M:.4g} ± {dM:.2g} kg, C_ef = {C:.4g} ± {dC:.2g} N s/m "
+                     f"(C_ef/C = {C / p.C:.3g})")
+    print("\n".join(lines))
+    m_p = grain_mass(cfg)
+    if args.out:
+        with h5py.File(args.out, "a") as h:
+            g = h.require_group("fit")
+            for name, col in (("M_ef", 0), ("C_ef", 1)):
+                if name in g:
+                    del g[name]
+                g.create_dataset(name, data=np.array([x[col] for x in fits])).attrs["units"] = (
+                    "kg" if col == 0 else "N s/m")
+        png = args.png or args.out.rsplit(".", 1)[0] + ".png"
+        frf_figure(png, np.asarray(freqs), Z, lz or [None], p, m_p, fits,
+                   title=f"{cfg.name}: N = {cfg.n_grains}, {res.summary['wall_time']:.0f} s wall")
+        print(f"wrote {args.out} and {png}")
+    return 0
+
+
 def cmd_presets(args) -> int:
     from . import presets
 
@@ -156,6 +223,37 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--resume", action="store_true", help="continue --out from its checkpoint")
     r.add_argument("--no-progress", action="store_true", help="no progress bar")
     r.set_defaults(func=cmd_run)
+
+    fr = sub.add_parser(
+        "frf", help="frequency response: a batched sweep over frequencies (and Lz), fit, figure",
+        description="Run one simulation per frequency (and per box height), all at once as a "
+        "batch, and report the steady-state amplitude Z(f), the phase, the granular "
+        "dissipation per cycle, and the fitted effective mass and damping.",
+        epilog=textwrap.dedent("""\
+            examples:
+              jaxdamp frf --preset sanchez2012-optimal --quick --out frf.h5
+              jaxdamp frf --preset sanchez2012-optimal --fmin 5 --fmax 25 --n 21 --out frf.h5
+              jaxdamp frf --preset sanchez2012-optimal --frequencies 12,14,15.16,17 \\
+                          --lz 0.06,0.09,0.1225 --out lz.h5
+            The HDF5 holds /summary/<name> arrays shaped (frequencies, Lz), /records (samples
+            per point), /axes, /fit (M_ef, C_ef per Lz) and a checkpoint (--resume)."""),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    fr.add_argument("--preset")
+    fr.add_argument("--config", metavar="FILE")
+    fr.add_argument("--set", action="append", metavar="KEY=VALUE")
+    fr.add_argument("--fmin", type=float, default=5.0, help="lowest frequency [Hz] (default 5)")
+    fr.add_argument("--fmax", type=float, default=25.0, help="highest frequency [Hz] (default 25)")
+    fr.add_argument("--n", type=int, help="number of frequencies (default 30; 6 with --quick)")
+    fr.add_argument("--frequencies", metavar="F1,F2,...", help="explicit list of frequencies [Hz]")
+    fr.add_argument("--lz", metavar="LZ1,LZ2,...", help="second axis: box heights [m]")
+    fr.add_argument("--duration", type=float, help="simulated time per point [s]")
+    fr.add_argument("--out", metavar="FILE.h5")
+    fr.add_argument("--png", metavar="FILE.png", help="figure (default: next to --out)")
+    fr.add_argument("--quick", action="store_true", help="6 frequencies, 0.5 s each")
+    fr.add_argument("--resume", action="store_true")
+    fr.add_argument("--no-progress", action="store_true")
+    fr.set_defaults(func=cmd_frf)
 
     pr = sub.add_parser("presets", help="list the reference cases (or --show one as TOML)")
     pr.add_argument("--show", metavar="NAME", help="print the full configuration of a preset")

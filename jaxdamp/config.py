@@ -133,7 +133,8 @@ class Numerics:
       chunk: simulated time per jitted chunk [s] (checkpoint, progress and overflow checks
         happen between chunks).
       record_dt: interval between recorded samples of the time series [s].
-      analysis_window: fraction of the run at its end used for steady-state quantities.
+      analysis_window: fraction of the run at its end used for steady-state quantities (at
+        least one drive period).
       seed: seed of every random choice (radii, lattice jitter).
       skin: neighbour-list skin as a fraction of the largest radius.
       capacity_multiplier: neighbour-list capacity headroom.

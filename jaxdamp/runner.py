@@ -20,7 +20,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from . import neighbors as nb
-from .analysis import steady_state_summary
+from .analysis import analysis_start, steady_state_summary
 from .config import Config, ConfigError
 from .integrate import box_frame
 from .io import RunFile
@@ -151,7 +151,7 @@ def run(
     validate(config)
     model, params = build(config)
     sched = schedule(config, float(params.dt))
-    t_window = (1.0 - config.numerics.analysis_window) * sched.duration
+    t_window = analysis_start(config, sched.duration)
     params = dataclasses.replace(params, t_window=jnp.asarray(t_window))
     pb = jax_tree_batch(params)
     radii = np.asarray(params.radius)

@@ -31,7 +31,7 @@ import numpy as np
 
 from . import __version__
 from . import neighbors as nb
-from .analysis import steady_state_summary
+from .analysis import analysis_start, steady_state_summary
 from .config import Config, ConfigError, apply_overrides
 from .integrate import box_frame
 from .model import build, config_dt, grain_radii
@@ -116,15 +116,15 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
     dt = min(config_dt(c, radii) for c in configs)
     sched = schedule(dataclasses.replace(
         base, numerics=dataclasses.replace(base.numerics, dt=dt)), dt)
-    t_window = (1.0 - base.numerics.analysis_window) * sched.duration
     built = [build(c, radii) for c in configs]
     model = built[0][0]
     for (m, _), c in zip(built, configs):
         if m != model:
             raise ConfigError("swept fields must not change the grains or the system "
                               f"(point {c.to_json()[:80]}... differs)")
-    params = [dataclasses.replace(p, dt=jnp.asarray(dt), t_window=jnp.asarray(t_window))
-              for _, p in built]
+    t_windows = [analysis_start(c, sched.duration) for c in configs]
+    params = [dataclasses.replace(p, dt=jnp.asarray(dt), t_window=jnp.asarray(tw))
+              for (_, p), tw in zip(built, t_windows)]
     pb = jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *params)
     P = len(configs)
     sharding, padded = _mesh_sharding(P) if shard else (None, P)
@@ -247,7 +247,7 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
     summaries = []
     for i, c in enumerate(configs):
         rec_i = {k: v[i] for k, v in records.items()}
-        s, units = steady_state_summary(c, rec_i, take(final, i), t_window, sched.duration)
+        s, units = steady_state_summary(c, rec_i, take(final, i), t_windows[i], sched.duration)
         summaries.append(s)
     shape = tuple(len(v) for v in axes.values())
     summary = {k: np.array([s[k] for s in summaries]).reshape(shape) for k in summaries[0]}
