@@ -94,14 +94,19 @@ if AVAILABLE:
             ref[i, 1] = r[i, 1]
             ref[i, 2] = r[i, 2] - z_box
             for k in range(3):
+                if not math.isfinite(ref[i, k]):
+                    return 0  # non-finite state: no pairs; the runner stops on it
                 lo[k] = min(lo[k], ref[i, k])
                 hi[k] = max(hi[k], ref[i, k])
+        for k in range(3):
+            if not (hi[k] - lo[k] < 1e3):  # exploded (or non-finite) state: no pairs; the
+                return 0                    # runner stops on the non-finite state it leads to
         side = cutoff
         dims = np.empty(3, np.int64)
         while True:  # cap the grid at ~4 cells per grain (tall, sparse boxes)
             for k in range(3):
                 dims[k] = int((hi[k] - lo[k]) / side) + 1
-            if dims[0] * dims[1] * dims[2] <= 4 * n + 64:
+            if float(dims[0]) * float(dims[1]) * float(dims[2]) <= 4 * n + 64:
                 break
             side *= 1.5
         ncell = dims[0] * dims[1] * dims[2]
@@ -152,6 +157,17 @@ if AVAILABLE:
                                     pc[k, 4] = _mix(mu[i], mu[j], mixing)
                                 k += 1
         return k if k <= cap else -k
+
+    @njit(cache=True, error_model="numpy")
+    def _pairs(r, z_box, cutoff, pi, pj, pc, ref, R, comp, A, gn, gs, mu, mixing):
+        """:func:`_build_pairs`, growing the pair arrays when they are too small."""
+        k = _build_pairs(r, z_box, cutoff, pi, pj, pc, ref, R, comp, A, gn, gs, mu, mixing)
+        if k < 0:
+            pi = np.empty(2 * (-k), np.int64)
+            pj = np.empty(2 * (-k), np.int64)
+            pc = np.empty((2 * (-k), 5))
+            k = _build_pairs(r, z_box, cutoff, pi, pj, pc, ref, R, comp, A, gn, gs, mu, mixing)
+        return k, pi, pj, pc
 
     @njit(cache=True, error_model="numpy")
     def _moved_too_far(r, z_box, ref, half_skin2):
@@ -280,12 +296,7 @@ if AVAILABLE:
         z, zd, zdd, t, zmax, zmin, step = zs[b, 0], zs[b, 1], zs[b, 2], zs[b, 3], zs[b, 4], zs[b, 5], zs[b, 6]
         npairs = 0
         if n > 1:
-            npairs = _build_pairs(rb, z, cutoff, pi, pj, pc, ref, Rb, cb, Ab, gnb, gsb, mub, mixing)
-            if npairs < 0:
-                pi = np.empty(2 * (-npairs), np.int64)
-                pj = np.empty(2 * (-npairs), np.int64)
-                pc = np.empty((2 * (-npairs), 5))
-                npairs = _build_pairs(rb, z, cutoff, pi, pj, pc, ref, Rb, cb, Ab, gnb, gsb, mub, mixing)
+            npairs, pi, pj, pc = _pairs(rb, z, cutoff, pi, pj, pc, ref, Rb, cb, Ab, gnb, gsb, mub, mixing)
         half_skin2 = 0.25 * skin * skin
         r1 = np.empty((n, 3))
         vp = np.empty((n, 3))
@@ -298,12 +309,7 @@ if AVAILABLE:
         imp1 = 0.0
         for _ in range(n_steps):
             if n > 1 and _moved_too_far(rb, z, ref, half_skin2):
-                npairs = _build_pairs(rb, z, cutoff, pi, pj, pc, ref, Rb, cb, Ab, gnb, gsb, mub, mixing)
-                if npairs < 0:
-                    pi = np.empty(2 * (-npairs), np.int64)
-                    pj = np.empty(2 * (-npairs), np.int64)
-                    pc = np.empty((2 * (-npairs), 5))
-                    npairs = _build_pairs(rb, z, cutoff, pi, pj, pc, ref, Rb, cb, Ab, gnb, gsb, mub, mixing)
+                npairs, pi, pj, pc = _pairs(rb, z, cutoff, pi, pj, pc, ref, Rb, cb, Ab, gnb, gsb, mub, mixing)
             t1 = t + dt
             for i in range(n):
                 for k in range(3):
@@ -320,6 +326,17 @@ if AVAILABLE:
                 zdd1 = -amp * om * om * math.cos(ph)
             _forces(r1, vp, wp, z1, zdp, Rb, mb, comp[b], A[b], gn[b], gs[b], mu[b],
                     wc, wA, wgn, wgs, wmu, Lx, Ly, Lz, grav, drag, mixing, pi, pj, pc, npairs, F, T, out)
+            health = out[0] + out[4] + out[5] + out[6] + out[7] + out[8] + z1 + zdp
+            for i in range(n):
+                health += F[i, 0] + F[i, 1] + F[i, 2] + T[i, 0] + T[i, 1] + T[i, 2]
+            if not math.isfinite(health):
+                # the state blew up: mark it non-finite and stop; the runner reports it
+                for i in range(n):
+                    for k in range(3):
+                        rb[i, k] = np.nan
+                        vb[i, k] = np.nan
+                zd = np.nan
+                break
             if system == 0:
                 u1 = U * math.cos(ph)
                 ud1 = -U * om * math.sin(ph)

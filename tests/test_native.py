@@ -71,3 +71,23 @@ def test_runs_with_both_engines_agree():
     for key in ("amplitude", "granular_loss_per_cycle", "input_per_cycle"):
         assert res["native"].summary[key] == pytest.approx(res["jax"].summary[key], rel=1e-6), key
     assert res["native"].summary["balance_error"] < 1e-3
+
+
+def test_cell_grid_pair_list_is_complete_and_grows():
+    """The kernel's half list equals the brute-force set of pairs within the cutoff, including
+    in a tall sparse box (grid capped) and when the pair arrays start too small."""
+    rng = np.random.default_rng(4)
+    n = 300
+    for box in ((0.02, 0.02, 0.02), (0.02, 0.02, 0.6)):
+        r = rng.uniform(0, 1, (n, 3)) * np.array(box)
+        cutoff = 0.003
+        ones = np.ones(n)
+        ref = np.empty((n, 3))
+        pi, pj, pc = np.empty(1, np.int64), np.empty(1, np.int64), np.empty((1, 5))
+        k, pi, pj, pc = native._pairs(r, 0.0, cutoff, pi, pj, pc, ref, ones * 1e-3, ones * 1e-9,
+                                      ones * 0, ones, ones, ones * 0.3, 0)
+        got = {(int(a), int(b)) for a, b in zip(pi[:k], pj[:k])}
+        d = np.linalg.norm(r[:, None] - r[None], axis=-1)
+        want = {(i, j) for i in range(n) for j in range(i + 1, n) if d[i, j] < cutoff}
+        assert got == want and len(want) > 10
+        np.testing.assert_allclose(pc[:k, 0], 2e-3)  # R_i + R_j
