@@ -13,7 +13,6 @@ Do not run while other jobs use the cores.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import platform
 import time
 

@@ -155,6 +155,30 @@ class RunFile:
         self.h5.close()
 
 
+def state_to_arrays(state, nbrs) -> dict:
+    """Checkpoint form of a (batch of) ``State`` and ``Neighbors``: ``{"state/<field>": array,
+    "nbrs/<field>": array}``, exact copies."""
+    import dataclasses
+
+    from . import neighbors as nb
+
+    out = {f"state/{f.name}": np.asarray(getattr(state, f.name)) for f in dataclasses.fields(state)}
+    out.update({f"nbrs/{k}": v for k, v in nb.to_numpy(nbrs).items()})
+    return out
+
+
+def arrays_to_state(arrays: dict):
+    """Inverse of :func:`state_to_arrays`: ``(State, Neighbors)`` as JAX arrays."""
+    import jax.numpy as jnp
+
+    from . import neighbors as nb
+    from .model import State
+
+    st = {k.split("/", 1)[1]: jnp.asarray(v) for k, v in arrays.items() if k.startswith("state/")}
+    nbr = {k.split("/", 1)[1]: v for k, v in arrays.items() if k.startswith("nbrs/")}
+    return State(**st), nb.from_numpy(nbr)
+
+
 def read_config(path: str) -> Config:
     """The configuration stored in a run file."""
     from .config import from_json

@@ -24,7 +24,6 @@ import math
 import numpy as np
 
 try:
-    import numba
     from numba import njit, prange
 
     AVAILABLE = True
@@ -435,7 +434,6 @@ def unpack_like(packed, tree):
     import jax.numpy as jnp
 
     out, k = {}, 0
-    b = packed.shape[0]
     for f in dataclasses.fields(tree):
         x = getattr(tree, f.name)
         size = int(np.prod(x.shape[1:], dtype=np.int64))

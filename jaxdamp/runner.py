@@ -23,8 +23,8 @@ from . import neighbors as nb
 from .analysis import analysis_start, steady_state_summary
 from .config import Config, ConfigError
 from .integrate import box_frame
-from .io import RunFile
-from .model import Model, Params, State, build, grain_species
+from .io import RunFile, arrays_to_state, state_to_arrays
+from .model import State, build, grain_species
 from .packing import SettledBed, jax_tree_batch, settle
 from .simulate import advance, init_states, take
 from .validation import validate
@@ -82,18 +82,6 @@ class RunResult:
     records: dict
     bed: SettledBed
     state: State
-
-
-def _state_to_arrays(state: State, nbrs: nb.Neighbors) -> dict:
-    out = {f"state/{k}": np.asarray(v) for k, v in dataclasses.asdict(state).items()}
-    out.update({f"nbrs/{k}": v for k, v in nb.to_numpy(nbrs).items()})
-    return out
-
-
-def _arrays_to_state(arrays: dict) -> tuple[State, nb.Neighbors]:
-    st = {k.split("/", 1)[1]: jnp.asarray(v) for k, v in arrays.items() if k.startswith("state/")}
-    nbr = {k.split("/", 1)[1]: v for k, v in arrays.items() if k.startswith("nbrs/")}
-    return State(**st), nb.from_numpy(nbr)
 
 
 def _first_nonfinite(recs: dict, states: State) -> tuple[int | None, str]:
@@ -176,15 +164,13 @@ def run(
             rf.close()
             raise ConfigError(f"--resume: {out} has no checkpoint (the run never finished a chunk)")
         arrays, attrs = ck
-        state1, nbrs1 = _arrays_to_state(arrays)
+        state1, nbrs1 = arrays_to_state(arrays)
         states = jax_tree_batch(state1)
         nbrs = jax.tree_util.tree_map(lambda x: x[None], nbrs1)
         start_chunk = int(attrs["chunk"])
         rf.truncate(int(attrs["n_records"]), int(attrs["n_snapshots"]))
-        from .packing import SettledBed as _SB
-
         s = rf.h5["settle"]
-        bed = _SB(s["r0"][()], None, None, None, float(s.attrs["bed_height"]),
+        bed = SettledBed(s["r0"][()], None, None, None, float(s.attrs["bed_height"]),
                   float(s.attrs["time"]), float(s.attrs["max_speed"]))
         say(f"resuming {out} at chunk {start_chunk}/{sched.n_chunks} (t = {float(states.t[0]):.6g} s)")
     else:
@@ -252,7 +238,7 @@ def run(
                 if snapshots:
                     rf.append_snapshot(float(states.t[0]), states.r[0], states.q[0])
                 rf.write_checkpoint(
-                    _state_to_arrays(take(states, 0), take(nbrs, 0)),
+                    state_to_arrays(take(states, 0), take(nbrs, 0)),
                     {"chunk": chunk + 1, "n_records": rf.n_records(),
                      "n_snapshots": rf.h5["snapshots"]["t"].shape[0] if snapshots else 0},
                 )

@@ -12,7 +12,6 @@ so no contact is ever dropped.
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 
 import jax

@@ -34,6 +34,7 @@ from . import neighbors as nb
 from .analysis import analysis_start, steady_state_summary
 from .config import Config, ConfigError, apply_overrides
 from .integrate import box_frame
+from .io import arrays_to_state, state_to_arrays
 from .model import build, config_dt, grain_radii
 from .packing import settle
 from .runner import initial_box_position, schedule
@@ -143,11 +144,9 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
             raise ConfigError(f"--resume: {out} holds a different sweep")
         g = h5["checkpoint"]
         start_chunk = int(g.attrs["chunk"])
-        from .runner import _arrays_to_state
-
         arrays = {}
         g.visititems(lambda n, o: arrays.__setitem__(n, o[()]) if isinstance(o, h5py.Dataset) else None)
-        states, nbrs = _arrays_to_state(arrays)
+        states, nbrs = arrays_to_state(arrays)
         states = _pad_and_shard(states, padded, sharding)
         nbrs = _pad_and_shard(nbrs, padded, sharding)
         for ds in h5["records"].values():
@@ -216,14 +215,12 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
                     n0 = g[k].shape[1]
                     g[k].resize(n0 + v.shape[1], axis=1)
                     g[k][:, n0:] = v
-            from .runner import _state_to_arrays
-
             if "checkpoint" in h5:
                 del h5["checkpoint"]
             ck = h5.create_group("checkpoint")
             host_states = jax.tree_util.tree_map(lambda x: np.asarray(x)[:P], states)
             host_nbrs = jax.tree_util.tree_map(lambda x: np.asarray(x)[:P], nbrs)
-            for k, v in _state_to_arrays(host_states, host_nbrs).items():
+            for k, v in state_to_arrays(host_states, host_nbrs).items():
                 ck.create_dataset(k, data=v)
             ck.attrs["chunk"] = chunk + 1
             h5.flush()

@@ -4,12 +4,11 @@ from __future__ import annotations
 
 import dataclasses
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 
 from jaxdamp import neighbors as nb
-from jaxdamp.config import Box, Config, Drive, Material, Numerics, Primary, Species
+from jaxdamp.config import Box, Config, Drive, Material, Numerics, Species
 from jaxdamp.integrate import box_frame
 from jaxdamp.model import build
 from jaxdamp.packing import jax_tree_batch

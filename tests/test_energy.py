@@ -1,6 +1,5 @@
 """Energy conservation, the energy balance, and sliding-to-rolling at 5/7."""
 
-import dataclasses
 import math
 
 import numpy as np

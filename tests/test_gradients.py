@@ -7,10 +7,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxdamp import neighbors as nb
 from jaxdamp.config import Material
 from jaxdamp.energy import granular_loss
-from jaxdamp.integrate import box_frame
 from jaxdamp.simulate import chunk_fn
 
 from helpers import config, start

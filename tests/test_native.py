@@ -1,8 +1,5 @@
 """The compiled CPU engine (numba) computes the same step as the pure-JAX reference."""
 
-import dataclasses
-
-import jax.numpy as jnp
 import numpy as np
 import pytest
 

@@ -1,7 +1,5 @@
 """Neighbour-list forces equal brute-force all-pairs forces, also after an overflow."""
 
-import dataclasses
-
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -12,7 +10,7 @@ from jaxdamp.config import Material
 from jaxdamp.integrate import box_frame
 from jaxdamp.model import build
 from jaxdamp.pairs import all_pairs, pair_forces
-from jaxdamp.simulate import advance, take
+from jaxdamp.simulate import advance
 
 from helpers import config, start
 

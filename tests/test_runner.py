@@ -54,7 +54,7 @@ def test_run_file_holds_config_series_snapshots_summary(finished):
 def test_resume_is_bit_identical(finished, tmp_path):
     cfg, res, _ = finished
     path = tmp_path / "part.h5"
-    part = run(cfg, out=str(path), progress=False, echo=None, max_chunks=2)
+    run(cfg, out=str(path), progress=False, echo=None, max_chunks=2)
     with h5py.File(path, "r") as h:
         assert h.attrs["status"] == "partial"
         assert h["series/t"].shape[0] == 40
@@ -86,7 +86,7 @@ def test_non_finite_state_stops_with_message_and_keeps_data(tmp_path):
     with h5py.File(path, "r") as h:
         assert h.attrs["status"] == "diverged"
         assert "non-finite" in h.attrs["message"]
-        t = h["series/t"][()]
+        assert h["series/t"].shape[0] > 0
         assert np.isfinite(h["series/z_cm"][()]).all()
 
 
