@@ -40,7 +40,8 @@ def fit_frf(f, Z, U, K, M0, C0, weights=None):
 
     Returns ``(M_ef, C_ef, stderr_M, stderr_C)`` [kg, N s/m]; standard errors from the
     Jacobian at the optimum and the residual variance. Residuals are relative
-    (``Z_model/Z - 1``) so that the resonance does not swamp the flanks.
+    (``Z_model/Z - 1``) so that the resonance does not swamp the flanks. The FRF depends on
+    ``C²`` only, so ``C`` is constrained ≥ 0 (else the fit may return the mirror ``-C``).
     """
     from scipy.optimize import least_squares
 
@@ -51,7 +52,8 @@ def fit_frf(f, Z, U, K, M0, C0, weights=None):
     def resid(x):
         return wts * (frf_amplitude(f, x[0], K, x[1], U) / Z - 1.0)
 
-    sol = least_squares(resid, [M0, C0], x_scale=[M0, max(C0, 1e-3)], method="lm")
+    sol = least_squares(resid, [M0, C0], x_scale=[M0, max(C0, 1e-3)], method="trf",
+                        bounds=([0.0, 0.0], [np.inf, np.inf]))
     dof = max(len(f) - 2, 1)
     s2 = float(np.sum(sol.fun**2)) / dof
     try:

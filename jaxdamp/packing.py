@@ -13,6 +13,7 @@ import dataclasses
 import math
 from typing import NamedTuple
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -127,6 +128,4 @@ def settle(config: Config, model: Model, params: Params, progress=None) -> Settl
 
 def jax_tree_batch(tree):
     """Add a leading batch axis of size 1 to every leaf."""
-    import jax
-
     return jax.tree_util.tree_map(lambda x: jnp.asarray(x)[None], tree)
