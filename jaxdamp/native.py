@@ -31,11 +31,16 @@ except ImportError:  # pragma: no cover - numba is a dependency; keep the JAX en
     AVAILABLE = False
 
 SYSTEMS = {"primary": 0, "driven": 1}
+
+#: LLVM fast-math flags of the kernels: contraction into FMAs, reassociation, reciprocals and
+#: signed zeros. Not ``nnan``/``ninf``: the kernel tests for non-finite states and must keep
+#: those tests (with them the compiler may assume every value finite and drop the checks).
+FASTMATH = {"contract", "reassoc", "arcp", "nsz"}
 MIXING = {"arithmetic": 0, "harmonic": 1, "geometric": 2}
 
 if AVAILABLE:
 
-    @njit(cache=True, inline="always", error_model="numpy")
+    @njit(cache=True, inline="always", error_model="numpy", fastmath=FASTMATH)
     def _mix(a, b, rule):
         if rule == 0:
             return 0.5 * (a + b)
@@ -44,18 +49,18 @@ if AVAILABLE:
         s = a + b
         return 2.0 * a * b / s if s > 0 else 0.0
 
-    @njit(cache=True, inline="always", error_model="numpy")
+    @njit(cache=True, inline="always", error_model="numpy", fastmath=FASTMATH)
     def _contact(xi, nx, ny, nz, vx, vy, vz, sx, sy, sz, k_n, g_n, g_s, mu):
         """Contact law of :func:`jaxdamp.contact.contact_force` for one touching contact.
 
         Returns force on i (fx, fy, fz), tangential force (tx, ty, tz), elastic energy,
-        normal loss, friction loss."""
+        normal loss, friction loss. Written without data-dependent branches where a
+        ``min``/``max`` does (branch mispredictions dominated the dense-bed cost), and with
+        the one division of the Coulomb cap only where the cap applies."""
         sq = math.sqrt(xi)
         xi_dot = -(vx * nx + vy * ny + vz * nz)
         f_el = k_n * xi * sq
-        f_n = f_el + g_n * sq * xi_dot
-        if f_n < 0.0:
-            f_n = 0.0
+        f_n = max(f_el + g_n * sq * xi_dot, 0.0)
         # contact-point relative velocity v_rel - spin × n, and its tangential part
         cx = vx - (sy * nz - sz * ny)
         cy = vy - (sz * nx - sx * nz)
@@ -65,20 +70,18 @@ if AVAILABLE:
         ty = cy - cn * ny
         tz = cz - cn * nz
         sp2 = tx * tx + ty * ty + tz * tz
-        drag = 0.0
-        if sp2 > 0.0:
-            sp = math.sqrt(sp2)
-            drag = g_s * sq
-            cap = mu * f_n / sp
-            if cap < drag:
-                drag = cap
+        # |F_t| = min(γ_s sqrt(ξ) |v_s|, μ F_n): drag = |F_t| / |v_s|
+        drag = g_s * sq
+        cap = mu * f_n
+        if drag * drag * sp2 > cap * cap:
+            drag = cap / math.sqrt(sp2)
         ftx, fty, ftz = -drag * tx, -drag * ty, -drag * tz
         return (
             f_n * nx + ftx, f_n * ny + fty, f_n * nz + ftz, ftx, fty, ftz,
             0.4 * k_n * xi * xi * sq, (f_n - f_el) * xi_dot, drag * sp2,
         )
 
-    @njit(cache=True, error_model="numpy")
+    @njit(cache=True, error_model="numpy", fastmath=FASTMATH)
     def _build_pairs(r, z_box, cutoff, pi, pj, pc, ref, R, comp, A, gn, gs, mu, mixing):
         """Half list of pairs closer than ``cutoff`` (box frame) via a cell grid of side
         ``cutoff``, with the pairs' constants ``pc[k] = (R_i + R_j, k_n, γ_n, γ_s, μ)``
@@ -157,7 +160,7 @@ if AVAILABLE:
                                 k += 1
         return k if k <= cap else -k
 
-    @njit(cache=True, error_model="numpy")
+    @njit(cache=True, error_model="numpy", fastmath=FASTMATH)
     def _pairs(r, z_box, cutoff, pi, pj, pc, ref, R, comp, A, gn, gs, mu, mixing):
         """:func:`_build_pairs`, growing the pair arrays when they are too small."""
         k = _build_pairs(r, z_box, cutoff, pi, pj, pc, ref, R, comp, A, gn, gs, mu, mixing)
@@ -168,7 +171,7 @@ if AVAILABLE:
             k = _build_pairs(r, z_box, cutoff, pi, pj, pc, ref, R, comp, A, gn, gs, mu, mixing)
         return k, pi, pj, pc
 
-    @njit(cache=True, error_model="numpy")
+    @njit(cache=True, error_model="numpy", fastmath=FASTMATH)
     def _moved_too_far(r, z_box, ref, half_skin2):
         for i in range(r.shape[0]):
             dx = r[i, 0] - ref[i, 0]
@@ -178,12 +181,45 @@ if AVAILABLE:
                 return True
         return False
 
-    @njit(cache=True, error_model="numpy")
-    def _forces(r, v, w, z_box, zd_box, R, m, comp, A, gn, gs, mu,
-                wc, wA, wgn, wgs, wmu, Lx, Ly, Lz, grav, drag, mixing,
+    @njit(cache=True, error_model="numpy", fastmath=FASTMATH)
+    def _wall_constants(R, comp, A, gn, gs, mu, wc, wA, wgn, wgs, wmu, mixing):
+        """Per grain, the constants of its contact with any wall: ``(N, 4)`` array of
+        ``(k_n, γ_n, γ_s, μ)`` (they depend on the grain and the wall material only)."""
+        n = R.shape[0]
+        wk = np.empty((n, 4))
+        for i in range(n):
+            k_n = (4.0 / 3.0) * math.sqrt(R[i]) / (comp[i] + wc)
+            wk[i, 0] = k_n
+            wk[i, 1] = _mix(gn[i], wgn, mixing) + 1.5 * _mix(A[i], wA, mixing) * k_n
+            wk[i, 2] = _mix(gs[i], wgs, mixing)
+            wk[i, 3] = _mix(mu[i], wmu, mixing)
+        return wk
+
+    @njit(cache=True, inline="always", error_model="numpy", fastmath=FASTMATH)
+    def _wall(i, xi, nx, ny, nz, v, w, R, zd_box, wk, F, T, out):
+        """Contact of grain ``i`` with a wall of inward normal ``n`` at overlap ``xi > 0``:
+        adds to ``F``, ``T`` and the energy channels; returns the force's z component."""
+        fx, fy, fz, tx, ty, tz, e, ln, lf = _contact(
+            xi, nx, ny, nz, v[i, 0], v[i, 1], v[i, 2] - zd_box,
+            R[i] * w[i, 0], R[i] * w[i, 1], R[i] * w[i, 2],
+            wk[i, 0], wk[i, 1], wk[i, 2], wk[i, 3])
+        F[i, 0] += fx
+        F[i, 1] += fy
+        F[i, 2] += fz
+        T[i, 0] -= R[i] * (ny * tz - nz * ty)
+        T[i, 1] -= R[i] * (nz * tx - nx * tz)
+        T[i, 2] -= R[i] * (nx * ty - ny * tx)
+        out[4] += e
+        out[7] += ln
+        out[8] += lf
+        return fz
+
+    @njit(cache=True, error_model="numpy", fastmath=FASTMATH)
+    def _forces(r, v, w, z_box, zd_box, R, m, wk, Lx, Ly, Lz, grav, drag,
                 pi, pj, pc, npairs, F, T, out):
         """Forces (F, T filled in place) and scalars ``out`` = [box_z, floor_lid_z, n_floor,
-        n_lid, e_elastic, pp_normal, pp_friction, pw_normal, pw_friction]."""
+        n_lid, e_elastic, pp_normal, pp_friction, pw_normal, pw_friction]. ``wk``: the
+        grains' wall constants (:func:`_wall_constants`)."""
         n = r.shape[0]
         for i in range(n):
             F[i, 0] = -m[i] * drag * v[i, 0]
@@ -194,6 +230,11 @@ if AVAILABLE:
             T[i, 2] = 0.0
         for k in range(9):
             out[k] = 0.0
+        # energy sums in registers: F, T and out may alias as far as the compiler knows, so
+        # accumulating into out[...] would force a store and reload per contact
+        e_sum = 0.0
+        ln_sum = 0.0
+        lf_sum = 0.0
         for p in range(npairs):
             i = pi[p]
             j = pj[p]
@@ -206,7 +247,8 @@ if AVAILABLE:
                 continue
             d = math.sqrt(d2)
             xi = rs - d
-            nx, ny, nz = dx / d, dy / d, dz / d
+            inv = 1.0 / d
+            nx, ny, nz = dx * inv, dy * inv, dz * inv
             sx = R[i] * w[i, 0] + R[j] * w[j, 0]
             sy = R[i] * w[i, 1] + R[j] * w[j, 1]
             sz = R[i] * w[i, 2] + R[j] * w[j, 2]
@@ -229,52 +271,37 @@ if AVAILABLE:
             T[j, 0] -= R[j] * cx
             T[j, 1] -= R[j] * cy
             T[j, 2] -= R[j] * cz
-            out[4] += e
-            out[5] += ln
-            out[6] += lf
-        # walls: floor, lid, x = 0, x = Lx, y = 0, y = Ly (inward normals)
+            e_sum += e
+            ln_sum += ln
+            lf_sum += lf
+        out[4] = e_sum
+        out[5] = ln_sum
+        out[6] = lf_sum
+        # walls: floor, lid, x = 0, x = Lx, y = 0, y = Ly (inward normals), unrolled: most
+        # grains touch none, so the common path is six compares
         for i in range(n):
+            Ri = R[i]
             floor = r[i, 2] - z_box
-            for wall in range(6):
-                if wall == 0:
-                    dist, nx, ny, nz = floor, 0.0, 0.0, 1.0
-                elif wall == 1:
-                    dist, nx, ny, nz = Lz - floor, 0.0, 0.0, -1.0
-                elif wall == 2:
-                    dist, nx, ny, nz = r[i, 0], 1.0, 0.0, 0.0
-                elif wall == 3:
-                    dist, nx, ny, nz = Lx - r[i, 0], -1.0, 0.0, 0.0
-                elif wall == 4:
-                    dist, nx, ny, nz = r[i, 1], 0.0, 1.0, 0.0
-                else:
-                    dist, nx, ny, nz = Ly - r[i, 1], 0.0, -1.0, 0.0
-                xi = R[i] - dist
-                if xi <= 0.0:
-                    continue
-                k_n = (4.0 / 3.0) * math.sqrt(R[i]) / (comp[i] + wc)
-                g_n = _mix(gn[i], wgn, mixing) + 1.5 * _mix(A[i], wA, mixing) * k_n
-                fx, fy, fz, tx, ty, tz, e, ln, lf = _contact(
-                    xi, nx, ny, nz, v[i, 0], v[i, 1], v[i, 2] - zd_box,
-                    R[i] * w[i, 0], R[i] * w[i, 1], R[i] * w[i, 2],
-                    k_n, g_n, _mix(gs[i], wgs, mixing), _mix(mu[i], wmu, mixing))
-                F[i, 0] += fx
-                F[i, 1] += fy
-                F[i, 2] += fz
-                T[i, 0] -= R[i] * (ny * tz - nz * ty)
-                T[i, 1] -= R[i] * (nz * tx - nx * tz)
-                T[i, 2] -= R[i] * (nx * ty - ny * tx)
+            if floor < Ri:
+                fz = _wall(i, Ri - floor, 0.0, 0.0, 1.0, v, w, R, zd_box, wk, F, T, out)
                 out[0] -= fz
-                if wall == 0:
-                    out[1] -= fz
-                    out[2] += 1.0
-                elif wall == 1:
-                    out[1] -= fz
-                    out[3] += 1.0
-                out[4] += e
-                out[7] += ln
-                out[8] += lf
+                out[1] -= fz
+                out[2] += 1.0
+            if Lz - floor < Ri:
+                fz = _wall(i, Ri - (Lz - floor), 0.0, 0.0, -1.0, v, w, R, zd_box, wk, F, T, out)
+                out[0] -= fz
+                out[1] -= fz
+                out[3] += 1.0
+            if r[i, 0] < Ri:
+                out[0] -= _wall(i, Ri - r[i, 0], 1.0, 0.0, 0.0, v, w, R, zd_box, wk, F, T, out)
+            if Lx - r[i, 0] < Ri:
+                out[0] -= _wall(i, Ri - (Lx - r[i, 0]), -1.0, 0.0, 0.0, v, w, R, zd_box, wk, F, T, out)
+            if r[i, 1] < Ri:
+                out[0] -= _wall(i, Ri - r[i, 1], 0.0, 1.0, 0.0, v, w, R, zd_box, wk, F, T, out)
+            if Ly - r[i, 1] < Ri:
+                out[0] -= _wall(i, Ri - (Ly - r[i, 1]), 0.0, -1.0, 0.0, v, w, R, zd_box, wk, F, T, out)
 
-    @njit(cache=True, error_model="numpy")
+    @njit(cache=True, error_model="numpy", fastmath=FASTMATH)
     def _advance_one(b, n_steps, system, mixing, cutoff, skin,
                      r, v, w, q, a, al, zs, work, power, diag,
                      R, m, I, comp, A, gn, gs, mu, sc, impulse):
@@ -291,6 +318,7 @@ if AVAILABLE:
         pj = np.empty(16 * n + 16, np.int64)
         pc = np.empty((16 * n + 16, 5))
         cb, Ab, gnb, gsb, mub = comp[b], A[b], gn[b], gs[b], mu[b]
+        wk = _wall_constants(Rb, cb, Ab, gnb, gsb, mub, wc, wA, wgn, wgs, wmu, mixing)
         ref = np.empty((n, 3))
         z, zd, zdd, t, zmax, zmin, step = zs[b, 0], zs[b, 1], zs[b, 2], zs[b, 3], zs[b, 4], zs[b, 5], zs[b, 6]
         npairs = 0
@@ -323,8 +351,8 @@ if AVAILABLE:
                 z1 = z_off + amp * math.cos(ph)
                 zdp = -amp * om * math.sin(ph)
                 zdd1 = -amp * om * om * math.cos(ph)
-            _forces(r1, vp, wp, z1, zdp, Rb, mb, comp[b], A[b], gn[b], gs[b], mu[b],
-                    wc, wA, wgn, wgs, wmu, Lx, Ly, Lz, grav, drag, mixing, pi, pj, pc, npairs, F, T, out)
+            _forces(r1, vp, wp, z1, zdp, Rb, mb, wk, Lx, Ly, Lz, grav, drag,
+                    pi, pj, pc, npairs, F, T, out)
             health = out[0] + out[4] + out[5] + out[6] + out[7] + out[8] + z1 + zdp
             for i in range(n):
                 health += F[i, 0] + F[i, 1] + F[i, 2] + T[i, 0] + T[i, 1] + T[i, 2]
@@ -357,10 +385,17 @@ if AVAILABLE:
                 ox = wb[i, 0] + 0.5 * dt * alb[i, 0]
                 oy = wb[i, 1] + 0.5 * dt * alb[i, 1]
                 oz = wb[i, 2] + 0.5 * dt * alb[i, 2]
-                speed = math.sqrt(ox * ox + oy * oy + oz * oz)
-                half = 0.5 * speed * dt
-                s = math.sin(half) / speed if speed > 0 else 0.5 * dt
-                dw, dx, dy, dz = math.cos(half), s * ox, s * oy, s * oz
+                h2 = 0.25 * dt * dt * (ox * ox + oy * oy + oz * oz)  # (half angle)^2
+                if h2 < 1e-4:
+                    # cos h and sin(h)/|ω| by their series: exact in float64 for h < 0.01
+                    # (next terms < 3e-21), and free of sin/cos/sqrt calls per grain and step
+                    cw = 1.0 - h2 * (0.5 - h2 * (1.0 / 24.0 - h2 / 720.0))
+                    s = 0.5 * dt * (1.0 - h2 * (1.0 / 6.0 - h2 * (1.0 / 120.0 - h2 / 5040.0)))
+                else:
+                    speed = math.sqrt(ox * ox + oy * oy + oz * oz)
+                    cw = math.cos(0.5 * speed * dt)
+                    s = math.sin(0.5 * speed * dt) / speed
+                dw, dx, dy, dz = cw, s * ox, s * oy, s * oz
                 qw, qx, qy, qz = qb[i, 0], qb[i, 1], qb[i, 2], qb[i, 3]
                 nw = dw * qw - (dx * qx + dy * qy + dz * qz)
                 nx = dw * qx + qw * dx + (dy * qz - dz * qy)
@@ -391,7 +426,7 @@ if AVAILABLE:
         impulse[b, 0] = imp0 / n_steps
         impulse[b, 1] = imp1 / n_steps
 
-    @njit(cache=True, parallel=True, error_model="numpy")
+    @njit(cache=True, parallel=True, error_model="numpy", fastmath=FASTMATH)
     def _advance(n_steps, system, mixing, cutoff, skin, r, v, w, q, a, al, zs, work, power,
                  diag, R, m, I, comp, A, gn, gs, mu, sc, impulse):
         for b in prange(r.shape[0]):
