@@ -64,6 +64,62 @@ def fit_frf(f, Z, U, K, M0, C0, weights=None):
     return float(sol.x[0]), float(sol.x[1]), float(err[0]), float(err[1])
 
 
+def resonance(f, Z):
+    """Resonance frequency [Hz] and peak amplitude of a sampled FRF ``Z(f)`` (``(F,)`` each).
+
+    A parabola through the largest sample and its two neighbours (in ``f``, ``log Z``) refines
+    the peak between samples; at either end of the range the largest sample is returned."""
+    f = np.asarray(f, float)
+    Z = np.asarray(Z, float)
+    order = np.argsort(f)
+    f, Z = f[order], Z[order]
+    k = int(np.argmax(Z))
+    if 0 < k < len(f) - 1:
+        c = np.polyfit(f[k - 1:k + 2], np.log(Z[k - 1:k + 2]), 2)
+        if c[0] < 0:
+            fp = -c[1] / (2 * c[0])
+            if f[k - 1] <= fp <= f[k + 1]:
+                return float(fp), float(np.exp(np.polyval(c, fp)))
+    return float(f[k]), float(Z[k])
+
+
+def crossings(x, y, level):
+    """Every ``x`` where the piecewise-linear ``y(x)`` crosses ``level`` (``x`` sorted).
+
+    Used for the box height where the effective mass crosses the primary mass ``M`` (the
+    thesis' proposed estimate of the optimal gap)."""
+    x = np.asarray(x, float)
+    d = np.asarray(y, float) - level
+    out = []
+    for i in range(len(x) - 1):
+        if d[i] == 0:
+            out.append(float(x[i]))
+        elif d[i] * d[i + 1] < 0:
+            out.append(float(x[i] - d[i] * (x[i + 1] - x[i]) / (d[i + 1] - d[i])))
+    if len(x) and d[-1] == 0:
+        out.append(float(x[-1]))
+    return out
+
+
+def optimal_gap(Lz, C_ef, Z_peak, M_ef=None, M=None):
+    """The optimum of an ``Lz`` scan by the criteria of the thesis (ch. 3).
+
+    Args:
+      Lz: box heights [m] ``(L,)``; C_ef: fitted effective damping [N s/m] ``(L,)``;
+      Z_peak: resonant amplitude [m] ``(L,)``; M_ef, M: effective masses [kg] ``(L,)`` and the
+      primary mass, for the crossing criterion.
+    Returns a dict: ``max_C_ef`` (the ``Lz`` of the largest ``C_ef``), ``min_peak`` (of the
+    smallest resonant amplitude), ``M_ef_crosses_M`` (list of ``Lz`` where ``M_ef = M``).
+    """
+    Lz = np.asarray(Lz, float)
+    order = np.argsort(Lz)
+    out = {"max_C_ef": float(Lz[int(np.nanargmax(C_ef))]),
+           "min_peak": float(Lz[int(np.nanargmin(Z_peak))])}
+    if M_ef is not None and M is not None:
+        out["M_ef_crosses_M"] = crossings(Lz[order], np.asarray(M_ef, float)[order], M)
+    return out
+
+
 def _window(records: dict, t_start: float):
     t = records["t"]
     i0 = int(np.searchsorted(t, t_start - 1e-12))

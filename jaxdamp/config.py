@@ -9,6 +9,9 @@ Two systems (SPEC §1):
 * ``system = "primary"`` (S1): the box rides on a 1-DOF primary ``M, K, C`` whose base moves as
   ``u(t) = U cos(2π f t)``.
 * ``system = "driven"`` (S2): the box itself moves as ``z(t) = A_d cos(2π f t)``.
+* ``system = "impact"`` (S3): the primary of S1 with the whole bed replaced by one point mass
+  (:class:`Impactor`, modelled by :mod:`jaxdamp.impact`); ``grains`` must be empty and the box
+  is not used (the free height is ``impactor.gap``).
 
 Contact damping is given per material either directly (``gamma_n``, ``gamma_s``; thesis) or as a
 coefficient of restitution ``restitution`` at impact speed ``v_ref`` for a like-pair collision
@@ -121,6 +124,36 @@ class Drive:
 
 
 @dataclass(frozen=True)
+class Impactor:
+    """The single particle of S3 (SPEC §1 S3; thesis §2.1.3, §5.3.2), see :mod:`jaxdamp.impact`.
+
+    Attributes:
+      mass: particle mass ``m`` [kg] (the bed's total mass ``m_p`` when it stands for a bed).
+      restitution: coefficient of restitution ``e`` of particle–box impacts [-], in [0, 1].
+      gap: free height between floor and lid for the point particle [m] (for a bed:
+        ``Lz - h_bed``).
+      method: ``"event"`` (exact event-driven, numba) or ``"smooth"`` (penalty contacts, JAX,
+        differentiable, ``vmap``-batched).
+      stick_speed: event-driven only: after an impact slower than this relative speed [m/s]
+        the particle sticks to the wall if the contact force is compressive (ends the
+        infinite series of ever shorter bounces of ``e > 0``; its loss is booked).
+      contact_time: smooth only: duration of one free collision of the penalty contact [s]
+        (sets the contact stiffness).
+      steps_per_contact: smooth only: time steps per ``contact_time``.
+      smooth_width: smooth only: length [m] over which the contact force switches on.
+    """
+
+    mass: float
+    restitution: float
+    gap: float
+    method: str = "event"
+    stick_speed: float = 1e-4
+    contact_time: float = 3e-4
+    steps_per_contact: float = 20.0
+    smooth_width: float = 3e-5
+
+
+@dataclass(frozen=True)
 class Numerics:
     """How the equations are integrated and recorded.
 
@@ -172,12 +205,13 @@ class Config:
     """A complete simulation.
 
     Attributes:
-      system: ``"primary"`` (S1) or ``"driven"`` (S2).
+      system: ``"primary"`` (S1), ``"driven"`` (S2) or ``"impact"`` (S3).
       frequency: excitation frequency ``f`` [Hz] (``Ω = 2π f``).
       grains: the grain species (an empty tuple means an empty box).
       box: the container.
       primary: the primary system (required for S1).
       drive: the prescribed box motion (required for S2).
+      impactor: the single particle (required for S3).
       numerics: integration and recording.
       gravity: ``g`` [m/s^2] along ``-z``.
       mixing: how per-species constants combine for a pair: ``"arithmetic"``, ``"harmonic"``
@@ -192,6 +226,7 @@ class Config:
     box: Box
     primary: Primary | None = None
     drive: Drive | None = None
+    impactor: Impactor | None = None
     numerics: Numerics = field(default_factory=Numerics)
     gravity: float = 9.8
     mixing: str = "arithmetic"
@@ -266,6 +301,7 @@ _NESTED = {
     (Config, "box"): Box,
     (Config, "primary"): Primary,
     (Config, "drive"): Drive,
+    (Config, "impactor"): Impactor,
     (Config, "numerics"): Numerics,
     (Box, "wall"): Material,
     (Species, "material"): Material,

@@ -8,7 +8,8 @@ from __future__ import annotations
 
 import math
 
-from .config import Box, Config, ConfigError, Drive, Material, Numerics, Primary, Species
+from .config import (Box, Config, ConfigError, Drive, Impactor, Material, Numerics, Primary,
+                     Species)
 
 #: Steel of the thesis (table 3.1 / §3.2): E = 2.03e11 Pa, ν = 0.28, ρ = 8030, μ = 0.3.
 SANCHEZ_STEEL = Material(
@@ -61,6 +62,29 @@ def sanchez2012_sec31(n: int) -> Config:
     )
 
 
+def sanchez2012_impact() -> Config:
+    m_p = 250 * SANCHEZ_STEEL.density * 4.0 / 3.0 * math.pi * 0.003**3
+    return Config(
+        name="sanchez2012-impact",
+        system="impact",
+        frequency=15.16,
+        grains=(),
+        box=Box(Lx=0.03675, Ly=0.03675, Lz=0.1225),
+        primary=Primary(M=2.37, K=21500.0, C=7.6, U=0.0045),
+        impactor=Impactor(mass=m_p, restitution=0.0, gap=0.0835),
+        numerics=Numerics(duration=13.12, record_dt=2.5e-4, analysis_window=0.1),
+        notes=(
+            "Thesis §5.3.2 single-particle impact damper (S3) standing for the optimal damper. "
+            "Model of thesis §2.1.3; primary of §3.2 (M = 2.37 kg, K = 21500 N/m, C = 7.6 N s/m, U = 0.0045 m), "
+            f"one particle of the bed's mass m_p = 250 steel grains of R = 3 mm, ρ = 8030 "
+            f"({m_p:.5g} kg; thesis code 0.22704 kg), e = 0, gap = Lz − h_bed = 0.0835 m for "
+            "Lz = 0.1225 m (the box is recorded but not used). Event-driven (exact); set "
+            "impactor.method = 'smooth' for the differentiable penalty model. 13.12 s per "
+            "frequency as the thesis' DEM runs (its impact code ran 30 s at dt = 5e-6 s)."
+        ),
+    )
+
+
 VARELA_STEEL = Material(E=2e9, nu=0.3, density=7850.0, mu=0.0, restitution=0.75, v_ref=1.0)
 
 
@@ -87,6 +111,7 @@ PRESETS = {
     "sanchez2012-sec31-n250": lambda: sanchez2012_sec31(250),
     "sanchez2012-sec31-n500": lambda: sanchez2012_sec31(500),
     "sanchez2012-sec31-n1000": lambda: sanchez2012_sec31(1000),
+    "sanchez2012-impact": sanchez2012_impact,
     "varela2023-reference": varela2023_reference,
 }
 

@@ -137,6 +137,11 @@ def run(
     """
     say = echo or (lambda *a, **k: None)
     validate(config)
+    if config.system == "impact":
+        raise ConfigError(
+            "system = 'impact' (S3, the single-particle model) has no DEM run file: use "
+            "`jaxdamp frf --preset sanchez2012-impact` (any number of frequencies, seconds) or "
+            "jaxdamp.impact.simulate(config) from Python")
     model, params = build(config)
     sched = schedule(config, float(params.dt))
     t_window = analysis_start(config, sched.duration)

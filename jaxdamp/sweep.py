@@ -109,7 +109,14 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
       shard: shard the batch over all JAX devices (no-op with one device).
       max_chunks: stop after this many chunks (leaving ``out`` to resume); returns ``None``
         if the sweep is not finished.
+
+    S3 configurations (``system = "impact"``) go to :func:`jaxdamp.impact.sweep` (same result
+    and file layout; ``resume``, ``shard`` and ``max_chunks`` do not apply: it runs whole).
     """
+    if config.system == "impact":  # S3: the single-particle model of jaxdamp.impact
+        from . import impact
+
+        return impact.sweep(config, axes, out=out, progress=progress, echo=echo)
     say = echo or (lambda *a, **k: None)
     configs = grid_configs(config, axes)
     base = configs[0]

@@ -7,7 +7,7 @@ import math
 from .config import Config, ConfigError, Material
 from .model import collision_time_limit, config_dt, grain_radii
 
-SYSTEMS = ("primary", "driven")
+SYSTEMS = ("primary", "driven", "impact")
 MIXING = ("arithmetic", "harmonic", "geometric")
 #: Densest packing of equal spheres: no bed of the given grains can be lower than this allows.
 _DENSEST = math.pi / (3.0 * math.sqrt(2.0))
@@ -57,6 +57,8 @@ def validate(config: Config) -> Config:
         _positive(getattr(box, side), f"box.{side}")
     if box.wall is not None:
         _material(box.wall, "box.wall", grain=False)
+    if config.system == "impact":
+        return _validate_impact(config)
 
     if config.system == "primary":
         if config.primary is None:
@@ -137,4 +139,59 @@ def validate(config: Config) -> Config:
             f"numerics.dt = {dt:.4g} s: must resolve the excitation, dt ≤ 1/(20 f) = "
             f"{1.0 / (20.0 * config.frequency):.4g} s"
         )
+    return config
+
+
+def _validate_impact(config: Config) -> Config:
+    """Checks of an S3 (single-particle impact damper) configuration, see :mod:`jaxdamp.impact`."""
+    if config.grains:
+        raise ConfigError(f"grains: system 'impact' (S3) models the bed as one particle; grains must "
+                          f"be empty (got {config.n_grains} grains) — set impactor.mass instead")
+    if config.primary is None:
+        raise ConfigError("primary: system 'impact' (S3) needs a [primary] table (M, K, C, U)")
+    if config.impactor is None:
+        raise ConfigError("impactor: system 'impact' (S3) needs an [impactor] table "
+                          "(mass, restitution, gap)")
+    pr, im = config.primary, config.impactor
+    _positive(pr.M, "primary.M")
+    # K > 0: the closed-form segments expand about the static equilibrium -m g / K
+    _positive(pr.K, "primary.K")
+    _positive(pr.C, "primary.C", allow_zero=True)
+    _positive(pr.U, "primary.U", allow_zero=True)
+    _positive(im.mass, "impactor.mass")
+    if not (isinstance(im.restitution, (int, float)) and 0.0 <= im.restitution <= 1.0):
+        raise ConfigError(f"impactor.restitution = {im.restitution!r}: must be in [0, 1]")
+    _positive(im.gap, "impactor.gap")
+    if im.method not in ("event", "smooth"):
+        raise ConfigError(f"impactor.method = {im.method!r}: expected 'event' or 'smooth'")
+    _positive(im.stick_speed, "impactor.stick_speed")
+    _positive(im.contact_time, "impactor.contact_time")
+    _positive(im.smooth_width, "impactor.smooth_width")
+    if not (isinstance(im.steps_per_contact, (int, float)) and im.steps_per_contact >= 5):
+        raise ConfigError(f"impactor.steps_per_contact = {im.steps_per_contact!r}: must be ≥ 5")
+    w = 2.0 * math.pi * config.frequency
+    if pr.C == 0:
+        for name, mass in (("M", pr.M), ("M + m", pr.M + im.mass)):
+            if abs(pr.K - mass * w * w) <= 1e-9 * pr.K:
+                raise ConfigError(
+                    f"frequency = {config.frequency} Hz: exactly at the undamped resonance of "
+                    f"mass {name} with primary.C = 0 (unbounded response); set primary.C > 0")
+    period = min(1.0 / config.frequency, 2.0 * math.pi * math.sqrt(pr.M / pr.K))
+    if im.method == "smooth" and im.contact_time > 0.05 * period:
+        raise ConfigError(
+            f"impactor.contact_time = {im.contact_time} s: the penalty contact must be short "
+            f"against the drive and primary periods, ≤ {0.05 * period:.4g} s (5 % of "
+            f"{period:.4g} s)")
+    num = config.numerics
+    for name in ("duration", "record_dt"):
+        _positive(getattr(num, name), f"numerics.{name}")
+    if not 0.0 < num.analysis_window <= 1.0:
+        raise ConfigError(f"numerics.analysis_window = {num.analysis_window}: must be in (0, 1]")
+    if num.record_dt > 1.0 / (20.0 * config.frequency):
+        raise ConfigError(
+            f"numerics.record_dt = {num.record_dt} s: the samples must resolve the drive, "
+            f"record_dt ≤ 1/(20 f) = {1.0 / (20.0 * config.frequency):.4g} s")
+    if num.duration < 1.0 / config.frequency:
+        raise ConfigError(f"numerics.duration = {num.duration} s: must cover at least one drive "
+                          f"period (1/f = {1.0 / config.frequency:.4g} s)")
     return config

@@ -1,0 +1,244 @@
+"""Trajectory export of a run file's ``/snapshots``: extended XYZ (OVITO, ASE) and legacy VTK
+polydata with a ParaView ``.pvd`` collection. Small self-contained writers, no dependency
+beyond numpy and h5py.
+
+Also the shared helpers that open an output file and check what it holds
+(:func:`open_output`, :func:`file_kind`, :func:`require`), used by :mod:`jaxdamp.visual`.
+
+Conventions of the written files (SI units, lab frame, as in the run file):
+
+- **extended XYZ** (``.xyz``, one frame per snapshot)::
+
+      N
+      Lattice="Lx 0 0 0 Ly 0 0 0 Lz" Origin="0 0 z_box" Properties=species:S:1:pos:R:3:radius:R:1:orientation:R:4 Time=t pbc="F F F"
+      steel x y z radius qx qy qz qw
+
+  ``Lattice`` and ``Origin`` are the box at the snapshot's time (the box moves with the floor
+  ``z_box``). ``orientation`` is written in OVITO's component order ``(x, y, z, w)``; the run
+  file stores ``(w, x, y, z)``.
+- **legacy VTK** (``<stem>_0000.vtk``, ... one per snapshot): ``DATASET POLYDATA`` with the
+  grain centres as ``POINTS`` and ``VERTICES``, dataset field data ``TIME`` and ``z_box``, and
+  point data ``radius`` [m] (the active scalars, for glyph scaling), ``species`` (index) and
+  ``orientation`` ``(w, x, y, z)``. The
+  ``.pvd`` collection indexes the frames by time; a ``<stem>.vtk.series`` file (ParaView ≥ 5.5
+  file-series JSON) lists the same frames and times, since ParaView's PVD reader is documented
+  for the XML VTK formats only and the ``.series`` file is what its legacy-VTK reader uses.
+  ParaView also groups the numbered ``.vtk`` files on its own.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+
+import h5py
+import numpy as np
+
+from .config import ConfigError
+
+RUN_FORMAT = "jaxdamp-run/"
+SWEEP_FORMAT = "jaxdamp-sweep/"
+
+
+class OutputFileError(ConfigError):
+    """An output file is missing, of the wrong kind, or lacks what a figure/export needs."""
+
+
+def open_output(path) -> h5py.File:
+    """Open a jaxdamp HDF5 output file for reading, with an error naming the file if it is
+    missing or not HDF5."""
+    path = os.fspath(path)
+    if not os.path.exists(path):
+        raise OutputFileError(f"{path}: no such file")
+    try:
+        return h5py.File(path, "r")
+    except OSError as err:
+        raise OutputFileError(f"{path}: not an HDF5 file ({err})") from None
+
+
+def file_kind(h5: h5py.File) -> str:
+    """``'run'`` (``jaxdamp run``), ``'sweep'`` (``jaxdamp frf`` / ``sweep``) or ``'unknown'``."""
+    fmt = str(h5.attrs.get("format", ""))
+    if fmt.startswith(RUN_FORMAT):
+        return "run"
+    if fmt.startswith(SWEEP_FORMAT):
+        return "sweep"
+    return "unknown"
+
+
+_KIND_TEXT = {
+    "run": "a run file (jaxdamp run --out FILE.h5)",
+    "sweep": "a sweep file (jaxdamp frf --out FILE.h5)",
+    "unknown": "not a jaxdamp output file (no 'format' attribute jaxdamp-run/… or jaxdamp-sweep/…)",
+}
+
+
+def require(h5: h5py.File, what: str, kind: str, paths=()) -> None:
+    """Raise :class:`OutputFileError` unless ``h5`` is of ``kind`` and holds every dataset in
+    ``paths`` (with at least one row). ``what`` names the figure or export in the message."""
+    have = file_kind(h5)
+    if have != kind:
+        raise OutputFileError(f"{h5.filename}: {what} needs {_KIND_TEXT[kind]}, but this is "
+                              f"{_KIND_TEXT[have]}")
+    missing = [p for p in paths if p not in h5 or h5[p].shape[:1] == (0,)]
+    if missing:
+        status = h5.attrs.get("status", "?")
+        raise OutputFileError(f"{h5.filename}: {what} needs {', '.join('/' + p for p in missing)}, "
+                              f"which the file lacks or holds empty (status {status!r})")
+
+
+SNAPSHOT_PATHS = ("snapshots/t", "snapshots/r", "snapshots/q", "grains/radius", "grains/species")
+
+
+@dataclass
+class Snapshots:
+    """Frames of a run file: ``t`` (S,) [s], ``r`` (S, N, 3) [m] lab frame, ``q`` (S, N, 4)
+    ``(w, x, y, z)``, ``z_box`` (S,) [m] floor at each frame, ``radius`` (N,) [m], ``species``
+    (N,) index, ``species_names``, box ``Lx, Ly, Lz`` [m], ``frames`` (S,) indices into the
+    file's ``/snapshots``."""
+
+    t: np.ndarray
+    r: np.ndarray
+    q: np.ndarray
+    z_box: np.ndarray
+    radius: np.ndarray
+    species: np.ndarray
+    species_names: list
+    box: tuple
+    frames: np.ndarray
+    path: str
+
+
+def load_snapshots(h5: h5py.File, every: int = 1, frames=None, what="snapshots") -> Snapshots:
+    """Read ``/snapshots`` (every ``every``-th frame, or the given frame indices) with the box
+    geometry and the floor height ``z_box`` at each frame (from ``/series``)."""
+    require(h5, what, "run", SNAPSHOT_PATHS)
+    if every < 1:
+        raise OutputFileError(f"--every {every}: need a positive integer")
+    n = h5["snapshots/t"].shape[0]
+    if frames is None:
+        idx = np.arange(0, n, every)
+    else:
+        idx = np.atleast_1d(np.asarray(frames, dtype=int))
+        bad = [int(k) for k in idx if not -n <= k < n]
+        if bad:
+            raise OutputFileError(f"{h5.filename}: frame {bad[0]} out of range; the file holds "
+                                  f"{n} snapshots (0 … {n - 1}, or -1 for the last)")
+        idx = np.where(idx < 0, idx + n, idx)
+    t = h5["snapshots/t"][()][idx]
+    cfg = json.loads(h5.attrs["config"])
+    box = (float(cfg["box"]["Lx"]), float(cfg["box"]["Ly"]), float(cfg["box"]["Lz"]))
+    if "series/t" in h5 and "series/z_box" in h5 and h5["series/t"].shape[0]:
+        z_box = np.interp(t, h5["series/t"][()], h5["series/z_box"][()])
+    else:
+        z_box = np.zeros_like(t)
+    names = json.loads(h5["grains"].attrs.get("species_names", "[]"))
+    return Snapshots(
+        t=t, r=h5["snapshots/r"][()][idx], q=h5["snapshots/q"][()][idx], z_box=z_box,
+        radius=h5["grains/radius"][()], species=h5["grains/species"][()].astype(int),
+        species_names=names, box=box, frames=idx, path=h5.filename,
+    )
+
+
+def _species_labels(s: Snapshots) -> np.ndarray:
+    names = [("_".join(str(n).split()) or f"s{i}") for i, n in enumerate(s.species_names)]
+    return np.array([names[k] if k < len(names) else f"s{k}" for k in s.species])
+
+
+# -- extended XYZ ----------------------------------------------------------------------------
+XYZ_PROPERTIES = "species:S:1:pos:R:3:radius:R:1:orientation:R:4"
+
+
+def write_xyz(s: Snapshots, out) -> str:
+    """Write every frame of ``s`` to one extended-XYZ file; returns the path."""
+    labels = _species_labels(s)
+    Lx, Ly, Lz = s.box
+    n = len(s.radius)
+    os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
+    with open(out, "w") as f:
+        for k in range(len(s.t)):
+            f.write(f"{n}\n")
+            f.write(f'Lattice="{Lx:.12g} 0 0 0 {Ly:.12g} 0 0 0 {Lz:.12g}" '
+                    f'Origin="0 0 {s.z_box[k]:.12g}" Properties={XYZ_PROPERTIES} '
+                    f'Time={s.t[k]:.12g} pbc="F F F"\n')
+            q = s.q[k][:, [1, 2, 3, 0]]  # (w, x, y, z) -> OVITO's (x, y, z, w)
+            cols = np.column_stack([s.r[k], s.radius, q])
+            for lab, row in zip(labels, cols):
+                f.write(lab + " " + " ".join(f"{v:.12g}" for v in row) + "\n")
+    return os.fspath(out)
+
+
+# -- legacy VTK + PVD --------------------------------------------------------------------------
+def _vtk_text(s: Snapshots, k: int) -> str:
+    n = len(s.radius)
+    lines = [
+        "# vtk DataFile Version 3.0",
+        f"jaxdamp grains, t = {s.t[k]:.12g} s (frame {int(s.frames[k])} of {os.path.basename(s.path)})",
+        "ASCII",
+        "DATASET POLYDATA",
+        "FIELD FieldData 2",
+        "TIME 1 1 double",
+        f"{s.t[k]:.12g}",
+        "z_box 1 1 double",
+        f"{s.z_box[k]:.12g}",
+        f"POINTS {n} double",
+    ]
+    lines += [" ".join(f"{v:.12g}" for v in p) for p in s.r[k]]
+    lines.append(f"VERTICES {n} {2 * n}")
+    lines += [f"1 {i}" for i in range(n)]
+    lines.append(f"POINT_DATA {n}")
+    lines += ["SCALARS radius double 1", "LOOKUP_TABLE default"]
+    lines += [f"{v:.12g}" for v in s.radius]
+    # further point arrays as field data: VTK's legacy reader keeps only the first SCALARS
+    # block unless told to read all of them
+    lines += ["FIELD point_fields 2", f"species 1 {n} int"]
+    lines += [str(int(v)) for v in s.species]
+    lines += [f"orientation 4 {n} double"]
+    lines += [" ".join(f"{v:.12g}" for v in q) for q in s.q[k]]
+    return "\n".join(lines) + "\n"
+
+
+def write_vtk(s: Snapshots, pvd) -> tuple[str, list[str]]:
+    """Write one legacy-VTK polydata file per frame next to ``pvd`` (``<stem>_0000.vtk``, ...),
+    the ParaView collection ``pvd`` indexing them by time, and ``<stem>.vtk.series``.
+    Returns ``(pvd path, [vtk paths])``."""
+    pvd = os.fspath(pvd)
+    folder = os.path.dirname(os.path.abspath(pvd))
+    os.makedirs(folder, exist_ok=True)
+    stem = os.path.splitext(os.path.basename(pvd))[0]
+    width = max(4, len(str(len(s.t) - 1)))
+    files = []
+    for k in range(len(s.t)):
+        name = f"{stem}_{k:0{width}d}.vtk"
+        with open(os.path.join(folder, name), "w") as f:
+            f.write(_vtk_text(s, k))
+        files.append(name)
+    entries = "\n".join(f'    <DataSet timestep="{t:.12g}" group="" part="0" file="{name}"/>'
+                        for t, name in zip(s.t, files))
+    with open(pvd, "w") as f:
+        f.write('<?xml version="1.0"?>\n'
+                '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">\n'
+                f"  <Collection>\n{entries}\n  </Collection>\n</VTKFile>\n")
+    series = {"file-series-version": "1.0",
+              "files": [{"name": name, "time": float(t)} for t, name in zip(s.t, files)]}
+    with open(os.path.join(folder, f"{stem}.vtk.series"), "w") as f:
+        json.dump(series, f, indent=1)
+    return pvd, [os.path.join(folder, n) for n in files]
+
+
+def export(path, fmt: str, out=None, every: int = 1) -> list[str]:
+    """Export the snapshots of run file ``path`` as ``fmt`` (``'xyz'`` or ``'vtk'``).
+
+    ``out`` defaults to the run file's name with ``.xyz`` / ``.pvd``. Returns the written paths
+    (for VTK: the ``.pvd`` first, then the frames)."""
+    path = os.fspath(path)
+    if fmt not in ("xyz", "vtk"):
+        raise OutputFileError(f"unknown export format {fmt!r}; choose xyz or vtk")
+    stem = os.path.splitext(path)[0]
+    with open_output(path) as h5:
+        s = load_snapshots(h5, every=every, what=f"export --format {fmt}")
+    if fmt == "xyz":
+        return [write_xyz(s, out or stem + ".xyz")]
+    pvd, files = write_vtk(s, out or stem + ".pvd")
+    return [pvd] + files

@@ -1,0 +1,282 @@
+"""Figures and trajectory export from real output files: `jaxdamp plot`, `jaxdamp export`."""
+
+import json
+import math
+import os
+import shutil
+import xml.etree.ElementTree as ET
+
+import h5py
+import numpy as np
+import pytest
+from matplotlib import image as mpimg
+
+from jaxdamp import cli, presets, visual
+from jaxdamp.config import apply_overrides
+from jaxdamp.runner import run
+from jaxdamp.sweep import sweep
+
+RUN = ["grains.0.count=30", "numerics.duration=0.1", "numerics.chunk=0.02",
+       "numerics.settle_time=0.1"]
+SWEEP = ["grains.0.count=20", "numerics.duration=0.04", "numerics.chunk=0.02",
+         "numerics.settle_time=0.05"]
+
+
+@pytest.fixture(scope="module")
+def run_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("vis") / "run.h5"
+    run(apply_overrides(presets.get("sanchez2012-optimal"), RUN), out=str(path), progress=False,
+        echo=None)
+    return path
+
+
+@pytest.fixture(scope="module")
+def sweep_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("vis") / "sweep.h5"
+    sweep(apply_overrides(presets.get("sanchez2012-optimal"), SWEEP),
+          {"frequency": [12.0, 15.0, 18.0]}, out=str(path), progress=False, echo=None)
+    return path
+
+
+def _png_size(kind):
+    w, h = visual.FIGSIZE[kind]
+    return round(h * visual.DPI), round(w * visual.DPI)
+
+
+@pytest.mark.parametrize("kind", ["band", "energy", "snapshot", "poincare", "frf"])
+def test_every_plot_kind_writes_a_png_of_the_expected_size(kind, run_file, sweep_file, tmp_path,
+                                                             capsys):
+    src = sweep_file if kind == "frf" else run_file
+    out = tmp_path / f"{kind}.png"
+    assert cli.main(["plot", str(src), "--kind", kind, "--out", str(out)]) == 0
+    assert f"wrote {out}" in capsys.readouterr().out
+    img = mpimg.imread(out)
+    # frf is drawn by jaxdamp.plots.frf_figure: 7 × 4.5 in at 120 dpi
+    expected = (540, 840) if kind == "frf" else _png_size(kind)
+    assert img.shape[:2] == expected
+    assert out.stat().st_size > 20_000
+    # not a blank canvas: many distinct colours
+    assert len(np.unique(img.reshape(-1, img.shape[-1]), axis=0)) > 50
+
+
+def test_plot_default_output_name_and_snapshot_by_height(run_file, tmp_path, capsys):
+    src = tmp_path / "copy.h5"
+    shutil.copy(run_file, src)
+    assert cli.main(["plot", str(src), "--kind", "snapshot", "--frame", "0",
+                     "--color", "height"]) == 0
+    assert (tmp_path / "copy_snapshot.png").stat().st_size > 20_000
+
+
+def test_band_figure_draws_the_series_in_the_window(run_file):
+    with h5py.File(run_file) as h:
+        s = {k: h["series"][k][()] for k in ("t", "z_box", "z_cm", "z_lowest", "z_highest")}
+        Lz = json.loads(h.attrs["config"])["box"]["Lz"]
+    fig = visual.band_from_file(run_file, t0=0.03, t1=0.07)
+    ax = fig.axes[0]
+    m = (s["t"] >= 0.03) & (s["t"] <= 0.07)
+    lines = {line.get_label(): line for line in ax.get_lines()}
+    floor = next(v for k, v in lines.items() if k.startswith("floor"))
+    lid = next(v for k, v in lines.items() if k.startswith("lid"))
+    cm = next(v for k, v in lines.items() if k.startswith("centre of mass"))
+    np.testing.assert_allclose(floor.get_xdata(), s["t"][m])
+    np.testing.assert_allclose(floor.get_ydata(), s["z_box"][m] * 1e3)
+    np.testing.assert_allclose(lid.get_ydata(), (s["z_box"][m] + Lz) * 1e3)
+    np.testing.assert_allclose(cm.get_ydata(), s["z_cm"][m] * 1e3)
+    band = ax.collections[0].get_paths()[0].vertices
+    lo, hi = s["z_lowest"][m].min() * 1e3, s["z_highest"][m].max() * 1e3
+    assert band[:, 1].min() == pytest.approx(lo) and band[:, 1].max() == pytest.approx(hi)
+    # the default window is the last BAND_PERIODS drive periods (here: the whole short run)
+    fig = visual.band_from_file(run_file)
+    x = fig.axes[0].get_lines()[0].get_xdata()
+    f = 15.16
+    assert x[0] >= max(s["t"][0], s["t"][-1] - visual.BAND_PERIODS / f) - 1e-12
+    assert x[-1] == s["t"][-1]
+
+
+def test_poincare_points_are_the_series_once_per_period(run_file):
+    with h5py.File(run_file) as h:
+        t, z, v = (h["series"][k][()] for k in ("t", "z_cm", "vz_cm"))
+    f = 15.16
+    fig = visual.poincare_from_file(run_file)
+    pts = fig.axes[0].collections[0].get_offsets()
+    tk = np.arange(math.ceil(t[0] * f), math.floor(t[-1] * f) + 1) / f
+    assert len(pts) == len(tk) >= 1
+    # against linear interpolation of the 4 kHz samples (the section uses a cubic spline)
+    np.testing.assert_allclose(pts[:, 0], np.interp(tk, t, z) * 1e3, atol=0.05)
+    np.testing.assert_allclose(pts[:, 1], np.interp(tk, t, v), atol=0.05)
+
+
+def _read_xyz(path):
+    frames = []
+    with open(path) as f:
+        lines = f.read().splitlines()
+    i = 0
+    while i < len(lines):
+        n = int(lines[i])
+        head = lines[i + 1]
+        rows = [ln.split() for ln in lines[i + 2:i + 2 + n]]
+        assert all(len(r) == 9 for r in rows)
+        frames.append((head, [r[0] for r in rows], np.array([r[1:] for r in rows], float)))
+        i += 2 + n
+    return frames
+
+
+def _header_value(head, key):
+    rest = head.split(key + "=", 1)[1]
+    return rest[1:].split('"', 1)[0] if rest.startswith('"') else rest.split()[0]
+
+
+def test_export_xyz_one_frame_per_snapshot(run_file, tmp_path, capsys):
+    out = tmp_path / "traj.xyz"
+    assert cli.main(["export", str(run_file), "--format", "xyz", "--out", str(out)]) == 0
+    with h5py.File(run_file) as h:
+        ts, r, q = h["snapshots/t"][()], h["snapshots/r"][()], h["snapshots/q"][()]
+        radius = h["grains/radius"][()]
+        zb = np.interp(ts, h["series/t"][()], h["series/z_box"][()])
+        box = json.loads(h.attrs["config"])["box"]
+    frames = _read_xyz(out)
+    assert len(frames) == len(ts) == 5
+    for k, (head, species, cols) in enumerate(frames):
+        assert cols.shape == (r.shape[1], 8)
+        assert "Properties=species:S:1:pos:R:3:radius:R:1:orientation:R:4" in head
+        assert float(_header_value(head, "Time")) == pytest.approx(ts[k], abs=1e-9)
+        lat = np.array(_header_value(head, "Lattice").split(), float).reshape(3, 3)
+        np.testing.assert_allclose(np.diag(lat), [box["Lx"], box["Ly"], box["Lz"]])
+        origin = np.array(_header_value(head, "Origin").split(), float)
+        np.testing.assert_allclose(origin, [0, 0, zb[k]], atol=1e-9)
+        assert set(species) == {"steel"}
+        np.testing.assert_allclose(cols[:, :3], r[k], atol=1e-9, rtol=0)
+        np.testing.assert_allclose(cols[:, 3], radius, atol=1e-12)
+        np.testing.assert_allclose(cols[:, 4:], q[k][:, [1, 2, 3, 0]], atol=1e-9)
+    # --every 2: frames 0, 2, 4
+    out2 = tmp_path / "every2.xyz"
+    assert cli.main(["export", str(run_file), "--format", "xyz", "--out", str(out2),
+                     "--every", "2"]) == 0
+    frames2 = _read_xyz(out2)
+    assert len(frames2) == 3
+    np.testing.assert_allclose(frames2[1][2][:, :3], r[2], atol=1e-9, rtol=0)
+
+
+def _read_vtk(path):
+    """Minimal reader of the legacy-VTK polydata we write: points, vertices, point arrays."""
+    tok = open(path).read().split("\n")
+    assert tok[0].startswith("# vtk DataFile") and tok[2] == "ASCII"
+    assert tok[3] == "DATASET POLYDATA"
+    words = " ".join(tok[4:]).split()
+    out, i = {"field": {}, "point": {}}, 0
+
+    def take(n, conv=float):
+        nonlocal i
+        vals = [conv(w) for w in words[i:i + n]]
+        i += n
+        return np.array(vals)
+
+    section = "field"
+    while i < len(words):
+        w = words[i]
+        if w == "FIELD":
+            n_arr = int(words[i + 2])
+            i += 3
+            for _ in range(n_arr):
+                name, ncomp, ntup = words[i], int(words[i + 1]), int(words[i + 2])
+                i += 4
+                out[section][name] = take(ncomp * ntup).reshape(ntup, ncomp).squeeze()
+        elif w == "POINTS":
+            n = int(words[i + 1])
+            i += 3
+            out["points"] = take(3 * n).reshape(n, 3)
+        elif w == "VERTICES":
+            n, size = int(words[i + 1]), int(words[i + 2])
+            i += 3
+            cells = take(size, int).reshape(n, 2)
+            assert (cells[:, 0] == 1).all()
+            out["vertices"] = cells[:, 1]
+        elif w == "POINT_DATA":
+            section = "point"
+            i += 2
+        elif w == "SCALARS":
+            name, i = words[i + 1], i + 6  # SCALARS name type 1 LOOKUP_TABLE default
+            out["point"][name] = take(len(out["points"]))
+        else:
+            raise AssertionError(f"unexpected token {w!r} in {path}")
+    return out
+
+
+def test_export_vtk_frames_and_pvd(run_file, tmp_path, capsys):
+    pvd = tmp_path / "vtk" / "grains.pvd"
+    assert cli.main(["export", str(run_file), "--format", "vtk", "--out", str(pvd)]) == 0
+    with h5py.File(run_file) as h:
+        ts, r, q = h["snapshots/t"][()], h["snapshots/r"][()], h["snapshots/q"][()]
+        radius, species = h["grains/radius"][()], h["grains/species"][()]
+    N = r.shape[1]
+    entries = ET.parse(pvd).getroot().find("Collection").findall("DataSet")
+    assert len(entries) == len(ts)
+    for k, e in enumerate(entries):
+        assert float(e.get("timestep")) == pytest.approx(ts[k], abs=1e-9)
+        d = _read_vtk(pvd.parent / e.get("file"))
+        assert d["points"].shape == (N, 3)
+        np.testing.assert_array_equal(d["vertices"], np.arange(N))
+        np.testing.assert_allclose(d["points"], r[k], atol=1e-9, rtol=0)
+        np.testing.assert_allclose(d["point"]["radius"], radius, atol=1e-12)
+        np.testing.assert_array_equal(d["point"]["species"], species)
+        np.testing.assert_allclose(d["point"]["orientation"], q[k], atol=1e-9)
+        assert float(d["field"]["TIME"]) == pytest.approx(ts[k], abs=1e-9)
+    series = json.loads((tmp_path / "vtk" / "grains.vtk.series").read_text())
+    assert [f["name"] for f in series["files"]] == [e.get("file") for e in entries]
+    assert sorted(os.listdir(pvd.parent)) == sorted(
+        [e.get("file") for e in entries] + ["grains.pvd", "grains.vtk.series"])
+
+
+def test_gif_has_one_frame_per_exported_snapshot(run_file, tmp_path, capsys):
+    from PIL import Image
+
+    out = tmp_path / "grains.gif"
+    assert cli.main(["export", str(run_file), "--format", "gif", "--out", str(out),
+                     "--every", "2"]) == 0
+    with Image.open(out) as im:
+        assert im.n_frames == 3
+        assert im.size == (round(visual.FIGSIZE["animation"][0] * 80),
+                           round(visual.FIGSIZE["animation"][1] * 80))
+    mp4 = tmp_path / "grains.mp4"
+    rc = cli.main(["export", str(run_file), "--format", "mp4", "--out", str(mp4)])
+    if shutil.which("ffmpeg"):
+        assert rc == 0 and mp4.stat().st_size > 1000
+    else:
+        assert rc == 2 and "MP4 needs ffmpeg on PATH" in capsys.readouterr().err
+
+
+def _error(capsys, argv):
+    assert cli.main(argv) == 2
+    return capsys.readouterr().err
+
+
+def test_wrong_file_kinds_and_missing_parts_are_named(run_file, sweep_file, tmp_path, capsys):
+    png = str(tmp_path / "x.png")
+    err = _error(capsys, ["plot", str(run_file), "--kind", "frf", "--out", png])
+    assert str(run_file) in err and "needs a sweep file" in err and "this is a run file" in err
+    for kind in ("band", "energy", "snapshot", "poincare"):
+        err = _error(capsys, ["plot", str(sweep_file), "--kind", kind, "--out", png])
+        assert str(sweep_file) in err and "needs a run file" in err and "sweep file" in err
+    err = _error(capsys, ["export", str(sweep_file), "--format", "xyz"])
+    assert str(sweep_file) in err and "export --format xyz needs a run file" in err
+    err = _error(capsys, ["plot", str(run_file), "--kind", "snapshot", "--frame", "9", "--out", png])
+    assert "frame 9 out of range" in err and "holds 5 snapshots" in err
+    err = _error(capsys, ["plot", str(run_file), "--kind", "band", "--t0", "5", "--t1", "6",
+                          "--out", png])
+    assert "fewer than 2 samples in t = 5 … 6 s" in err
+    err = _error(capsys, ["plot", str(tmp_path / "nope.h5"), "--kind", "band"])
+    assert "nope.h5: no such file" in err
+    text = tmp_path / "notes.h5"
+    text.write_text("not hdf5")
+    assert "not an HDF5 file" in _error(capsys, ["plot", str(text), "--kind", "energy"])
+    # a run file without snapshots (written with snapshots=False, or cut short)
+    bare = tmp_path / "bare.h5"
+    shutil.copy(run_file, bare)
+    with h5py.File(bare, "a") as h:
+        del h["snapshots"]
+        del h["series/force_box"]
+    err = _error(capsys, ["export", str(bare), "--format", "vtk"])
+    assert str(bare) in err and "/snapshots/t" in err and "lacks or holds empty" in err
+    err = _error(capsys, ["plot", str(bare), "--kind", "band", "--out", png])
+    assert "/series/force_box" in err
+    assert not os.path.exists(png)
