@@ -151,6 +151,9 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
             raise ConfigError(f"--resume: {out} holds a different sweep")
         g = h5["checkpoint"]
         start_chunk = int(g.attrs["chunk"])
+        # compute time already spent on this sweep (older files: the finished summary's)
+        wall_before = float(h5.attrs.get("wall_time", h5["summary/wall_time"][()]
+                                         if "summary/wall_time" in h5 else 0.0))
         arrays = {}
         g.visititems(lambda n, o: arrays.__setitem__(n, o[()]) if isinstance(o, h5py.Dataset) else None)
         states, nbrs = arrays_to_state(arrays)
@@ -160,6 +163,7 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
             ds.resize(start_chunk * sched.records_per_chunk, axis=1)
         say(f"resuming sweep at chunk {start_chunk}/{sched.n_chunks}")
     else:
+        wall_before = 0.0
         beds = {}
         r0, v0, w0, q0, z0 = [], [], [], [], []
         for c, (m, p) in zip(configs, built):
@@ -230,6 +234,7 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
             for k, v in state_to_arrays(host_states, host_nbrs).items():
                 ck.create_dataset(k, data=v)
             ck.attrs["chunk"] = chunk + 1
+            h5.attrs["wall_time"] = wall_before + time.perf_counter() - wall0
             h5.flush()
         for k, v in recs.items():
             mem.setdefault(k, []).append(v)
@@ -242,7 +247,7 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
             h5.attrs["status"] = "partial"
             h5.close()
         return None
-    wall = time.perf_counter() - wall0
+    wall = wall_before + time.perf_counter() - wall0  # over every session of a resumed sweep
     if h5 is not None:
         records = {k: h5["records"][k][()] for k in h5["records"]}
     else:

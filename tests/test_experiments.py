@@ -4,6 +4,7 @@ import importlib.util
 import pathlib
 
 import numpy as np
+import pytest
 
 EXPERIMENTS = pathlib.Path(__file__).parent.parent / "experiments"
 
@@ -27,3 +28,106 @@ def test_restitution_curve_quick(tmp_path):
     assert np.max(np.abs(a - b)) < 1e-6  # the reduced-modulus similarity rule holds in the DEM
     assert (tmp_path / "figure.png").stat().st_size > 10_000
     assert (tmp_path / "data.h5").exists() and (tmp_path / "summary.md").exists()
+
+
+def test_gap_scan_quick(tmp_path):
+    """3 heights x 4 frequencies x 0.3 s of the thesis damper: data, both figures, summary;
+    energy balance closes at every point; the grains add damping at every height and, in the
+    smallest box (Lz = 0.057 m, grains nearly locked), add mass: M_ef above M."""
+    res = _load("gap_scan").main(["--quick", "--out", str(tmp_path), "--no-progress"])
+    r = res[7.6]
+    assert np.all(r["res"].summary["balance_error"] < 1e-3)
+    fits = r["fits"]
+    assert np.all(np.isfinite(fits["M_ef"])) and np.all(np.isfinite(fits["C_ef"]))
+    assert np.all(fits["C_ef"] > 1.5 * 7.6)
+    assert fits["M_ef"][0] > 2.37 + 0.1
+    for name in ("fig3_6.png", "fig3_7_3_8.png"):
+        assert (tmp_path / name).stat().st_size > 10_000
+    assert "C_ef/C" in (tmp_path / "summary.md").read_text()
+
+
+def test_stiffness_quick(tmp_path):
+    """Thesis modulus and the preset's reduced one: dt follows t_c ∝ E^-2/5 exactly, both
+    runs close their energy balance, and the short-run amplitudes agree within 25 %."""
+    rows = _load("stiffness").main(["--quick", "--out", str(tmp_path), "--no-progress"])
+    hard, soft = rows[1.0], rows[0.01]
+    assert soft["dt"] / hard["dt"] == pytest.approx(0.01 ** -0.4, rel=1e-9)
+    assert np.all(hard["balance"] < 1e-3) and np.all(soft["balance"] < 1e-3)
+    np.testing.assert_allclose(hard["Z"], soft["Z"], rtol=0.25)
+    assert (tmp_path / "figure.png").stat().st_size > 10_000
+
+
+def test_universal_response_quick(tmp_path):
+    """Two contact-damping cases and S3 (e = 0): the exact event-driven and the smooth S3 agree
+    within 5 %; switching off γ_n removes the collisional loss of the DEM bed."""
+    out = _load("universal_response").main(["--quick", "--out", str(tmp_path), "--no-progress"])
+    ev, sm = out["s3"]["event"], out["s3"]["smooth"]
+    np.testing.assert_allclose(sm["Z"], ev["Z"], rtol=0.05)
+    ref, no_gn = out["dem"][(3660.0, 10980.0)], out["dem"][(0.0, 10980.0)]
+    assert np.all(ref["coll"] > 0) and np.all(no_gn["coll"] < 1e-3 * no_gn["total"])
+    assert np.all(ref["balance"] < 1e-3) and np.all(no_gn["balance"] < 1e-3)
+    assert (tmp_path / "fig5_2.png").stat().st_size > 10_000
+
+
+def test_bed_dynamics_quick(tmp_path):
+    """5.5, 14.5, 21 Hz x 1.5 s of the optimal damper: energy balance closes; every frequency
+    and observable gets a regime label (with a finite exponent when not periodic); the bed
+    never reaches the lid at 5.5 Hz and hits it about once per period at 14.5 Hz, where the
+    grains hold the amplitude far below the rigid-mass resonance; one section point per period."""
+    import json
+
+    import h5py
+
+    from jaxdamp.analysis import frf_amplitude
+
+    out = _load("bed_dynamics").main(["--quick", "--out", str(tmp_path), "--no-progress"])
+    res, rows, cfg = out["result"], out["rows"], out["config"]
+    freqs = list(res.axes["frequency"])
+    assert np.all(res.summary["balance_error"] < 1e-3)
+    assert len(rows) == len(freqs)
+    for r in rows:
+        for sig in ("z_cm", "z_rel"):
+            c = r[sig]
+            assert c["label"] in ("periodic", "quasi-periodic", "chaotic", "undetermined")
+            assert (c["period"] >= 1) if c["label"] == "periodic" else np.isfinite(c["exponent"])
+    by_f = dict(zip(freqs, rows))
+    assert by_f[5.5]["lid_hits_per_period"] == 0.0
+    assert by_f[14.5]["lid_hits_per_period"] > 0.8
+    p = cfg.primary
+    Z = dict(zip(freqs, res.summary["amplitude"]))
+    assert Z[14.5] < 0.5 * frf_amplitude(14.5, p.M + out["grain_mass"], p.K, p.C, p.U)
+    for f, d in out["details"].items():
+        n_periods = (d["t"][-1] - d["t"][0]) * f
+        assert abs(len(d["sec_t"]) - n_periods) <= 1.01
+    with h5py.File(tmp_path / "data.h5") as h:
+        assert len(json.loads(h.attrs["configs"])) == len(freqs)
+        assert h["classification/z_cm/label"].shape == (len(freqs),)
+    for name in ("fig4_1.png", "fig_details.png"):
+        assert (tmp_path / name).stat().st_size > 10_000
+    assert "regime z_cm" in (tmp_path / "summary.md").read_text()
+
+
+def test_gap_optimisation_quick(tmp_path):
+    """Every part of the gap-optimisation study on tiny settings: S3 exact gradients equal
+    central differences (1 %), the DEM window derivative equals central differences of the same
+    averaged window objective for a 0.5 ms window (h = 1e-8 m, 2 %), forward mode needs less
+    compiled memory than reverse mode, the scan and both optimiser runs are logged."""
+    import h5py
+
+    out = _load("gap_optimisation").main(["--quick", "--out", str(tmp_path), "--no-progress"])
+    r = out["s3"]["dissipation"]
+    for row in r["fd"][:2]:  # in the periodic regime
+        assert row["ad"] == pytest.approx(row[1e-5], rel=0.01)
+    dem = out["dem"]
+    for row in dem["fd"]:
+        ad, fd = row["ad"].mean(), row["fd"][1e-8].mean()
+        assert np.isfinite(ad) and abs(ad - fd) <= 0.02 * abs(fd) + 1e-6
+    m = dem["modes"]
+    assert m["forward"]["temp_bytes"] < m["reverse"]["temp_bytes"]
+    assert np.all(dem["scan"]["balance"] < 1e-3)
+    assert set(dem["opt"]) == {0.07, 0.25} and set(r["opt"]) == {0.07, 0.25}
+    with h5py.File(tmp_path / "data.h5") as h:
+        assert "config" in h["dem"].attrs and "dem/scan/dissipation" in h
+        assert h["dem/opt_lz0_0.07/lz"].shape[0] >= 1
+    assert (tmp_path / "figure.png").stat().st_size > 10_000
+    assert "Forward vs reverse" in (tmp_path / "summary.md").read_text()
