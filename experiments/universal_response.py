@@ -158,12 +158,12 @@ def _figure(out, f, dem, s3, p, m_p):
     for ((gn, gs), d), col in zip(dem.items(), ("C0", "C1", "C2", "C3")):
         if gn == 0 and gs == 0:
             continue
-        a2.plot(f, d["coll"] * 1e3, "^-", color=col, ms=4, lw=0.8, label=f"collision, ({gn:g}, {gs:g})")
-        a2.plot(f, d["fric"] * 1e3, "s--", color=col, ms=4, lw=0.8, label=f"friction, ({gn:g}, {gs:g})")
-        a2.plot(f, d["total"] * 1e3, "o-", color=col, ms=5, mfc="none", lw=1.2, label=f"total, ({gn:g}, {gs:g})")
-    a2.plot(f, s3["event"]["total"] * 1e3, "k-", lw=1.2, label="S3, e = 0")
+        a2.plot(f, d["coll"], "^-", color=col, ms=4, lw=0.8, label=f"collision, ({gn:g}, {gs:g})")
+        a2.plot(f, d["fric"], "s--", color=col, ms=4, lw=0.8, label=f"friction, ({gn:g}, {gs:g})")
+        a2.plot(f, d["total"], "o-", color=col, ms=5, mfc="none", lw=1.2, label=f"total, ({gn:g}, {gs:g})")
+    a2.plot(f, s3["event"]["total"], "k-", lw=1.2, label="S3, e = 0")
     a2.set_xlabel("f [Hz]")
-    a2.set_ylabel("granular loss per cycle [mJ]")
+    a2.set_ylabel("granular loss per cycle [J]")
     a2.set_title("(b) dissipation per cycle, collisional vs frictional (thesis fig. 5.2b)", fontsize=9)
     a2.legend(fontsize=6, ncol=2)
     fig.tight_layout()
