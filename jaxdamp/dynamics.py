@@ -440,7 +440,8 @@ def lyapunov_kantz(x, dim, delay, dt=1.0, max_steps=None, epsilon=None, theiler=
     Args:
       x: series ``(N,)``. dt: sampling interval [s] (1 for a map: exponent per iteration).
       max_steps: horizon of ``S`` [samples]; default ``30·delay`` (flows: several mean
-        periods, long enough to reach saturation), at least 20.
+        periods, long enough to reach saturation), at least 20, but at most half of what the
+        series leaves after the Theiler window (short series).
       epsilon: neighbourhood radius [units of x]; default ``0.02·σ_x·√dim``, doubled (up to 5
         times) while fewer than a quarter of the references have ``min_neighbours``.
       theiler: exclusion window [samples]; default ``dim·delay`` (one embedding window).
@@ -454,6 +455,8 @@ def lyapunov_kantz(x, dim, delay, dt=1.0, max_steps=None, epsilon=None, theiler=
     w = int(dim * delay if theiler is None else theiler)
     L = int(max(20, 30 * delay) if max_steps is None else max_steps)
     y = embed(x, dim, delay)
+    if max_steps is None:  # a short series: keep at least half the vectors as references
+        L = max(1, min(L, (len(y) - 2 * w - 3) // 2))
     eps = 0.02 * np.std(x) * np.sqrt(dim) if epsilon is None else float(epsilon)
     for attempt in range(6):
         S, nref = kantz_curve(y, L, eps, w, n_ref, min_neighbours, max_neighbours)

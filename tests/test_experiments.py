@@ -126,6 +126,7 @@ def test_gap_optimisation_quick(tmp_path):
     assert m["forward"]["temp_bytes"] < m["reverse"]["temp_bytes"]
     assert np.all(dem["scan"]["balance"] < 1e-3)
     assert set(dem["opt"]) == {0.07, 0.25} and set(r["opt"]) == {0.07, 0.25}
+    assert set(dem["opt_amp"]) == {0.07, 0.25}
     with h5py.File(tmp_path / "data.h5") as h:
         assert "config" in h["dem"].attrs and "dem/scan/dissipation" in h
         assert h["dem/opt_lz0_0.07/lz"].shape[0] >= 1

@@ -1,4 +1,5 @@
-"""Every notebook in notebooks/ executes top to bottom (small settings, in a scratch folder)."""
+"""Every notebook in notebooks/ executes top to bottom (small settings, in a scratch folder)
+and draws its figures."""
 
 import pathlib
 import shutil
@@ -7,7 +8,15 @@ import nbformat
 import pytest
 from nbclient import NotebookClient
 
-NOTEBOOKS = sorted((pathlib.Path(__file__).parent.parent / "notebooks").glob("*.ipynb"))
+NOTEBOOK_DIR = pathlib.Path(__file__).parent.parent / "notebooks"
+NOTEBOOKS = sorted(NOTEBOOK_DIR.glob("*.ipynb"))
+#: the tutorials the README links to; each must exist (the glob above would silently skip one)
+EXPECTED = ("quickstart.ipynb", "frf_sweep.ipynb", "bed_dynamics.ipynb", "binary_mixtures.ipynb",
+            "gap_optimisation.ipynb")
+
+
+def test_expected_notebooks_present():
+    assert set(EXPECTED) <= {p.name for p in NOTEBOOKS}
 
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
@@ -16,6 +25,8 @@ def test_notebook_executes(path, tmp_path):
     shutil.copy(path, work)
     nb = nbformat.read(work, as_version=4)
     NotebookClient(nb, timeout=600, kernel_name="python3", resources={"metadata": {"path": str(tmp_path)}}).execute()
-    errors = [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])
-              if o.get("output_type") == "error"]
+    outputs = [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])]
+    errors = [o for o in outputs if o.get("output_type") == "error"]
     assert not errors
+    # a tutorial "with figures": at least one rendered image
+    assert any("image/png" in o.get("data", {}) for o in outputs), f"{path.name} drew no figure"
