@@ -151,6 +151,43 @@ def cmd_frf(args) -> int:
     return 0
 
 
+def cmd_optimize(args) -> int:
+    from .optimize import Objective, make_problem, optimize
+
+    cfg = apply_overrides(_base_config(args), list(args.set or []))
+    band = tuple(_float_list(args.band)) if args.band else None
+    objective = Objective(args.objective, frequency=args.frequency, band=band)
+    prob, s = make_problem(cfg, objective, quick=args.quick, window=args.window,
+                           n_windows=args.n_windows, burn_in=args.burn_in, mode=args.mode,
+                           lr=args.lr, max_iter=args.max_iter, duration=args.duration)
+    impact = cfg.system == "impact"
+    if impact:
+        x0 = args.gap0 if args.gap0 is not None else prob.from_lz(args.lz0)
+    else:
+        if args.gap0 is not None:
+            raise ConfigError("--gap0 applies to S3 (sanchez2012-impact); use --lz0 for the DEM")
+        x0 = args.lz0
+    lo, hi = prob.bounds()
+    if args.lo is not None:
+        lo = prob.from_lz(args.lo)
+    if args.hi is not None:
+        hi = prob.from_lz(args.hi)
+    what = "maximise" if objective.maximise else "minimise"
+    print(f"{what} {objective.kind} at {', '.join(f'{f:.4g}' for f in objective.frequencies(cfg))} Hz "
+          f"over {prob.variable} in [{lo:.4g}, {hi:.4g}] m from {prob.variable}0 = {x0:.4g} m")
+    res = optimize(prob, x0, lr=s["lr"], decay=s["decay"], max_iter=s["max_iter"],
+                   xtol=s["xtol"], lo=lo, hi=hi, out=args.out, progress=not args.no_progress,
+                   config_json=cfg.to_json())
+    where = f"gap = {res.x:.5g} m (Lz = gap + h_bed = {res.lz:.5g} m)" if impact else \
+        f"Lz = {res.lz:.5g} m"
+    print(f"{where}; objective = "
+          f"{res.value:.6g} after {len(res.history['x'])} iterates ({res.reason}); "
+          f"{res.sim_seconds:.3g} simulated s, {res.wall:.0f} s wall")
+    if args.out:
+        print(f"wrote {args.out}")
+    return 0
+
+
 def cmd_presets(args) -> int:
     from . import presets
 
@@ -321,6 +358,66 @@ def build_parser() -> argparse.ArgumentParser:
     fr.add_argument("--resume", action="store_true")
     fr.add_argument("--no-progress", action="store_true")
     fr.set_defaults(func=cmd_frf)
+
+    op = sub.add_parser(
+        "optimize", help="gradient-based optimisation of the box height Lz (DEM) or gap (S3)",
+        description="Find the box height that maximises the granular dissipation per cycle "
+        "(or minimises the amplitude Z, or a smooth maximum of Z over a band) with optax Adam "
+        "driven by derivatives of the simulation. S1 presets (DEM): Lz is the design variable "
+        "and its derivative is estimated over an ensemble of short windows started from "
+        "steady states (pathwise jax.jvp through the JAX engine; mean and standard error). "
+        "S3 presets (one particle, smooth penalty model): the gap = Lz - h_bed, exact jax.grad.",
+        epilog=textwrap.dedent("""\
+            examples:
+              jaxdamp optimize --preset sanchez2012-impact --quick --out s3_opt.h5
+                  S3, dissipation at f0, from Lz0 = 0.07 m (gap0 = Lz0 - 0.039 m); ~30 s
+              jaxdamp optimize --preset sanchez2012-impact --objective band --band 14,14.5,15.16,16
+              jaxdamp optimize --preset sanchez2012-optimal --objective dissipation --lz0 0.07
+                  DEM, 250 grains: ~1 min per iterate (forward runs + 8 gradient windows)
+              jaxdamp optimize --preset sanchez2012-optimal --lz0 0.25 --window 0.002 --n-windows 16
+
+            objectives:
+              dissipation  granular dissipation per drive period at --frequency (default f0 =
+                           sqrt(K/M)/2pi); maximised
+              amplitude    steady-state amplitude Z at --frequency (S3: first harmonic of z; DEM:
+                           sqrt(2) x RMS of z about its static position); minimised
+              band         smooth maximum (p-norm, p = 16) of Z over --band frequencies (default
+                           9 points over f0 +- 10 %); minimised
+
+            stopping: --max-iter iterates, three steps below xtol, or (DEM) a gradient within
+            its standard error for three iterates. Every iterate (Lz, objective, gradient,
+            standard errors, wall time, simulated seconds) goes to --out (HDF5, schema in
+            docs/output.md). The DEM gradient is that of the short-window objective (start
+            states held fixed): see experiments/gap_optimisation/summary.md for how far it can
+            be trusted."""),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    op.add_argument("--preset", help="sanchez2012-optimal (DEM) or sanchez2012-impact (S3), ...")
+    op.add_argument("--config", metavar="FILE")
+    op.add_argument("--set", action="append", metavar="KEY=VALUE")
+    op.add_argument("--objective", choices=["dissipation", "amplitude", "band"],
+                    default="dissipation", help="what to optimise (default dissipation)")
+    op.add_argument("--frequency", type=float, metavar="HZ",
+                    help="frequency of dissipation/amplitude (default: the primary's f0)")
+    op.add_argument("--band", metavar="F1,F2,...", help="frequencies of the band objective [Hz]")
+    op.add_argument("--lz0", type=float, default=0.07, help="starting box height [m] (0.07)")
+    op.add_argument("--gap0", type=float, help="S3: starting gap [m] (default lz0 - h_bed)")
+    op.add_argument("--lo", type=float, metavar="LZ", help="lowest Lz [m] (default bed + 5 mm)")
+    op.add_argument("--hi", type=float, metavar="LZ", help="highest Lz [m] (default 0.4 DEM)")
+    op.add_argument("--lr", type=float, help="initial learning rate [m] (S3 0.01, DEM 0.02)")
+    op.add_argument("--max-iter", type=int, help="most iterates (S3 40, DEM 12; quick 30, 3)")
+    op.add_argument("--window", type=float, metavar="S", help="DEM: gradient window [s] (0.002)")
+    op.add_argument("--n-windows", type=int, help="DEM: windows per frequency (8)")
+    op.add_argument("--burn-in", type=float, metavar="S",
+                    help="DEM: forward time from the settled bed to steady state [s] (1.0)")
+    op.add_argument("--mode", choices=["forward", "reverse"],
+                    help="DEM: jax.jvp (default, faster for one parameter) or jax.grad")
+    op.add_argument("--duration", type=float, metavar="S", help="S3: run length [s] (4; quick 2)")
+    op.add_argument("--out", metavar="FILE.h5", help="log of every iterate (HDF5)")
+    op.add_argument("--quick", action="store_true",
+                    help="small settings: S3 2 s runs (~30 s); DEM 3 iterates of 4 short windows")
+    op.add_argument("--no-progress", action="store_true")
+    op.set_defaults(func=cmd_optimize)
 
     pr = sub.add_parser("presets", help="list the reference cases (or --show one as TOML)")
     pr.add_argument("--show", metavar="NAME", help="print the full configuration of a preset")

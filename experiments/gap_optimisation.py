@@ -1,0 +1,572 @@
+"""Gradient-based optimisation of the gap: where pathwise DEM gradients work, where they do not.
+
+    python experiments/gap_optimisation.py            # full mode (wall time in summary.md)
+    python experiments/gap_optimisation.py --quick    # ~1.5 min: every part on tiny settings
+
+Parts (``sanchez2012-optimal`` / ``sanchez2012-impact``, objective: granular dissipation per
+drive period at the primary's f0 = 15.157 Hz):
+
+1. **DEM, gradient vs window length** at Lz = 0.1225 m: the same ``K`` steady-state start states,
+   windows from 0.5 ms up; the ensemble mean, standard error and spread of the pathwise
+   derivative ``dD/dLz`` (``jax.jvp``) and central finite differences (native engine, same
+   start states, h = 1e-5 m) of the same averaged window objective.
+2. **DEM, AD vs FD at three Lz** (0.07, 0.1225, 0.25 m) with the chosen window.
+3. **DEM, forward vs reverse mode**: time and compiled temporary memory of one ensemble.
+4. **DEM, brute-force scan** of the steady-state dissipation per cycle over Lz (native engine,
+   one batched sweep) — the reference optimum — and the **optimiser** (optax Adam on the
+   window estimator) from Lz0 = 0.07 and 0.25 m; simulated seconds of each approach.
+5. **S3 (smooth model, exact gradients)**: derivative vs central differences at three gaps,
+   a dense gap scan, the optimiser from Lz0 = 0.07 and 0.25 m (gap = Lz − 0.039 m), for the
+   dissipation at f0 and (full mode) the band objective (smooth max of Z over 14–16 Hz).
+
+Writes ``data.h5`` (every number; configurations as JSON attributes), ``figure.png`` and
+``summary.md`` in ``--out``; raw optimiser logs in ``--out/raw/`` (not committed).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+
+import h5py
+import jax
+import numpy as np
+
+import jaxdamp
+from jaxdamp import presets
+from jaxdamp.config import apply_overrides
+from jaxdamp.model import primary_frequency
+from jaxdamp.optimize import (DEMProblem, Objective, S3Problem, optimize, scan_optimum)
+from jaxdamp.sweep import sweep
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+THESIS_LZ = 0.1225
+#: S3 at f0: the response is periodic (two impacts per period) up to about this gap [m] and
+#: irregular above (measured: the smooth and event-driven models' Z and dissipation jump).
+PERIODIC_GAP = 0.13
+
+
+def settings(quick: bool) -> dict:
+    if quick:
+        return dict(
+            grains=60, settle=0.2, burn_in=0.15, warm=0.05, K=3, windows=(0.0005,), window=0.0005,
+            fd_lz=(0.07, 0.1225, 0.25), scan_lz=(0.07, 0.1225, 0.25), scan_duration=0.2,
+            opt_iter=2, lr=0.02, decay=0.85,
+            s3_duration=1.5, s3_scan=np.linspace(0.02, 0.15, 27), s3_iter=4,
+            s3_objectives=("dissipation",), s3_fd_gaps=(0.05, 0.0835, 0.12))
+    return dict(
+        grains=250, settle=0.3, burn_in=0.8, warm=0.3, K=8,
+        windows=(0.0005, 0.001, 0.002, 0.004, 0.008, 0.016, 0.032),
+        window=0.002, fd_lz=(0.07, 0.1225, 0.25),
+        scan_lz=(0.06, 0.07, 0.085, 0.1, 0.1225, 0.15, 0.2, 0.25), scan_duration=1.5,
+        opt_iter=6, lr=0.02, decay=0.85,
+        s3_duration=3.0, s3_scan=np.linspace(0.02, 0.2, 145), s3_iter=25,
+        s3_objectives=("dissipation", "band"), s3_fd_gaps=(0.05, 0.0835, 0.12))
+
+
+def dem_part(s, raw, progress, log):
+    base = apply_overrides(presets.get("sanchez2012-optimal"),
+                           {"numerics.settle_time": s["settle"], "grains.0.count": s["grains"]})
+    f0 = primary_frequency(base)
+    obj = Objective("dissipation")
+    out = {"f0": f0}
+    prob = DEMProblem(base, obj, window=s["window"], n_windows=s["K"], burn_in=s["burn_in"],
+                      warm_burn_in=s["warm"])
+    out["bed_height"] = prob.bed.height
+    out["dt"] = prob.dt
+    out["config"] = prob.config.to_json()
+
+    # 1. gradient vs window length, and 2. AD vs FD at three Lz
+    ens_at = {}
+    sim_windows = 0.0
+    for lz in s["fd_lz"]:
+        ens_at[lz] = prob.start_states(lz)
+        sim_windows += ens_at[lz].sim_seconds
+    rows = []
+    ens = ens_at[THESIS_LZ]
+    h = 1e-5
+    for w in s["windows"]:
+        prob.set_window(w)
+        t0 = time.perf_counter()
+        v, d = prob.window_derivatives(ens)
+        wall = time.perf_counter() - t0
+        fd = (prob.window_values(ens, THESIS_LZ + h, engine="auto")
+              - prob.window_values(ens, THESIS_LZ - h, engine="auto")) / (2 * h)
+        fd8 = (prob.window_values(ens, THESIS_LZ + 1e-8, engine="auto")
+               - prob.window_values(ens, THESIS_LZ - 1e-8, engine="auto")) / 2e-8
+        rows.append(dict(window=prob.window_seconds, values=v, ad=d, fd=fd, fd8=fd8, wall=wall))
+        log(f"window {prob.window_seconds * 1e3:.2f} ms: dD/dLz = {d.mean():.4g} ± "
+            f"{d.std(ddof=1) / np.sqrt(len(d)):.3g} (FD {fd.mean():.4g}), {wall:.1f} s")
+    out["windows"] = rows
+    prob.set_window(s["window"])
+    fd_rows = []
+    for lz in s["fd_lz"]:
+        e = ens_at[lz]
+        v, d = prob.window_derivatives(e)
+        fds = {}
+        for hh in (1e-4, 1e-5, 1e-6, 1e-8):
+            fds[hh] = (prob.window_values(e, lz + hh, engine="auto")
+                       - prob.window_values(e, lz - hh, engine="auto")) / (2 * hh)
+        fd_rows.append(dict(lz=lz, values=v, ad=d, fd=fds))
+        log(f"Lz = {lz}: AD {d.mean():.4g} ± {d.std(ddof=1) / np.sqrt(len(d)):.3g}; FD "
+            + ", ".join(f"h={hh:g}: {x.mean():.4g}" for hh, x in fds.items()))
+    out["fd"] = fd_rows
+
+    # 3. forward vs reverse mode: time (second call, compiled) and compiled temp memory
+    import jax.numpy as jnp
+
+    from jaxdamp import neighbors as nb
+    from jaxdamp.integrate import box_frame
+    modes = {}
+    for mode in ("forward", "reverse"):
+        fn = prob._derivative_fn(mode)
+        B = ens.states.t.shape[0]
+        nbrs = nb.allocate(prob.model, box_frame(ens.states), 1.5, at_least=12)
+        args = (jnp.full((B,), ens.lz), ens.states, nbrs, ens.params)
+        mem = fn.lower(*args).compile().memory_analysis()
+        jax.block_until_ready(fn(*args))
+        t0 = time.perf_counter()
+        jax.block_until_ready(fn(*args))
+        modes[mode] = dict(wall=time.perf_counter() - t0,
+                           temp_bytes=float(getattr(mem, "temp_size_in_bytes", np.nan)))
+    fwd_fn = prob._fns.get(("values", "jax", prob.n_rec, prob.record_every))
+    prob.window_values(ens, engine="jax")
+    t0 = time.perf_counter()
+    prob.window_values(ens, engine="jax")
+    modes["primal (JAX)"] = dict(wall=time.perf_counter() - t0, temp_bytes=np.nan)
+    t0 = time.perf_counter()
+    prob.window_values(ens, engine="auto")
+    modes["primal (native)"] = dict(wall=time.perf_counter() - t0, temp_bytes=np.nan)
+    del fwd_fn
+    out["modes"] = modes
+    out["mode_steps"] = float(ens.states.t.shape[0] * prob.n_rec * prob.record_every)
+    log("modes: " + ", ".join(f"{k} {v['wall']:.2f} s" for k, v in modes.items()))
+
+    # 4a. brute-force scan (one batched sweep, native engine)
+    cfg_scan = apply_overrides(base, {"frequency": f0, "numerics.duration": s["scan_duration"],
+                                      "numerics.analysis_window": 0.5,
+                                      "numerics.record_dt": 1e-3, "numerics.chunk": 0.1})
+    t0 = time.perf_counter()
+    res = sweep(cfg_scan, {"box.Lz": list(s["scan_lz"])}, progress=progress, echo=None)
+    out["scan"] = dict(lz=np.asarray(s["scan_lz"]),
+                       dissipation=np.asarray(res.summary["granular_loss_per_cycle"]),
+                       amplitude=np.asarray(res.summary["amplitude"]),
+                       balance=np.asarray(res.summary["balance_error"]),
+                       wall=time.perf_counter() - t0,
+                       sim_seconds=len(s["scan_lz"]) * s["scan_duration"] + prob.bed.time,
+                       config=cfg_scan.to_json())
+    out["scan"]["optimum"] = scan_optimum(s["scan_lz"], out["scan"]["dissipation"], True)
+    log(f"scan optimum Lz = {out['scan']['optimum']:.4g} m")
+
+    # 4b. optimiser from both starts
+    out["opt"] = {}
+    for lz0 in (0.07, 0.25):
+        r = optimize(prob, lz0, lr=s["lr"], decay=s["decay"], max_iter=s["opt_iter"],
+                     out=os.path.join(raw, f"dem_opt_{lz0:g}.h5"), progress=progress)
+        out["opt"][lz0] = r
+        log(f"DEM optimiser from {lz0}: Lz = {r.lz:.4g} ({r.reason}), {r.sim_seconds:.3g} sim s")
+    # 4c. the same with the amplitude objective (the designer's target at f0)
+    out["scan"]["optimum_amplitude"] = scan_optimum(s["scan_lz"], out["scan"]["amplitude"], False)
+    prob.objective = Objective("amplitude")
+    prob._fns.clear()
+    out["opt_amp"] = {}
+    for lz0 in (0.07, 0.25):
+        r = optimize(prob, lz0, lr=s["lr"], decay=s["decay"], max_iter=s["opt_iter"],
+                     out=os.path.join(raw, f"dem_opt_amplitude_{lz0:g}.h5"), progress=progress)
+        out["opt_amp"][lz0] = r
+        log(f"DEM amplitude optimiser from {lz0}: Lz = {r.lz:.4g} ({r.reason})")
+    out["sim_windows"] = sim_windows
+    return out
+
+
+def s3_part(s, raw, progress, log):
+    base = apply_overrides(presets.get("sanchez2012-impact"), {"numerics.analysis_window": 0.5})
+    out = {}
+    for kind in s["s3_objectives"]:
+        obj = Objective(kind, band=(14.0, 14.5, 15.0, 15.5, 16.0) if kind == "band" else None)
+        dur = min(s["s3_duration"], 2.0) if kind == "band" else s["s3_duration"]
+        prob = S3Problem(base, obj, duration=dur)
+        r = {"duration": dur, "h_bed": prob.h_bed, "config": prob.config.to_json(),
+             "objective": obj.to_json(prob.config)}
+        t0 = time.perf_counter()
+        gaps = np.asarray(s["s3_scan"])
+        r["scan_gap"], r["scan_value"] = gaps, prob.scan(gaps)
+        r["scan_wall"] = time.perf_counter() - t0
+        r["scan_sim_seconds"] = len(gaps) * dur * len(prob.freqs)
+        # the scan's optimum: a parabola through the best sample, then a fine local scan. Over
+        # the periodic regime (gap <= PERIODIC_GAP; beyond it the response at f0 is irregular and
+        # the dissipation per cycle jumps around — larger, with a larger Z) and over all gaps.
+        r["optimum_global"] = scan_optimum(gaps, r["scan_value"], obj.maximise)
+        sel = gaps <= PERIODIC_GAP
+        g0 = scan_optimum(gaps[sel], r["scan_value"][sel], obj.maximise)
+        step = gaps[1] - gaps[0]
+        fine = np.linspace(g0 - 2 * step, g0 + 2 * step, 21 if len(gaps) < 50 else 41)
+        r["fine_gap"], r["fine_value"] = fine, prob.scan(fine)
+        r["optimum"] = scan_optimum(fine, r["fine_value"], obj.maximise)
+        r["scan_sim_seconds"] += len(fine) * dur * len(prob.freqs)
+        fd = []
+        for g in s["s3_fd_gaps"]:
+            e, _ = prob.evaluate(g)
+            row = {"gap": g, "ad": e.grad}
+            for h in (1e-4, 1e-5, 1e-6):
+                row[h] = (prob.value(g + h) - prob.value(g - h)) / (2 * h)
+            fd.append(row)
+            log(f"S3 {kind} gap {g}: AD {e.grad:.6g}, FD(1e-5) {row[1e-5]:.6g}")
+        r["fd"] = fd
+        r["opt"] = {}
+        for lz0 in (0.07, 0.25):
+            o = optimize(prob, prob.from_lz(lz0), lr=0.015, decay=0.88, max_iter=s["s3_iter"],
+                         xtol=5e-5, out=os.path.join(raw, f"s3_{kind}_opt_{lz0:g}.h5"),
+                         progress=progress)
+            r["opt"][lz0] = o
+            log(f"S3 {kind} from Lz0 {lz0}: gap {o.x:.5g} (scan {r['optimum']:.5g}), {o.reason}")
+        out[kind] = r
+    return out
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--quick", action="store_true", help="tiny settings (~1.5 min)")
+    ap.add_argument("--out", default=os.path.join(HERE, "gap_optimisation"))
+    ap.add_argument("--no-progress", action="store_true")
+    args = ap.parse_args(argv)
+    s = settings(args.quick)
+    raw = os.path.join(args.out, "raw")
+    os.makedirs(raw, exist_ok=True)
+    progress = not args.no_progress
+    lines = []
+
+    def log(msg):
+        lines.append(msg)
+        if progress:
+            print(msg, flush=True)
+
+    t0 = time.perf_counter()
+    s3 = s3_part(s, raw, progress, log)
+    t_s3 = time.perf_counter() - t0
+    dem = dem_part(s, raw, progress, log)
+    wall = time.perf_counter() - t0
+    command = "python experiments/gap_optimisation.py" + (" --quick" if args.quick else "")
+    _write_data(args.out, s, s3, dem, wall, command)
+    _figure(args.out, s3, dem)
+    _summary(args.out, s, s3, dem, wall, t_s3, command, args.quick)
+    return {"s3": s3, "dem": dem, "wall": wall}
+
+
+def _hist_group(g, res):
+    for k, v in res.history.items():
+        g.create_dataset(k, data=v)
+    g.attrs["reason"] = res.reason
+    g.attrs["x"] = res.x
+    g.attrs["lz"] = res.lz
+    g.attrs["sim_seconds"] = res.sim_seconds
+    g.attrs["wall_time"] = res.wall
+
+
+def _write_data(out, s, s3, dem, wall, command):
+    with h5py.File(os.path.join(out, "data.h5"), "w") as h:
+        h.attrs["jaxdamp_version"] = jaxdamp.__version__
+        h.attrs["command"] = command
+        h.attrs["wall_time"] = wall
+        h.attrs["settings"] = json.dumps({k: (np.asarray(v).tolist() if np.ndim(v) else v)
+                                          for k, v in s.items()})
+        for kind, r in s3.items():
+            g = h.create_group(f"s3/{kind}")
+            g.attrs["config"] = r["config"]
+            g.attrs["objective"] = r["objective"]
+            g.attrs["optimum_gap"] = r["optimum"]
+            g.attrs["optimum_gap_global"] = r["optimum_global"]
+            g.attrs["h_bed"] = r["h_bed"]
+            for k in ("scan_gap", "scan_value", "fine_gap", "fine_value"):
+                g.create_dataset(k, data=r[k]).attrs["units"] = "m" if "gap" in k else ""
+            g.create_dataset("fd/gap", data=[x["gap"] for x in r["fd"]])
+            g.create_dataset("fd/ad", data=[x["ad"] for x in r["fd"]])
+            for hh in (1e-4, 1e-5, 1e-6):
+                g.create_dataset(f"fd/fd_h{hh:g}", data=[x[hh] for x in r["fd"]])
+            for lz0, o in r["opt"].items():
+                _hist_group(g.create_group(f"opt_lz0_{lz0:g}"), o)
+        g = h.create_group("dem")
+        g.attrs["config"] = dem["config"]
+        g.attrs["bed_height"] = dem["bed_height"]
+        g.attrs["dt"] = dem["dt"]
+        g.attrs["f0"] = dem["f0"]
+        for i, r in enumerate(dem["windows"]):
+            w = g.create_group(f"windows/{i}")
+            w.attrs["window"] = r["window"]
+            w.attrs["wall_time"] = r["wall"]
+            for k in ("values", "ad", "fd", "fd8"):
+                w.create_dataset(k, data=r[k])
+        for r in dem["fd"]:
+            w = g.create_group(f"fd/lz_{r['lz']:g}")
+            w.create_dataset("values", data=r["values"])
+            w.create_dataset("ad", data=r["ad"])
+            for hh, x in r["fd"].items():
+                w.create_dataset(f"fd_h{hh:g}", data=x)
+        g.attrs["modes"] = json.dumps(dem["modes"])
+        sc = g.create_group("scan")
+        sc.attrs["config"] = dem["scan"]["config"]
+        sc.attrs["optimum"] = dem["scan"]["optimum"]
+        sc.attrs["sim_seconds"] = dem["scan"]["sim_seconds"]
+        for k in ("lz", "dissipation", "amplitude", "balance"):
+            sc.create_dataset(k, data=dem["scan"][k])
+        for lz0, o in dem["opt"].items():
+            _hist_group(g.create_group(f"opt_lz0_{lz0:g}"), o)
+        for lz0, o in dem["opt_amp"].items():
+            _hist_group(g.create_group(f"opt_amplitude_lz0_{lz0:g}"), o)
+        sc.attrs["optimum_amplitude"] = dem["scan"]["optimum_amplitude"]
+
+
+def _figure(out, s3, dem):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(2, 3, figsize=(16, 8))
+    a = ax[0, 2]
+    sc = dem["scan"]
+    a.plot(sc["lz"], sc["amplitude"] * 1e3, "ko-", label="scan (steady state, half p-p)")
+    for lz0, o in dem["opt_amp"].items():
+        a.plot(o.history["lz"], o.history["objective"] * 1e3, ".-",
+               label=f"optimiser from {lz0} m (window estimate)")
+    a.axvline(THESIS_LZ, color="g", ls="-.", lw=0.8, label="thesis 0.1225 m")
+    a.axvline(sc["optimum_amplitude"], color="k", ls=":", lw=0.8, label="scan optimum")
+    a.set_xlabel("Lz [m]")
+    a.set_ylabel("Z [mm]")
+    a.set_title("DEM at f0: amplitude objective", fontsize=9)
+    a.legend(fontsize=7)
+    ax[1, 2].set_visible(False)
+    a = ax[0, 0]
+    w = np.array([r["window"] for r in dem["windows"]]) * 1e3
+    for key, mk, lab in (("ad", "o-", "pathwise (jvp)"), ("fd8", "^--", "central FD, h = 1e-8 m"),
+                         ("fd", "s--", "central FD, h = 1e-5 m")):
+        m = np.array([np.mean(np.abs(r[key])) for r in dem["windows"]])
+        sd = np.array([np.std(r[key]) for r in dem["windows"]])
+        a.loglog(w, np.maximum(m, 1e-3), mk, label=f"mean |dD/dLz|, {lab}")
+        if key == "ad":
+            a.loglog(w, np.maximum(sd, 1e-3), "o:", color="C0", alpha=0.6,
+                     label="std over windows (pathwise)")
+    a.set_xlabel("window length [ms]")
+    a.set_ylabel("|dD/dLz| [J per cycle / m]")
+    a.set_title("DEM, Lz = 0.1225 m: the pathwise derivative vs window length", fontsize=9)
+    a.legend(fontsize=7)
+    a = ax[0, 1]
+    sc = dem["scan"]
+    a.plot(sc["lz"], sc["dissipation"], "ko-", label="scan (steady state)")
+    for lz0, o in dem["opt"].items():
+        a.plot(o.history["lz"], o.history["objective"], ".-", label=f"optimiser from {lz0} m "
+               "(window estimate)")
+    a.axvline(THESIS_LZ, color="g", ls="-.", lw=0.8, label="thesis 0.1225 m")
+    a.axvline(sc["optimum"], color="k", ls=":", lw=0.8, label="scan optimum")
+    a.set_xlabel("Lz [m]")
+    a.set_ylabel("granular dissipation per cycle [J]")
+    a.set_title(f"DEM at f0 = {dem['f0']:.3f} Hz", fontsize=9)
+    a.legend(fontsize=7)
+    for a, kind in zip((ax[1, 0], ax[1, 1]), ("dissipation", "band")):
+        if kind not in s3:
+            a.set_visible(False)
+            continue
+        r = s3[kind]
+        scale = 1e3 if kind == "band" else 1.0
+        a.plot(r["scan_gap"], r["scan_value"] * scale, "k-", lw=0.8, label="dense scan")
+        for lz0, o in r["opt"].items():
+            a.plot(o.history["x"], o.history["objective"] * scale, ".-",
+                   label=f"optimiser from Lz0 = {lz0} m")
+        a.axvline(r["optimum"], color="k", ls=":", lw=0.8, label="scan optimum")
+        a.axvline(THESIS_LZ - r["h_bed"], color="g", ls="-.", lw=0.8, label="thesis 0.0835 m")
+        a.set_xlabel("gap [m]")
+        a.set_ylabel("impact loss per cycle [J]" if kind == "dissipation"
+                     else "smooth max of Z over 14–16 Hz [mm]")
+        a.set_title(f"S3 (smooth model, exact gradients): {kind}", fontsize=9)
+        a.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "figure.png"), dpi=110)
+    plt.close(fig)
+
+
+def _fmt(x):
+    return f"{x:.4g}"
+
+
+def _findings(s, s3, dem, quick):
+    """Interpretation, computed from the numbers above (re-generated with every run)."""
+    L = ["", "## Findings", ""]
+    ok = [r for r in dem["windows"]
+          if abs(r["ad"].mean() - r["fd8"].mean()) <= 0.05 * abs(r["fd8"].mean()) + 1e-6]
+    last_ok = max((r["window"] for r in ok), default=float("nan"))
+    big = max(dem["windows"], key=lambda r: r["window"])
+    sc = dem["scan"]
+    slope = np.max(np.abs(np.diff(sc["dissipation"]) / np.diff(sc["lz"])))
+    L.append(f"- **Pathwise DEM derivatives** equal central differences (h = 1e-8 m, same start "
+             f"states) of the window objective up to windows of {last_ok * 1e3:.2g} ms; the "
+             f"largest per-window derivative grows from "
+             f"{_fmt(np.abs(dem['windows'][0]['ad']).max())} at "
+             f"{dem['windows'][0]['window'] * 1e3:.2g} ms to {_fmt(np.abs(big['ad']).max())} at "
+             f"{big['window'] * 1e3:.2g} ms (J per cycle per m; the steepest slope of the "
+             f"steady-state scan is {_fmt(slope)}). Only windows in which a grain touches the lid have a nonzero "
+             "derivative, so the ensemble is dominated by a few windows and its standard error "
+             "is as large as its mean.")
+    L.append("- **Bias**: the window derivative holds the start states fixed. It measures what "
+             "moving the lid does in the next milliseconds (e.g. grains pressed against the "
+             "lid are pressed less when it rises), not how the bed's steady motion changes with "
+             "the free height (grains thrown higher hit harder), which takes a flight time "
+             "(~a period, 66 ms) to show — beyond the windows where the derivative is still "
+             "meaningful (above: where it leaves the finite differences and grows by orders of "
+             "magnitude; the bed is chaotic).")
+    for lz0, o in dem["opt"].items():
+        L.append(f"- DEM optimiser from {lz0} m ended at Lz = {o.lz:.4g} m "
+                 f"({(o.lz - sc['optimum']) / sc['optimum'] * 100:+.0f} % from the scan's "
+                 f"optimum {sc['optimum']:.4g} m, {(o.lz - THESIS_LZ) / THESIS_LZ * 100:+.0f} % "
+                 f"from 0.1225 m): {o.reason}; {o.sim_seconds:.3g} simulated s = "
+                 f"{o.sim_seconds / sc['sim_seconds']:.2f} × the scan's.")
+    for lz0, o in dem["opt_amp"].items():
+        L.append(f"- DEM amplitude optimiser from {lz0} m ended at Lz = {o.lz:.4g} m "
+                 f"({(o.lz - sc['optimum_amplitude']) / sc['optimum_amplitude'] * 100:+.0f} % "
+                 f"from the scan's Z optimum {sc['optimum_amplitude']:.4g} m): {o.reason}.")
+    k = int(np.argmax(sc["dissipation"]))
+    if k == len(sc["lz"]) - 1:
+        L.append(f"- The dissipation per cycle at f0 grows up to the tallest box scanned "
+                 f"({sc['lz'][-1]} m), where Z is {sc['amplitude'][-1] / sc['amplitude'].min():.1f}× "
+                 "its smallest value: more dissipation per cycle there means more energy pumped in "
+                 "at a larger amplitude, so it is a poor design target; Z at f0 (or the band "
+                 "objective) is the one a designer minimises.")
+    for kind, r in s3.items():
+        for lz0, o in r["opt"].items():
+            L.append(f"- S3 {kind} from Lz0 = {lz0} m: gap {o.x:.4g} m vs scan {r['optimum']:.4g} m "
+                     f"({(o.x - r['optimum']) / r['optimum'] * 100:+.1f} %), {o.sim_seconds:.3g} "
+                     f"simulated s vs {r['scan_sim_seconds']:.3g} for the dense scan.")
+    if "dissipation" in s3:
+        r = s3["dissipation"]
+        lz_s3 = r["optimum"] + dem["bed_height"]
+        L.append(f"- S3 as a surrogate (thesis §5.3.2: S3 with e = 0 matches the bed at the "
+                 f"optimum): its optimum gap {r['optimum']:.4g} m + the DEM bed's height "
+                 f"{dem['bed_height']:.4g} m = Lz {lz_s3:.4g} m, "
+                 f"{(lz_s3 - sc['optimum']) / sc['optimum'] * 100:+.0f} % from the DEM scan's "
+                 "optimum of the same objective.")
+    m = dem["modes"]
+    L.append(f"- Forward mode (`jax.jvp`, the default) took {m['forward']['wall']:.2f} s and "
+             f"{m['forward']['temp_bytes'] / 1e6:.1f} MB of compiled temporaries; reverse mode "
+             f"(`jax.grad` with `jax.checkpoint` per {25} steps) {m['reverse']['wall']:.2f} s and "
+             f"{m['reverse']['temp_bytes'] / 1e6:.1f} MB (its memory grows with the window, "
+             "forward mode's does not). One parameter: forward mode wins on both.")
+    if not quick:
+        per_sim = sc["wall"] / (len(sc["lz"]) * s["scan_duration"])
+        its = [o for o in dem["opt"].values() if len(o.history["x"])]
+        per_it = np.mean([o.wall / len(o.history["x"]) for o in its]) if its else float("nan")
+        L.append(f"- Cut for the 25-minute budget: scan runs of {s['scan_duration']} s (thesis "
+                 f"13.12 s) at {len(sc['lz'])} heights, K = {s['K']} windows, at most "
+                 f"{s['opt_iter']} optimiser iterates per start. Projected full size at the "
+                 f"measured rates: a 12-height scan of 13.12 s runs ≈ "
+                 f"{per_sim * 12 * 13.12 / 60:.0f} min; 20 iterates with K = 32 ≈ "
+                 f"{per_it * 20 * 4 / 60:.0f} min per start (upper bound: all of an iterate "
+                 "scaled with K).")
+    return L + [""]
+
+
+def _sign_agrees(ad, fd):
+    if ad == 0 and fd == 0:
+        return "n/a (no lid contact in any window)"
+    return "yes" if np.sign(ad) == np.sign(fd) else "no"
+
+
+def _summary(out, s, s3, dem, wall, t_s3, command, quick):
+    L = ["# Gradient-based optimisation of the gap (issue 4)", "",
+         f"Command: `{command}` — wall time {wall / 60:.1f} min on 2 shared cores "
+         f"(S3 part {t_s3:.0f} s). Data: `data.h5`; figure: `figure.png`; optimiser logs "
+         "in `raw/`.", ""]
+    if quick:
+        L += ["**Quick mode**: 60 grains instead of 250, tiny ensembles, short runs; the "
+              "numbers only show that every part runs. See the full mode for the findings.", ""]
+    L += ["## S3: single particle, smooth model, exact gradients", ""]
+    for kind, r in s3.items():
+        L += [f"### {kind} (runs of {r['duration']} s, analysis window: last half)", "",
+              "| gap [m] | jax.grad | FD h=1e-4 | FD h=1e-5 | FD h=1e-6 | rel. diff (1e-5) |",
+              "| --- | --- | --- | --- | --- | --- |"]
+        for x in r["fd"]:
+            rel = abs(x["ad"] - x[1e-5]) / max(abs(x[1e-5]), 1e-300)
+            L.append(f"| {x['gap']} | {_fmt(x['ad'])} | {_fmt(x[1e-4])} | {_fmt(x[1e-5])} | "
+                     f"{_fmt(x[1e-6])} | {rel:.2e} |")
+        L += ["", f"Dense scan ({len(r['scan_gap'])} gaps + {len(r['fine_gap'])} around the best): optimum gap in "
+              f"the periodic regime (gap ≤ {PERIODIC_GAP} m) **{r['optimum']:.5g} m** "
+              f"(Lz = {r['optimum'] + r['h_bed']:.5g} m; thesis gap 0.0835 m); over all gaps "
+              f"{r['optimum_global']:.5g} m.", "",
+              "| start Lz0 (gap0) | final gap | vs scan | iterates | stop | simulated s |",
+              "| --- | --- | --- | --- | --- | --- |"]
+        for lz0, o in r["opt"].items():
+            L.append(f"| {lz0} ({lz0 - r['h_bed']:.4g}) | {o.x:.5g} | "
+                     f"{(o.x - r['optimum']) / r['optimum'] * 100:+.2f} % | "
+                     f"{len(o.history['x'])} | {o.reason} | {o.sim_seconds:.3g} |")
+        L += ["", f"Scan cost: {r['scan_sim_seconds']:.4g} simulated s.", ""]
+    L += [f"## DEM (`sanchez2012-optimal`, N = {s['grains']}), dissipation per cycle at f0", "",
+          f"Bed height {dem['bed_height']:.4g} m, dt = {dem['dt']:.3g} s, K = {s['K']} "
+          "windows per ensemble, start phases stratified over the period.", "",
+          "### Pathwise derivative vs window length (Lz = 0.1225 m, same start states)", "",
+          "| window [ms] | mean dD/dLz ± SE (jvp) | max \\|per-window\\| | FD h=1e-8 mean | "
+          "FD h=1e-5 mean | windows with a nonzero derivative | window values: mean ± SE [J] "
+          "| wall [s] |",
+          "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+    for r in dem["windows"]:
+        d = r["ad"]
+        se = d.std(ddof=1) / np.sqrt(len(d))
+        L.append(f"| {r['window'] * 1e3:.2f} | {_fmt(d.mean())} ± {_fmt(se)} | "
+                 f"{_fmt(np.abs(d).max())} | {_fmt(r['fd8'].mean())} | {_fmt(r['fd'].mean())} | "
+                 f"{int(np.count_nonzero(d))}/{len(d)} | {_fmt(r['values'].mean())} ± "
+                 f"{_fmt(r['values'].std(ddof=1) / np.sqrt(len(d)))} | {r['wall']:.1f} |")
+    L += ["", "### AD vs central differences of the same averaged window objective", "",
+          f"Window {s['window'] * 1e3:g} ms, same start states and engine inputs; FD with the "
+          "native engine (equal to the JAX engine to round-off).", "",
+          "| Lz [m] | jvp mean ± SE | FD h=1e-4 | FD h=1e-5 | FD h=1e-6 | FD h=1e-8 | "
+          "sign agrees (1e-8) |", "| --- | --- | --- | --- | --- | --- | --- |"]
+    for r in dem["fd"]:
+        d = r["ad"]
+        se = d.std(ddof=1) / np.sqrt(len(d))
+        f8 = r["fd"][1e-8].mean()
+        L.append(f"| {r['lz']} | {_fmt(d.mean())} ± {_fmt(se)} | {_fmt(r['fd'][1e-4].mean())} | "
+                 f"{_fmt(r['fd'][1e-5].mean())} | {_fmt(r['fd'][1e-6].mean())} | {_fmt(f8)} | "
+                 f"{_sign_agrees(d.mean(), f8)} |")
+    m = dem["modes"]
+    L += ["", "### Forward vs reverse mode (one ensemble, compiled, second call)", "",
+          "| | wall [s] | µs per system-step | compiled temp memory [MB] |",
+          "| --- | --- | --- | --- |"]
+    for k, v in m.items():
+        mb = v["temp_bytes"] / 1e6 if np.isfinite(v["temp_bytes"]) else float("nan")
+        L.append(f"| {k} | {v['wall']:.2f} | {v['wall'] / dem['mode_steps'] * 1e6:.0f} | "
+                 f"{mb:.1f} |")
+    sc = dem["scan"]
+    L += ["", "### Brute-force scan vs optimiser", "",
+          f"Scan: {len(sc['lz'])} heights × {s['scan_duration']} s (one batched sweep, native "
+          f"engine, dissipation over the last half): {sc['sim_seconds']:.3g} simulated s, "
+          f"{sc['wall']:.0f} s wall.", "",
+          "| Lz [m] | dissipation per cycle [J] | Z [mm] | balance error |",
+          "| --- | --- | --- | --- |"]
+    for i, lz in enumerate(sc["lz"]):
+        L.append(f"| {lz} | {sc['dissipation'][i]:.4g} | {sc['amplitude'][i] * 1e3:.3g} | "
+                 f"{sc['balance'][i]:.1e} |")
+    L += ["", f"Scan optimum (parabola through the best three): **Lz = {sc['optimum']:.4g} m** "
+          f"(thesis 0.1225 m).", "",
+          "| start Lz0 | final Lz | vs scan optimum | vs 0.1225 | iterates | stop | simulated s "
+          "| ratio to scan |", "| --- | --- | --- | --- | --- | --- | --- | --- |"]
+    for lz0, o in dem["opt"].items():
+        L.append(f"| {lz0} | {o.lz:.4g} | {(o.lz - sc['optimum']) / sc['optimum'] * 100:+.1f} % | "
+                 f"{(o.lz - THESIS_LZ) / THESIS_LZ * 100:+.1f} % | {len(o.history['x'])} | "
+                 f"{o.reason} | {o.sim_seconds:.3g} | {o.sim_seconds / sc['sim_seconds']:.2f} |")
+    L += ["", f"Amplitude objective (Z at f0, surrogate sqrt(2 <(z - z_s)²>) over the windows): "
+          f"scan optimum (parabola through the smallest three Z) **Lz = "
+          f"{sc['optimum_amplitude']:.4g} m**.", "",
+          "| start Lz0 | final Lz | vs scan optimum | vs 0.1225 | iterates | stop | simulated s |",
+          "| --- | --- | --- | --- | --- | --- | --- |"]
+    for lz0, o in dem["opt_amp"].items():
+        L.append(f"| {lz0} | {o.lz:.4g} | "
+                 f"{(o.lz - sc['optimum_amplitude']) / sc['optimum_amplitude'] * 100:+.1f} % | "
+                 f"{(o.lz - THESIS_LZ) / THESIS_LZ * 100:+.1f} % | {len(o.history['x'])} | "
+                 f"{o.reason} | {o.sim_seconds:.3g} |")
+    L += _findings(s, s3, dem, quick)
+    with open(os.path.join(out, "summary.md"), "w") as fh:
+        fh.write("\n".join(L) + "\n")
+
+
+if __name__ == "__main__":
+    main()
