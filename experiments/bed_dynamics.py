@@ -38,9 +38,9 @@ import jaxdamp
 from jaxdamp import dynamics as dyn
 from jaxdamp import presets
 from jaxdamp.analysis import frf_amplitude
-from jaxdamp.config import ConfigError, apply_overrides
+from jaxdamp.config import apply_overrides
 from jaxdamp.model import grain_mass
-from jaxdamp.sweep import sweep
+from jaxdamp.sweep import reuse_or_run
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 #: Frequencies [Hz] of the full mode: the thesis' regions (periodic < 7.5, transition 7.5–11,
@@ -80,15 +80,8 @@ def run_sweep(s: dict, raw_dir: str, progress: bool):
         "numerics.duration": s["duration"], "numerics.settle_time": s["settle"],
         "numerics.record_dt": s["record_dt"], "numerics.chunk": 0.2})
     out = os.path.join(raw_dir, "sweep.h5")
-    resume = os.path.exists(out)
     axes = {"frequency": list(s["freqs"])}
-    try:  # a finished or partial raw file of the same sweep is reused / continued
-        res = sweep(cfg, axes, out=out, resume=resume, progress=progress)
-    except ConfigError:
-        if not resume:
-            raise
-        res = sweep(cfg, axes, out=out, resume=False, progress=progress)  # it held another sweep
-    return res, cfg
+    return reuse_or_run(cfg, axes, out, progress=progress), cfg
 
 
 def contact_stats(t, force_box, weight, frequency):
@@ -357,7 +350,7 @@ def _figures(out, res, cfg, s, rows, det, m_p):
         tau = d["delay"]
         a[3].plot(d["z"][:-tau] * mm, d["z"][tau:] * mm, "-", lw=0.2, color="tab:blue")
         a[3].set_xlabel("z_cm(t) [mm]")
-        a[3].set_ylabel(f"z_cm(t + τ) [mm]")
+        a[3].set_ylabel("z_cm(t + τ) [mm]")
         a[3].set_title(f"delay embedding: τ = {tau} ms (MI), FNN dim = {d['dim']}", fontsize=8)
         ly = d["lyap"]
         a[4].plot(ly.time, ly.S, "-", lw=1)

@@ -29,9 +29,9 @@ import numpy as np
 import jaxdamp
 from jaxdamp import presets
 from jaxdamp.analysis import fit_frf, frf_amplitude, optimal_gap, resonance
-from jaxdamp.config import ConfigError, apply_overrides
+from jaxdamp.config import apply_overrides
 from jaxdamp.model import grain_mass
-from jaxdamp.sweep import sweep
+from jaxdamp.sweep import reuse_or_run
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 #: Box heights [m] of the thesis' scan (SPEC §5) used in the full mode.
@@ -55,15 +55,8 @@ def run_scan(C: float, s: dict, raw_dir: str, progress: bool):
         "primary.C": C, "numerics.duration": s["duration"], "numerics.settle_time": s["settle"],
         "numerics.record_dt": 1e-3, "numerics.chunk": 0.1})
     out = os.path.join(raw_dir, f"sweep_C{C:g}.h5")
-    resume = os.path.exists(out)
     axes = {"frequency": list(s["freqs"]), "box.Lz": list(s["lz"])}
-    try:  # a finished or partial raw file of the same sweep is reused / continued
-        res = sweep(cfg, axes, out=out, resume=resume, progress=progress)
-    except ConfigError:
-        if not resume:
-            raise
-        res = sweep(cfg, axes, out=out, resume=False, progress=progress)  # it held another sweep
-    return res, cfg
+    return reuse_or_run(cfg, axes, out, progress=progress), cfg
 
 
 def analyse(res, cfg):

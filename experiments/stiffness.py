@@ -28,9 +28,9 @@ import numpy as np
 import jaxdamp
 from jaxdamp import presets
 from jaxdamp.analysis import resonance
-from jaxdamp.config import ConfigError, apply_overrides
+from jaxdamp.config import apply_overrides
 from jaxdamp.model import collision_time_limit, grain_radii
-from jaxdamp.sweep import sweep
+from jaxdamp.sweep import reuse_or_run
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCALES = (1.0, 0.01, 0.001)
@@ -48,10 +48,7 @@ def run_one(scale: float, s: dict, raw_dir: str, progress: bool):
         "numerics.settle_time": s["settle"], "numerics.record_dt": 1e-3, "numerics.chunk": 0.1})
     out = os.path.join(raw_dir, f"sweep_scale{scale:g}.h5")
     axes = {"frequency": list(s["freqs"])}
-    try:  # a finished raw file of the same sweep is reused (its compute time is kept)
-        res = sweep(cfg, axes, out=out, resume=os.path.exists(out), progress=progress)
-    except ConfigError:
-        res = sweep(cfg, axes, out=out, resume=False, progress=progress)
+    res = reuse_or_run(cfg, axes, out, progress=progress)
     with h5py.File(out, "r") as h:
         dt = float(h.attrs["dt"])
     return res, cfg, dt, float(res.summary["wall_time"])

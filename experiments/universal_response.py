@@ -29,9 +29,9 @@ import numpy as np
 import jaxdamp
 from jaxdamp import presets
 from jaxdamp.analysis import frf_amplitude, resonance
-from jaxdamp.config import ConfigError, apply_overrides
+from jaxdamp.config import apply_overrides
 from jaxdamp.model import grain_mass
-from jaxdamp.sweep import sweep
+from jaxdamp.sweep import reuse_or_run, sweep
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 CASES = ((3660.0, 10980.0), (0.0, 10980.0), (3660.0, 0.0), (0.0, 0.0))
@@ -56,11 +56,7 @@ def run_dem(gn, gs, s, raw_dir, progress):
         "numerics.record_dt": 1e-3, "numerics.chunk": 0.1})
     out = os.path.join(raw_dir, f"sweep_{_label(gn, gs)}.h5")
     axes = {"frequency": list(s["freqs"])}
-    try:
-        res = sweep(cfg, axes, out=out, resume=os.path.exists(out), progress=progress)
-    except ConfigError:
-        res = sweep(cfg, axes, out=out, resume=False, progress=progress)
-    return res, cfg
+    return reuse_or_run(cfg, axes, out, progress=progress), cfg
 
 
 def run_s3(method, s):

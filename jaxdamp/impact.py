@@ -926,8 +926,7 @@ def sweep(config: Config, axes: dict, out: str | None = None, progress: bool = T
     loops over them (numba; one core each)."""
     import h5py
 
-    from . import __version__
-    from .sweep import SweepResult, grid_configs
+    from .sweep import SweepResult, grid_configs, write_header
 
     for key in axes:
         if key.startswith(("box.", "grains")):
@@ -965,14 +964,7 @@ def sweep(config: Config, axes: dict, out: str | None = None, progress: bool = T
     duration = n_rec * configs[0].numerics.record_dt
     if out:
         with h5py.File(out, "w") as h5:
-            h5.attrs["format"] = "jaxdamp-sweep/1"
-            h5.attrs["jaxdamp_version"] = __version__
-            h5.attrs["base_config"] = config.to_json()
-            h5.attrs["axes"] = json.dumps({k: list(map(float, v)) for k, v in axes.items()})
-            h5.attrs["configs"] = json.dumps([c.to_json() for c in configs])
-            h5.attrs["dt"] = dt
-            h5.attrs["duration"] = duration
-            h5.attrs["engine"] = f"impact-{method}"
+            write_header(h5, config, axes, configs, dt, duration, f"impact-{method}")
             h5.attrs["devices"] = 1
             sg = h5.create_group("summary")
             for k, v in summary.items():

@@ -95,6 +95,42 @@ def _pad_and_shard(tree, padded, sharding):
     return jax.tree_util.tree_map(one, tree)
 
 
+def _axes_json(axes: dict) -> str:
+    return json.dumps({k: list(map(float, v)) for k, v in axes.items()})
+
+
+def write_header(h5, config: Config, axes: dict, configs: list, dt: float, duration: float,
+                 engine: str) -> None:
+    """The root attributes of a sweep file (``docs/output.md``), shared by every model."""
+    h5.attrs["format"] = "jaxdamp-sweep/1"
+    h5.attrs["jaxdamp_version"] = __version__
+    h5.attrs["base_config"] = config.to_json()
+    h5.attrs["axes"] = _axes_json(axes)
+    h5.attrs["configs"] = json.dumps([c.to_json() for c in configs])
+    h5.attrs["dt"] = dt
+    h5.attrs["duration"] = duration
+    h5.attrs["engine"] = engine
+
+
+def holds(path: str, config: Config, axes: dict) -> bool:
+    """Whether the sweep file ``path`` exists and holds the sweep ``(config, axes)``."""
+    if not os.path.exists(path):
+        return False
+    try:
+        with h5py.File(path, "r") as h5:
+            return (h5.attrs.get("base_config") == config.to_json()
+                    and h5.attrs.get("axes") == _axes_json(axes) and "checkpoint" in h5)
+    except OSError:  # not an HDF5 file (e.g. cut short while being created)
+        return False
+
+
+def reuse_or_run(config: Config, axes: dict, out: str, **kwargs) -> SweepResult:
+    """:func:`sweep` into ``out``, reusing what is there: a finished file of the same sweep is
+    read back without computing (its compute time kept), a partial one is resumed, anything
+    else is replaced. For experiments whose raw sweeps outlive a figure or a kill."""
+    return sweep(config, axes, out=out, resume=holds(out, config, axes), **kwargs)
+
+
 def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = False,
           progress: bool = True, echo=print, shard: bool = True,
           max_chunks: int | None = None) -> SweepResult | None:
@@ -145,8 +181,7 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
     start_chunk = 0
     if resume and out and os.path.exists(out):
         h5 = h5py.File(out, "a")
-        if h5.attrs["base_config"] != config.to_json() or h5.attrs["axes"] != json.dumps(
-                {k: list(map(float, v)) for k, v in axes.items()}):
+        if h5.attrs["base_config"] != config.to_json() or h5.attrs["axes"] != _axes_json(axes):
             h5.close()
             raise ConfigError(f"--resume: {out} holds a different sweep")
         g = h5["checkpoint"]
@@ -185,14 +220,7 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
         nbrs = _pad_and_shard(nbrs, padded, sharding)
         if out:
             h5 = h5py.File(out, "w")
-            h5.attrs["format"] = "jaxdamp-sweep/1"
-            h5.attrs["jaxdamp_version"] = __version__
-            h5.attrs["base_config"] = config.to_json()
-            h5.attrs["axes"] = json.dumps({k: list(map(float, v)) for k, v in axes.items()})
-            h5.attrs["configs"] = json.dumps([c.to_json() for c in configs])
-            h5.attrs["dt"] = dt
-            h5.attrs["duration"] = sched.duration
-            h5.attrs["engine"] = engine
+            write_header(h5, config, axes, configs, dt, sched.duration, engine)
             h5.attrs["devices"] = len(jax.devices())
             h5.create_group("records")
 
@@ -271,6 +299,7 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
         for k, v in axes.items():
             if k not in ag:
                 ag.create_dataset(k, data=np.asarray(v, float))
+        h5.attrs["wall_time"] = wall
         h5.attrs["status"] = "finished"
         h5.close()
     return SweepResult(axes=axes, configs=configs, summary=summary, records=records, path=out)

@@ -85,3 +85,34 @@ def test_killed_sweep_resumes_without_recomputing(tmp_path):
     np.testing.assert_array_equal(res.summary["amplitude"], full.summary["amplitude"])
     np.testing.assert_array_equal(res.records["z_cm"], full.records["z_cm"])
     assert res.summary["amplitude"].shape == (3, 2)
+
+
+def test_reuse_or_run_reads_back_resumes_or_replaces(tmp_path):
+    """Experiments' raw sweeps: a finished file of the same sweep is read back without
+    computing (same results, its compute time kept), a partial one is resumed, a file holding
+    another sweep is replaced."""
+    import h5py
+
+    from jaxdamp.sweep import holds, reuse_or_run
+
+    cfg, axes = _small_grid()
+    path = str(tmp_path / "raw.h5")
+    assert not holds(path, cfg, axes)
+    assert sweep(cfg, axes, out=path, progress=False, echo=None, max_chunks=3) is None
+    assert holds(path, cfg, axes)
+    msgs = []
+    first = reuse_or_run(cfg, axes, path, progress=False, echo=msgs.append)
+    assert msgs == ["resuming sweep at chunk 3/4"]
+    with h5py.File(path) as h:
+        assert h.attrs["status"] == "finished"
+    msgs.clear()
+    again = reuse_or_run(cfg, axes, path, progress=False, echo=msgs.append)
+    assert msgs == ["resuming sweep at chunk 4/4"]  # nothing left to compute
+    np.testing.assert_array_equal(again.summary["amplitude"], first.summary["amplitude"])
+    assert again.summary["wall_time"] >= first.summary["wall_time"] > 0
+    other = {k: v[:1] for k, v in axes.items()}
+    assert not holds(path, cfg, other)
+    msgs.clear()
+    res = reuse_or_run(cfg, other, path, progress=False, echo=msgs.append)
+    assert not any("resuming" in m for m in msgs) and res.summary["amplitude"].shape == (1, 1)
+    assert holds(path, cfg, other) and not holds(path, cfg, axes)
