@@ -47,6 +47,9 @@ class Material:
       restitution: coefficient of restitution [-] of a head-on collision of two grains of this
         material and the species' radius at speed ``v_ref`` (paper form); sets ``A``.
       v_ref: impact speed [m/s] at which ``restitution`` holds.
+      calibration_radius: radius [m] of the like-pair collision at which ``restitution`` holds;
+        ``None`` means the species' own radius (for walls: the first species'). Fixing it for
+        the walls keeps the wall's constant the same across mixtures of different sizes.
     """
 
     E: float
@@ -57,6 +60,7 @@ class Material:
     gamma_s: float = 0.0
     restitution: float | None = None
     v_ref: float = 1.0
+    calibration_radius: float | None = None
 
 
 @dataclass(frozen=True)
@@ -161,7 +165,8 @@ class Numerics:
       dt: time step [s]; ``None`` chooses ``t_c / dt_per_collision`` from the Hertz collision
         time of the smallest grains at ``v_impact``.
       dt_per_collision: the minimum number of steps per collision (SPEC §3: 50).
-      v_impact: largest expected impact speed [m/s] used for the collision time.
+      v_impact: largest expected impact speed [m/s] used for the collision time; for a driven
+        box (S2) the walls' relative speed ``2 A_d ω`` is used when larger.
       duration: simulated time after settling [s].
       chunk: simulated time per jitted chunk [s] (checkpoint, progress and overflow checks
         happen between chunks).

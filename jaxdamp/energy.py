@@ -62,6 +62,10 @@ RECORD_UNITS = {
     "force_box": "N",
     "n_floor": "1",
     "n_lid": "1",
+    "z_cm_species": "m",
+    "vz_cm_species": "m/s",
+    "n_floor_species": "1",
+    "n_lid_species": "1",
     "e_kinetic": "J",
     "e_rotational": "J",
     "e_gravitational": "J",
@@ -78,7 +82,9 @@ def record(st: State, p: Params, model: Model, mean_forces) -> dict:
     ``mean_forces`` = ``(floor+lid, whole box)`` vertical grain forces averaged over the
     sampling interval [N] (impulse / interval: collisions are shorter than the interval).
     ``z_lowest``/``z_highest`` are the lowest and highest grain centres; ``work`` the
-    cumulative channels ``(N_CHANNELS,)``.
+    cumulative channels ``(N_CHANNELS,)``. ``*_species`` are shaped ``(S,)``, one entry per
+    species (:meth:`Model.species_slices`): centre of mass height and vertical velocity, and
+    the grains touching floor / lid at this instant (overlap > 0).
     """
     kin, rot, grav = grain_energies(st, p)
     m_tot = jnp.maximum(p.mass.sum(), 1e-300)
@@ -96,6 +102,7 @@ def record(st: State, p: Params, model: Model, mean_forces) -> dict:
         force_box=mean_forces[1],
         n_floor=st.n_floor.astype(jnp.int32),
         n_lid=st.n_lid.astype(jnp.int32),
+        **_species_records(st, p, model),
         e_kinetic=kin,
         e_rotational=rot,
         e_gravitational=grav,
@@ -104,3 +111,18 @@ def record(st: State, p: Params, model: Model, mean_forces) -> dict:
         work=st.work,
         balance_residual=balance_residual(st, p, model),
     )
+
+
+def _species_records(st: State, p: Params, model: Model) -> dict:
+    floor = st.r[:, 2] - st.z  # centre height above the floor
+    on_floor = floor < p.radius
+    on_lid = p.Lz - floor < p.radius
+    out = {k: [] for k in ("z_cm_species", "vz_cm_species", "n_floor_species", "n_lid_species")}
+    for sl in model.species_slices():
+        m = p.mass[sl]
+        m_tot = jnp.maximum(m.sum(), 1e-300)
+        out["z_cm_species"].append(jnp.sum(m * st.r[sl, 2]) / m_tot)
+        out["vz_cm_species"].append(jnp.sum(m * st.v[sl, 2]) / m_tot)
+        out["n_floor_species"].append(on_floor[sl].sum().astype(jnp.int32))
+        out["n_lid_species"].append(on_lid[sl].sum().astype(jnp.int32))
+    return {k: jnp.stack(v) for k, v in out.items()}

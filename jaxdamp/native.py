@@ -6,8 +6,9 @@ implements *the same* step — same contact law, same velocity-Verlet scheme wit
 velocities, same wall geometry, same energy channels — as plain loops compiled by numba:
 
 * grain pairs come from a half neighbour list (each pair once, Newton's third law applied)
-  built inside the kernel on a cell grid from box-frame positions with cutoff
-  ``2 R_max + skin`` and rebuilt whenever a grain moved more than ``skin / 2``; the list is rebuilt at the start of every call,
+  built inside the kernel on a cell grid from box-frame positions, holding the pairs closer
+  than ``R_i + R_j + skin``, and rebuilt whenever a grain moved more than ``skin / 2``; the
+  list is rebuilt at the start of every call,
   so a call's result is a pure function of its inputs (resume stays bit-identical);
 * the batch of independent systems is spread over the CPU cores (``prange``).
 
@@ -83,12 +84,13 @@ if AVAILABLE:
 
     @njit(cache=True, error_model="numpy", fastmath=FASTMATH)
     def _build_pairs(r, z_box, cutoff, pi, pj, pc, ref, R, comp, A, gn, gs, mu, mixing):
-        """Half list of pairs closer than ``cutoff`` (box frame) via a cell grid of side
-        ``cutoff``, with the pairs' constants ``pc[k] = (R_i + R_j, k_n, γ_n, γ_s, μ)``
-        (they depend on the pair only); stores the reference positions. Returns the number of
-        pairs, or minus the number needed when the arrays are too small."""
+        """Half list of the pairs whose surfaces are closer than the skin, ``|r_i - r_j| < R_i +
+        R_j + cutoff - 2 R_max`` (box frame; size-aware, as :mod:`jaxdamp.neighbors`), via a
+        cell grid of side ``cutoff``, with the pairs' constants ``pc[k] = (R_i + R_j, k_n, γ_n,
+        γ_s, μ)`` (they depend on the pair only); stores the reference positions. Returns the
+        number of pairs, or minus the number needed when the arrays are too small."""
         n = r.shape[0]
-        c2 = cutoff * cutoff
+        extra = cutoff - 2.0 * R.max()
         lo = np.full(3, np.inf)
         hi = np.full(3, -np.inf)
         for i in range(n):
@@ -146,7 +148,8 @@ if AVAILABLE:
                             dx = ref[i, 0] - ref[j, 0]
                             dy = ref[i, 1] - ref[j, 1]
                             dz = ref[i, 2] - ref[j, 2]
-                            if dx * dx + dy * dy + dz * dz < c2:
+                            lim = R[i] + R[j] + extra
+                            if dx * dx + dy * dy + dz * dz < lim * lim:
                                 if k < cap:
                                     pi[k] = i
                                     pj[k] = j

@@ -10,8 +10,13 @@ distances do not change under the box's rigid translation, and a bed that rides 
 does not trigger rebuilds.
 
 A rebuild is needed once any grain moved more than ``skin / 2`` since the last build; the list
-holds all pairs closer than ``cutoff = 2 R_max + skin`` (plus a small margin for the one step
-that runs before the next check). Overflow (a grain with more neighbours than the capacity) is
+holds every pair whose surfaces are closer than ``skin`` (centres closer than ``R_i + R_j +
+skin``, plus a small margin for the one step that runs before the next check). The size-aware
+cutoff keeps mixtures cheap: with radii differing tenfold a uniform ``2 R_max + skin`` would list
+hundreds of small neighbours per small grain, where a few dozen can touch. It enters jax-md as a
+metric on positions carrying the radius as a fourth coordinate,
+``max(0, |r_i - r_j| - R_i - R_j + 2 R_max)``, compared with ``2 R_max + skin``; for equal radii
+this is the plain distance. Overflow (a grain with more neighbours than the capacity) is
 flagged, sticky, in :attr:`Neighbors.overflow`; the runner re-allocates and redoes the chunk.
 """
 
@@ -44,10 +49,30 @@ class Neighbors:
     overflow: jnp.ndarray
 
 
+def _gap_metric(model: Model):
+    """jax-md metric on ``(x, y, z, R)`` points: the surface gap shifted by ``2 R_max``."""
+    shift = model.cutoff - model.skin  # 2 R_max
+
+    def metric(a, b, **unused):
+        d = a[..., :-1] - b[..., :-1]
+        return jnp.maximum(jnp.sqrt(jnp.sum(d * d, axis=-1)) - a[..., -1] - b[..., -1] + shift, 0.0)
+
+    return metric
+
+
+def _with_radius(model: Model, positions, radius):
+    """Positions ``(..., N, 3)`` with the radii as a fourth column; ``radius=None`` means every
+    grain has the largest radius (the uniform cutoff ``2 R_max + skin``)."""
+    positions = jnp.asarray(positions)
+    if radius is None:
+        radius = 0.5 * (model.cutoff - model.skin)
+    radius = jnp.broadcast_to(jnp.asarray(radius, positions.dtype), positions.shape[:-1])
+    return jnp.concatenate([positions, radius[..., None]], axis=-1)
+
+
 def _jaxmd_fns(model: Model):
-    displacement, _ = space.free()
     return partition.neighbor_list(
-        displacement,
+        _gap_metric(model),
         box=1.0,  # unused: cell lists are off (all-pairs candidates, rebuilt rarely)
         r_cutoff=model.cutoff + _MARGIN * model.skin,
         dr_threshold=0.0,  # jax-md then always rebuilds; the decision is ours (see module doc)
@@ -58,16 +83,17 @@ def _jaxmd_fns(model: Model):
 
 
 @partial(jax.jit, static_argnums=(0,))
-def _occupancy(model: Model, positions):
-    """Largest number of neighbours within the cutoff of any grain in the batch."""
+def _occupancy(model: Model, points):
+    """Largest number of listed neighbours of any grain in the batch (``points`` ``(B, N, 4)``)."""
     cutoff = model.cutoff + _MARGIN * model.skin
+    metric = _gap_metric(model)
 
-    def one(r):
-        d2 = jnp.sum((r[:, None, :] - r[None, :, :]) ** 2, axis=-1)
-        close = (d2 < cutoff**2) & ~jnp.eye(r.shape[0], dtype=bool)
+    def one(p):
+        d = metric(p[:, None, :], p[None, :, :])
+        close = (d < cutoff) & ~jnp.eye(p.shape[0], dtype=bool)
         return close.sum(axis=1).max()
 
-    return jax.vmap(one)(positions).max()
+    return jax.vmap(one)(points).max()
 
 
 def _template(model: Model, capacity: int):
@@ -75,7 +101,7 @@ def _template(model: Model, capacity: int):
     fns = _jaxmd_fns(model)
     template = partition.NeighborList(
         idx=jnp.full((model.n, capacity), model.n, jnp.int32),
-        reference_position=jnp.zeros((model.n, 3)),
+        reference_position=jnp.zeros((model.n, 4)),
         error=partition.PartitionError(jnp.zeros((), jnp.uint8)),
         cell_list_capacity=None,
         max_occupancy=capacity,
@@ -92,18 +118,24 @@ def _template(model: Model, capacity: int):
 MIN_CAPACITY = 12
 
 
-def capacity_for(model: Model, positions, multiplier: float, at_least: int = 0) -> int:
-    """Capacity for a batch of box-frame positions ``(B, N, 3)``: max occupancy × multiplier
-    (at least :data:`MIN_CAPACITY` and ``at_least``, at most ``N - 1``)."""
+def capacity_for(model: Model, positions, multiplier: float, at_least: int = 0,
+                 radius=None) -> int:
+    """Capacity for a batch of box-frame positions ``(B, N, 3)`` (radii ``(B, N)`` or ``(N,)``,
+    ``None``: all ``R_max``): max occupancy × multiplier (at least :data:`MIN_CAPACITY` and
+    ``at_least``, at most ``N - 1``)."""
     if model.n < 2:
         return 0
-    occ = int(_occupancy(model, positions))
+    occ = int(_occupancy(model, _with_radius(model, positions, radius)))
     cap = max(int(math.ceil(occ * multiplier)), at_least, MIN_CAPACITY)
     return min(cap, model.n - 1)
 
 
-def allocate(model: Model, positions, multiplier: float, at_least: int = 0) -> Neighbors:
-    """Build lists for a batch of box-frame positions ``(B, N, 3)`` with a shared capacity."""
+def allocate(model: Model, positions, multiplier: float, at_least: int = 0,
+             radius=None) -> Neighbors:
+    """Build lists for a batch of box-frame positions ``(B, N, 3)`` with a shared capacity.
+
+    ``radius``: grain radii [m], ``(B, N)`` or ``(N,)`` (``Params.radius``); ``None`` treats
+    every grain as the largest (exact for one size, wasteful for mixtures)."""
     positions = jnp.asarray(positions)
     if model.n < 2:
         b = positions.shape[0]
@@ -112,18 +144,23 @@ def allocate(model: Model, positions, multiplier: float, at_least: int = 0) -> N
             reference=positions,
             overflow=jnp.zeros((b,), bool),
         )
-    cap = capacity_for(model, positions, multiplier, at_least)
-    return _build(model, cap, positions)
+    cap = capacity_for(model, positions, multiplier, at_least, radius)
+    return _build(model, cap, positions, _radius_array(model, positions, radius))
 
 
 def capacity(nbrs: Neighbors) -> int:
     return int(nbrs.idx.shape[-1])
 
 
-def update(model: Model, nbrs: Neighbors, positions) -> Neighbors:
+def _radius_array(model: Model, positions, radius):
+    return _with_radius(model, positions, radius)[..., 3]
+
+
+def update(model: Model, nbrs: Neighbors, positions, radius=None) -> Neighbors:
     """Rebuild every list of the batch if any grain of any system moved more than skin/2.
 
-    Traceable (use inside ``jit``/``scan``); ``positions`` are box-frame, ``(B, N, 3)``.
+    Traceable (use inside ``jit``/``scan``); ``positions`` are box-frame, ``(B, N, 3)``;
+    ``radius`` as in :func:`allocate`.
     """
     if model.n < 2:
         return nbrs
@@ -132,23 +169,24 @@ def update(model: Model, nbrs: Neighbors, positions) -> Neighbors:
     need = jnp.any(moved2 > (0.5 * model.skin) ** 2)
 
     def rebuild(nb):
-        fresh = _build_traced(model, cap, positions)
+        fresh = _build_traced(model, cap, positions, _radius_array(model, positions, radius))
         return Neighbors(fresh.idx, fresh.reference, nb.overflow | fresh.overflow)
 
     return jax.lax.cond(need, rebuild, lambda nb: nb, nbrs)
 
 
-def _build_traced(model: Model, capacity: int, positions) -> Neighbors:
+def _build_traced(model: Model, capacity: int, positions, radius=None) -> Neighbors:
     fns, template = _template(model, capacity)
+    points = _with_radius(model, positions, radius)
 
-    def one(r):
-        nb = fns.update(r, template)
+    def one(p):
+        nb = fns.update(p, template)
         return nb.idx, nb.did_buffer_overflow > 0
 
     with warnings.catch_warnings():
         # jax-md's dense pruning scatters int64 into int32 under x64; harmless, silenced here.
         warnings.filterwarnings("ignore", "scatter inputs have incompatible types", FutureWarning)
-        idx, overflow = jax.vmap(one)(positions)
+        idx, overflow = jax.vmap(one)(points)
     return Neighbors(idx=idx, reference=positions, overflow=overflow)
 
 

@@ -99,7 +99,8 @@ def settle(config: Config, model: Model, params: Params, progress=None) -> Settl
         settle_model, pb, batch(r0), batch(np.zeros((n, 3))), batch(np.zeros((n, 3))),
         batch(q0), jnp.zeros(1), jnp.zeros(1),
     )
-    nbrs = nb.allocate(settle_model, states.r, config.numerics.capacity_multiplier)
+    nbrs = nb.allocate(settle_model, states.r, config.numerics.capacity_multiplier,
+                       radius=pb.radius)
     dt = float(params.dt)
     record_every = max(1, int(round(0.005 / dt)))
     n_rec = 4

@@ -116,3 +116,103 @@ def kantz_figure(path, result, title=""):
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
+
+
+def efficiency_figure(path, curves, title=""):
+    """``⟨E_d⟩ / m`` versus drive amplitude (the 2023 paper's figs. 2, 6, 9).
+
+    Args:
+      curves: ``[(label, amplitudes [m] (P,), E_d/m [1/kg] (P,), spread [1/kg] (P,)), ...]``;
+        the spread is drawn as error bars (the paper: standard deviation over periods).
+    """
+    plt = _plt()
+    fig, ax = plt.subplots(figsize=(6.5, 4.3))
+    for label, amp, y, err in curves:
+        ax.errorbar(np.asarray(amp) * 100, y, yerr=err, fmt="o-", ms=4, capsize=2, label=label)
+    ax.set_xlabel("drive amplitude A_d [cm]")
+    ax.set_ylabel("⟨E_d⟩ / m  [1/kg]")
+    ax.set_title(title, fontsize=9)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def phase_figure(path, cases, title=""):
+    """Phase-resolved diagnostics over one drive period (the paper's figs. 4, 5, 7, 8, 10–12).
+
+    Args:
+      cases: ``[(label, phase dict, species names), ...]`` with the arrays of one point of
+        :attr:`jaxdamp.efficiency.EfficiencyResult.phase` (``phase``, ``contacts``,
+        ``force_floor_lid``, ``z_cm_species``, ``vz_cm_species``, ``z_box``).
+    Panels: grains touching floor or lid; vertical force of the grains on floor + lid; the
+    centre of mass' phase plot ``v_z(z)`` per species, ``z`` measured from the box's mid-plane
+    position at rest (lab frame).
+    """
+    plt = _plt()
+    fig, axes = plt.subplots(1, 3, figsize=(13, 4))
+    styles = ["-", "--", ":", "-."]
+    for k, (label, ph, names) in enumerate(cases):
+        x = np.asarray(ph["phase"])
+        line, = axes[0].plot(x, ph["contacts"], label=label)
+        axes[1].plot(x, ph["force_floor_lid"], color=line.get_color(), label=label)
+        zc, vc = np.asarray(ph["z_cm_species"]), np.asarray(ph["vz_cm_species"])
+        for s, name in enumerate(names):
+            close = lambda a: np.append(a, a[:1])  # noqa: E731  (a closed orbit)
+            axes[2].plot(close(zc[:, s]) * 100, close(vc[:, s]), styles[s % 4],
+                         color=line.get_color(), label=f"{label}: {name}")
+    axes[0].set_ylabel("grains touching floor or lid")
+    axes[1].set_ylabel("vertical force on floor + lid [N]")
+    for ax in axes[:2]:
+        ax.set_xlabel("phase t/T (box at its top at 0, z_box = A_d cos 2πft)")
+    axes[2].set_xlabel("centre of mass z [cm] (lab frame)")
+    axes[2].set_ylabel("centre of mass v_z [m/s]")
+    for ax in axes:
+        ax.legend(fontsize=6)
+    fig.suptitle(title, fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
+
+
+def snapshot_figure(path, rows, title=""):
+    """Side views (x–z) of beds at chosen instants, grains drawn to scale, coloured by species
+    (the paper's fig. 3).
+
+    Args:
+      rows: ``[(label, [(caption, r (N, 3), z_box), ...], radii (N,), species (N,), box
+        (Lx, Lz)), ...]``; one row per system, one panel per instant.
+    """
+    from matplotlib.collections import PatchCollection
+    from matplotlib.patches import Circle, Rectangle
+
+    plt = _plt()
+    ncol = max(len(r[1]) for r in rows)
+    fig, axes = plt.subplots(len(rows), ncol, figsize=(2.6 * ncol, 2.9 * len(rows)),
+                             squeeze=False)
+    colours = ["tab:red", "tab:green", "tab:blue", "tab:orange"]
+    for i, (label, frames, radii, species, (Lx, Lz)) in enumerate(rows):
+        order = np.argsort(-np.asarray(radii))  # small grains drawn last, on top
+        for j, (caption, r, z_box) in enumerate(frames):
+            ax = axes[i, j]
+            circles = [Circle((r[k, 0] * 100, (r[k, 2] - z_box) * 100), radii[k] * 100)
+                       for k in order]
+            ax.add_collection(PatchCollection(
+                circles, facecolor=[colours[species[k] % 4] for k in order], edgecolor="none",
+                alpha=0.8))
+            ax.add_patch(Rectangle((0, 0), Lx * 100, Lz * 100, fill=False, lw=1))
+            ax.set_xlim(-0.2, Lx * 100 + 0.2)
+            ax.set_ylim(-0.2, Lz * 100 + 0.2)
+            ax.set_aspect("equal")
+            ax.set_title(f"{label}\n{caption}", fontsize=7)
+            ax.tick_params(labelsize=6)
+        for j in range(len(frames), ncol):
+            axes[i, j].axis("off")
+    fig.suptitle(title + "  (x–z side view, box frame [cm]; red: large, green: small)",
+                 fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path

@@ -196,7 +196,8 @@ def run(
             model, pb, r0[None], bed.v[None], bed.w[None], bed.q[None],
             jnp.full((1,), z0), jnp.zeros(1),
         )
-        nbrs = nb.allocate(model, box_frame(states), config.numerics.capacity_multiplier)
+        nbrs = nb.allocate(model, box_frame(states), config.numerics.capacity_multiplier,
+                            radius=pb.radius)
         if out is not None:
             rf = RunFile.create(out, config, radii, masses, grain_species(config), bed,
                                 extra_attrs={"dt": sched.dt, "duration": sched.duration})

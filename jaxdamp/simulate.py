@@ -82,7 +82,7 @@ def _jax_block(model: Model, record_every: int):
     def block(states, nbrs, params):
         def inner(carry, _):
             states, nbrs, impulse = carry
-            nbrs = nb.update(model, nbrs, box_frame(states))
+            nbrs = nb.update(model, nbrs, box_frame(states), params.radius)
             states = step_b(states, nbrs.idx, params, model)
             impulse = impulse + jnp.stack([states.f_floor_lid, states.f_box], axis=-1)
             return (states, nbrs, impulse), None
@@ -154,7 +154,8 @@ def advance(model, states, nbrs, params, n_records, record_every, multiplier, on
             return out_states, out_nbrs, jax.tree_util.tree_map(np.asarray, recs)
         old = nb.capacity(nbrs)
         nbrs = nb.allocate(
-            model, box_frame(states), multiplier, at_least=int(np.ceil(old * 1.5)) + 1
+            model, box_frame(states), multiplier, at_least=int(np.ceil(old * 1.5)) + 1,
+            radius=params.radius,
         )
         if on_realloc is not None:
             on_realloc(old, nb.capacity(nbrs))

@@ -46,13 +46,16 @@ from .validation import validate
 class SweepResult:
     """``axes``: ``{key: values}``; ``configs``: one per point (grid order, last axis fastest);
     ``summary``: ``{name: array shaped like the grid}``; ``records``: per-point samples
-    (dict of arrays ``(P, T)``); ``path``: the HDF5 file or ``None``."""
+    (dict of arrays ``(P, T)``); ``path``: the HDF5 file or ``None``; ``snapshots``: with
+    ``sweep(..., snapshots=k)``, ``{"t": (k,), "r": (P, k, N, 3), "v": (P, k, N, 3), "z_box": (P, k)}`` at the
+    ends of the last ``k`` chunks, else ``None``."""
 
     axes: dict
     configs: list
     summary: dict
     records: dict
     path: str | None
+    snapshots: dict | None = None
 
 
 def grid_configs(config: Config, axes: dict) -> list[Config]:
@@ -133,7 +136,7 @@ def reuse_or_run(config: Config, axes: dict, out: str, **kwargs) -> SweepResult:
 
 def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = False,
           progress: bool = True, echo=print, shard: bool = True,
-          max_chunks: int | None = None) -> SweepResult | None:
+          max_chunks: int | None = None, snapshots: int = 0) -> SweepResult | None:
     """Run every grid point of ``axes`` (``{dotted key: values}``) as one batch.
 
     Args:
@@ -145,6 +148,9 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
       shard: shard the batch over all JAX devices (no-op with one device).
       max_chunks: stop after this many chunks (leaving ``out`` to resume); returns ``None``
         if the sweep is not finished.
+      snapshots: keep grain positions and velocities at the ends of the last this many chunks
+        (``/snapshots`` in the file; e.g. chunks of a quarter drive period and 4 snapshots give
+        the bed at the drive's turning points and at its largest speeds).
 
     S3 configurations (``system = "impact"``) go to :func:`jaxdamp.impact.sweep` (same result
     and file layout; ``resume``, ``shard`` and ``max_chunks`` do not apply: it runs whole).
@@ -215,7 +221,8 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
             v0.append(bed.v), w0.append(bed.w), q0.append(bed.q), z0.append(z)
         states = init_states(model, pb, np.stack(r0), np.stack(v0), np.stack(w0), np.stack(q0),
                              jnp.asarray(z0), jnp.zeros(P))
-        nbrs = nb.allocate(model, box_frame(states), base.numerics.capacity_multiplier)
+        nbrs = nb.allocate(model, box_frame(states), base.numerics.capacity_multiplier,
+                            radius=pb.radius)
         states = _pad_and_shard(states, padded, sharding)
         nbrs = _pad_and_shard(nbrs, padded, sharding)
         if out:
@@ -232,6 +239,7 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
                    desc=f"sweep of {P} points")
     wall0 = time.perf_counter()
     mem: dict = {}
+    snaps: dict = {}
     stop = sched.n_chunks if max_chunks is None else min(sched.n_chunks, start_chunk + max_chunks)
     for chunk in range(start_chunk, stop):
         states, nbrs, recs = advance(model, states, nbrs, pb_s, sched.records_per_chunk,
@@ -264,6 +272,10 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
             ck.attrs["chunk"] = chunk + 1
             h5.attrs["wall_time"] = wall_before + time.perf_counter() - wall0
             h5.flush()
+        if chunk >= sched.n_chunks - snapshots:
+            _keep_snapshot(h5, snaps, states, P)
+            if h5 is not None:
+                h5.flush()
         for k, v in recs.items():
             mem.setdefault(k, []).append(v)
         if bar is not None:
@@ -278,8 +290,11 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
     wall = wall_before + time.perf_counter() - wall0  # over every session of a resumed sweep
     if h5 is not None:
         records = {k: h5["records"][k][()] for k in h5["records"]}
+        if "snapshots" in h5:
+            snaps = {k: h5["snapshots"][k][()] for k in h5["snapshots"]}
     else:
         records = {k: np.concatenate(v, axis=1) for k, v in mem.items()}
+        snaps = {k: np.stack(v, axis=1 if k != "t" else 0) for k, v in snaps.items()}
     final = jax.tree_util.tree_map(lambda x: np.asarray(x)[:P], states)
     summaries = []
     for i, c in enumerate(configs):
@@ -302,4 +317,35 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
         h5.attrs["wall_time"] = wall
         h5.attrs["status"] = "finished"
         h5.close()
-    return SweepResult(axes=axes, configs=configs, summary=summary, records=records, path=out)
+    return SweepResult(axes=axes, configs=configs, summary=summary, records=records, path=out,
+                       snapshots=snaps or None)
+
+
+def _keep_snapshot(h5, mem: dict, states, P: int) -> None:
+    """Append the batch's positions and velocities (and the time) to ``/snapshots`` of the
+    file (resumable: the snapshot count follows the chunk count) or to ``mem``."""
+    t = float(np.asarray(states.t)[0])
+    per_point = {k: np.asarray(getattr(states, f))[:P]
+                 for k, f in (("r", "r"), ("v", "v"), ("z_box", "z"))}
+    if h5 is None:
+        mem.setdefault("t", []).append(t)
+        for k, x in per_point.items():
+            mem.setdefault(k, []).append(x)
+        return
+    g = h5.require_group("snapshots")
+    if "t" not in g:
+        g.create_dataset("t", shape=(0,), maxshape=(None,), dtype="f8").attrs["units"] = "s"
+        for k, x in per_point.items():
+            g.create_dataset(k, shape=(P, 0) + x.shape[1:], maxshape=(P, None) + x.shape[1:],
+                             chunks=True, dtype="f8").attrs["units"] = _SNAPSHOT_UNITS[k]
+    n = g["t"].shape[0]
+    if n and float(g["t"][n - 1]) >= t:  # a resumed sweep re-running a stored chunk
+        n = int(np.searchsorted(g["t"][()], t))
+    g["t"].resize(n + 1, axis=0)
+    g["t"][n] = t
+    for k, x in per_point.items():
+        g[k].resize(n + 1, axis=1)
+        g[k][:, n] = x
+
+
+_SNAPSHOT_UNITS = {"r": "m", "v": "m/s", "z_box": "m"}

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 
 from .config import Config, ConfigError, Material
-from .model import collision_time_limit, config_dt, grain_radii
+from .model import collision_time_limit, config_dt, grain_radii, impact_speed
 
 SYSTEMS = ("primary", "driven", "impact")
 MIXING = ("arithmetic", "harmonic", "geometric")
@@ -42,6 +42,8 @@ def _material(mat: Material, name: str, grain: bool) -> None:
                 f"{name}.restitution = {mat.restitution!r}: must be in (0, 1]"
             )
         _positive(mat.v_ref, f"{name}.v_ref")
+    if mat.calibration_radius is not None:
+        _positive(mat.calibration_radius, f"{name}.calibration_radius")
 
 
 def validate(config: Config) -> Config:
@@ -130,7 +132,8 @@ def validate(config: Config) -> Config:
     if math.isfinite(t_c) and dt > t_c / num.dt_per_collision * (1 + 1e-12):
         raise ConfigError(
             f"numerics.dt = {dt:.4g} s is too large: the Hertz collision time of the smallest "
-            f"grains at v_impact = {num.v_impact} m/s is t_c = {t_c:.4g} s, and dt must be ≤ "
+            f"grains at an impact speed of {impact_speed(config):.4g} m/s (numerics.v_impact = "
+            f"{num.v_impact}; a driven box needs at least 2 A_d ω) is t_c = {t_c:.4g} s, and dt must be ≤ "
             f"t_c / {num.dt_per_collision:g} = {t_c / num.dt_per_collision:.4g} s "
             "(lower dt, or numerics.stiffness_scale, or numerics.dt_per_collision knowingly)"
         )

@@ -1,0 +1,269 @@
+"""Dissipation efficiency of a driven box (S2; SPEC §4; Varela-Rosales et al. 2023, eqs. 3–5).
+
+Per drive period ``T = 1/f`` (energies in J per period, not the paper's ``1/T`` powers):
+
+* ``E_pp``, ``E_pw``: energy dissipated in grain–grain and grain–wall contacts (collisional
+  and, if any, frictional), from the cumulative work channels of every run;
+* ``E_max = 4 m A_d² ω²``: the most a granulate of mass ``m`` could dissipate in one period
+  (Sack et al., PRL 111, 018001, 2013, read literally: every grain hits floor and lid once per
+  period each at the walls' largest relative speed ``2 A_d ω`` and loses all of it,
+  ``2 × ½ m (2 A_d ω)²``); the paper does not restate the formula, so this is our reading;
+* ``E_d = (E_pp + E_pw) / E_max``.
+
+The average ``⟨E_d⟩`` over the analysed periods (after a transient) is given two ways: the
+paper's "linear fit" (read as the slope of the cumulative dissipation over the window, times
+``T / E_max``) and the plain mean of the per-period values, with their standard deviation and
+the standard error of the mean. Phase-resolved diagnostics average over the analysed periods in
+``samples_per_period`` phase bins: grains touching floor or lid (per species), the vertical
+force of the grains on floor + lid, and the centre of mass ``z``, ``v_z`` per species.
+
+:func:`protocol` sets a run's timing so that periods, samples and chunks line up exactly
+(``dt`` divides ``T / samples_per_period``); :func:`measure` runs an amplitude sweep through
+:func:`jaxdamp.sweep.sweep` and writes the analysis into the sweep file's ``/efficiency``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from .config import Config, ConfigError
+from .model import CH, config_dt, grain_radii
+
+#: Units of the per-point scalars of :func:`analyse`.
+SUMMARY_UNITS = {
+    "mass": "kg", "E_max": "J", "E_pp": "J", "E_pw": "J", "E_input": "J", "E_d_mean": "1",
+    "E_d_std": "1", "E_d_sem": "1", "E_d_fit": "1", "E_d_trend": "1/period",
+    "E_d_mean_per_mass": "1/kg", "E_d_fit_per_mass": "1/kg", "E_d_std_per_mass": "1/kg",
+    "wall_fraction": "1", "contacts_mean": "1", "balance_error": "1", "periods": "1",
+}
+#: Units of the phase-resolved arrays of :func:`analyse`.
+PHASE_UNITS = {
+    "phase": "1", "contacts": "1", "contacts_species": "1", "force_floor_lid": "N",
+    "z_cm_species": "m", "vz_cm_species": "m/s", "z_box": "m", "v_box": "m/s",
+}
+
+
+def e_max(mass: float, amplitude: float, frequency: float) -> float:
+    """``4 m A_d² ω²`` [J]: the largest energy a granulate of ``mass`` [kg] can dissipate in
+    one period of a box driven at ``amplitude`` [m] and ``frequency`` [Hz] (module doc)."""
+    return 4.0 * mass * amplitude**2 * (2.0 * math.pi * frequency) ** 2
+
+
+def protocol(config: Config, periods: int = 50, transient: int = 10,
+             samples_per_period: int = 100, amplitudes=None) -> Config:
+    """``config`` with timing for an efficiency measurement (system ``driven`` only).
+
+    ``transient + periods`` drive periods are simulated, the last ``periods`` analysed;
+    ``samples_per_period`` samples per period (a multiple of 4); chunks of a quarter period (so
+    chunk ends fall on the drive's turning points and largest speeds, for snapshots). ``dt`` is
+    the largest step ``≤ t_c / dt_per_collision`` (at the largest of ``amplitudes``, default
+    the config's) that divides the sampling interval exactly.
+    """
+    if config.system != "driven":
+        raise ConfigError(f"efficiency needs a driven box (system = 'driven', S2); "
+                          f"{config.name!r} has system = {config.system!r}")
+    for name, value, low in (("periods", periods, 1), ("transient", transient, 0),
+                             ("samples_per_period", samples_per_period, 4)):
+        if not isinstance(value, int) or value < low:
+            raise ConfigError(f"{name} = {value!r}: must be an integer ≥ {low}")
+    if samples_per_period % 4:
+        raise ConfigError(f"samples_per_period = {samples_per_period}: must be a multiple of 4 "
+                          "(chunks are quarter periods)")
+    amps = [config.drive.amplitude] if amplitudes is None else [float(a) for a in amplitudes]
+    if not amps or min(amps) <= 0:
+        raise ConfigError(f"amplitudes {amps}: every drive amplitude must be > 0 (E_max ∝ A_d²)")
+    T = 1.0 / config.frequency
+    loudest = config.replace(drive=dataclasses.replace(config.drive, amplitude=max(amps)))
+    dt_max = config_dt(loudest, grain_radii(config))
+    if config.numerics.dt is not None:
+        dt_max = min(dt_max, config.numerics.dt)
+    per_sample = int(math.ceil(T / samples_per_period / dt_max * (1 - 1e-12)))
+    total = transient + periods
+    num = dataclasses.replace(
+        config.numerics, dt=T / samples_per_period / per_sample, record_dt=T / samples_per_period,
+        chunk=T / 4.0, duration=total * T, analysis_window=periods / total)
+    return config.replace(numerics=num)
+
+
+def _sample_index(t, frequency, spp):
+    """Sample number ``s`` (sample ``s`` is at ``s T / spp``) of each record time."""
+    s = np.rint(np.asarray(t) * frequency * spp).astype(np.int64)
+    if np.any(np.abs(np.asarray(t) * frequency * spp - s) > 1e-6):
+        raise ConfigError("records are not on the period grid; run with efficiency.protocol()")
+    return s
+
+
+def analyse(config: Config, records: dict, periods: int, samples_per_period: int = 100) -> dict:
+    """Efficiency of one run from its records (arrays over samples, see
+    :data:`jaxdamp.energy.RECORD_UNITS`); the last ``periods`` whole periods are analysed.
+
+    Returns ``{"summary": {name: float}, "per_period": {name: (n,)}, "phase": {name: (spp,[S])}}``
+    where ``per_period`` covers every simulated period (``E_pp``, ``E_pw``, ``E_input``,
+    ``E_d`` [J, J, J, 1], ``t_end`` [s]) and ``phase`` the analysed ones (``phase`` bin starts in
+    units of ``T``). See the module doc for the definitions.
+    """
+    spp = samples_per_period
+    f = config.frequency
+    s = _sample_index(records["t"], f, spp)
+    work = np.asarray(records["work"], dtype=float)
+    pp = work[:, CH["pp_normal"]] + work[:, CH["pp_friction"]]
+    pw = work[:, CH["pw_normal"]] + work[:, CH["pw_friction"]]
+    inp = work[:, CH["input"]]
+    ends = np.flatnonzero(s % spp == 0)
+    # the run starts at t = 0 with zero work: prepend it as the first boundary
+    cum = lambda x: np.concatenate([[0.0], x[ends]])  # noqa: E731
+    if s[0] != 1 or len(ends) < 1:
+        raise ConfigError("records must start at the first sample of a run from t = 0")
+    E_pp, E_pw, E_in = (np.diff(cum(x)) for x in (pp, pw, inp))
+    n_total = len(E_pp)
+    if periods > n_total:
+        raise ConfigError(f"periods = {periods}: the run covers only {n_total} whole periods")
+    from .mixtures import granulate_mass
+
+    mass = granulate_mass(config)
+    emax = e_max(mass, config.drive.amplitude, f)
+    E_d = (E_pp + E_pw) / emax
+    sel = slice(n_total - periods, n_total)
+    ed = E_d[sel]
+
+    # the paper's linear fit: slope of the cumulative dissipation over the analysed window
+    t = np.asarray(records["t"], dtype=float)
+    first = ends[n_total - periods - 1] if n_total > periods else -1
+    win = slice(max(first, 0), ends[-1] + 1)  # from the window's opening boundary sample
+    tw, lw = t[win], (pp + pw)[win]
+    if first < 0:  # include the start of the run (t = 0, no loss yet)
+        tw, lw = np.concatenate([[0.0], tw]), np.concatenate([[0.0], lw])
+    slope = np.polyfit(tw, lw, 1)[0]
+    trend = np.polyfit(np.arange(periods), ed, 1)[0] if periods > 1 else 0.0
+
+    contacts = np.asarray(records["n_floor"]) + np.asarray(records["n_lid"])
+    resid = np.asarray(records["balance_residual"], dtype=float)
+    scale = max(float(np.max(np.abs(inp))), float(np.max(np.abs(pp + pw))), 1e-300)
+    in_window = (s > (n_total - periods) * spp) & (s <= n_total * spp)
+    summary = dict(
+        mass=mass, E_max=emax, E_pp=float(E_pp[sel].mean()), E_pw=float(E_pw[sel].mean()),
+        E_input=float(E_in[sel].mean()),
+        E_d_mean=float(ed.mean()), E_d_std=float(ed.std(ddof=1)) if periods > 1 else 0.0,
+        E_d_fit=float(slope / f / emax), E_d_trend=float(trend),
+        wall_fraction=float(E_pw[sel].sum() / max((E_pp[sel] + E_pw[sel]).sum(), 1e-300)),
+        contacts_mean=float(contacts[in_window].mean()),
+        balance_error=float(np.max(np.abs(resid)) / scale), periods=float(periods),
+    )
+    summary["E_d_sem"] = summary["E_d_std"] / math.sqrt(periods)
+    for k in ("mean", "fit", "std"):
+        summary[f"E_d_{k}_per_mass"] = summary[f"E_d_{k}"] / mass
+
+    # phase-resolved averages over the analysed periods (bin 0 = phase 0, the box at its top)
+    bins = s[in_window] % spp
+
+    def fold(x):
+        x = np.asarray(x, dtype=float)[in_window]
+        out = np.zeros((spp,) + x.shape[1:])
+        np.add.at(out, bins, x)
+        return out / np.bincount(bins, minlength=spp).reshape((spp,) + (1,) * (x.ndim - 1))
+
+    phase = dict(
+        phase=np.arange(spp) / spp,
+        contacts=fold(contacts),
+        contacts_species=fold(np.asarray(records["n_floor_species"])
+                              + np.asarray(records["n_lid_species"])),
+        force_floor_lid=fold(records["force_floor_lid"]),
+        z_cm_species=fold(records["z_cm_species"]),
+        vz_cm_species=fold(records["vz_cm_species"]),
+        z_box=fold(records["z_box"]),
+        v_box=fold(records["v_box"]),
+    )
+    per_period = dict(E_pp=E_pp, E_pw=E_pw, E_input=E_in, E_d=E_d,
+                      t_end=(np.arange(n_total) + 1) / f)
+    return dict(summary=summary, per_period=per_period, phase=phase)
+
+
+@dataclasses.dataclass
+class EfficiencyResult:
+    """An amplitude sweep's efficiency: ``amplitudes`` [m] ``(P,)``; ``summary`` ``{name: (P,)}``
+    (:data:`SUMMARY_UNITS`); ``per_period`` ``{name: (P, n)}``; ``phase`` ``{name: (P, spp, ...)}``
+    (:data:`PHASE_UNITS`); ``snapshots`` from the sweep (the last period's quarter points) or
+    ``None``; ``config`` the base configuration (with :func:`protocol` timing);
+    ``wall_time`` [s] of the sweep; ``path`` its file."""
+
+    amplitudes: np.ndarray
+    summary: dict
+    per_period: dict
+    phase: dict
+    snapshots: dict | None
+    config: Config
+    wall_time: float
+    path: str | None
+
+
+def measure(config: Config, amplitudes, periods: int = 50, transient: int = 10,
+            samples_per_period: int = 100, out: str | None = None, progress: bool = True,
+            echo=print) -> EfficiencyResult:
+    """Run ``config`` at every drive amplitude [m] as one batch and analyse its efficiency.
+
+    With ``out`` the sweep file is reused or resumed when it already holds this sweep
+    (:func:`jaxdamp.sweep.reuse_or_run`) and the analysis is written to its ``/efficiency``
+    group (units in attributes, the ``E_max`` formula in ``/efficiency`` attrs).
+    """
+    from . import sweep as sw
+
+    amplitudes = np.asarray([float(a) for a in amplitudes])
+    cfg = protocol(config, periods, transient, samples_per_period, amplitudes)
+    axes = {"drive.amplitude": list(amplitudes)}
+    kw = dict(progress=progress, echo=echo, snapshots=4)
+    res = (sw.reuse_or_run(cfg, axes, out, **kw) if out else sw.sweep(cfg, axes, **kw))
+    per = [analyse(c, {k: v[i] for k, v in res.records.items()}, periods, samples_per_period)
+           for i, c in enumerate(res.configs)]
+    stack = lambda part: {k: np.stack([p[part][k] for p in per]) for k in per[0][part]}  # noqa: E731
+    result = EfficiencyResult(amplitudes=amplitudes, summary=stack("summary"),
+                              per_period=stack("per_period"), phase=stack("phase"),
+                              snapshots=res.snapshots, config=cfg,
+                              wall_time=float(res.summary["wall_time"]), path=out)
+    if out:
+        write(out, result, transient=transient, samples_per_period=samples_per_period)
+    return result
+
+
+def write(path: str, result: EfficiencyResult, transient: int, samples_per_period: int) -> None:
+    """Store ``result`` in the ``/efficiency`` group of the sweep file ``path``."""
+    import h5py
+
+    with h5py.File(path, "a") as h5:
+        if "efficiency" in h5:
+            del h5["efficiency"]
+        g = h5.create_group("efficiency")
+        g.attrs["E_max"] = "4 m A_d^2 omega^2 (Sack et al. 2013 read literally; SPEC §4)"
+        g.attrs["energies"] = "J per drive period (the paper's eqs. 4-5 times T)"
+        g.attrs["E_d_fit"] = "slope of the cumulative granular dissipation over the window x T / E_max"
+        g.attrs["transient_periods"] = transient
+        g.attrs["samples_per_period"] = samples_per_period
+        g.create_dataset("amplitude", data=result.amplitudes).attrs["units"] = "m"
+        for part, units in (("summary", SUMMARY_UNITS), ("per_period", None),
+                            ("phase", PHASE_UNITS)):
+            sub = g.create_group(part)
+            for k, v in getattr(result, part).items():
+                u = units.get(k, "") if units else ("s" if k == "t_end" else
+                                                    "1" if k == "E_d" else "J")
+                sub.create_dataset(k, data=v).attrs["units"] = u
+
+
+def read(path: str) -> EfficiencyResult:
+    """Load an :class:`EfficiencyResult` written by :func:`measure`."""
+    import h5py
+
+    from .config import from_json
+
+    with h5py.File(path, "r") as h5:
+        if "efficiency" not in h5:
+            raise ConfigError(f"{path} holds no efficiency analysis (run `jaxdamp efficiency`)")
+        g = h5["efficiency"]
+        parts = {p: {k: g[p][k][()] for k in g[p]} for p in ("summary", "per_period", "phase")}
+        snaps = ({k: h5["snapshots"][k][()] for k in h5["snapshots"]}
+                 if "snapshots" in h5 else None)
+        return EfficiencyResult(amplitudes=g["amplitude"][()], snapshots=snaps,
+                                config=from_json(h5.attrs["base_config"]),
+                                wall_time=float(h5.attrs.get("wall_time", np.nan)), path=path,
+                                **parts)
