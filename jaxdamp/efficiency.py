@@ -11,9 +11,10 @@ Per drive period ``T = 1/f`` (energies in J per period, not the paper's ``1/T`` 
 * ``E_d = (E_pp + E_pw) / E_max``.
 
 The average ``⟨E_d⟩`` over the analysed periods (after a transient) is given two ways: the
-paper's "linear fit" (read as the slope of the cumulative dissipation over the window, times
-``T / E_max``) and the plain mean of the per-period values, with their standard deviation and
-the standard error of the mean. Phase-resolved diagnostics average over the analysed periods in
+paper's "linear fit to E_d(t)" (``E_d(t)`` with the one-period integrals starting at every
+sample ``t`` whose period lies in the window, a least-squares line through them read at the
+window's middle; its slope is reported as the trend per period) and the plain mean of the
+per-period values, with their standard deviation and the standard error of the mean. Phase-resolved diagnostics average over the analysed periods in
 ``samples_per_period`` phase bins: grains touching floor or lid (per species), the vertical
 force of the grains on floor + lid, and the centre of mass ``z``, ``v_z`` per species.
 
@@ -129,15 +130,19 @@ def analyse(config: Config, records: dict, periods: int, samples_per_period: int
     sel = slice(n_total - periods, n_total)
     ed = E_d[sel]
 
-    # the paper's linear fit: slope of the cumulative dissipation over the analysed window
-    t = np.asarray(records["t"], dtype=float)
-    first = ends[n_total - periods - 1] if n_total > periods else -1
-    win = slice(max(first, 0), ends[-1] + 1)  # from the window's opening boundary sample
-    tw, lw = t[win], (pp + pw)[win]
-    if first < 0:  # include the start of the run (t = 0, no loss yet)
-        tw, lw = np.concatenate([[0.0], tw]), np.concatenate([[0.0], lw])
-    slope = np.polyfit(tw, lw, 1)[0]
-    trend = np.polyfit(np.arange(periods), ed, 1)[0] if periods > 1 else 0.0
+    # the paper's linear fit to E_d(t), its eq. 3 with the one-period integrals of eqs. 4-5
+    # starting at any time t: E_d(t) at every sample whose period lies in the window, a
+    # least-squares line through them, read at the window's middle
+    loss = np.concatenate([[0.0], pp + pw])  # index = sample number (0: t = 0)
+    s_lo, s_hi = (n_total - periods) * spp, n_total * spp - spp
+    starts = np.arange(s_lo, s_hi + 1)
+    ed_t = (loss[starts + spp] - loss[starts]) / emax
+    if len(starts) > 1:
+        slope_t, icpt = np.polyfit(starts / (f * spp), ed_t, 1)
+        fit = icpt + slope_t * 0.5 * (starts[0] + starts[-1]) / (f * spp)
+    else:
+        slope_t, fit = 0.0, ed_t[0]
+    trend = slope_t / f  # change of E_d per period
 
     contacts = np.asarray(records["n_floor"]) + np.asarray(records["n_lid"])
     resid = np.asarray(records["balance_residual"], dtype=float)
@@ -147,7 +152,7 @@ def analyse(config: Config, records: dict, periods: int, samples_per_period: int
         mass=mass, E_max=emax, E_pp=float(E_pp[sel].mean()), E_pw=float(E_pw[sel].mean()),
         E_input=float(E_in[sel].mean()),
         E_d_mean=float(ed.mean()), E_d_std=float(ed.std(ddof=1)) if periods > 1 else 0.0,
-        E_d_fit=float(slope / f / emax), E_d_trend=float(trend),
+        E_d_fit=float(fit), E_d_trend=float(trend),
         wall_fraction=float(E_pw[sel].sum() / max((E_pp[sel] + E_pw[sel]).sum(), 1e-300)),
         contacts_mean=float(contacts[in_window].mean()),
         balance_error=float(np.max(np.abs(resid)) / scale), periods=float(periods),
@@ -237,7 +242,8 @@ def write(path: str, result: EfficiencyResult, transient: int, samples_per_perio
         g = h5.create_group("efficiency")
         g.attrs["E_max"] = "4 m A_d^2 omega^2 (Sack et al. 2013 read literally; SPEC §4)"
         g.attrs["energies"] = "J per drive period (the paper's eqs. 4-5 times T)"
-        g.attrs["E_d_fit"] = "slope of the cumulative granular dissipation over the window x T / E_max"
+        g.attrs["E_d_fit"] = ("linear fit to E_d(t) (one-period integrals from every sample t "
+                              "in the window), read at the window's middle")
         g.attrs["transient_periods"] = transient
         g.attrs["samples_per_period"] = samples_per_period
         g.create_dataset("amplitude", data=result.amplitudes).attrs["units"] = "m"

@@ -89,10 +89,13 @@ def test_analysis_recovers_planted_per_period_energies():
     assert s["E_d_mean"] == pytest.approx(ed.mean(), rel=1e-12)
     assert s["E_d_std"] == pytest.approx(ed.std(ddof=1), rel=1e-12)
     assert s["E_d_sem"] == pytest.approx(ed.std(ddof=1) / math.sqrt(5), rel=1e-12)
-    # the fit's slope is that of a least-squares line through the cumulative loss in the window
-    tw = np.concatenate([[2 / f], rec["t"][2 * spp:]])
-    cum = np.concatenate([[0.0], np.cumsum((rates_pp + rates_pw)[2:].repeat(spp) / spp)])
-    assert s["E_d_fit"] == pytest.approx(np.polyfit(tw, cum, 1)[0] / f / emax, rel=1e-9)
+    # the linear fit to E_d(t): one-period integrals from every sample in the window
+    loss = np.concatenate([[0.0], np.cumsum((rates_pp + rates_pw).repeat(spp) / spp)])
+    starts = np.arange(2 * spp, 6 * spp + 1)
+    ed_t = (loss[starts + spp] - loss[starts]) / emax
+    slope, icpt = np.polyfit(starts / (f * spp), ed_t, 1)
+    assert s["E_d_fit"] == pytest.approx(icpt + slope * 4 / f, rel=1e-9)
+    assert s["E_d_trend"] == pytest.approx(slope / f, rel=1e-9)
     assert s["wall_fraction"] == pytest.approx(rates_pw[2:].sum() / (rates_pp + rates_pw)[2:].sum())
     ph = out["phase"]
     bins = np.arange(spp) / spp

@@ -132,3 +132,29 @@ def test_gap_optimisation_quick(tmp_path):
         assert h["dem/opt_lz0_0.07/lz"].shape[0] >= 1
     assert (tmp_path / "figure.png").stat().st_size > 10_000
     assert "Forward vs reverse" in (tmp_path / "summary.md").read_text()
+
+
+def test_binary_mixtures_quick(tmp_path):
+    """The 2023 paper's families at test size (σ = 0.5, 2 amplitudes, 1 + 2 periods): every
+    family runs, the class builders' conserved quantities hold in the runs, the energy balance
+    closes, and data, figures and the claims section are written."""
+    runs = _load("binary_mixtures").main(["--quick", "--out", str(tmp_path), "--no-progress"])
+    names = [(r["name"], r["sigma"]) for r in runs]
+    assert names == [("varela2023-reference", None)] + [(f"varela2023-{k}", 0.5) for k in "abc"]
+    mass = {r["name"].split("-")[1]: r["result"].summary["mass"][0] for r in runs}
+    ref = mass["reference"]
+    assert mass["c"] == pytest.approx(ref, rel=1e-12)
+    assert mass["a"] == pytest.approx(ref, rel=2e-3)
+    assert mass["b"] == pytest.approx(ref * (1 + 0.125) / 2, rel=1e-12)
+    for r in runs:
+        s = r["result"].summary
+        assert np.all(s["balance_error"] < 2e-3), r["name"]
+        assert np.all((s["E_d_mean"] > 0) & (s["E_d_mean"] < 1.5)), r["name"]
+    text = (tmp_path / "summary.md").read_text()
+    assert "A_opt ≈ 2.8 cm" in text and "class c (σ = 0.5) below the reference" in text
+    for name in ("efficiency.png", "contacts_force.png", "phase_plots.png", "snapshots.png"):
+        assert (tmp_path / name).stat().st_size > 10_000
+    import h5py
+
+    with h5py.File(tmp_path / "data.h5") as h:
+        assert h["varela2023-b/sigma_0.5/phase/vz_cm_species"].shape == (2, 100, 2)
