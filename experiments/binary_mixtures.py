@@ -24,6 +24,7 @@ arrays); raw sweeps in ``raw/`` (re-running reuses finished sweeps and resumes p
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import os
 import platform
@@ -38,7 +39,7 @@ from jaxdamp import efficiency as ef
 from jaxdamp import mixtures
 from jaxdamp.cli import efficiency_figures  # noqa: F401  (same figure code as the CLI)
 from jaxdamp.model import grain_radii, grain_species
-from jaxdamp.plots import _plt, snapshot_figure
+from jaxdamp.plots import _plt, save_figure, snapshot_figure
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 CLASS_NAMES = {"a": "class a (equal mass)", "b": "class b (equal number)",
@@ -55,15 +56,18 @@ def settings(args):
                 low_amps=[0.02, 0.03, 0.04])
 
 
-def run_family(name, sigma, amps, raw, periods, transient, progress):
+def run_family(name, sigma, amps, raw, periods, transient, progress, seed=0):
     cfg = mixtures.family(name, sigma)
+    if seed:
+        cfg = cfg.replace(numerics=dataclasses.replace(cfg.numerics, seed=seed))
     tag = name.split("-")[1] + (f"_sigma{sigma:g}" if sigma is not None else "")
-    path = os.path.join(raw, f"{tag}_a{len(amps)}_t{transient}_p{periods}.h5")
+    path = os.path.join(raw, f"{tag}_a{len(amps)}_t{transient}_p{periods}"
+                        + (f"_seed{seed}" if seed else "") + ".h5")
     t0 = time.perf_counter()
     r = ef.measure(cfg, amps, periods=periods, transient=transient, out=path,
                    progress=progress, echo=None)
     return dict(name=name, sigma=sigma, result=r, periods=periods, transient=transient,
-                path=path, elapsed=time.perf_counter() - t0)
+                path=path, elapsed=time.perf_counter() - t0, seed=seed)
 
 
 def peak(amps, y):
@@ -95,6 +99,9 @@ def main(argv=None):
     ap.add_argument("--low-periods", type=int, default=5)
     ap.add_argument("--low-transient", type=int, default=3)
     ap.add_argument("--classes", default="abc")
+    ap.add_argument("--replicate-seeds", type=lambda t: [int(x) for x in t.split(",") if x],
+                    default=[1], help="extra seeds (initial positions) of the reference and the "
+                    "σ = 0.5 classes, for the run-to-run spread of the claims")
     ap.add_argument("--out", default=os.path.join(HERE, "binary_mixtures"))
     ap.add_argument("--no-progress", action="store_true")
     args = ap.parse_args(argv)
@@ -113,10 +120,18 @@ def main(argv=None):
         for sigma in s["low_sigmas"]:
             runs.append(run_family(f"varela2023-{klass}", sigma, s["low_amps"], raw,
                                    s["low_periods"], s["low_transient"], progress))
+    replicas = []
+    if not args.quick:
+        for seed in args.replicate_seeds:
+            replicas.append(run_family("varela2023-reference", None, s["amps"], raw, s["periods"],
+                                       s["transient"], progress, seed))
+            for klass in args.classes:
+                replicas.append(run_family(f"varela2023-{klass}", 0.5, s["amps"], raw,
+                                           s["periods"], s["transient"], progress, seed))
     elapsed = time.perf_counter() - t0
     write_data(os.path.join(args.out, "data.h5"), runs)
     figures(args.out, runs, args.classes, s)
-    write_summary(args, s, runs, elapsed)
+    write_summary(args, s, runs, elapsed, replicas)
     print(f"wrote {args.out}/summary.md ({elapsed:.0f} s; sweeps {sum(r['result'].wall_time for r in runs):.0f} s)")
     return runs
 
@@ -162,9 +177,7 @@ def figures(out, runs, classes, s):
         ax.set_xlabel("drive amplitude A_d [cm]")
         ax.set_ylabel("⟨E_d⟩ / m [1/kg] (mean ± std over periods)")
         ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out, "efficiency.png"), dpi=120)
-    plt.close(fig)
+    save_figure(fig, os.path.join(out, "efficiency.png"))
 
     # contacts and force vs phase at A_d = 3 cm (figs. 4, 5, 7, 10, 11)
     fig, axes = plt.subplots(2, len(classes), figsize=(5 * len(classes), 7), squeeze=False)
@@ -183,9 +196,7 @@ def figures(out, runs, classes, s):
         for i in range(2):
             axes[i, j].set_xlabel("phase t/T (box at its top at 0)")
             axes[i, j].legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out, "contacts_force.png"), dpi=120)
-    plt.close(fig)
+    save_figure(fig, os.path.join(out, "contacts_force.png"))
 
     # phase plots at σ = 0.5 (figs. 8, 12)
     pc = [k for k in "bc" if k in classes]
@@ -204,9 +215,7 @@ def figures(out, runs, classes, s):
         ax.set_xlabel("z [cm] (lab frame)")
         ax.set_ylabel("v_z [m/s]")
         ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out, "phase_plots.png"), dpi=120)
-    plt.close(fig)
+    save_figure(fig, os.path.join(out, "phase_plots.png"))
 
     # snapshots (fig. 3): reference and class a at the smallest σ run
     rows = []
@@ -230,7 +239,7 @@ def figures(out, runs, classes, s):
     snapshot_figure(os.path.join(out, "snapshots.png"), rows, "driven box at 70 Hz")
 
 
-def write_summary(args, s, runs, elapsed):
+def write_summary(args, s, runs, elapsed, replicas=()):
     ref = runs[0]["result"]
     amps = ref.amplitudes
     lines = []
@@ -305,6 +314,18 @@ def write_summary(args, s, runs, elapsed):
     for line in claims(runs, peaks):
         P(f"- {line}")
     P("")
+    seeds = sorted({r["seed"] for r in replicas})
+    for seed in seeds:
+        rep = [r for r in replicas if r["seed"] == seed]
+        P(f"### Replicate: seed {seed} (other initial positions; reference and σ = 0.5 classes)\n")
+        rp = {(r["name"], r["sigma"]): peak(r["result"].amplitudes,
+                                            r["result"].summary["E_d_mean_per_mass"])[0]
+              for r in rep}
+        for line in claims(rep, rp, with_diagnostics=False):
+            P(f"- {line}")
+        P(f"- sweep wall times: " + ", ".join(
+            f"{r['name'].replace('varela2023-', '')}: {r['result'].wall_time:.0f} s" for r in rep))
+        P("")
     P("Figures: `efficiency.png` (figs. 2, 6, 9), `contacts_force.png` (figs. 4, 5, 7, 10, 11), "
       "`phase_plots.png` (figs. 8, 12), `snapshots.png` (fig. 3). Data: `data.h5`.\n")
     with open(os.path.join(args.out, "summary.md"), "w") as fh:
@@ -313,7 +334,7 @@ def write_summary(args, s, runs, elapsed):
         json.dump({"peaks_cm": {f"{k[0]}:{k[1]}": v * 100 for k, v in peaks.items()}}, fh, indent=1)
 
 
-def claims(runs, peaks):
+def claims(runs, peaks, with_diagnostics=True):
     """One line per claim of SPEC §5 with the numbers that decide it."""
     out = []
     ref = runs[0]["result"]
@@ -336,11 +357,87 @@ def claims(runs, peaks):
         klass = run["name"][-1]
         expect = "below" if klass == "c" else "above"
         n_ok = int(np.sum(z < -2)) if klass == "c" else int(np.sum(z > 2))
-        out.append(f"**class {klass} (σ = 0.5) {expect} the reference for A_d > 2.8 cm**: ratio "
-                   f"to the reference {ratio.min():.3f}–{ratio.max():.3f} over "
+        ed_ratio = r.summary["E_d_mean"][above] / ref.summary["E_d_mean"][above]
+        e_ratio = ((r.summary["E_pp"] + r.summary["E_pw"])[above]
+                   / (ref.summary["E_pp"] + ref.summary["E_pw"])[above])
+        out.append(f"**class {klass} (σ = 0.5) {expect} the reference for A_d > 2.8 cm** (in "
+                   f"⟨E_d⟩/m, the paper's quantity): ratio to the reference "
+                   f"{ratio.min():.3f}–{ratio.max():.3f} over "
                    f"{', '.join(f'{a * 100:g}' for a in amps[above])} cm; {n_ok} of "
-                   f"{int(above.sum())} amplitudes {expect} by more than 2 standard errors "
-                   f"(z = {', '.join(f'{v:+.1f}' for v in z)}).")
+                   f"{int(above.sum())} amplitudes {expect} by more than 2 standard errors of the "
+                   f"mean (z = {', '.join(f'{v:+.1f}' for v in z)}; the standard errors treat the "
+                   "50 periods as independent and cover one realisation, not the run-to-run "
+                   f"spread). Mass ratio to the reference {r.summary['mass'][0] / ref.summary['mass'][0]:.4f}; "
+                   f"⟨E_d⟩ itself (= dissipated energy per kg per period / 4 A_d² ω²) ratio "
+                   f"{ed_ratio.min():.3f}–{ed_ratio.max():.3f}; dissipated energy per period "
+                   f"ratio {e_ratio.min():.3f}–{e_ratio.max():.3f}.")
+    if with_diagnostics:
+        out += diagnostics(runs)
+    return out
+
+
+def _at3_numbers(run):
+    r = run["result"]
+    k = at3(r)
+    ph = r.phase
+    return dict(contacts=float(ph["contacts"][k].mean()),
+                force=float(np.abs(ph["force_floor_lid"][k]).max()),
+                force_mean=float(np.abs(ph["force_floor_lid"][k]).mean()),
+                vmax=np.abs(ph["vz_cm_species"][k]).max(axis=0))
+
+
+def diagnostics(runs):
+    """The paper's explanations at A_d = 3 cm (figs. 4, 5, 7, 8, 10–12) and fig. 3, in numbers."""
+    out = []
+    ref = _at3_numbers(runs[0])
+    v_ref = float(ref["vmax"][0])
+    for run in runs[1:]:
+        if run["sigma"] != 0.5:
+            continue
+        d = _at3_numbers(run)
+        klass = run["name"][-1]
+        c_word = "more" if d["contacts"] > ref["contacts"] else "fewer"
+        f_word = "larger" if d["force"] > ref["force"] else "smaller"
+        expect = {"a": ("more", "larger"), "b": ("fewer", None), "c": ("fewer", "smaller")}[klass]
+        verdict = []
+        verdict.append("as the paper" if c_word == expect[0] else "unlike the paper")
+        if expect[1]:
+            verdict.append("as the paper" if f_word == expect[1] else "unlike the paper")
+        text = (f"**class {klass} (σ = 0.5) at 3 cm, wall contacts**: {d['contacts']:.2f} grains on "
+                f"floor or lid on average over the period vs {ref['contacts']:.2f} for the "
+                f"reference ({c_word}; paper: {expect[0]}; {verdict[0]})")
+        if expect[1]:
+            text += (f"; **peak wall force** {d['force']:.4g} N vs {ref['force']:.4g} N "
+                     f"({f_word}; paper: {expect[1]}; {verdict[1]}), period-mean |F_z| "
+                     f"{d['force_mean']:.4g} vs {ref['force_mean']:.4g} N")
+        if klass in "bc":
+            names = [sp.name for sp in run["result"].config.grains]
+            vs = ", ".join(f"{n} {v:.3g}" for n, v in zip(names, d["vmax"]))
+            want = ("both species faster than the reference" if klass == "b"
+                    else "large grains like the reference, small grains faster")
+            text += (f"; **largest centre-of-mass speed** {vs} m/s vs {v_ref:.3g} m/s for the "
+                     f"reference (paper: {want})")
+        out.append(text + ".")
+    # fig. 3: spread and segregation in the snapshots
+    for run in runs:
+        r = run["result"]
+        if run["sigma"] is None or r.snapshots is None or not run["name"].endswith("-a"):
+            continue  # the paper's fig. 3 shows class a
+        k = at3(r)
+        sp = grain_species(r.config)
+        rows = []
+        for j, t in enumerate(r.snapshots["t"]):
+            z = r.snapshots["r"][k, j, :, 2] - r.snapshots["z_box"][k, j]
+            q = int(round((t * r.config.frequency % 1.0) * 4)) % 4
+            rows.append((q, z[sp == 0].mean(), z[sp == 1].mean(), z.std()))
+        ref_snap = runs[0]["result"].snapshots
+        zr = ref_snap["r"][at3(runs[0]["result"]), :, :, 2] - ref_snap["z_box"][at3(runs[0]["result"])][:, None]
+        out.append(f"fig. 3, {run['name'].replace('varela2023-', 'class ')} σ = {run['sigma']:g} at 3 cm, "
+                   "snapshots of the last period (phase: mean height of large / small grains above "
+                   "the floor, spread (std) of all heights; reference spread): "
+                   + "; ".join(f"{q / 4:.2f}T: {a * 100:.2f} / {b * 100:.2f} cm, spread "
+                               f"{c * 100:.2f} cm (ref {zr[j].std() * 100:.2f} cm)"
+                               for j, (q, a, b, c) in enumerate(rows)) + ".")
     return out
 
 

@@ -31,6 +31,16 @@ the steady state itself moves with ``Lz`` (a bias that the experiment measures).
 ``"reverse"`` (``jax.grad`` with rematerialisation); both give the same numbers — see
 ``experiments/gap_optimisation/summary.md`` for their measured time and memory.
 
+**The estimator that works for the DEM** (:class:`SteadyProblem`, the default of
+:func:`make_problem` and ``jaxdamp optimize``): the designer's objective is a steady-state
+average, which the bed reaches only after it has forgotten its start — tens of periods, far
+beyond the ~8 ms over which pathwise derivatives stay finite. So the derivative is taken by
+central differences ``Lz ± h`` of steady-state runs with common random numbers (the pair starts
+from the same settled bed and differs only in the lid), both members and all frequencies as one
+batch, with standard errors from batch means. Exact ``jax.grad`` stays the tool for the smooth
+S3 model; the pathwise window estimator stays available (``estimator="windows"``) and the
+experiment shows why it fails on the DEM.
+
 Moving ``Lz`` moves the lid: the start states at a new ``Lz`` come from a forward run at that
 ``Lz``, warm-started from the previous iterate's last state if every grain fits under the new lid
 (else from the settled bed); :func:`check_states` refuses states with grains above the lid.
@@ -542,6 +552,124 @@ class DEMProblem:
                 "settle_time": self.bed.time}
 
 
+class SteadyProblem(DEMProblem):
+    """DEM objectives of ``Lz`` from **steady states**: central differences with common random
+    numbers — the estimator that works where the pathwise one cannot (module doc).
+
+    Each evaluation runs one batch of ``2 F`` systems — ``Lz ± h`` at each of the objective's
+    ``F`` frequencies — from the *same* settled bed (common random numbers: the two members of
+    a pair share every initial condition and differ only in the lid's height), lets them reach
+    their steady states (``burn_in``) and averages the objective over ``average`` seconds,
+    split into ``blocks`` consecutive blocks. Value: the mean of the pair; derivative
+    ``(J(Lz+h) - J(Lz-h)) / 2h``; standard errors from the spread over blocks (batch means).
+    The runs are long enough for the bed to forget its start (tens of periods), which the
+    short pathwise windows are not, so the estimate is that of the steady-state objective the
+    designer wants, at the price of ``2 F (burn_in + average)`` simulated seconds per iterate
+    and a bias ``O(h²)`` from the differences.
+
+    Args (beyond :class:`DEMProblem`'s ``config``, ``objective``, ``engine``, ``margin``):
+      h: half-step of the central difference [m].
+      burn_in: time from the settled bed to the steady state [s].
+      average: averaging time [s] after the burn-in.
+      blocks: number of blocks for the standard errors.
+      samples_per_period: records per drive period (amplitude objective).
+    """
+
+    def __init__(self, config: Config, objective: Objective, h: float = 0.005,
+                 burn_in: float = 1.0, average: float = 1.5, blocks: int = 5,
+                 samples_per_period: int = 40, engine: str = "auto", margin: float = 0.005,
+                 progress: bool = False):
+        super().__init__(config, objective, burn_in=burn_in, engine=engine, margin=margin,
+                         progress=progress)
+        if not (h > 0 and average > 0 and blocks >= 2):
+            raise ConfigError(f"SteadyProblem: need h > 0 (got {h}), average > 0 (got {average}) "
+                              f"and blocks ≥ 2 (got {blocks})")
+        self.h, self.average, self.blocks = float(h), float(average), int(blocks)
+        period = 1.0 / max(self.freqs)
+        self.sample_every = max(1, int(round(period / samples_per_period / self.dt)))
+
+    def bounds(self, margin: float | None = None, hi: float | None = None):
+        lo, hi_ = super().bounds(margin, hi)
+        return lo + self.h, hi_ - self.h  # both members of a pair stay feasible
+
+    def block_raw(self, lzs) -> np.ndarray:
+        """Per-block raw quantity ``(F, len(lzs), blocks)`` of steady-state runs from the settled
+        bed at every ``Lz`` of ``lzs`` and every frequency, as one batch: dissipation per cycle
+        [J], or the mean of ``(z - z_s)²`` [m²] (amplitude objectives)."""
+        from . import neighbors as nb
+        from .energy import granular_loss
+        from .integrate import box_frame
+        from .runner import initial_box_position
+        from .simulate import advance, init_states
+
+        F, L = len(self.freqs), len(lzs)
+        ps = [dataclasses.replace(self.params, Lz=jnp.asarray(float(lz)),
+                                  omega=jnp.asarray(2 * math.pi * f))
+              for f in self.freqs for lz in lzs]
+        params = jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *ps)
+        B = F * L
+        z0 = initial_box_position(self.config, self.m_grains)
+        rep = lambda a: np.broadcast_to(a, (B,) + a.shape)  # noqa: E731
+        states = init_states(self.model, params, rep(self.bed.r + np.array([0.0, 0.0, z0])),
+                             rep(self.bed.v), rep(self.bed.w), rep(self.bed.q),
+                             jnp.full((B,), z0), jnp.zeros(B))
+        states = self._advance(states, params, self.burn_in, pieces=max(1, int(self.burn_in / 0.05)))
+        n_samples = max(self.blocks, int(round(self.average / (self.sample_every * self.dt))))
+        n_samples -= n_samples % self.blocks
+        per_call = max(1, int(round(0.05 / (self.sample_every * self.dt))))
+        mult = self.config.numerics.capacity_multiplier
+        nbrs = nb.allocate(self.model, box_frame(states), mult, radius=params.radius)
+        loss0 = np.asarray(granular_loss(states.work))
+        zs, losses, done = [], [], 0
+        while done < n_samples:
+            k = min(per_call, n_samples - done)
+            states, nbrs, rec = advance(self.model, states, nbrs, params, k, self.sample_every,
+                                        mult, engine=self.engine)
+            zs.append(rec["z_box"])
+            losses.append(granular_loss(rec["work"]))
+            done += k
+        z = np.concatenate(zs, axis=1).reshape(F, L, self.blocks, -1)
+        loss = np.concatenate(losses, axis=1).reshape(F, L, self.blocks, -1)
+        if not (np.all(np.isfinite(z)) and np.all(np.isfinite(loss))):
+            raise FloatingPointError("steady-state run went non-finite (try a smaller numerics.dt)")
+        if self.objective.kind == "dissipation":
+            start = np.concatenate([loss0.reshape(F, L, 1), loss[:, :, :-1, -1]], axis=2)
+            block_time = loss.shape[-1] * self.sample_every * self.dt
+            cycles = block_time * np.asarray(self.freqs)[:, None, None]
+            return (loss[..., -1] - start) / cycles
+        return np.mean((z - self.z_static) ** 2, axis=-1)
+
+    def _transform(self, raw):
+        """Objective from raw per-frequency means ``(F, ...)``."""
+        if self.objective.kind == "dissipation":
+            return raw[0]
+        Z = np.sqrt(2.0 * raw)
+        if self.objective.kind == "amplitude":
+            return Z[0]
+        return np.sum(Z**self.objective.p, axis=0) ** (1 / self.objective.p)
+
+    def evaluate(self, lz: float, state=None):
+        """``(Estimate, None)`` at ``lz`` from the pair ``lz ± h`` (see the class doc)."""
+        t0 = time.perf_counter()
+        raw = self.block_raw([lz - self.h, lz + self.h])  # (F, 2, blocks)
+        minus, plus = self._transform(raw[:, 0]), self._transform(raw[:, 1])  # (blocks,)
+        J_m, J_p = self._transform(raw[:, 0].mean(-1)), self._transform(raw[:, 1].mean(-1))
+        value, grad = 0.5 * (J_m + J_p), (J_p - J_m) / (2 * self.h)
+        nb_ = self.blocks
+        value_se = float(np.std(0.5 * (minus + plus), ddof=1) / math.sqrt(nb_))
+        grad_se = float(np.std((plus - minus) / (2 * self.h), ddof=1) / math.sqrt(nb_))
+        sim = 2 * len(self.freqs) * (self.burn_in + self.average)
+        return Estimate(float(value), value_se, float(grad), grad_se, sim,
+                        time.perf_counter() - t0,
+                        extra={"minus": float(J_m), "plus": float(J_p)}), None
+
+    def describe(self) -> dict:
+        return {"model": "DEM", "estimator": "steady", "h": self.h, "burn_in": self.burn_in,
+                "average": self.average, "blocks": self.blocks, "dt": self.dt,
+                "sample_every": self.sample_every, "bed_height": self.bed.height,
+                "frequencies": list(self.freqs), "settle_time": self.bed.time}
+
+
 # ---------------------------------------------------------------------------------------------
 # the optimiser
 
@@ -722,13 +850,19 @@ DEFAULTS = {
                 max_iter=12, xtol=5e-4, settle_time=0.3),
     "dem-quick": dict(window=0.001, n_windows=4, burn_in=0.3, warm_burn_in=0.1, lr=0.02,
                       decay=0.85, max_iter=3, xtol=5e-4, settle_time=0.3),
+    "steady": dict(h=0.005, burn_in=1.0, average=1.5, blocks=5, lr=0.03, decay=0.9,
+                   max_iter=12, xtol=5e-4, settle_time=0.3),
+    "steady-quick": dict(h=0.005, burn_in=0.3, average=0.3, blocks=3, lr=0.03, decay=0.9,
+                         max_iter=3, xtol=5e-4, settle_time=0.3),
 }
 
 
 def make_problem(config: Config, objective: Objective, quick: bool = False, **overrides):
-    """The :class:`S3Problem` (``system = "impact"``) or :class:`DEMProblem` (``"primary"``)
-    of ``config`` with the settings of :data:`DEFAULTS` (``overrides`` win; ``None`` values are
-    ignored). Returns ``(problem, optimiser settings dict)``."""
+    """The :class:`S3Problem` (``system = "impact"``), or for the DEM (``"primary"``) the
+    :class:`SteadyProblem` (``estimator="steady"``, default) or the pathwise
+    :class:`DEMProblem` (``estimator="windows"``), of ``config`` with the settings of
+    :data:`DEFAULTS` (``overrides`` win; ``None`` values are ignored). Returns
+    ``(problem, optimiser settings dict)``."""
     over = {k: v for k, v in overrides.items() if v is not None}
     if config.system == "impact":
         s = dict(DEFAULTS["s3-quick" if quick else "s3"], **over)
@@ -736,6 +870,14 @@ def make_problem(config: Config, objective: Objective, quick: bool = False, **ov
             s["duration"] = 2.0  # longer runs: irregular response in the band, gradient explodes
         config = apply_overrides(config, {"numerics.analysis_window": s.pop("analysis_window")})
         prob = S3Problem(config, objective, duration=s.pop("duration"))
+    elif config.system == "primary" and over.pop("estimator", "steady") == "steady":
+        s = dict(DEFAULTS["steady-quick" if quick else "steady"],
+                 **{k: v for k, v in over.items()
+                    if k not in ("window", "n_windows", "mode", "duration", "warm_burn_in")})
+        config = apply_overrides(config, {"numerics.settle_time": s.pop("settle_time")})
+        prob = SteadyProblem(config, objective, h=s.pop("h"), burn_in=s.pop("burn_in"),
+                             average=s.pop("average"), blocks=s.pop("blocks"),
+                             margin=s.pop("margin", 0.005))
     elif config.system == "primary":
         s = dict(DEFAULTS["dem-quick" if quick else "dem"], **over)
         config = apply_overrides(config, {"numerics.settle_time": s.pop("settle_time")})

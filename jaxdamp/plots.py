@@ -16,6 +16,16 @@ def _plt():
     return plt
 
 
+def save_figure(fig, path, dpi=120):
+    """Lay out ``fig``, write it to ``path`` (PNG), close it and return ``path``."""
+    import matplotlib.pyplot as plt
+
+    fig.tight_layout()
+    fig.savefig(path, dpi=dpi)
+    plt.close(fig)
+    return path
+
+
 def frf_figure(path, f, Z, lz_values, primary, grain_mass, fits=None, title="", model="DEM"):
     """Amplitude ratio Z/U versus f for each Lz, with the analytic FRFs of the primary alone
     (mass M) and with the grains as a rigid mass (M + m_p).
@@ -46,10 +56,7 @@ def frf_figure(path, f, Z, lz_values, primary, grain_mass, fits=None, title="", 
     ax.set_ylabel("amplitude ratio Z / U")
     ax.set_title(title, fontsize=9)
     ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 def poincare_figure(path, section, kind="velocity", title=""):
@@ -65,10 +72,7 @@ def poincare_figure(path, section, kind="velocity", title=""):
     ax.set_ylabel("dx/dt(t_k)" if kind == "velocity" else "x(t_{k+1})")
     ax.set_title(title or f"Poincaré section, f = {section.frequency:g} Hz, "
                  f"phase = {section.phase:.2f} rad, {len(P)} points", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 def spectrum_figure(path, spectrum, fmax=None, title=""):
@@ -90,10 +94,7 @@ def spectrum_figure(path, spectrum, fmax=None, title=""):
     ax.set_xlabel("frequency [Hz]")
     ax.set_ylabel("PSD [x²/Hz]")
     ax.set_title(title or spectrum.method, fontsize=9, pad=12)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 def kantz_figure(path, result, title=""):
@@ -112,10 +113,7 @@ def kantz_figure(path, result, title=""):
     ax.set_title(title or f"Kantz, m = {result.dim}, τ = {result.delay}, "
                  f"ε = {result.epsilon:.3g}, Theiler = {result.theiler}", fontsize=9)
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 def efficiency_figure(path, curves, title=""):
@@ -133,10 +131,7 @@ def efficiency_figure(path, curves, title=""):
     ax.set_ylabel("⟨E_d⟩ / m  [1/kg]")
     ax.set_title(title, fontsize=9)
     ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 def phase_figure(path, cases, title=""):
@@ -171,10 +166,7 @@ def phase_figure(path, cases, title=""):
     for ax in axes:
         ax.legend(fontsize=6)
     fig.suptitle(title, fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 def snapshot_figure(path, rows, title=""):
@@ -212,7 +204,4 @@ def snapshot_figure(path, rows, title=""):
             axes[i, j].axis("off")
     fig.suptitle(title + "  (x–z side view, box frame [cm]; red: large, green: small)",
                  fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)

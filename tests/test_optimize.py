@@ -86,3 +86,28 @@ def test_cli_optimize_quick_s3_converges_to_scan(tmp_path, capsys):
     best = scan_optimum(gaps, prob.scan(gaps), True)
     assert abs(gap - best) / best < 0.02, (gap, best)
     assert "gap =" in capsys.readouterr().out
+
+
+def test_dem_steady_estimator_common_random_numbers_and_sign():
+    """The steady-state estimator (central differences, common random numbers) on the small
+    bed of the test above: with the lid out of reach the pair Lz ± h is bit-identical, so the
+    derivative is exactly 0 ± 0 (the pair shares every initial condition); just above the bed,
+    where the grains hit the lid, the pair differs: a finite, nonzero derivative with a finite
+    standard error (the sign test against a scan is the experiment's, at full size)."""
+    from jaxdamp.optimize import SteadyProblem
+
+    cfg = apply_overrides(presets.get("sanchez2012-optimal"), {
+        "grains.0.count": 24, "box.Lx": 0.02, "box.Ly": 0.02, "numerics.settle_time": 0.15,
+        "primary.M": 0.3, "primary.K": 2720.0, "primary.C": 1.0, "primary.U": 0.0005})
+    prob = SteadyProblem(cfg, Objective("amplitude"), h=0.002, burn_in=0.1, average=0.2,
+                         blocks=4)
+    lo, hi = prob.bounds()
+    assert lo == pytest.approx(prob.bed.height + 0.005 + 0.002)
+    far, _ = prob.evaluate(0.39)
+    assert np.isfinite([far.value, far.value_se]).all() and far.value > 0
+    assert far.grad == 0.0 and far.grad_se == 0.0
+    assert far.extra["minus"] == far.extra["plus"]
+    assert far.sim_seconds == pytest.approx(2 * 0.3)
+    near, _ = prob.evaluate(prob.bed.height + 0.008)
+    assert np.isfinite([near.value, near.grad, near.grad_se]).all()
+    assert near.grad != 0.0 and near.grad_se > 0
