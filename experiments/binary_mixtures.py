@@ -128,10 +128,11 @@ def main(argv=None):
             for klass in args.classes:
                 replicas.append(run_family(f"varela2023-{klass}", 0.5, s["amps"], raw,
                                            s["periods"], s["transient"], progress, seed))
+    drift = [] if args.quick else balance_drift(raw, progress)
     elapsed = time.perf_counter() - t0
     write_data(os.path.join(args.out, "data.h5"), runs)
     figures(args.out, runs, args.classes, s)
-    write_summary(args, s, runs, elapsed, replicas)
+    write_summary(args, s, runs, elapsed, replicas, drift)
     print(f"wrote {args.out}/summary.md ({elapsed:.0f} s; sweeps {sum(r['result'].wall_time for r in runs):.0f} s)")
     return runs
 
@@ -239,7 +240,33 @@ def figures(out, runs, classes, s):
     snapshot_figure(os.path.join(out, "snapshots.png"), rows, "driven box at 70 Hz")
 
 
-def write_summary(args, s, runs, elapsed, replicas=()):
+def balance_drift(raw, progress, amplitude=0.03, periods=5, transient=2):
+    """Energy-balance drift of the reference at 3 cm against the time step: the balance residual
+    gained over the analysed periods, relative to the dissipation (E_pp + E_pw) in them, for
+    dt = t_c/50 (the default) and t_c/100. Velocity Verlet's energy error per Hertz collision
+    falls as (dt/t_c)^2.5, so the drift should fall ~5.7× (tests/test_energy.py)."""
+    from jaxdamp import runner
+    from jaxdamp.config import apply_overrides
+
+    rows = []
+    for n in (50, 100):
+        cfg = apply_overrides(mixtures.family("varela2023-reference"),
+                              {"drive.amplitude": amplitude, "numerics.dt_per_collision": n})
+        cfg = ef.protocol(cfg, periods=periods, transient=transient)
+        t0 = time.perf_counter()
+        res = runner.run(cfg, progress=progress, echo=None, snapshots=False)
+        a = ef.analyse(cfg, res.records, periods)
+        spp = 100
+        i0, i1 = transient * spp - 1, (transient + periods) * spp - 1
+        resid = res.records["balance_residual"]
+        diss = float((a["per_period"]["E_pp"] + a["per_period"]["E_pw"])[transient:].sum())
+        rows.append(dict(dt_per_collision=n, dt=cfg.numerics.dt, drift=float(resid[i1] - resid[i0]),
+                         dissipated=diss, E_d=a["summary"]["E_d_mean"],
+                         wall=time.perf_counter() - t0))
+    return rows
+
+
+def write_summary(args, s, runs, elapsed, replicas=(), drift=()):
     ref = runs[0]["result"]
     amps = ref.amplitudes
     lines = []
@@ -295,6 +322,12 @@ def write_summary(args, s, runs, elapsed, replicas=()):
           for run in runs) + ".\n")
     P("Energy balance (max |residual| / max input work over the run), worst over all points: "
       f"{max(float(np.max(run['result'].summary['balance_error'])) for run in runs):.2e}.\n")
+    if drift:
+        P("Energy-balance drift vs time step (reference, A_d = 3 cm, 2 + 5 periods; residual "
+          "gained over the analysed periods / energy dissipated in them): "
+          + "; ".join(f"dt = t_c/{d['dt_per_collision']} ({d['dt']:.3g} s): "
+                      f"{d['drift'] / d['dissipated']:+.2e} (⟨E_d⟩ {d['E_d']:.4f}, "
+                      f"{d['wall']:.0f} s wall)" for d in drift) + ".\n")
     P("## At A_d = 3 cm: wall contacts, wall force, centre-of-mass speed\n")
     P("| family | ⟨E_d⟩/m | E_pw/(E_pp+E_pw) | mean contacts | peak contacts | peak |F_z| [N] | "
       "max |v_z| COM per species [m/s] |")

@@ -234,8 +234,8 @@ STEADY = dict(
     full=dict(grains=250, h=0.005, burn_in=1.0, average=1.5, blocks=5, lr=0.03, decay=0.9,
               max_iter=12, scan_lz=(0.06, 0.07, 0.085, 0.1, 0.11, 0.1225, 0.135, 0.15, 0.175,
                                     0.2, 0.25)),
-    quick=dict(grains=60, h=0.005, burn_in=0.15, average=0.15, blocks=3, lr=0.03, decay=0.9,
-               max_iter=2, scan_lz=(0.07, 0.12, 0.2)),
+    quick=dict(grains=60, h=0.005, burn_in=0.1, average=0.1, blocks=3, lr=0.03, decay=0.9,
+               max_iter=1, scan_lz=(0.07, 0.12, 0.2)),
 )
 
 

@@ -1,6 +1,7 @@
 """Experiments run in their --quick mode and reproduce what their summaries claim."""
 
 import importlib.util
+import os
 import pathlib
 
 import numpy as np
@@ -132,6 +133,10 @@ def test_gap_optimisation_quick(tmp_path):
         assert h["dem/opt_lz0_0.07/lz"].shape[0] >= 1
     assert (tmp_path / "figure.png").stat().st_size > 10_000
     assert "Forward vs reverse" in (tmp_path / "summary.md").read_text()
+    st = out["steady"]  # part 6: steady-state central differences
+    assert set(st["runs"]) == {0.07, 0.25}
+    assert all(np.isfinite(r.history["gradient"]).all() for r in st["runs"].values())
+    assert np.all(np.isfinite(st["scan"]["Z"])) and "steady_summary.md" in os.listdir(tmp_path)
 
 
 def test_binary_mixtures_quick(tmp_path):
