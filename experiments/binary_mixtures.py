@@ -301,7 +301,8 @@ def write_summary(args, s, runs, elapsed, replicas=(), drift=()):
         P(f"| {fam} | {r.config.n_grains} | {r.summary['mass'][0]:.4f} | {r.config.numerics.dt:.3g} | "
           f"{run['transient']} + {run['periods']} | "
           + " | ".join(cells.get(round(a, 6), "–") for a in amps)
-          + f" | {ap * 100:.2f} | {r.wall_time:.0f} ({r.wall_time / steps / len(r.amplitudes) * 1e6:.1f} µs/system-step) |")
+          + f" | {f'{ap * 100:.2f}' if len(r.amplitudes) == len(amps) else '–'} | "
+          f"{r.wall_time:.0f} ({r.wall_time / steps / len(r.amplitudes) * 1e6:.1f} µs/system-step) |")
     low = [run for run in runs if run["periods"] != s["periods"]]
     if low:
         P("")
