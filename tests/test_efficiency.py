@@ -112,7 +112,8 @@ def test_dissipation_channels_close_the_energy_balance_of_a_driven_box():
     """A class-b mixture (30 + 30 grains, σ = 0.5) in the paper's box at A_d = 3 cm: over the
     analysed periods, E_pp + E_pw equals the walls' input work minus the change of mechanical
     energy to 1e-3 (SPEC §4)."""
-    small_ref = REF.replace(grains=(dataclasses.replace(REF.grains[0], count=60),))
+    small_ref = REF.replace(grains=(dataclasses.replace(REF.grains[0], count=60),),
+                            numerics=dataclasses.replace(REF.numerics, settle_time=0.02))
     cfg = ef.protocol(mixtures.binary(small_ref, "b", 0.5), periods=2, transient=1)
     res = run(cfg, progress=False, echo=None, snapshots=False)
     rec = res.records
@@ -135,7 +136,7 @@ def test_efficiency_cli_quick_writes_data_and_figures(tmp_path):
     out = tmp_path / "b.h5"
     cmd = [sys.executable, "-m", "jaxdamp", "efficiency", "--preset", "varela2023-b",
            "--sigma", "0.5", "--amplitude", "0.025,0.035", "--periods", "2", "--transient", "1",
-           "--out", str(out), "--no-progress"]
+           "--set", "numerics.settle_time=0.02", "--out", str(out), "--no-progress"]
     p = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     assert p.returncode == 0, p.stderr
     assert "varela2023-b, σ = 0.5: 300 grains, 2 amplitudes" in p.stdout
