@@ -72,7 +72,7 @@ def binary(reference: Config, klass: str, sigma: float) -> Config:
     (n_l, r_l), (n_s, r_s) = counts_and_radii(klass, sigma, ref.count, ref.radius)
     mass = lambda n, r: n * r**3  # noqa: E731  (same density: proportional to the mass)
     err = (mass(n_l, r_l) + mass(n_s, r_s)) / mass(ref.count, ref.radius) - 1.0
-    wall = reference.box.wall or dataclasses.replace(ref.material, calibration_radius=ref.radius)
+    wall = reference.box.wall or ref.material
     if wall.calibration_radius is None:
         wall = dataclasses.replace(wall, calibration_radius=ref.radius)
     base = reference.name.removesuffix("-reference")
