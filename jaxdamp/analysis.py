@@ -35,22 +35,34 @@ def first_harmonic(t, x, f):
     return float(np.hypot(c, s)), float(np.arctan2(-s, c))
 
 
-def fit_frf(f, Z, U, K, M0, C0, weights=None):
+#: Residual weightings of the FRF fit: ``relative`` (``Z_model/Z − 1``, every frequency
+#: counts alike; the default) and ``absolute`` (``(Z_model − Z)/U``, dominated by the largest
+#: amplitudes, as the thesis describes its fit).
+RESIDUALS = ("relative", "absolute")
+
+
+def fit_frf(f, Z, U, K, M0, C0, weights=None, residuals: str = "relative"):
     """Least-squares fit of the analytic FRF to amplitudes ``Z(f)`` with ``U, K`` fixed.
 
     Returns ``(M_ef, C_ef, stderr_M, stderr_C)`` [kg, N s/m]; standard errors from the
-    Jacobian at the optimum and the residual variance. Residuals are relative
-    (``Z_model/Z - 1``) so that the resonance does not swamp the flanks. The FRF depends on
-    ``C²`` only, so ``C`` is constrained ≥ 0 (else the fit may return the mirror ``-C``).
+    Jacobian at the optimum and the residual variance. ``residuals`` (:data:`RESIDUALS`):
+    ``"relative"`` (``Z_model/Z - 1``, so that the resonance does not swamp the flanks) or
+    ``"absolute"`` (``(Z_model - Z)/U``). The FRF depends on ``C²`` only, so ``C`` is
+    constrained ≥ 0 (else the fit may return the mirror ``-C``).
     """
     from scipy.optimize import least_squares
 
+    if residuals not in RESIDUALS:
+        raise ValueError(f"residuals = {residuals!r}: expected one of {RESIDUALS}")
     f = np.asarray(f, float)
     Z = np.asarray(Z, float)
     wts = np.ones_like(Z) if weights is None else np.asarray(weights, float)
 
     def resid(x):
-        return wts * (frf_amplitude(f, x[0], K, x[1], U) / Z - 1.0)
+        model = frf_amplitude(f, x[0], K, x[1], U)
+        if residuals == "relative":
+            return wts * (model / Z - 1.0)
+        return wts * (model - Z) / U
 
     sol = least_squares(resid, [M0, C0], x_scale=[M0, max(C0, 1e-3)], method="trf",
                         bounds=([0.0, 0.0], [np.inf, np.inf]))
@@ -62,6 +74,29 @@ def fit_frf(f, Z, U, K, M0, C0, weights=None):
     except np.linalg.LinAlgError:
         err = np.array([np.nan, np.nan])
     return float(sol.x[0]), float(sol.x[1]), float(err[0]), float(err[1])
+
+
+def fit_frf_replicates(f, Z, U, K, M0, C0, residuals: str = "relative") -> dict:
+    """FRF fit with the uncertainty of independent replicates.
+
+    ``Z``: amplitudes ``(F, R)``, one independent FRF per replicate (column). Every replicate
+    is fitted on its own (:func:`fit_frf`); the effective mass and damping are the means of
+    the ``R`` fits ± their standard error across replicates ``s/√R`` (NaN for ``R = 1``, then
+    the fit's own Jacobian error is the only figure). Also the fit of the replicate-mean FRF.
+
+    Returns ``{"M_ef", "C_ef", "se_M", "se_C", "M_reps", "C_reps", "M_mean_fit", "C_mean_fit",
+    "fit_se_M", "fit_se_C", "residuals", "replicates"}``.
+    """
+    Z = np.asarray(Z, float).reshape(len(f), -1)
+    R = Z.shape[1]
+    reps = np.array([fit_frf(f, Z[:, r], U, K, M0, C0, residuals=residuals)[:2] for r in range(R)])
+    Mm, Cm, dM, dC = fit_frf(f, Z.mean(axis=1), U, K, M0, C0, residuals=residuals)
+    se = reps.std(axis=0, ddof=1) / np.sqrt(R) if R >= 2 else np.full(2, np.nan)
+    return {"M_ef": float(reps[:, 0].mean()), "C_ef": float(reps[:, 1].mean()),
+            "se_M": float(se[0]), "se_C": float(se[1]),
+            "M_reps": reps[:, 0], "C_reps": reps[:, 1],
+            "M_mean_fit": Mm, "C_mean_fit": Cm, "fit_se_M": dM, "fit_se_C": dC,
+            "residuals": residuals, "replicates": R}
 
 
 def resonance(f, Z):

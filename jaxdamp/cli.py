@@ -59,23 +59,71 @@ def _run_config(args):
     return apply_overrides(cfg, overrides)
 
 
+def print_steady(steady: dict, keys=("amplitude", "granular_loss_per_cycle", "phase")) -> None:
+    """Print the steady-state estimates of one point (:func:`jaxdamp.stats.summarise` arrays):
+    mean ± SE over replicates, the detected start of the steady state, the batch-means error."""
+    import numpy as np
+
+    from .stats import format_estimate, unit
+
+    a = steady[keys[0]]
+    start = np.atleast_1d(a["start"]).ravel()
+    ok = np.atleast_1d(a["stationary"]).ravel()
+    R = len(start)
+    print(f"steady state detected (MSER on per-period amplitude and dissipation) in "
+          f"{int(ok.sum())} of {R} replicate(s); starts at t = "
+          + ", ".join(f"{t:.3g}" if k else "never" for t, k in zip(start, ok)) + " s")
+    for k in keys:
+        e = steady[k]
+        bse = np.atleast_1d(e["batch_se"]).ravel()
+        extra = (f"; within-run batch-means SE {np.nanmean(bse):.2g}"
+                 if np.isfinite(bse).any() else "")
+        print(f"  {k} = {format_estimate(float(e['mean']), float(e['se']), int(e['n']), unit(k))}"
+              + extra)
+
+
 def cmd_run(args) -> int:
     from .runner import run
     from .validation import validate
 
     cfg = validate(_run_config(args))
+    R = _replicates(args)
+    if R > 1:  # R independent beds in one batch: a sweep of one point (sweep file layout)
+        from .sweep import sweep
+
+        res = sweep(cfg, {}, out=args.out, resume=args.resume, progress=not args.no_progress,
+                    replicates=R)
+        s = res.summary
+        print(f"{R} replicates, fixed analysis window: amplitude Z = {float(s['amplitude']):.6g} m, "
+              f"granular dissipation per cycle = {float(s['granular_loss_per_cycle']):.6g} J, "
+              f"max energy balance error = {float(res.replicate_summary['balance_error'].max()):.3g}")
+        print_steady(res.steady)
+        if args.out:
+            print(f"wrote {args.out} (a sweep file of one point with {R} replicates)")
+        return 0
     res = run(cfg, out=args.out, resume=args.resume, progress=not args.no_progress)
     s = res.summary
     print(f"amplitude Z = {s['amplitude']:.6g} m"
-          + (f" (Z/U = {s['amplitude_ratio']:.4g})" if "amplitude_ratio" in s else ""))
+          + (f" (Z/U = {s['amplitude_ratio']:.4g})" if "amplitude_ratio" in s else "")
+          + " (fixed analysis window)")
     print(f"granular dissipation per cycle = {s['granular_loss_per_cycle']:.6g} J "
           f"(pp: {s['pp_normal_per_cycle'] + s['pp_friction_per_cycle']:.4g} J, "
           f"pw: {s['pw_normal_per_cycle'] + s['pw_friction_per_cycle']:.4g} J)")
     print(f"energy balance error = {s['balance_error']:.3g}; {s['steps']} steps of "
           f"{s['dt']:.4g} s at {s['steps_per_second']:.4g} steps/s")
+    if res.steady is not None:
+        print_steady(res.steady)
     if args.out:
         print(f"wrote {args.out}")
     return 0
+
+
+def _replicates(args) -> int:
+    R = getattr(args, "replicates", None)
+    R = 1 if R is None else R
+    if R < 1:
+        raise ConfigError(f"--replicates {R}: need at least 1 independent bed")
+    return R
 
 
 def _float_list(text):
@@ -89,10 +137,10 @@ def cmd_frf(args) -> int:
     import h5py
     import numpy as np
 
-    from .analysis import fit_frf
+    from .analysis import RESIDUALS, fit_frf_replicates
     from .model import grain_mass
     from .plots import frf_figure
-    from .sweep import sweep
+    from .sweep import steady_or_window, sweep, write_fit
 
     cfg = _base_config(args)
     overrides = list(args.set or [])
@@ -118,35 +166,55 @@ def cmd_frf(args) -> int:
     lz = _float_list(args.lz) if args.lz else None
     if lz:
         axes["box.Lz"] = lz
-    res = sweep(cfg, axes, out=args.out, resume=args.resume, progress=not args.no_progress)
-    Z = res.summary["amplitude"].reshape(len(freqs), -1)
+    R = _replicates(args)
+    res = sweep(cfg, axes, out=args.out, resume=args.resume, progress=not args.no_progress,
+                replicates=R)
+    L = len(lz) if lz else 1
     p = cfg.primary
-    fits, lines = [], []
-    for j in range(Z.shape[1]):
-        M, C, dM, dC = fit_frf(freqs, Z[:, j], p.U, p.K, M0=p.M, C0=max(p.C, 1.0))
-        fits.append((M, C))
+    if res.steady is not None:
+        Zr, fallback = steady_or_window(res, "amplitude")
+        Zr = Zr.reshape(len(freqs), L, R)
+        if fallback:
+            print(f"warning: {fallback} of {Zr.size} runs did not become stationary (MSER on "
+                  "per-period amplitude and dissipation); their fixed-window amplitude is used "
+                  "— run longer (--duration)")
+    else:  # S3: deterministic, one realisation
+        Zr = res.summary["amplitude"].reshape(len(freqs), L, 1)
+    Z = Zr.mean(axis=-1)
+    Z_se = Zr.std(axis=-1, ddof=1) / np.sqrt(R) if R >= 2 else None
+    fits, lines, fit_all = [], [], {w: [] for w in RESIDUALS}
+    for j in range(L):
+        for w in RESIDUALS:
+            fit_all[w].append(fit_frf_replicates(freqs, Zr[:, j], p.U, p.K, M0=p.M,
+                                                 C0=max(p.C, 1.0), residuals=w))
+        fr = fit_all[args.residuals][j]
+        other = fit_all[[w for w in RESIDUALS if w != args.residuals][0]][j]
+        fits.append((fr["M_ef"], fr["C_ef"]))
         label = (f"Lz = {lz[j]:g} m" if lz else f"gap = {cfg.impactor.gap:g} m" if impact
                  else f"Lz = {cfg.box.Lz:g} m")
         k = int(np.argmax(Z[:, j]))
+        err = ((lambda e: f"± {e:.2g} (SE over R = {R})") if R >= 2 else
+               (lambda e: f"± {e:.2g} (fit error, R = 1)"))
+        eM = fr["se_M"] if R >= 2 else fr["fit_se_M"]
+        eC = fr["se_C"] if R >= 2 else fr["fit_se_C"]
         lines.append(f"{label}: peak Z/U = {Z[k, j] / p.U:.4g} at {freqs[k]:.4g} Hz; "
-                     f"fit M_ef = {M:.4g} ± {dM:.2g} kg, C_ef = {C:.4g} ± {dC:.2g} N s/m "
-                     f"(C_ef/C = {C / p.C:.3g})")
+                     f"{args.residuals} fit M_ef = {fr['M_ef']:.4g} {err(eM)} kg, "
+                     f"C_ef = {fr['C_ef']:.4g} {err(eC)} N s/m (C_ef/C = {fr['C_ef'] / p.C:.3g}); "
+                     f"{other['residuals']} fit: M_ef = {other['M_ef']:.4g}, "
+                     f"C_ef = {other['C_ef']:.4g}")
     print("\n".join(lines))
     m_p = cfg.impactor.mass if impact else grain_mass(cfg)
     if args.out:
         with h5py.File(args.out, "a") as h:
-            g = h.require_group("fit")
-            for name, col in (("M_ef", 0), ("C_ef", 1)):
-                if name in g:
-                    del g[name]
-                g.create_dataset(name, data=np.array([x[col] for x in fits])).attrs["units"] = (
-                    "kg" if col == 0 else "N s/m")
+            write_fit(h, fit_all, args.residuals)
         png = args.png or args.out.rsplit(".", 1)[0] + ".png"
         frf_figure(png, np.asarray(freqs), Z, lz or [None], p, m_p, fits,
                    title=(f"{cfg.name}: one particle, m = {m_p:.4g} kg, e = "
                           f"{cfg.impactor.restitution:g}" if impact else
                           f"{cfg.name}: N = {cfg.n_grains}")
-                   + f", {res.summary['wall_time']:.0f} s wall", model="S3" if impact else "DEM")
+                   + f", {res.summary['wall_time']:.0f} s wall"
+                   + (f", mean of R = {R} beds ± 2 SE" if R > 1 else ""),
+                   model="S3" if impact else "DEM", Z_se=Z_se)
         print(f"wrote {args.out} and {png}")
     return 0
 
@@ -435,6 +503,10 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--quick", action="store_true",
                    help="short demo run (1 s driven after settling, under a minute on 2 cores)")
     r.add_argument("--resume", action="store_true", help="continue --out from its checkpoint")
+    r.add_argument("--replicates", type=int, metavar="R",
+                   help="independent beds (seeds seed..seed+R-1) run in one batch (default 1); "
+                        "steady-state numbers get mean ± standard error over them and the file "
+                        "is a sweep file of one point")
     r.add_argument("--no-progress", action="store_true", help="no progress bar")
     r.set_defaults(func=cmd_run)
 
@@ -466,6 +538,13 @@ def build_parser() -> argparse.ArgumentParser:
     fr.add_argument("--png", metavar="FILE.png", help="figure (default: next to --out)")
     fr.add_argument("--quick", action="store_true", help="6 frequencies, 0.5 s each")
     fr.add_argument("--resume", action="store_true")
+    fr.add_argument("--replicates", type=int, metavar="R",
+                    help="independent beds per point, run in the same batch (default 1): "
+                         "amplitudes and M_ef, C_ef get mean ± standard error over them")
+    fr.add_argument("--residuals", choices=["relative", "absolute"], default="relative",
+                    help="FRF-fit weighting that is reported first and drawn: relative "
+                         "(Z_model/Z - 1, default) or absolute ((Z_model - Z)/U, dominated by "
+                         "the resonance, as the thesis describes); both are stored in /fit")
     fr.add_argument("--no-progress", action="store_true")
     fr.set_defaults(func=cmd_frf)
 

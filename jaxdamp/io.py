@@ -11,6 +11,8 @@ Schema of a run file (every dataset has a ``units`` attribute; see ``docs/output
     /series/work (T, 7)     cumulative work channels, attr 'channels'
     /snapshots/t (S,)       s;  /snapshots/r (S,N,3) m;  /snapshots/q (S,N,4) unit quaternions
     /summary                attrs: steady-state scalars (units in attr 'units' JSON)
+    /steady/<quantity>/...  steady-state estimates from the detected steady state
+                            (:func:`write_steady`; same layout in sweep files)
     /checkpoint             the full state and neighbour list after the last finished chunk
 """
 
@@ -215,3 +217,27 @@ def describe(path: str) -> str:
                 if k != "units":
                     lines.append(f"    {k} = {v} {units.get(k, '')}".rstrip())
     return "\n".join(lines)
+
+
+def write_steady(h5, steady: dict, replicates: int, units) -> None:
+    """``/steady/<quantity>/{mean, se, ci95, n, values, batch_se, start, stationary}``: the
+    steady-state estimates of :func:`jaxdamp.stats.to_arrays` (grid-shaped ``mean`` … ``n``,
+    grid + ``(R,)`` for the rest), with units, the number of replicates and the method in
+    attributes. ``units(quantity)`` gives the unit of a quantity. Used by run and sweep files."""
+    from .stats import DETECT_ON
+
+    if "steady" in h5:
+        del h5["steady"]
+    st = h5.create_group("steady")
+    st.attrs["replicates"] = int(replicates)
+    st.attrs["method"] = (
+        "per-period series; start of the steady state by MSER on " + ", ".join(DETECT_ON)
+        + " (the later of the two; at least 1 period dropped, 5 kept); mean +- standard error "
+        "across independent replicates (Student-t 95 % half-width in ci95; NaN for one "
+        "replicate); batch_se: within-run batch means (5 batches)")
+    for q, fields in steady.items():
+        g = st.create_group(q)
+        g.attrs["units"] = units(q)
+        for f, v in fields.items():
+            d = g.create_dataset(f, data=np.asarray(v))
+            d.attrs["units"] = "s" if f == "start" else "1" if f in ("n", "stationary") else units(q)

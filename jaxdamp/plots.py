@@ -26,7 +26,8 @@ def save_figure(fig, path, dpi=120):
     return path
 
 
-def frf_figure(path, f, Z, lz_values, primary, grain_mass, fits=None, title="", model="DEM"):
+def frf_figure(path, f, Z, lz_values, primary, grain_mass, fits=None, title="", model="DEM",
+               Z_se=None):
     """Amplitude ratio Z/U versus f for each Lz, with the analytic FRFs of the primary alone
     (mass M) and with the grains as a rigid mass (M + m_p).
 
@@ -35,6 +36,8 @@ def frf_figure(path, f, Z, lz_values, primary, grain_mass, fits=None, title="", 
       ``[None]``; primary: :class:`jaxdamp.config.Primary`; grain_mass [kg];
       fits: optional ``[(M_ef, C_ef), ...]`` per Lz, drawn dashed.
       model: legend label of the simulated points (``"DEM"``, ``"S3"``).
+      Z_se: optional standard errors of ``Z`` across replicates [m], ``(F, L)``: error bars
+        of ± 2 SE.
     """
     plt = _plt()
     fig, ax = plt.subplots(figsize=(7, 4.5))
@@ -47,6 +50,9 @@ def frf_figure(path, f, Z, lz_values, primary, grain_mass, fits=None, title="", 
     for j, lz in enumerate(lz_values):
         lab = f"{model}, Lz = {lz:g} m" if lz is not None else model
         line, = ax.plot(f, Z[:, j] / U, "o-", label=lab)
+        if Z_se is not None and np.isfinite(Z_se[:, j]).any():
+            ax.errorbar(f, Z[:, j] / U, yerr=2 * np.nan_to_num(Z_se[:, j]) / U, fmt="none",
+                        ecolor=line.get_color(), capsize=2, lw=0.8)
         if fits is not None and fits[j] is not None:
             M, C = fits[j]
             ax.plot(ff, frf_amplitude(ff, M, primary.K, C, U) / U, ":", color=line.get_color(),

@@ -20,10 +20,11 @@ import jax.numpy as jnp
 import numpy as np
 
 from . import neighbors as nb
+from . import stats
 from .analysis import analysis_start, steady_state_summary
 from .config import Config, ConfigError
 from .integrate import box_frame
-from .io import RunFile, arrays_to_state, state_to_arrays
+from .io import RunFile, arrays_to_state, state_to_arrays, write_steady
 from .model import State, build, grain_species
 from .packing import SettledBed, jax_tree_batch, settle
 from .simulate import advance, init_states, take
@@ -74,14 +75,18 @@ def initial_box_position(config: Config, grain_mass: float) -> float:
 
 @dataclass
 class RunResult:
-    """What :func:`run` returns: the output path (or ``None``), the summary scalars, the samples
-    (dict of numpy arrays), the settled bed and the final state."""
+    """What :func:`run` returns: the output path (or ``None``), the summary scalars (fixed
+    analysis window), the samples (dict of numpy arrays), the settled bed, the final state,
+    and the steady-state estimates from the detected steady state (one replicate:
+    :func:`jaxdamp.stats.summarise`; the replicate error needs ``replicates > 1``, which runs
+    as a sweep of one point)."""
 
     path: str | None
     summary: dict
     records: dict
     bed: SettledBed
     state: State
+    steady: dict | None = None
 
 
 def _first_nonfinite(recs: dict, states: State) -> tuple[int | None, str]:
@@ -262,8 +267,12 @@ def run(
     summary.update(bed_height=bed.height, dt=sched.dt, steps=int(final.step),
                    wall_time=wall, steps_per_second=steps_done / wall if wall > 0 else 0.0)
     units.update(bed_height="m", dt="s", steps="1", wall_time="s", steps_per_second="1/s")
+    steady = stats.summarise([records], config.frequency) if records else None
     if rf is not None:
         rf.write_summary(summary, units)
+        if steady is not None:
+            write_steady(rf.h5, steady, 1, stats.unit)
         rf.set_status("finished" if int(final.step) >= sched.n_chunks * sched.chunk_steps else "partial")
         rf.close()
-    return RunResult(path=out, summary=summary, records=records, bed=bed, state=final)
+    return RunResult(path=out, summary=summary, records=records, bed=bed, state=final,
+                     steady=steady)

@@ -31,10 +31,11 @@ import numpy as np
 
 from . import __version__
 from . import neighbors as nb
+from . import stats
 from .analysis import analysis_start, steady_state_summary
 from .config import Config, ConfigError, apply_overrides
 from .integrate import box_frame
-from .io import arrays_to_state, state_to_arrays
+from .io import arrays_to_state, state_to_arrays, write_steady
 from .model import build, config_dt, grain_radii
 from .packing import settle
 from .runner import initial_box_position, schedule
@@ -48,7 +49,14 @@ class SweepResult:
     ``summary``: ``{name: array shaped like the grid}``; ``records``: per-point samples
     (dict of arrays ``(P, T)``); ``path``: the HDF5 file or ``None``; ``snapshots``: with
     ``sweep(..., snapshots=k)``, ``{"t": (k,), "r": (P, k, N, 3), "v": (P, k, N, 3), "z_box": (P, k)}`` at the
-    ends of the last ``k`` chunks, else ``None``."""
+    ends of the last ``k`` chunks, else ``None``.
+
+    With ``R = replicates`` independent beds per grid point, ``records`` and ``snapshots``
+    have ``P = grid points × R`` rows (:meth:`point`), ``summary`` holds the mean over the
+    replicates of each fixed-window value, ``replicate_summary`` the values of every replicate
+    (grid shape + ``(R,)``), and ``steady`` the steady-state estimates over replicates from
+    the detected steady state (:func:`jaxdamp.stats.steady`, as :func:`jaxdamp.stats.to_arrays`:
+    ``{quantity: {"mean", "se", "ci95", "n", "values", "batch_se", "start", "stationary"}}``)."""
 
     axes: dict
     configs: list
@@ -56,13 +64,21 @@ class SweepResult:
     records: dict
     path: str | None
     snapshots: dict | None = None
+    replicates: int = 1
+    replicate_summary: dict | None = None
+    steady: dict | None = None
+
+    def point(self, index: int, replicate: int = 0) -> int:
+        """Row of grid point ``index`` (grid order), replicate ``replicate``, in ``records``
+        and ``snapshots`` (replicates are the fastest axis)."""
+        return index * self.replicates + replicate
 
 
 def grid_configs(config: Config, axes: dict) -> list[Config]:
     """One configuration per grid point (``itertools.product`` order), each validated."""
     keys = list(axes)
-    if not 1 <= len(keys) <= 2:
-        raise ConfigError(f"a sweep takes one or two axes, got {keys}")
+    if len(keys) > 2:
+        raise ConfigError(f"a sweep takes at most two axes, got {keys}")
     out = []
     for values in itertools.product(*(axes[k] for k in keys)):
         out.append(validate(apply_overrides(config, dict(zip(keys, map(float, values))))))
@@ -98,31 +114,46 @@ def _pad_and_shard(tree, padded, sharding):
     return jax.tree_util.tree_map(one, tree)
 
 
-def _axes_json(axes: dict) -> str:
-    return json.dumps({k: list(map(float, v)) for k, v in axes.items()})
+def _axes_json(axes: dict, replicates: int = 1) -> str:
+    d = {k: list(map(float, v)) for k, v in axes.items()}
+    if replicates > 1:
+        d["replicates"] = int(replicates)
+    return json.dumps(d)
+
+
+def replicate_configs(grid: list[Config], replicates: int) -> list[Config]:
+    """Every grid configuration repeated ``replicates`` times with the seeds of
+    :func:`jaxdamp.stats.replicate_seed` (replicates fastest)."""
+    if replicates < 1:
+        raise ConfigError(f"replicates = {replicates}: need at least 1")
+    return [c if k == 0 else dataclasses.replace(
+                c, numerics=dataclasses.replace(
+                    c.numerics, seed=stats.replicate_seed(c.numerics.seed, k)))
+            for c in grid for k in range(replicates)]
 
 
 def write_header(h5, config: Config, axes: dict, configs: list, dt: float, duration: float,
-                 engine: str) -> None:
+                 engine: str, replicates: int = 1) -> None:
     """The root attributes of a sweep file (``docs/output.md``), shared by every model."""
     h5.attrs["format"] = "jaxdamp-sweep/1"
     h5.attrs["jaxdamp_version"] = __version__
     h5.attrs["base_config"] = config.to_json()
-    h5.attrs["axes"] = _axes_json(axes)
+    h5.attrs["axes"] = _axes_json(axes, replicates)
+    h5.attrs["replicates"] = int(replicates)
     h5.attrs["configs"] = json.dumps([c.to_json() for c in configs])
     h5.attrs["dt"] = dt
     h5.attrs["duration"] = duration
     h5.attrs["engine"] = engine
 
 
-def holds(path: str, config: Config, axes: dict) -> bool:
+def holds(path: str, config: Config, axes: dict, replicates: int = 1) -> bool:
     """Whether the sweep file ``path`` exists and holds the sweep ``(config, axes)``."""
     if not os.path.exists(path):
         return False
     try:
         with h5py.File(path, "r") as h5:
             return (h5.attrs.get("base_config") == config.to_json()
-                    and h5.attrs.get("axes") == _axes_json(axes) and "checkpoint" in h5)
+                    and h5.attrs.get("axes") == _axes_json(axes, replicates) and "checkpoint" in h5)
     except OSError:  # not an HDF5 file (e.g. cut short while being created)
         return False
 
@@ -131,12 +162,14 @@ def reuse_or_run(config: Config, axes: dict, out: str, **kwargs) -> SweepResult:
     """:func:`sweep` into ``out``, reusing what is there: a finished file of the same sweep is
     read back without computing (its compute time kept), a partial one is resumed, anything
     else is replaced. For experiments whose raw sweeps outlive a figure or a kill."""
-    return sweep(config, axes, out=out, resume=holds(out, config, axes), **kwargs)
+    return sweep(config, axes, out=out,
+                 resume=holds(out, config, axes, kwargs.get("replicates", 1)), **kwargs)
 
 
 def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = False,
           progress: bool = True, echo=print, shard: bool = True,
-          max_chunks: int | None = None, snapshots: int = 0) -> SweepResult | None:
+          max_chunks: int | None = None, snapshots: int = 0,
+          replicates: int = 1) -> SweepResult | None:
     """Run every grid point of ``axes`` (``{dotted key: values}``) as one batch.
 
     Args:
@@ -151,6 +184,8 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
       snapshots: keep grain positions and velocities at the ends of the last this many chunks
         (``/snapshots`` in the file; e.g. chunks of a quarter drive period and 4 snapshots give
         the bed at the drive's turning points and at its largest speeds).
+      replicates: independent realisations per grid point: beds settled from the seeds
+        :func:`jaxdamp.stats.replicate_seed` ``(seed, 0..R-1)``, run in the same batch.
 
     S3 configurations (``system = "impact"``) go to :func:`jaxdamp.impact.sweep` (same result
     and file layout; ``resume``, ``shard`` and ``max_chunks`` do not apply: it runs whole).
@@ -158,9 +193,15 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
     if config.system == "impact":  # S3: the single-particle model of jaxdamp.impact
         from . import impact
 
+        if replicates != 1:
+            raise ConfigError(f"replicates = {replicates}: the single-particle model (S3) is "
+                              "deterministic, one realisation is exact (use replicates = 1)")
+
         return impact.sweep(config, axes, out=out, progress=progress, echo=echo)
     say = echo or (lambda *a, **k: None)
-    configs = grid_configs(config, axes)
+    grid = grid_configs(config, axes)
+    R = int(replicates)
+    configs = replicate_configs(grid, R)
     base = configs[0]
     radii = grain_radii(base)
     dt = min(config_dt(c, radii) for c in configs)
@@ -187,7 +228,8 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
     start_chunk = 0
     if resume and out and os.path.exists(out):
         h5 = h5py.File(out, "a")
-        if h5.attrs["base_config"] != config.to_json() or h5.attrs["axes"] != _axes_json(axes):
+        if (h5.attrs["base_config"] != config.to_json()
+                or h5.attrs["axes"] != _axes_json(axes, R)):
             h5.close()
             raise ConfigError(f"--resume: {out} holds a different sweep")
         g = h5["checkpoint"]
@@ -227,7 +269,7 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
         nbrs = _pad_and_shard(nbrs, padded, sharding)
         if out:
             h5 = h5py.File(out, "w")
-            write_header(h5, config, axes, configs, dt, sched.duration, engine)
+            write_header(h5, config, axes, configs, dt, sched.duration, engine, R)
             h5.attrs["devices"] = len(jax.devices())
             h5.create_group("records")
 
@@ -296,20 +338,25 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
         records = {k: np.concatenate(v, axis=1) for k, v in mem.items()}
         snaps = {k: np.stack(v, axis=1 if k != "t" else 0) for k, v in snaps.items()}
     final = jax.tree_util.tree_map(lambda x: np.asarray(x)[:P], states)
-    summaries = []
+    summaries, series = [], []
     for i, c in enumerate(configs):
         rec_i = {k: v[i] for k, v in records.items()}
         s, units = steady_state_summary(c, rec_i, take(final, i), t_windows[i], sched.duration)
         summaries.append(s)
+        series.append(stats.per_period(rec_i, c.frequency, channels=stats.CHANNELS))
     shape = tuple(len(v) for v in axes.values())
-    summary = {k: np.array([s[k] for s in summaries]).reshape(shape) for k in summaries[0]}
+    per_rep = {k: np.array([s[k] for s in summaries]).reshape(shape + (R,)) for k in summaries[0]}
+    summary = {k: v.mean(axis=-1) for k, v in per_rep.items()}
     summary["wall_time"] = wall
+    steady = stats.to_arrays(
+        [stats.steady(series[g * R:(g + 1) * R]) for g in range(len(grid))], shape)
     if h5 is not None:
         sg = h5.require_group("summary")
         for k, v in summary.items():
             if k in sg:
                 del sg[k]
             sg.create_dataset(k, data=v).attrs["units"] = units.get(k, "s" if k == "wall_time" else "")
+        write_replicates(h5, per_rep, units, steady, R)
         ag = h5.require_group("axes")
         for k, v in axes.items():
             if k not in ag:
@@ -317,35 +364,50 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
         h5.attrs["wall_time"] = wall
         h5.attrs["status"] = "finished"
         h5.close()
-    return SweepResult(axes=axes, configs=configs, summary=summary, records=records, path=out,
-                       snapshots=snaps or None)
+    return SweepResult(axes=axes, configs=grid, summary=summary, records=records, path=out,
+                       snapshots=snaps or None, replicates=R, replicate_summary=per_rep,
+                       steady=steady)
 
 
-def _keep_snapshot(h5, mem: dict, states, P: int) -> None:
-    """Append the batch's positions and velocities (and the time) to ``/snapshots`` of the
-    file (resumable: the snapshot count follows the chunk count) or to ``mem``."""
-    t = float(np.asarray(states.t)[0])
-    per_point = {k: np.asarray(getattr(states, f))[:P]
-                 for k, f in (("r", "r"), ("v", "v"), ("z_box", "z"))}
-    if h5 is None:
-        mem.setdefault("t", []).append(t)
-        for k, x in per_point.items():
-            mem.setdefault(k, []).append(x)
-        return
-    g = h5.require_group("snapshots")
-    if "t" not in g:
-        g.create_dataset("t", shape=(0,), maxshape=(None,), dtype="f8").attrs["units"] = "s"
-        for k, x in per_point.items():
-            g.create_dataset(k, shape=(P, 0) + x.shape[1:], maxshape=(P, None) + x.shape[1:],
-                             chunks=True, dtype="f8").attrs["units"] = _SNAPSHOT_UNITS[k]
-    n = g["t"].shape[0]
-    if n and float(g["t"][n - 1]) >= t:  # a resumed sweep re-running a stored chunk
-        n = int(np.searchsorted(g["t"][()], t))
-    g["t"].resize(n + 1, axis=0)
-    g["t"][n] = t
-    for k, x in per_point.items():
-        g[k].resize(n + 1, axis=1)
-        g[k][:, n] = x
+def write_replicates(h5, per_rep: dict, units: dict, steady: dict, R: int) -> None:
+    """``/replicate_summary/<name>`` (grid + ``(R,)``) and ``/steady/<quantity>/<field>``
+    (``docs/output.md``): the replicate values and the steady-state estimates over them."""
+    rg = h5.require_group("replicate_summary")
+    rg.attrs["replicates"] = R
+    for k, v in per_rep.items():
+        if k in rg:
+            del rg[k]
+        rg.create_dataset(k, data=v).attrs["units"] = units.get(k, "")
+    write_steady(h5, steady, R, stats.unit)
 
 
-_SNAPSHOT_UNITS = {"r": "m", "v": "m/s", "z_box": "m"}
+def steady_or_window(res: SweepResult, key: str) -> tuple[np.ndarray, int]:
+    """Per-replicate values of ``key`` (grid shape + ``(R,)``): the steady mean over the
+    detected steady state where the replicate became stationary, else its fixed-window
+    value (``summary``); and how many replicates fell back to the fixed window."""
+    steady = res.steady[key]["values"]
+    window = res.replicate_summary[key]
+    ok = np.asarray(res.steady[key]["stationary"], bool) & np.isfinite(steady)
+    return np.where(ok, steady, window), int((~ok).sum())
+
+
+def write_fit(h5, fits: dict, used: str) -> None:
+    """``/fit`` of an FRF sweep file: ``M_ef``, ``C_ef`` (the ``used`` weighting), their
+    standard errors across replicates ``se_M_ef``, ``se_C_ef``, and ``<weighting>/...`` for
+    every weighting (:data:`jaxdamp.analysis.RESIDUALS`), one entry per ``Lz``."""
+    if "fit" in h5:
+        del h5["fit"]
+    g = h5.create_group("fit")
+    g.attrs["residuals"] = used
+    g.attrs["replicates"] = int(fits[used][0]["replicates"])
+
+    def put(grp, fl):
+        for name, key, unit in (("M_ef", "M_ef", "kg"), ("C_ef", "C_ef", "N s/m"),
+                                ("se_M_ef", "se_M", "kg"), ("se_C_ef", "se_C", "N s/m"),
+                                ("M_ef_of_mean", "M_mean_fit", "kg"),
+                                ("C_ef_of_mean", "C_mean_fit", "N s/m")):
+            grp.create_dataset(name, data=np.array([f[key] for f in fl])).attrs["units"] = unit
+
+    put(g, fits[used])
+    for w, fl in fits.items():
+        put(g.create_group(w), fl)
