@@ -315,6 +315,8 @@ def efficiency_figures(results, stem, title):
 
 
 def cmd_efficiency(args) -> int:
+    import numpy as np
+
     from . import efficiency as ef
     from . import mixtures
 
@@ -344,8 +346,9 @@ def cmd_efficiency(args) -> int:
         label = cfg.name + (f", σ = {sigma:g}" if sigma is not None else "")
         print(f"{label}: {cfg.n_grains} grains, {len(amps)} amplitudes, "
               f"{transient} + {periods} periods at {cfg.frequency:g} Hz")
+        R = _replicates(args)
         r = ef.measure(cfg, amps, periods=periods, transient=transient, out=path,
-                       progress=not args.no_progress)
+                       progress=not args.no_progress, replicates=R)
         s = r.summary
         print(f"  m = {s['mass'][0]:.4g} kg, dt = {r.config.numerics.dt:.4g} s, "
               f"{r.wall_time:.0f} s wall")
@@ -356,6 +359,15 @@ def cmd_efficiency(args) -> int:
                   f"{s['E_d_fit'][i]:.4f}  {s['E_d_mean_per_mass'][i]:12.4g}  "
                   f"{s['E_pp'][i]:8.4g}  {s['E_pw'][i]:8.4g}  {s['contacts_mean'][i]:8.3g}  "
                   f"{s['balance_error'][i]:.1e}")
+        from .stats import format_estimate
+
+        print(f"  steady state from the data (MSER on per-period E_d, {R} replicate(s)):")
+        for i, a in enumerate(r.amplitudes):
+            e = {k: v[i] if np.ndim(v) else v for k, v in r.steady["E_d"].items()}
+            starts = ", ".join(f"{t:.3g}" if ok else "never"
+                               for t, ok in zip(e["start"], e["stationary"]))
+            print(f"  {a * 100:7.3f}  <E_d> = {format_estimate(e['mean'], e['se'], int(e['n']))}; "
+                  f"steady from t = {starts} s")
         if path:
             print(f"  wrote {path}")
         results.append((label, r))
@@ -658,6 +670,9 @@ def build_parser() -> argparse.ArgumentParser:
     ef.add_argument("--out", metavar="FILE.h5", help="sweep file with the /efficiency analysis")
     ef.add_argument("--png", metavar="FILE.png", help="figure stem (default: next to --out)")
     ef.add_argument("--quick", action="store_true", help="3 amplitudes, 1 + 3 periods")
+    ef.add_argument("--replicates", type=int, metavar="R",
+                    help="independent beds per amplitude in the same batch (default 1): <E_d> "
+                         "gets mean ± standard error over them")
     ef.add_argument("--no-progress", action="store_true")
     ef.set_defaults(func=cmd_efficiency)
 

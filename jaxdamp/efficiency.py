@@ -192,7 +192,14 @@ class EfficiencyResult:
     (:data:`SUMMARY_UNITS`); ``per_period`` ``{name: (P, n)}``; ``phase`` ``{name: (P, spp, ...)}``
     (:data:`PHASE_UNITS`); ``snapshots`` from the sweep (the last period's quarter points) or
     ``None``; ``config`` the base configuration (with :func:`protocol` timing);
-    ``wall_time`` [s] of the sweep; ``path`` its file."""
+    ``wall_time`` [s] of the sweep; ``path`` its file.
+
+    With ``replicates = R`` independent beds per amplitude, ``summary``, ``per_period`` and
+    ``phase`` are means over the replicates, ``replicate_summary`` ``{name: (P, R)}`` holds
+    each replicate's values, and ``steady`` the estimates of ``E_d`` and ``E_d_per_mass`` over
+    replicates from each replicate's detected steady state (MSER on its per-period ``E_d``;
+    :func:`jaxdamp.stats.to_arrays` layout: ``mean``, ``se``, ``ci95``, ``n`` ``(P,)``,
+    ``values``, ``batch_se``, ``start``, ``stationary`` ``(P, R)``)."""
 
     amplitudes: np.ndarray
     summary: dict
@@ -202,31 +209,51 @@ class EfficiencyResult:
     config: Config
     wall_time: float
     path: str | None
+    replicates: int = 1
+    replicate_summary: dict | None = None
+    steady: dict | None = None
 
 
 def measure(config: Config, amplitudes, periods: int = 50, transient: int = 10,
             samples_per_period: int = 100, out: str | None = None, progress: bool = True,
-            echo=print) -> EfficiencyResult:
+            echo=print, replicates: int = 1) -> EfficiencyResult:
     """Run ``config`` at every drive amplitude [m] as one batch and analyse its efficiency.
 
     With ``out`` the sweep file is reused or resumed when it already holds this sweep
     (:func:`jaxdamp.sweep.reuse_or_run`) and the analysis is written to its ``/efficiency``
     group (units in attributes, the ``E_max`` formula in ``/efficiency`` attrs).
+    ``replicates``: independent beds per amplitude, in the same batch (:class:`EfficiencyResult`).
     """
+    from . import stats
     from . import sweep as sw
 
     amplitudes = np.asarray([float(a) for a in amplitudes])
     cfg = protocol(config, periods, transient, samples_per_period, amplitudes)
     axes = {"drive.amplitude": list(amplitudes)}
-    kw = dict(progress=progress, echo=echo, snapshots=4)
+    R = int(replicates)
+    kw = dict(progress=progress, echo=echo, snapshots=4, replicates=R)
     res = (sw.reuse_or_run(cfg, axes, out, **kw) if out else sw.sweep(cfg, axes, **kw))
-    per = [analyse(c, {k: v[i] for k, v in res.records.items()}, periods, samples_per_period)
+    per = [[analyse(c, {k: v[res.point(i, r)] for k, v in res.records.items()}, periods,
+                    samples_per_period) for r in range(R)]
            for i, c in enumerate(res.configs)]
-    stack = lambda part: {k: np.stack([p[part][k] for p in per]) for k in per[0][part]}  # noqa: E731
+
+    def stack(part, reduce=True):
+        out = {k: np.stack([np.stack([p[part][k] for p in reps]) for reps in per])
+               for k in per[0][0][part]}  # (P, R, ...)
+        return {k: v.mean(axis=1) for k, v in out.items()} if reduce else out
+
+    steady = []
+    for reps in per:
+        series = [{"t_start": p["per_period"]["t_end"] - 1.0 / cfg.frequency,
+                   "E_d": p["per_period"]["E_d"],
+                   "E_d_per_mass": p["per_period"]["E_d"] / p["summary"]["mass"]} for p in reps]
+        steady.append(stats.steady(series, on=("E_d",)))
     result = EfficiencyResult(amplitudes=amplitudes, summary=stack("summary"),
                               per_period=stack("per_period"), phase=stack("phase"),
                               snapshots=res.snapshots, config=cfg,
-                              wall_time=float(res.summary["wall_time"]), path=out)
+                              wall_time=float(res.summary["wall_time"]), path=out,
+                              replicates=R, replicate_summary=stack("summary", reduce=False),
+                              steady=stats.to_arrays(steady, (len(amplitudes),)))
     if out:
         write(out, result, transient=transient, samples_per_period=samples_per_period)
     return result
@@ -247,6 +274,16 @@ def write(path: str, result: EfficiencyResult, transient: int, samples_per_perio
         g.attrs["transient_periods"] = transient
         g.attrs["samples_per_period"] = samples_per_period
         g.create_dataset("amplitude", data=result.amplitudes).attrs["units"] = "m"
+        g.attrs["replicates"] = result.replicates
+        if result.steady is not None:
+            from .io import write_steady
+
+            write_steady(g, result.steady, result.replicates,
+                         lambda q: "1/kg" if q.endswith("per_mass") else "1")
+        if result.replicate_summary is not None:
+            rs = g.create_group("replicate_summary")
+            for k, v in result.replicate_summary.items():
+                rs.create_dataset(k, data=v).attrs["units"] = SUMMARY_UNITS.get(k, "")
         for part, units in (("summary", SUMMARY_UNITS), ("per_period", None),
                             ("phase", PHASE_UNITS)):
             sub = g.create_group(part)
