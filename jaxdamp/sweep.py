@@ -411,3 +411,33 @@ def write_fit(h5, fits: dict, used: str) -> None:
     put(g, fits[used])
     for w, fl in fits.items():
         put(g.create_group(w), fl)
+
+
+def _keep_snapshot(h5, mem: dict, states, P: int) -> None:
+    """Append the batch's positions and velocities (and the time) to ``/snapshots`` of the
+    file (resumable: the snapshot count follows the chunk count) or to ``mem``."""
+    t = float(np.asarray(states.t)[0])
+    per_point = {k: np.asarray(getattr(states, f))[:P]
+                 for k, f in (("r", "r"), ("v", "v"), ("z_box", "z"))}
+    if h5 is None:
+        mem.setdefault("t", []).append(t)
+        for k, x in per_point.items():
+            mem.setdefault(k, []).append(x)
+        return
+    g = h5.require_group("snapshots")
+    if "t" not in g:
+        g.create_dataset("t", shape=(0,), maxshape=(None,), dtype="f8").attrs["units"] = "s"
+        for k, x in per_point.items():
+            g.create_dataset(k, shape=(P, 0) + x.shape[1:], maxshape=(P, None) + x.shape[1:],
+                             chunks=True, dtype="f8").attrs["units"] = _SNAPSHOT_UNITS[k]
+    n = g["t"].shape[0]
+    if n and float(g["t"][n - 1]) >= t:  # a resumed sweep re-running a stored chunk
+        n = int(np.searchsorted(g["t"][()], t))
+    g["t"].resize(n + 1, axis=0)
+    g["t"][n] = t
+    for k, x in per_point.items():
+        g[k].resize(n + 1, axis=1)
+        g[k][:, n] = x
+
+
+_SNAPSHOT_UNITS = {"r": "m", "v": "m/s", "z_box": "m"}
