@@ -13,14 +13,12 @@ import dataclasses
 import math
 from typing import NamedTuple
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import neighbors as nb
+from . import driver
 from .config import Config, ConfigError
 from .model import Model, Params
-from .simulate import advance, init_states
 
 #: Lattice spacing is (1 + _GAP) grain diameters; jitter is ± _GAP/2 radii per coordinate.
 _GAP = 0.05
@@ -75,58 +73,75 @@ class SettledBed(NamedTuple):
 
 def settle(config: Config, model: Model, params: Params, progress=None) -> SettledBed:
     """Drop the grains from the lattice into the (lid-less) box and let them come to rest."""
-    radii = np.asarray(params.radius)
+    return settle_many([config], model, [params], progress)[0]
+
+
+def settle_many(configs: list[Config], model: Model, params: list[Params],
+                progress=None) -> list[SettledBed]:
+    """Settle several beds of one model (e.g. independently seeded replicates) as one batch.
+
+    Each bed is taken at the end of the first 20 ms chunk after which all its grains are
+    slower than ``numerics.settle_speed`` (or at ``numerics.settle_time``), exactly as if it
+    had settled alone; the batch runs until the last one is done. ``progress(t, max_speed)``
+    is called after every chunk with the largest speed of the beds still settling."""
     n = model.n
     if n == 0:
         empty = np.zeros((0, 3))
-        return SettledBed(empty, empty, empty, np.zeros((0, 4)), 0.0, 0.0, 0.0)
-    r0 = fcc_lattice(radii, config.box.Lx, config.box.Ly, config.numerics.seed)
-    top = float((r0[:, 2] + radii).max())
+        return [SettledBed(empty, empty, empty, np.zeros((0, 4)), 0.0, 0.0, 0.0)
+                for _ in configs]
+    radii = np.asarray(params[0].radius)
     settle_model = dataclasses.replace(model, system="driven")
-    p = dataclasses.replace(
-        params,
-        Lz=jnp.asarray(top + 4 * radii.max()),  # lid out of reach: the bed does not depend on Lz
-        amplitude=jnp.asarray(0.0),
-        z_offset=jnp.asarray(0.0),
-        drag=jnp.asarray(config.numerics.settle_drag),
-        t_window=jnp.asarray(np.inf),
-    )
-    batch = lambda x: jnp.asarray(x)[None]  # noqa: E731
-    q0 = np.zeros((n, 4))
-    q0[:, 0] = 1.0
-    pb = jax_tree_batch(p)
-    states = init_states(
-        settle_model, pb, batch(r0), batch(np.zeros((n, 3))), batch(np.zeros((n, 3))),
-        batch(q0), jnp.zeros(1), jnp.zeros(1),
-    )
-    nbrs = nb.allocate(settle_model, states.r, config.numerics.capacity_multiplier,
-                       radius=pb.radius)
-    dt = float(params.dt)
+    r0, ps = [], []
+    for config, prm in zip(configs, params):
+        r = fcc_lattice(np.asarray(prm.radius), config.box.Lx, config.box.Ly,
+                        config.numerics.seed)
+        top = float((r[:, 2] + np.asarray(prm.radius)).max())
+        r0.append(r)
+        ps.append(dataclasses.replace(
+            prm,
+            Lz=jnp.asarray(top + 4 * radii.max()),  # lid out of reach: the bed ignores Lz
+            amplitude=jnp.asarray(0.0),
+            z_offset=jnp.asarray(0.0),
+            drag=jnp.asarray(config.numerics.settle_drag),
+            t_window=jnp.asarray(np.inf),
+        ))
+    B = len(configs)
+    q0 = np.zeros((B, n, 4))
+    q0[..., 0] = 1.0
+    zeros = np.zeros((B, n, 3))
+    num = configs[0].numerics
+    batch = driver.start(settle_model, driver.stack(ps), np.stack(r0), zeros, zeros, q0,
+                         np.zeros(B), np.zeros(B), engine=num.engine,
+                         multiplier=num.capacity_multiplier)
+    dt = float(params[0].dt)
     record_every = max(1, int(round(0.005 / dt)))
-    n_rec = 4
-    t = 0.0
-    max_speed = math.inf
-    while t < config.numerics.settle_time:
-        states, nbrs, _ = advance(
-            settle_model, states, nbrs, pb, n_rec, record_every,
-            config.numerics.capacity_multiplier, engine=config.numerics.engine,
-        )
-        t = float(states.t[0])
-        max_speed = float(jnp.sqrt(jnp.max(jnp.sum(states.v[0] ** 2, axis=-1))))
+    limit = np.array([c.numerics.settle_time for c in configs])
+    threshold = np.array([c.numerics.settle_speed for c in configs])
+    done: list[SettledBed | None] = [None] * B
+    for b in range(B):  # settle_time = 0: the lattice itself
+        if limit[b] <= 0:
+            rb = np.asarray(params[b].radius)
+            done[b] = SettledBed(r=r0[b], v=zeros[b], w=zeros[b], q=q0[b],
+                                 height=float((r0[b][:, 2] + rb).max()), time=0.0,
+                                 max_speed=math.inf)
+    while any(d is None for d in done):
+        try:
+            batch, _ = driver.advance(batch, 4, record_every)
+        except driver.SimulationDiverged as e:
+            raise driver.SimulationDiverged(f"settling: {e}") from None
+        st = batch.states
+        t = np.asarray(st.t)
+        v = np.asarray(st.v)
+        speed = np.sqrt((v**2).sum(axis=-1).max(axis=-1))
+        r = np.asarray(st.r)
+        for b in range(B):
+            if done[b] is None and (speed[b] < threshold[b] or t[b] >= limit[b]):
+                rb = np.asarray(params[b].radius)
+                done[b] = SettledBed(r=r[b], v=v[b], w=np.asarray(st.w)[b],
+                                     q=np.asarray(st.q)[b],
+                                     height=float((r[b, :, 2] + rb).max()), time=float(t[b]),
+                                     max_speed=float(speed[b]))
         if progress is not None:
-            progress(t, max_speed)
-        if not math.isfinite(max_speed):
-            raise FloatingPointError(f"settling diverged at t = {t:.4g} s (check numerics.dt)")
-        if max_speed < config.numerics.settle_speed:
-            break
-    r = np.asarray(states.r[0])
-    height = float((r[:, 2] + radii).max())
-    return SettledBed(
-        r=r, v=np.asarray(states.v[0]), w=np.asarray(states.w[0]), q=np.asarray(states.q[0]),
-        height=height, time=t, max_speed=max_speed,
-    )
-
-
-def jax_tree_batch(tree):
-    """Add a leading batch axis of size 1 to every leaf."""
-    return jax.tree_util.tree_map(lambda x: jnp.asarray(x)[None], tree)
+            left = [speed[b] for b in range(B) if done[b] is None]
+            progress(float(t[0]), float(max(left)) if left else float(speed.max()))
+    return done

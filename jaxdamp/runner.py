@@ -1,10 +1,10 @@
 """Run one simulation end to end: validate, settle, drive in jitted chunks, write HDF5.
 
-This is the edge of the package where files, progress bars and messages live. Between chunks
-it handles neighbour-list overflow (re-allocate and redo the chunk), stops on non-finite state
-with a message naming time, step and quantity (keeping the data written so far), appends
-samples and a snapshot, and writes a checkpoint from which ``resume=True`` continues
-bit-identically.
+This is the edge of the package where files, progress bars and messages live. The time loop
+is the driver's (:mod:`jaxdamp.driver`: neighbour lists, overflow, the non-finite policy);
+between its chunks the runner appends samples and a snapshot and writes a checkpoint from which
+``resume=True`` continues bit-identically. A run that goes non-finite stops with the driver's
+message and keeps the samples before it (file status ``diverged``).
 """
 
 from __future__ import annotations
@@ -15,24 +15,17 @@ import os
 import time
 from dataclasses import dataclass
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import neighbors as nb
-from . import stats
+from . import driver, stats
 from .analysis import analysis_start, steady_state_summary
 from .config import Config, ConfigError
-from .integrate import box_frame
-from .io import RunFile, arrays_to_state, state_to_arrays, write_steady
+from .driver import SimulationDiverged  # noqa: F401  (re-exported: runs raise it)
+from .io import RunFile, write_steady
 from .model import State, build, grain_species
-from .packing import SettledBed, jax_tree_batch, settle
-from .simulate import advance, init_states, take
+from .packing import SettledBed, settle
 from .validation import validate
-
-
-class SimulationDiverged(FloatingPointError):
-    """The state became non-finite. The run file keeps every sample before it."""
 
 
 @dataclass(frozen=True)
@@ -89,36 +82,6 @@ class RunResult:
     steady: dict | None = None
 
 
-def _first_nonfinite(recs: dict, states: State) -> tuple[int | None, str]:
-    """Index of the first non-finite sample and a description of the offending quantities."""
-    bad_at = None
-    names = []
-    for name, values in recs.items():
-        v = np.asarray(values, dtype=float)
-        bad = ~np.isfinite(v.reshape(v.shape[0], -1)).all(axis=1)
-        if bad.any():
-            k = int(np.argmax(bad))
-            if bad_at is None or k < bad_at:
-                bad_at, names = k, [name]
-            elif k == bad_at:
-                names.append(name)
-    what = []
-    for field in ("r", "v", "w", "z", "zd"):
-        arr = np.asarray(getattr(states, field))
-        if not np.isfinite(arr).all():
-            if arr.ndim >= 2:
-                grain = int(np.argmax(~np.isfinite(arr.reshape(arr.shape[0], -1)).all(axis=1)))
-                what.append(f"{field} of grain {grain}")
-            else:
-                what.append(field)
-    if bad_at is None and what:
-        bad_at = 0
-    desc = ", ".join(what) if what else ", ".join(names)
-    if names and what:
-        desc += f" (first non-finite samples: {', '.join(names)})"
-    return bad_at, desc
-
-
 def run(
     config: Config,
     out: str | None = None,
@@ -151,7 +114,8 @@ def run(
     sched = schedule(config, float(params.dt))
     t_window = analysis_start(config, sched.duration)
     params = dataclasses.replace(params, t_window=jnp.asarray(t_window))
-    pb = jax_tree_batch(params)
+    pb = driver.batched(params)
+    engine = dict(engine=config.numerics.engine, multiplier=config.numerics.capacity_multiplier)
     radii = np.asarray(params.radius)
     masses = np.asarray(params.mass)
     m_grains = float(masses.sum())
@@ -174,15 +138,14 @@ def run(
             rf.close()
             raise ConfigError(f"--resume: {out} has no checkpoint (the run never finished a chunk)")
         arrays, attrs = ck
-        state1, nbrs1 = arrays_to_state(arrays)
-        states = jax_tree_batch(state1)
-        nbrs = jax.tree_util.tree_map(lambda x: x[None], nbrs1)
+        batch = driver.restore(model, pb, arrays, **engine)
         start_chunk = int(attrs["chunk"])
         rf.truncate(int(attrs["n_records"]), int(attrs["n_snapshots"]))
         s = rf.h5["settle"]
         bed = SettledBed(s["r0"][()], None, None, None, float(s.attrs["bed_height"]),
                   float(s.attrs["time"]), float(s.attrs["max_speed"]))
-        say(f"resuming {out} at chunk {start_chunk}/{sched.n_chunks} (t = {float(states.t[0]):.6g} s)")
+        say(f"resuming {out} at chunk {start_chunk}/{sched.n_chunks} "
+            f"(t = {float(batch.states.t[0]):.6g} s)")
     else:
         t0 = time.perf_counter()
         bed = settle(config, model, params)
@@ -197,12 +160,8 @@ def run(
             )
         z0 = initial_box_position(config, m_grains)
         r0 = bed.r + np.array([0.0, 0.0, z0])
-        states = init_states(
-            model, pb, r0[None], bed.v[None], bed.w[None], bed.q[None],
-            jnp.full((1,), z0), jnp.zeros(1),
-        )
-        nbrs = nb.allocate(model, box_frame(states), config.numerics.capacity_multiplier,
-                            radius=pb.radius)
+        batch = driver.start(model, pb, r0[None], bed.v[None], bed.w[None], bed.q[None],
+                             np.full(1, z0), np.zeros(1), **engine)
         if out is not None:
             rf = RunFile.create(out, config, radii, masses, grain_species(config), bed,
                                 extra_attrs={"dt": sched.dt, "duration": sched.duration})
@@ -225,44 +184,37 @@ def run(
     try:
         stop = sched.n_chunks if max_chunks is None else min(sched.n_chunks, start_chunk + max_chunks)
         for chunk in range(start_chunk, stop):
-            states_new, nbrs, recs = advance(
-                model, states, nbrs, pb, sched.records_per_chunk, sched.record_every,
-                config.numerics.capacity_multiplier, on_realloc=realloc,
-                engine=config.numerics.engine,
-            )
-            recs = {k: v[0] for k, v in recs.items()}
-            bad_at, what = _first_nonfinite(recs, take(states_new, 0))
-            if bad_at is not None:
-                t_bad = float(recs["t"][bad_at]) if bad_at < len(recs["t"]) else float("nan")
-                step_bad = int(states.step[0]) + (bad_at + 1) * sched.record_every
-                msg = (f"simulation went non-finite by t = {t_bad:.6g} s (step {step_bad}): "
-                       f"{what}. Samples before it are kept; try a smaller numerics.dt.")
+            try:
+                batch, recs = driver.advance(batch, sched.records_per_chunk, sched.record_every,
+                                             on_realloc=realloc)
+            except driver.SimulationDiverged as e:
                 if rf is not None:
-                    rf.append_records(recs, bad_at)
-                    rf.set_status("diverged", msg)
-                raise SimulationDiverged(msg)
-            states = states_new
+                    rf.append_records({k: v[0] for k, v in e.records.items()}, e.index)
+                    rf.set_status("diverged", str(e))
+                raise
+            recs = {k: v[0] for k, v in recs.items()}
             steps_done += sched.chunk_steps
             all_recs.append(recs)
             if rf is not None:
                 rf.append_records(recs)
                 if snapshots:
-                    rf.append_snapshot(float(states.t[0]), states.r[0], states.q[0])
+                    rf.append_snapshot(float(batch.states.t[0]), batch.states.r[0],
+                                       batch.states.q[0])
                 rf.write_checkpoint(
-                    state_to_arrays(take(states, 0), take(nbrs, 0)),
+                    {k: v[0] for k, v in driver.checkpoint(batch, 1).items()},  # one system
                     {"chunk": chunk + 1, "n_records": rf.n_records(),
                      "n_snapshots": rf.h5["snapshots"]["t"].shape[0] if snapshots else 0},
                 )
             if bar is not None:
                 bar.update(1)
-                bar.set_postfix(t=f"{float(states.t[0]):.3f}s")
+                bar.set_postfix(t=f"{float(batch.states.t[0]):.3f}s")
     finally:
         if bar is not None:
             bar.close()
     wall = time.perf_counter() - wall0
 
     records = {k: np.concatenate([r[k] for r in all_recs]) for k in all_recs[0]} if all_recs else {}
-    final = take(states, 0)
+    final = batch.system(0)
     summary, units = steady_state_summary(config, records, final, t_window, sched.duration)
     summary.update(bed_height=bed.height, dt=sched.dt, steps=int(final.step),
                    wall_time=wall, steps_per_second=steps_done / wall if wall > 0 else 0.0)

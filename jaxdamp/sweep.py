@@ -30,16 +30,14 @@ import jax.numpy as jnp
 import numpy as np
 
 from . import __version__
-from . import neighbors as nb
-from . import stats
+from . import driver, stats
 from .analysis import analysis_start, steady_state_summary
 from .config import Config, ConfigError, apply_overrides
-from .integrate import box_frame
-from .io import arrays_to_state, state_to_arrays, write_steady
+from .io import write_steady
 from .model import build, config_dt, grain_radii
-from .packing import settle
+from .packing import settle_many
 from .runner import initial_box_position, schedule
-from .simulate import advance, init_states, resolve_engine, take
+from .simulate import resolve_engine
 from .validation import validate
 
 
@@ -223,6 +221,8 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
     if sharding is not None and engine == "native":
         engine = "jax"  # host callbacks do not partition over devices; use the JAX step
     pb_s = _pad_and_shard(pb, padded, sharding)
+    drive = dict(engine=engine, multiplier=base.numerics.capacity_multiplier,
+                 place=lambda tree: _pad_and_shard(tree, padded, sharding))
 
     h5 = None
     start_chunk = 0
@@ -239,21 +239,21 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
                                          if "summary/wall_time" in h5 else 0.0))
         arrays = {}
         g.visititems(lambda n, o: arrays.__setitem__(n, o[()]) if isinstance(o, h5py.Dataset) else None)
-        states, nbrs = arrays_to_state(arrays)
-        states = _pad_and_shard(states, padded, sharding)
-        nbrs = _pad_and_shard(nbrs, padded, sharding)
+        batch = driver.restore(model, pb, arrays, **drive).replace(params=pb_s)
         for ds in h5["records"].values():
             ds.resize(start_chunk * sched.records_per_chunk, axis=1)
         say(f"resuming sweep at chunk {start_chunk}/{sched.n_chunks}")
     else:
         wall_before = 0.0
-        beds = {}
+        keys = [_geometry_key(c) for c in configs]
+        first = {k: i for i, k in reversed(list(enumerate(keys)))}  # one bed per geometry
+        order = sorted(first.values())
+        settled = settle_many([configs[i] for i in order], model, [built[i][1] for i in order])
+        beds = {keys[i]: b for i, b in zip(order, settled)}
+        say(f"settled {len(beds)} bed(s) in one batch: heights "
+            + ", ".join(f"{b.height:.5g}" for b in settled) + " m")
         r0, v0, w0, q0, z0 = [], [], [], [], []
-        for c, (m, p) in zip(configs, built):
-            key = _geometry_key(c)
-            if key not in beds:
-                beds[key] = settle(c, m, p)
-                say(f"settled bed {len(beds)}: height {beds[key].height:.5g} m")
+        for c, (m, p), key in zip(configs, built, keys):
             bed = beds[key]
             if m.n and bed.height >= c.box.Lz:
                 raise ConfigError(f"box.Lz = {c.box.Lz} m: the settled bed ({bed.height:.5g} m) "
@@ -261,12 +261,8 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
             z = initial_box_position(c, float(np.asarray(p.mass).sum()))
             r0.append(bed.r + np.array([0.0, 0.0, z]))
             v0.append(bed.v), w0.append(bed.w), q0.append(bed.q), z0.append(z)
-        states = init_states(model, pb, np.stack(r0), np.stack(v0), np.stack(w0), np.stack(q0),
-                             jnp.asarray(z0), jnp.zeros(P))
-        nbrs = nb.allocate(model, box_frame(states), base.numerics.capacity_multiplier,
-                            radius=pb.radius)
-        states = _pad_and_shard(states, padded, sharding)
-        nbrs = _pad_and_shard(nbrs, padded, sharding)
+        batch = driver.start(model, pb, np.stack(r0), np.stack(v0), np.stack(w0), np.stack(q0),
+                             np.asarray(z0), np.zeros(P), **drive).replace(params=pb_s)
         if out:
             h5 = h5py.File(out, "w")
             write_header(h5, config, axes, configs, dt, sched.duration, engine, R)
@@ -284,17 +280,15 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
     snaps: dict = {}
     stop = sched.n_chunks if max_chunks is None else min(sched.n_chunks, start_chunk + max_chunks)
     for chunk in range(start_chunk, stop):
-        states, nbrs, recs = advance(model, states, nbrs, pb_s, sched.records_per_chunk,
-                                     sched.record_every, base.numerics.capacity_multiplier,
-                                     engine=engine)
-        recs = {k: np.asarray(v)[:P] for k, v in recs.items()}
-        bad = [k for k, v in recs.items() if not np.isfinite(np.asarray(v, float)).all()]
-        if bad:
-            msg = f"sweep went non-finite in chunk {chunk} ({', '.join(bad)}); try a smaller dt"
-            if h5 is not None:
-                h5.attrs["status"] = msg
+        try:
+            batch, recs = driver.advance(batch, sched.records_per_chunk, sched.record_every,
+                                         systems=P)
+        except driver.SimulationDiverged as e:
+            if h5 is not None:  # the file keeps every finished chunk and its checkpoint
+                h5.attrs["status"] = "diverged"
+                h5.attrs["message"] = str(e)
                 h5.close()
-            raise FloatingPointError(msg)
+            raise
         if h5 is not None:
             g = h5["records"]
             for k, v in recs.items():
@@ -307,15 +301,13 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
             if "checkpoint" in h5:
                 del h5["checkpoint"]
             ck = h5.create_group("checkpoint")
-            host_states = jax.tree_util.tree_map(lambda x: np.asarray(x)[:P], states)
-            host_nbrs = jax.tree_util.tree_map(lambda x: np.asarray(x)[:P], nbrs)
-            for k, v in state_to_arrays(host_states, host_nbrs).items():
+            for k, v in driver.checkpoint(batch, P).items():
                 ck.create_dataset(k, data=v)
             ck.attrs["chunk"] = chunk + 1
             h5.attrs["wall_time"] = wall_before + time.perf_counter() - wall0
             h5.flush()
         if chunk >= sched.n_chunks - snapshots:
-            _keep_snapshot(h5, snaps, states, P)
+            _keep_snapshot(h5, snaps, batch.states, P)
             if h5 is not None:
                 h5.flush()
         for k, v in recs.items():
@@ -337,11 +329,11 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
     else:
         records = {k: np.concatenate(v, axis=1) for k, v in mem.items()}
         snaps = {k: np.stack(v, axis=1 if k != "t" else 0) for k, v in snaps.items()}
-    final = jax.tree_util.tree_map(lambda x: np.asarray(x)[:P], states)
+    final = jax.tree_util.tree_map(lambda x: np.asarray(x)[:P], batch.states)
     summaries, series = [], []
     for i, c in enumerate(configs):
         rec_i = {k: v[i] for k, v in records.items()}
-        s, units = steady_state_summary(c, rec_i, take(final, i), t_windows[i], sched.duration)
+        s, units = steady_state_summary(c, rec_i, driver.take(final, i), t_windows[i], sched.duration)
         summaries.append(s)
         series.append(stats.per_period(rec_i, c.frequency, channels=stats.CHANNELS))
     shape = tuple(len(v) for v in axes.values())

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -11,7 +12,6 @@ from jaxdamp import neighbors as nb
 from jaxdamp.config import Box, Config, Drive, Material, Numerics, Species
 from jaxdamp.integrate import box_frame
 from jaxdamp.model import build
-from jaxdamp.packing import jax_tree_batch
 from jaxdamp.simulate import advance, chunk_fn, init_states, take
 
 STEEL = Material(E=2e9, nu=0.3, density=7850.0, mu=0.0, gamma_n=0.0, gamma_s=0.0)
@@ -47,7 +47,7 @@ def start(cfg: Config, r, v, w=None, z=0.0, zd=0.0, dt=None, **param_changes):
     w = np.zeros((n, 3)) if w is None else np.asarray(w, float).reshape(n, 3)
     q = np.zeros((n, 4))
     q[:, 0] = 1.0
-    pb = jax_tree_batch(params)
+    pb = jax.tree_util.tree_map(lambda x: jnp.asarray(x)[None], params)  # batch of one
     st = init_states(model, pb, r[None], v[None], w[None], q[None], jnp.full(1, z), jnp.full(1, zd))
     nbrs = nb.allocate(model, box_frame(st), cfg.numerics.capacity_multiplier)
     return model, pb, st, nbrs

@@ -1,0 +1,242 @@
+"""The simulation driver: the one place that runs the time loop of the DEM.
+
+Everything that advances grains — a single run (:mod:`jaxdamp.runner`), a sweep
+(:mod:`jaxdamp.sweep`), settling (:mod:`jaxdamp.packing`), the optimiser's problems
+(:mod:`jaxdamp.optimize`), experiments and benchmarks — holds a :class:`Batch` and calls
+:func:`advance`. The driver owns:
+
+* the start of a batch from positions and velocities (:func:`start`: forces evaluated once,
+  neighbour lists allocated) or from a checkpoint (:func:`restore`), and the checkpoint itself
+  (:func:`checkpoint`);
+* the neighbour lists: allocation, and re-allocation with the chunk redone when a list
+  overflowed, so that no contact is ever dropped (nothing else allocates them);
+* the engine (``"jax"`` — differentiable, shards over devices — or the compiled ``"native"``
+  CPU kernel; ``"auto"`` picks native on a CPU), resolved once per batch;
+* one non-finite policy: a chunk whose samples or final state are not finite raises
+  :class:`SimulationDiverged` naming the time, the step, the system and the quantity (the grain,
+  where it is a grain's), and carrying the samples before it so that the caller can keep them.
+
+The jitted chunk itself (``lax.scan`` over steps, records every ``record_every`` steps) is
+:func:`jaxdamp.simulate.chunk_fn`; the physics step is :func:`jaxdamp.integrate.step`.
+
+Example::
+
+    from jaxdamp import driver, presets
+    from jaxdamp.model import build
+    model, params = build(presets.get("sanchez2012-optimal"))
+    batch = driver.start(model, driver.batched(params), r[None], v[None], w[None], q[None],
+                         z[None], zd[None])
+    batch, records = driver.advance(batch, n_records=100, record_every=10)
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Callable
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from . import neighbors as nb
+from .integrate import box_frame
+from .model import Model, Params, State
+from .simulate import chunk_fn, init_states, resolve_engine
+
+
+class SimulationDiverged(FloatingPointError):
+    """The state became non-finite.
+
+    Attributes:
+      system: index of the first offending system in the batch.
+      index: index of its first non-finite sample in the chunk (samples before it are good).
+      records: the chunk's samples (numpy, batch axis first), for the caller to keep.
+    """
+
+    def __init__(self, message: str, system: int = 0, index: int = 0, records=None):
+        super().__init__(message)
+        self.system = system
+        self.index = index
+        self.records = records
+
+
+@dataclass(frozen=True)
+class Batch:
+    """``B`` independent systems of one :class:`~jaxdamp.model.Model` in flight.
+
+    Attributes:
+      model: the static model (shapes and code paths).
+      params: batched :class:`~jaxdamp.model.Params` (leading axis ``B``).
+      states: batched :class:`~jaxdamp.model.State`.
+      nbrs: batched :class:`~jaxdamp.neighbors.Neighbors`.
+      engine: ``"jax"`` or ``"native"`` (resolved).
+      multiplier: neighbour-list capacity multiplier.
+      place: applied to states and lists after every (re-)allocation — e.g. padding and
+        sharding over devices (:mod:`jaxdamp.sweep`); identity by default.
+    """
+
+    model: Model
+    params: Params
+    states: State
+    nbrs: nb.Neighbors
+    engine: str
+    multiplier: float = 1.5
+    place: Callable | None = None
+
+    @property
+    def size(self) -> int:
+        return int(self.states.t.shape[0])
+
+    def system(self, i: int) -> State:
+        """State of system ``i``."""
+        return take(self.states, i)
+
+    def replace(self, **changes) -> "Batch":
+        return dataclasses.replace(self, **changes)
+
+
+def batched(tree):
+    """Add a leading batch axis of size 1 to every leaf of a pytree."""
+    return jax.tree_util.tree_map(lambda x: jnp.asarray(x)[None], tree)
+
+
+def stack(tree_list):
+    """Stack single-system pytrees into a batch (leading axis)."""
+    return jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *tree_list)
+
+
+def take(tree, i):
+    """System ``i`` of a batched pytree."""
+    return jax.tree_util.tree_map(lambda x: x[i], tree)
+
+
+def _allocate(model, states, params, multiplier, at_least=0):
+    return nb.allocate(model, box_frame(states), multiplier, at_least=at_least,
+                       radius=params.radius)
+
+
+def start(model: Model, params: Params, r, v, w, q, z, zd, t: float = 0.0, *,
+          engine: str = "auto", multiplier: float = 1.5, place: Callable | None = None,
+          e_start=None) -> Batch:
+    """A batch at time ``t`` from grain kinematics ``(B, N, 3)`` (``q``: ``(B, N, 4)``) and box
+    position/velocity ``(B,)`` (ignored for a driven box, which follows its drive): forces and
+    accelerations evaluated there, neighbour lists allocated. ``e_start`` ``(B,)`` sets the
+    reference energy of the balance (default: the energy of this state)."""
+    states = init_states(model, params, jnp.asarray(r), jnp.asarray(v), jnp.asarray(w),
+                         jnp.asarray(q), jnp.asarray(z), jnp.asarray(zd), t)
+    if e_start is not None:
+        states = dataclasses.replace(states, e_start=jnp.asarray(e_start, jnp.float64))
+    nbrs = _allocate(model, states, params, multiplier)
+    return _placed(Batch(model, params, states, nbrs, resolve_engine(engine), multiplier, place))
+
+
+def restore(model: Model, params: Params, arrays: dict, *, engine: str = "auto",
+            multiplier: float = 1.5, place: Callable | None = None) -> Batch:
+    """A batch from :func:`checkpoint` arrays (bit-identical continuation)."""
+    from .io import arrays_to_state
+
+    states, nbrs = arrays_to_state(arrays)
+    if states.t.ndim == 0:  # a single system's checkpoint
+        states, nbrs = batched(states), batched(nbrs)
+    return _placed(Batch(model, params, states, nbrs, resolve_engine(engine), multiplier, place))
+
+
+def checkpoint(batch: Batch, systems: int | None = None) -> dict:
+    """Exact host copies of the first ``systems`` states and neighbour lists (all by default),
+    as ``{"state/<field>", "nbrs/<field>"}`` arrays (:func:`jaxdamp.io.state_to_arrays`)."""
+    from .io import state_to_arrays
+
+    n = batch.size if systems is None else systems
+    host = lambda tree: jax.tree_util.tree_map(lambda x: np.asarray(x)[:n], tree)  # noqa: E731
+    return state_to_arrays(host(batch.states), host(batch.nbrs))
+
+
+def _placed(batch: Batch) -> Batch:
+    if batch.place is None:
+        return batch
+    return batch.replace(states=batch.place(batch.states), nbrs=batch.place(batch.nbrs))
+
+
+def advance(batch: Batch, n_records: int, record_every: int, *, systems: int | None = None,
+            on_realloc=None, check: bool = True) -> tuple[Batch, dict]:
+    """Run ``n_records × record_every`` steps; return the new batch and the samples
+    (numpy, ``(B, n_records, ...)``; with ``systems``, the first ``systems`` rows only — the
+    rest is padding).
+
+    On neighbour-list overflow the lists are re-allocated 1.5× larger and the chunk is redone
+    (``on_realloc(old, new)`` is told the capacities). With ``check`` a non-finite sample or
+    state raises :class:`SimulationDiverged` (the batch is left as it was before the chunk)."""
+    model = batch.model
+    fn = chunk_fn(model, n_records, record_every, engine=batch.engine)
+    nbrs = batch.nbrs
+    while True:
+        states, new_nbrs, recs = fn(batch.states, nbrs, batch.params)
+        if model.n < 2 or not bool(np.any(np.asarray(new_nbrs.overflow))):
+            break
+        old = nb.capacity(nbrs)
+        nbrs = _allocate(model, batch.states, batch.params, batch.multiplier,
+                         at_least=int(np.ceil(old * 1.5)) + 1)
+        if batch.place is not None:
+            nbrs = batch.place(nbrs)
+        if on_realloc is not None:
+            on_realloc(old, nb.capacity(nbrs))
+    n = batch.size if systems is None else systems
+    recs = {k: np.asarray(v)[:n] for k, v in recs.items()}
+    if check:
+        check_finite(recs, states, int(np.asarray(batch.states.step)[0]), record_every, n)
+    return batch.replace(states=states, nbrs=new_nbrs), recs
+
+
+def run_for(batch: Batch, seconds: float, pieces: int = 1, check: bool = True) -> Batch:
+    """Advance by ``seconds`` (rounded to whole steps, at least one per piece) in ``pieces``
+    chunks, discarding the samples (burn-in, transients)."""
+    dt = float(np.asarray(batch.params.dt).ravel()[0])
+    steps = max(pieces, int(round(seconds / dt)))
+    per = max(1, steps // pieces)
+    for _ in range(pieces):
+        batch, _ = advance(batch, 1, per, check=check)
+    return batch
+
+
+def _first_bad(values) -> int | None:
+    v = np.asarray(values, dtype=float)
+    bad = ~np.isfinite(v.reshape(v.shape[0], -1)).all(axis=1)
+    return int(np.argmax(bad)) if bad.any() else None
+
+
+def check_finite(recs: dict, states: State, step0: int, record_every: int, n: int) -> None:
+    """Raise :class:`SimulationDiverged` if a sample or a final state of the first ``n``
+    systems is not finite. The message names the time, step, system and what went bad."""
+    for b in range(n):
+        at, names = None, []
+        for name, values in recs.items():
+            k = _first_bad(values[b])
+            if k is not None and (at is None or k < at):
+                at, names = k, [name]
+            elif k is not None and k == at:
+                names.append(name)
+        what = []
+        for field in ("r", "v", "w", "z", "zd"):
+            arr = np.asarray(getattr(states, field))[b]
+            if not np.isfinite(arr).all():
+                if arr.ndim >= 2:
+                    grain = int(np.argmax(~np.isfinite(arr.reshape(arr.shape[0], -1)).all(axis=1)))
+                    what.append(f"{field} of grain {grain}")
+                else:
+                    what.append(field)
+        if at is None and not what:
+            continue
+        if at is None:
+            at = len(recs["t"][b]) - 1 if "t" in recs else 0
+        desc = ", ".join(what) if what else ", ".join(names)
+        if names and what:
+            desc += f" (first non-finite samples: {', '.join(names)})"
+        t = recs["t"][b]
+        t_bad = float(t[at]) if "t" in recs and np.isfinite(t[at]) else float("nan")
+        step = step0 + (at + 1) * record_every
+        system = f", system {b}" if n > 1 else ""
+        raise SimulationDiverged(
+            f"simulation went non-finite by t = {t_bad:.6g} s (step {step}{system}): {desc}. "
+            "Samples before it are kept; try a smaller numerics.dt.", system=b, index=at,
+            records=recs)
