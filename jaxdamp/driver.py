@@ -131,6 +131,23 @@ def start(model: Model, params: Params, r, v, w, q, z, zd, t: float = 0.0, *,
     return _placed(Batch(model, params, states, nbrs, resolve_engine(engine), multiplier, place))
 
 
+def attach(model: Model, params: Params, states: State, *, engine: str = "auto",
+           multiplier: float = 1.5, at_least: int = 0, place: Callable | None = None) -> Batch:
+    """A batch around existing (batched) states: neighbour lists allocated for them (with at
+    least ``at_least`` neighbours per grain)."""
+    nbrs = _allocate(model, states, params, multiplier, at_least)
+    return _placed(Batch(model, params, states, nbrs, resolve_engine(engine), multiplier, place))
+
+
+def grow(batch: Batch) -> Batch:
+    """The batch with neighbour lists re-allocated 1.5× larger (after an overflow flagged by a
+    caller's own jitted function of ``batch.nbrs``, e.g. a differentiated window)."""
+    old = nb.capacity(batch.nbrs)
+    nbrs = _allocate(batch.model, batch.states, batch.params, batch.multiplier,
+                     at_least=int(np.ceil(old * 1.5)) + 1)
+    return batch.replace(nbrs=batch.place(nbrs) if batch.place is not None else nbrs)
+
+
 def restore(model: Model, params: Params, arrays: dict, *, engine: str = "auto",
             multiplier: float = 1.5, place: Callable | None = None) -> Batch:
     """A batch from :func:`checkpoint` arrays (bit-identical continuation)."""
@@ -175,10 +192,7 @@ def advance(batch: Batch, n_records: int, record_every: int, *, systems: int | N
         if model.n < 2 or not bool(np.any(np.asarray(new_nbrs.overflow))):
             break
         old = nb.capacity(nbrs)
-        nbrs = _allocate(model, batch.states, batch.params, batch.multiplier,
-                         at_least=int(np.ceil(old * 1.5)) + 1)
-        if batch.place is not None:
-            nbrs = batch.place(nbrs)
+        nbrs = grow(batch.replace(nbrs=nbrs)).nbrs
         if on_realloc is not None:
             on_realloc(old, nb.capacity(nbrs))
     n = batch.size if systems is None else systems
@@ -189,13 +203,16 @@ def advance(batch: Batch, n_records: int, record_every: int, *, systems: int | N
 
 
 def run_for(batch: Batch, seconds: float, pieces: int = 1, check: bool = True) -> Batch:
-    """Advance by ``seconds`` (rounded to whole steps, at least one per piece) in ``pieces``
+    """Advance by ``seconds`` (rounded to whole steps, at least one) in about ``pieces``
     chunks, discarding the samples (burn-in, transients)."""
     dt = float(np.asarray(batch.params.dt).ravel()[0])
-    steps = max(pieces, int(round(seconds / dt)))
+    steps = max(1, int(round(seconds / dt)))
     per = max(1, steps // pieces)
-    for _ in range(pieces):
-        batch, _ = advance(batch, 1, per, check=check)
+    done = 0
+    while done < steps:
+        k = min(per, steps - done)
+        batch, _ = advance(batch, 1, k, check=check)
+        done += k
     return batch
 
 

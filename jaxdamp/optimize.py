@@ -331,22 +331,11 @@ class DEMProblem:
 
     def _advance(self, states, params, seconds: float, pieces: int = 1):
         """Forward ``seconds`` (whole steps) with the forward engine; returns the new states."""
-        from . import neighbors as nb
-        from .integrate import box_frame
-        from .simulate import advance
+        from . import driver
 
-        steps = max(1, int(round(seconds / self.dt)))
-        per = max(1, steps // pieces)
-        nbrs = nb.allocate(self.model, box_frame(states), self.config.numerics.capacity_multiplier)
-        done = 0
-        while done < steps:
-            k = min(per, steps - done)
-            states, nbrs, _ = advance(self.model, states, nbrs, params, 1, k,
-                                      self.config.numerics.capacity_multiplier, engine=self.engine)
-            done += k
-        if not np.all(np.isfinite(np.asarray(states.r))):
-            raise FloatingPointError("forward run went non-finite (try a smaller numerics.dt)")
-        return states
+        batch = driver.attach(self.model, params, states, engine=self.engine,
+                              multiplier=self.config.numerics.capacity_multiplier)
+        return driver.run_for(batch, seconds, pieces=pieces).states
 
     def _fits(self, states, lz):
         top = np.asarray(states.r[..., 2] - states.z[..., None]).max(axis=-1) + self.radius_max
@@ -357,8 +346,8 @@ class DEMProblem:
         ``(1 + 1/K)`` periods per frequency. Warm-started from ``warm.last`` when every grain
         fits under the new lid (advanced at the old ``Lz`` by up to two periods until it does),
         else from the settled bed."""
+        from . import driver
         from .runner import initial_box_position
-        from .simulate import init_states
 
         t0 = time.perf_counter()
         F, K = len(self.freqs), self.n_windows
@@ -381,8 +370,9 @@ class DEMProblem:
             z0 = initial_box_position(self.config, self.m_grains)
             r0 = np.broadcast_to(self.bed.r + np.array([0.0, 0.0, z0]), (F,) + self.bed.r.shape)
             rep = lambda a: np.broadcast_to(a, (F,) + a.shape)  # noqa: E731
-            states = init_states(self.model, params, r0, rep(self.bed.v), rep(self.bed.w),
-                                 rep(self.bed.q), jnp.full((F,), z0), jnp.zeros(F))
+            states = driver.start(self.model, params, r0, rep(self.bed.v), rep(self.bed.w),
+                                  rep(self.bed.q), np.full((F,), z0), np.zeros(F),
+                                  engine=self.engine).states
             burn = self.burn_in
         states = self._advance(states, params, burn, pieces=max(1, int(burn / 0.05)))
         sim += F * burn
@@ -406,7 +396,7 @@ class DEMProblem:
         seconds = np.asarray(seconds, float)
         if np.allclose(seconds, seconds[0]):
             return self._advance(states, params, float(seconds[0]))
-        from .simulate import stack, take
+        from .driver import stack, take
 
         out = [self._advance(jax.tree_util.tree_map(lambda x: x[i:i + 1], states),
                              jax.tree_util.tree_map(lambda x: x[i:i + 1], params), s)
@@ -454,8 +444,7 @@ class DEMProblem:
     def window_values(self, ens: Ensemble, lz: float | None = None, engine: str = "jax"):
         """Per-window raw values at ``lz`` (default ``ens.lz``) from the ensemble's start states
         — forward only (``engine="auto"``: native), for finite differences."""
-        from . import neighbors as nb
-        from .integrate import box_frame
+        from . import driver
         from .simulate import chunk_fn
 
         lz = ens.lz if lz is None else lz
@@ -464,38 +453,38 @@ class DEMProblem:
             fn = chunk_fn(self.model, self.n_rec, self.record_every, engine=engine)
             self._fns[key] = jax.jit(
                 lambda lz_vec, s, n, p: self._window_values(fn, s, n, p, lz_vec))
-        nbrs = nb.allocate(self.model, box_frame(ens.states),
-                           self.config.numerics.capacity_multiplier, at_least=12)
+        batch = self._windows(ens)
         B = ens.states.t.shape[0]
         while True:
-            v, ovf = self._fns[key](jnp.full((B,), float(lz)), ens.states, nbrs, ens.params)
+            v, ovf = self._fns[key](jnp.full((B,), float(lz)), ens.states, batch.nbrs, ens.params)
             if not bool(ovf):
                 return np.asarray(v)
-            nbrs = nb.allocate(self.model, box_frame(ens.states),
-                               self.config.numerics.capacity_multiplier,
-                               at_least=int(nb.capacity(nbrs) * 1.5) + 1)
+            batch = driver.grow(batch)
 
     def window_derivatives(self, ens: Ensemble, mode: str | None = None):
         """Per-window raw values and their derivatives w.r.t. ``Lz`` at ``ens.lz`` (``(F·K,)``
         each) through the JAX engine; neighbour lists re-allocated and redone on overflow."""
-        from . import neighbors as nb
-        from .integrate import box_frame
+        from . import driver
 
         fn = self._derivative_fn(mode or self.mode)
         B = ens.states.t.shape[0]
-        nbrs = nb.allocate(self.model, box_frame(ens.states),
-                           self.config.numerics.capacity_multiplier, at_least=12)
+        batch = self._windows(ens)
         while True:
-            v, d, ovf = fn(jnp.full((B,), ens.lz), ens.states, nbrs, ens.params)
+            v, d, ovf = fn(jnp.full((B,), ens.lz), ens.states, batch.nbrs, ens.params)
             if not bool(ovf):
                 break
-            nbrs = nb.allocate(self.model, box_frame(ens.states),
-                               self.config.numerics.capacity_multiplier,
-                               at_least=int(nb.capacity(nbrs) * 1.5) + 1)
+            batch = driver.grow(batch)
         v, d = np.asarray(v), np.asarray(d)
         if not (np.all(np.isfinite(v)) and np.all(np.isfinite(d))):
             raise FloatingPointError("window objective or derivative is non-finite")
         return v, d
+
+    def _windows(self, ens: Ensemble):
+        """The ensemble's start states as a driver batch (neighbour lists for the windows)."""
+        from . import driver
+
+        return driver.attach(self.model, ens.params, ens.states, engine="jax",
+                             multiplier=self.config.numerics.capacity_multiplier, at_least=12)
 
     def combine(self, raw, draw):
         """Objective value, its derivative and their standard errors from per-window raw
@@ -596,11 +585,9 @@ class SteadyProblem(DEMProblem):
         """Per-block raw quantity ``(F, len(lzs), blocks)`` of steady-state runs from the settled
         bed at every ``Lz`` of ``lzs`` and every frequency, as one batch: dissipation per cycle
         [J], or the mean of ``(z - z_s)²`` [m²] (amplitude objectives)."""
-        from . import neighbors as nb
+        from . import driver
         from .energy import granular_loss
-        from .integrate import box_frame
         from .runner import initial_box_position
-        from .simulate import advance, init_states
 
         F, L = len(self.freqs), len(lzs)
         ps = [dataclasses.replace(self.params, Lz=jnp.asarray(float(lz)),
@@ -610,21 +597,19 @@ class SteadyProblem(DEMProblem):
         B = F * L
         z0 = initial_box_position(self.config, self.m_grains)
         rep = lambda a: np.broadcast_to(a, (B,) + a.shape)  # noqa: E731
-        states = init_states(self.model, params, rep(self.bed.r + np.array([0.0, 0.0, z0])),
+        batch = driver.start(self.model, params, rep(self.bed.r + np.array([0.0, 0.0, z0])),
                              rep(self.bed.v), rep(self.bed.w), rep(self.bed.q),
-                             jnp.full((B,), z0), jnp.zeros(B))
-        states = self._advance(states, params, self.burn_in, pieces=max(1, int(self.burn_in / 0.05)))
+                             np.full((B,), z0), np.zeros(B), engine=self.engine,
+                             multiplier=self.config.numerics.capacity_multiplier)
+        batch = driver.run_for(batch, self.burn_in, pieces=max(1, int(self.burn_in / 0.05)))
         n_samples = max(self.blocks, int(round(self.average / (self.sample_every * self.dt))))
         n_samples -= n_samples % self.blocks
         per_call = max(1, int(round(0.05 / (self.sample_every * self.dt))))
-        mult = self.config.numerics.capacity_multiplier
-        nbrs = nb.allocate(self.model, box_frame(states), mult, radius=params.radius)
-        loss0 = np.asarray(granular_loss(states.work))
+        loss0 = np.asarray(granular_loss(batch.states.work))
         zs, losses, done = [], [], 0
         while done < n_samples:
             k = min(per_call, n_samples - done)
-            states, nbrs, rec = advance(self.model, states, nbrs, params, k, self.sample_every,
-                                        mult, engine=self.engine)
+            batch, rec = driver.advance(batch, k, self.sample_every)
             zs.append(rec["z_box"])
             losses.append(granular_loss(rec["work"]))
             done += k
