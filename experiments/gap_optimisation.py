@@ -121,14 +121,11 @@ def dem_part(s, raw, progress, log):
     # 3. forward vs reverse mode: time (second call, compiled) and compiled temp memory
     import jax.numpy as jnp
 
-    from jaxdamp import neighbors as nb
-    from jaxdamp.integrate import box_frame
     modes = {}
     for mode in ("forward", "reverse"):
         fn = prob._derivative_fn(mode)
         B = ens.states.t.shape[0]
-        nbrs = nb.allocate(prob.model, box_frame(ens.states), 1.5, at_least=12)
-        args = (jnp.full((B,), ens.lz), ens.states, nbrs, ens.params)
+        args = (jnp.full((B,), ens.lz), ens.states, prob._windows(ens).nbrs, ens.params)
         mem = fn.lower(*args).compile().memory_analysis()
         jax.block_until_ready(fn(*args))
         t0 = time.perf_counter()
