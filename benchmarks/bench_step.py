@@ -91,8 +91,8 @@ def main():
         def leaves_sum(t):
             return sum(jnp.sum(x) for x in jax.tree_util.tree_leaves(t))
 
-        t_pairs = time_kernel(lambda c: leaves_sum(pair_forces(r + c, v, w, idx, params, cfg.mixing)))
-        t_walls = time_kernel(lambda c: leaves_sum(wall_forces(r + c, v, w, 0.0, 0.0, params, cfg.mixing)))
+        t_pairs = time_kernel(lambda c: leaves_sum(pair_forces(r + c, v, w, idx, params, model)))
+        t_walls = time_kernel(lambda c: leaves_sum(wall_forces(r + c, v, w, 0.0, 0.0, params, model)))
         print(f"      kernels alone (one system): grain pairs {t_pairs * 1e6:.1f} us "
               f"({n * idx.shape[1]} pair slots), walls {t_walls * 1e6:.1f} us ({n * 6} slots)")
 

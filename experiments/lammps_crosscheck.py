@@ -199,7 +199,7 @@ class Mapping:
 
 def build_mapping(cfg) -> Mapping:
     """The numbers jaxdamp uses (``jaxdamp.model.build``) and their LAMMPS equivalents."""
-    from jaxdamp.model import build
+    from jaxdamp.model import build, contact_law
 
     model, p = build(cfg)
     sp = cfg.grains[0]
@@ -207,15 +207,19 @@ def build_mapping(cfg) -> Mapping:
     mat = sp.material
     R = float(np.asarray(p.radius)[0])
     m = float(np.asarray(p.mass)[0])
-    A = float(np.asarray(p.A)[0])
-    A_w = float(np.asarray(p.wall_A))
-    c = float(np.asarray(p.compliance)[0])
-    c_w = float(np.asarray(p.wall_compliance))
-    assert np.allclose(np.asarray(p.radius), R) and np.allclose(np.asarray(p.A), A)
+    law = contact_law(cfg)
+    pair, wall = np.asarray(p.pair_table)[0, 0], np.asarray(p.wall_table)[0]  # mixed constants
+    col = law.column
+    A = float(pair[col("A")])
     assert cfg.mixing == "arithmetic"
-    assert float(np.max(np.asarray(p.mu))) == 0.0 and float(np.max(np.asarray(p.gamma_s))) == 0.0
-    assert float(np.max(np.asarray(p.gamma_n))) == 0.0, "paper parameterisation (A) expected"
-    E_pp, E_pw = 1.0 / (2.0 * c), 1.0 / (c + c_w)
+    A_w = 2.0 * float(wall[col("A")]) - A  # the wall material's own A (arithmetic mixing)
+    E_pp, E_pw = float(pair[col("E_star")]), float(wall[col("E_star")])
+    c = 1.0 / (2.0 * E_pp)
+    c_w = 1.0 / E_pw - c
+    assert np.allclose(np.asarray(p.radius), R)
+    for row in (pair, wall):
+        assert row[col("mu")] == 0.0 and row[col("gamma_s")] == 0.0
+        assert row[col("gamma_n")] == 0.0, "paper parameterisation (A) expected"
     R_pp, m_pp = R / 2.0, m / 2.0
     k_pp = 4.0 / 3.0 * E_pp * math.sqrt(R_pp)
     k_pw = 4.0 / 3.0 * E_pw * math.sqrt(R)

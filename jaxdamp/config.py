@@ -221,6 +221,8 @@ class Config:
       gravity: ``g`` [m/s^2] along ``-z``.
       mixing: how per-species constants combine for a pair: ``"arithmetic"``, ``"harmonic"``
         or ``"geometric"`` mean (the 2023 paper: arithmetic).
+      contact_law: the normal contact law by name, one of :data:`jaxdamp.contact.LAWS`:
+        ``"hertz"`` (Hertz + viscoelastic, SPEC §2).
       name: preset or user label.
       notes: free text, e.g. deviations from a source.
     """
@@ -235,6 +237,7 @@ class Config:
     numerics: Numerics = field(default_factory=Numerics)
     gravity: float = 9.8
     mixing: str = "arithmetic"
+    contact_law: str = "hertz"
     name: str = "custom"
     notes: str = ""
 

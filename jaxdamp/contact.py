@@ -1,33 +1,80 @@
-"""Contact laws between spheres and between a sphere and a flat wall (SPEC §2).
+"""The contact laws between spheres and between a sphere and a flat wall (SPEC §2), in one place
+for both engines.
 
-Every function here is pure, shape-polymorphic (leading axes are anything: ``(N, K)`` for a
-dense neighbour block, ``(N, 6)`` for walls) and safe under ``jax.grad``: no ``sqrt`` or
-division is ever evaluated at zero overlap or zero sliding speed, even in masked-out lanes,
-so gradients stay finite.
+Every law is written twice, side by side: a JAX form (shape-polymorphic, safe under
+``jax.grad``) used by :mod:`jaxdamp.pairs` / :mod:`jaxdamp.walls`, and a scalar form compiled
+by numba (:func:`scalar_form`) that the native kernel (:mod:`jaxdamp.native`) inlines. Laws
+are registered by name in :data:`LAWS` and selected with ``Config.contact_law``.
 
 Conventions: ``n`` is the unit normal pointing from the partner ``j`` (grain or wall) to the
 grain ``i``; the overlap is ``ξ = R_i + R_j - |r_i - r_j|`` (wall: ``ξ = R_i - distance``) and
-``ξ' = -(v_i - v_j)·n`` its rate (positive while approaching).
+``ξ' = -(v_i - v_j)·n`` its rate (positive while approaching). Effective radius
+``1/R* = 1/R_i + 1/R_j`` and mass ``1/m* = 1/m_i + 1/m_j`` (wall: ``R* = R_i``, ``m* = m_i``).
 
-Normal force (Hertz + viscoelastic, Kuwabara–Kono / Brilliantov et al.)::
-
-    F_n = max(0, k_n ξ^{3/2} + γ_n sqrt(ξ) ξ'),   k_n = (4/3) E* sqrt(R*)
-
-with ``γ_n = γ_n(thesis) + (3/2) A k_n`` so that both parameterisations share one code path.
-Tangential force (thesis eq. 2.2.12, viscous and capped by Coulomb, no spring)::
+Every law has a normal force ``F_n = max(0, F_elastic(ξ) + F_damping(ξ, ξ'))`` (never
+attractive) and shares the tangential force (thesis eq. 2.2.12, viscous and capped by Coulomb,
+no spring)::
 
     F_t = -min(γ_s sqrt(ξ) |v_s|, μ F_n) v_s / |v_s|
+
+**Constants.** What a law needs of a contact is split in two: the constants of the pair of
+*materials* (mixed once, when the model is built: :meth:`Law.mix`, stored per species pair
+in ``Params.pair_table`` ``(S, S, F)`` and per species against the walls in
+``Params.wall_table`` ``(S, F)``, columns :attr:`Law.columns`), and the radius- and mass-
+dependent part formed per contact from a table row (:meth:`Law.pair_jax` / ``pair_scalar``:
+e.g. Hertz ``k_n = (4/3) E* sqrt(R*)``). The mixing rule (:func:`mix`) is applied only in
+:meth:`Law.mix`. The first two columns of every table are ``γ_s`` and ``μ``
+(:data:`GAMMA_S`, :data:`MU`).
+
+**Hertz** (``"hertz"``; Kuwabara–Kono / Brilliantov et al. 1996)::
+
+    F_n = max(0, k_n ξ^{3/2} + γ_n sqrt(ξ) ξ'),   k_n = (4/3) E* sqrt(R*),
+    1/E* = (1-ν_i²)/(λE_i) + (1-ν_j²)/(λE_j),    γ_n = γ_n(thesis) + (3/2) A k_n
+
+so both parameterisations (thesis ``γ_n``, paper ``A`` from a restitution) share one code
+path; elastic energy ``(2/5) k_n ξ^{5/2}``.
+
+All functions are pure; SI units.
 """
 
 from __future__ import annotations
 
-from typing import NamedTuple
+import math
+from typing import Callable, NamedTuple
 
 import jax.numpy as jnp
 
+from . import restitution as rst
+from .config import ConfigError, Material
 
-def mix(a, b, rule: str):
-    """Combine per-body constants ``a`` and ``b`` of a pair (broadcasting).
+try:
+    from numba import njit
+
+    HAVE_NUMBA = True
+except ImportError:  # pragma: no cover - numba is a dependency; keep the JAX engine usable
+    HAVE_NUMBA = False
+
+#: LLVM fast-math flags of the numba forms: contraction into FMAs, reassociation, reciprocals
+#: and signed zeros. Not ``nnan``/``ninf``: the kernel tests for non-finite states and must
+#: keep those tests (with them the compiler may assume every value finite and drop the checks).
+FASTMATH = {"contract", "reassoc", "arcp", "nsz"}
+
+
+def scalar_form(fn):
+    """Compile ``fn`` as a numba scalar form: inlined into its (numba) callers, float64, the
+    kernel's fast-math flags. Without numba it stays a plain Python function (the JAX engine
+    does not need it)."""
+    if not HAVE_NUMBA:  # pragma: no cover
+        return fn
+    return njit(cache=True, inline="always", error_model="numpy", fastmath=FASTMATH)(fn)
+
+
+# ---------------------------------------------------------------------------------------------
+# helpers
+
+
+def mix(a: float, b: float, rule: str) -> float:
+    """Combine per-material constants ``a`` and ``b`` of a pair (plain floats, at model build).
 
     ``rule`` is ``"arithmetic"`` (the 2023 paper), ``"harmonic"`` or ``"geometric"``.
     Harmonic and geometric means of zero are zero (a frictionless side makes the pair frictionless).
@@ -35,10 +82,10 @@ def mix(a, b, rule: str):
     if rule == "arithmetic":
         return 0.5 * (a + b)
     if rule == "geometric":
-        return jnp.sqrt(a * b)
+        return math.sqrt(a * b)
     if rule == "harmonic":
         s = a + b
-        return jnp.where(s > 0, 2.0 * a * b / jnp.where(s > 0, s, 1.0), 0.0)
+        return 2.0 * a * b / s if s > 0 else 0.0
     raise ValueError(f"mixing rule {rule!r}: expected 'arithmetic', 'harmonic' or 'geometric'")
 
 
@@ -97,6 +144,173 @@ class Vec(NamedTuple):
         return Vec(self.x.sum(axis), self.y.sum(axis), self.z.sum(axis))
 
 
+# ---------------------------------------------------------------------------------------------
+# table layout
+
+#: Columns every law's table starts with: tangential damping ``γ_s`` [kg s^-1 m^-1/2] and the
+#: Coulomb coefficient ``μ`` [-].
+COMMON_COLUMNS = ("gamma_s", "mu")
+GAMMA_S, MU = (COMMON_COLUMNS.index(c) for c in ("gamma_s", "mu"))
+
+
+def _columns(*own: str) -> tuple[str, ...]:
+    return COMMON_COLUMNS + own
+
+
+# ---------------------------------------------------------------------------------------------
+# Hertz + viscoelastic
+
+#: Table columns of the Hertz law: ``E*`` [Pa], thesis ``γ_n`` [kg s^-1 m^-1/2], paper ``A`` [s].
+HERTZ_COLUMNS = _columns("E_star", "gamma_n", "A")
+_H_E, _H_GN, _H_A = (HERTZ_COLUMNS.index(c) for c in ("E_star", "gamma_n", "A"))
+
+
+def hertz_material(mat: Material, radius: float, stiffness_scale: float) -> dict:
+    """Per-material constants of the Hertz law: compliance ``(1-ν²)/(λE)`` [1/Pa], ``A`` [s],
+    ``γ_n``, ``γ_s`` [kg s^-1 m^-1/2] (scaled by ``λ^{3/5}``, :func:`restitution.scale_damping`)
+    and ``μ``. A ``restitution`` at ``v_ref`` is turned into ``A`` for a like-pair collision of
+    grains of ``radius`` (or ``mat.calibration_radius``) — exact for this force law."""
+    compliance = (1.0 - mat.nu**2) / (stiffness_scale * mat.E)
+    scale = rst.scale_damping(1.0, stiffness_scale)
+    out = dict(compliance=compliance, gamma_s=mat.gamma_s * scale, mu=mat.mu, A=0.0,
+               gamma_n=(mat.gamma_n or 0.0) * scale)
+    if mat.restitution is not None:
+        r = mat.calibration_radius if mat.calibration_radius is not None else radius
+        m = mat.density * 4.0 / 3.0 * math.pi * r**3
+        out["A"] = rst.dissipative_constant(mat.restitution, mat.v_ref, 0.5 * m, 0.5 * r,
+                                            0.5 / compliance)
+        out["gamma_n"] = 0.0
+    return out
+
+
+def hertz_mix(a: dict, b: dict, rule: str) -> tuple[float, ...]:
+    """Table row of two materials: ``1/E* = c_a + c_b`` (series compliances, exact), ``γ_s``,
+    ``μ``, ``γ_n``, ``A`` by the mixing ``rule`` (the 2023 paper: arithmetic mean of ``A``)."""
+    return (mix(a["gamma_s"], b["gamma_s"], rule), mix(a["mu"], b["mu"], rule),
+            1.0 / (a["compliance"] + b["compliance"]), mix(a["gamma_n"], b["gamma_n"], rule),
+            mix(a["A"], b["A"], rule))
+
+
+def hertz_pair_jax(row, r_eff, m_eff):
+    """``(k_n, γ_n)`` of contacts from their table rows ``(..., F)``: ``k_n = (4/3) E* sqrt(R*)``
+    [N m^-3/2], ``γ_n = γ_n + (3/2) A k_n`` [kg s^-1 m^-1/2]. ``m_eff`` is not needed."""
+    k = (4.0 / 3.0) * row[..., _H_E] * jnp.sqrt(r_eff)
+    return k, row[..., _H_GN] + 1.5 * row[..., _H_A] * k
+
+
+@scalar_form
+def hertz_pair_scalar(row, r_eff, m_eff):
+    """Scalar form of :func:`hertz_pair_jax` for one table row ``(F,)``."""
+    k = (4.0 / 3.0) * row[_H_E] * math.sqrt(r_eff)
+    return k, row[_H_GN] + 1.5 * row[_H_A] * k
+
+
+def hertz_normal_jax(xi, sqrt_xi, xi_dot, k, g):
+    """Elastic force ``k ξ^{3/2}`` [N], damping force ``γ_n sqrt(ξ) ξ'`` [N] (before the
+    clip) and elastic energy ``(2/5) k ξ^{5/2}`` [J] at overlaps ``ξ ≥ 0``."""
+    f_el = k * xi * sqrt_xi
+    return f_el, g * sqrt_xi * xi_dot, 0.4 * f_el * xi
+
+
+@scalar_form
+def hertz_normal_scalar(xi, sqrt_xi, xi_dot, k, g):
+    """Scalar form of :func:`hertz_normal_jax`."""
+    f_el = k * xi * sqrt_xi
+    return f_el, g * sqrt_xi * xi_dot, 0.4 * f_el * xi
+
+
+def hertz_collision_time(row, m_eff: float, r_eff: float, v: float) -> float:
+    """Elastic Hertz collision time [s] at impact speed ``v`` (SPEC §3,
+    :func:`restitution.collision_time`; damping lengthens the overlap by 1–11 %)."""
+    return rst.collision_time(m_eff, r_eff, float(row[_H_E]), v)
+
+
+def hertz_check(mat: Material, name: str) -> None:
+    """Material inputs of the Hertz law: ``gamma_n`` (thesis) or ``restitution`` at ``v_ref``."""
+    if mat.gamma_n is not None and mat.restitution is not None:
+        raise ConfigError(
+            f"{name}: give either gamma_n (thesis) or restitution (paper), not both "
+            f"(gamma_n = {mat.gamma_n}, restitution = {mat.restitution})"
+        )
+    if mat.gamma_n is not None and not (_finite(mat.gamma_n) and mat.gamma_n >= 0):
+        raise ConfigError(f"{name}.gamma_n = {mat.gamma_n!r}: must be a finite number ≥ 0")
+    if mat.restitution is not None:
+        if not (_finite(mat.restitution) and 0.0 < mat.restitution <= 1.0):
+            raise ConfigError(f"{name}.restitution = {mat.restitution!r}: must be in (0, 1]")
+        if not (_finite(mat.v_ref) and mat.v_ref > 0):
+            raise ConfigError(f"{name}.v_ref = {mat.v_ref!r}: must be a finite number > 0")
+    if mat.calibration_radius is not None and not (
+            _finite(mat.calibration_radius) and mat.calibration_radius > 0):
+        raise ConfigError(
+            f"{name}.calibration_radius = {mat.calibration_radius!r}: must be a finite number > 0")
+
+
+def _finite(x) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+
+
+# ---------------------------------------------------------------------------------------------
+# the registry
+
+
+class Law(NamedTuple):
+    """A normal contact law, in both engines' forms.
+
+    Attributes:
+      name: its name in ``Config.contact_law``.
+      id: its number in the native kernel's dispatch (:func:`pair_scalar`, :func:`normal_scalar`).
+      columns: the table columns (``γ_s``, ``μ`` first).
+      material: ``(Material, radius, stiffness_scale) -> dict`` of one body's constants
+        (``radius``: the like-pair radius of a calibration).
+      mix: ``(dict, dict, rule) -> tuple`` a table row of two bodies, in ``columns`` order.
+      pair_jax, pair_scalar: ``(row, R*, m*) -> (k, g)`` the per-contact stiffness and damping.
+      normal_jax, normal_scalar: ``(ξ ≥ 0, sqrt ξ, ξ', k, g) -> (F_elastic, F_damping,
+        elastic energy)``; the force is ``max(0, F_elastic + F_damping)`` while ``ξ > 0``.
+      collision_time: ``(row, m*, R*, v) -> t_c`` [s] that sets the time step (SPEC §3).
+      check: ``(Material, name) -> None``, raises :class:`ConfigError` for bad inputs.
+    """
+
+    name: str
+    id: int
+    columns: tuple[str, ...]
+    material: Callable
+    mix: Callable
+    pair_jax: Callable
+    pair_scalar: Callable
+    normal_jax: Callable
+    normal_scalar: Callable
+    collision_time: Callable
+    check: Callable
+
+    def column(self, name: str) -> int:
+        """Index of column ``name`` in this law's tables."""
+        return self.columns.index(name)
+
+
+HERTZ = Law("hertz", 0, HERTZ_COLUMNS, hertz_material, hertz_mix, hertz_pair_jax,
+            hertz_pair_scalar, hertz_normal_jax, hertz_normal_scalar, hertz_collision_time,
+            hertz_check)
+
+#: The contact laws by name.
+LAWS: dict[str, Law] = {law.name: law for law in (HERTZ,)}
+
+
+@scalar_form
+def pair_scalar(law, row, r_eff, m_eff):
+    """The native kernel's per-contact ``(k, g)`` of law number ``law`` (:attr:`Law.id`)."""
+    return hertz_pair_scalar(row, r_eff, m_eff)
+
+
+@scalar_form
+def normal_scalar(law, xi, sqrt_xi, xi_dot, k, g):
+    """The native kernel's normal force terms of law number ``law`` (:attr:`Law.id`)."""
+    return hertz_normal_scalar(xi, sqrt_xi, xi_dot, k, g)
+
+
+# ---------------------------------------------------------------------------------------------
+# the whole contact: normal law + Coulomb-capped viscous friction
+
+
 class ContactForce(NamedTuple):
     """Force of one contact on grain ``i`` and its energetics. Shapes: leading axes ``S``.
 
@@ -104,10 +318,10 @@ class ContactForce(NamedTuple):
       force: total contact force on ``i`` [N], a :class:`Vec` of shape ``S``.
       torque: torque on ``i`` about its centre [N m], :class:`Vec` of shape ``S``.
       normal: normal force magnitude ``F_n`` [N], ``S``.
-      elastic_energy: ``(2/5) k_n ξ^{5/2}`` [J], ``S``.
-      normal_loss: dissipated power of the normal force [W], ``S`` (≥ 0): ``(F_n - k_n ξ^{3/2}) ξ'``,
-        which is ``γ_n sqrt(ξ) ξ'^2`` while the force is not clipped and also counts the elastic
-        energy lost when clipping to zero releases it.
+      elastic_energy: the law's elastic energy (Hertz ``(2/5) k_n ξ^{5/2}``) [J], ``S``.
+      normal_loss: dissipated power of the normal force [W], ``S`` (≥ 0):
+        ``(F_n - F_elastic) ξ'``, which is the damping force times ``ξ'`` while the force is
+        not clipped and also counts the elastic energy lost when clipping to zero releases it.
       friction_loss: dissipated power of the tangential force ``|F_t| |v_s|`` [W], ``S`` (≥ 0).
       touching: ``ξ > 0``, ``S``.
     """
@@ -121,17 +335,18 @@ class ContactForce(NamedTuple):
     touching: jnp.ndarray
 
 
-def contact_force(xi, n: Vec, v_rel: Vec, spin: Vec, radius_i, k_n, gamma_n, gamma_s, mu) -> ContactForce:
-    """Force, torque and losses of a sphere contact (SPEC §2).
+def contact_force(law: Law, xi, n: Vec, v_rel: Vec, spin: Vec, radius_i, k, g, gamma_s,
+                  mu) -> ContactForce:
+    """Force, torque and losses of a sphere contact (SPEC §2), JAX form.
 
     Args:
+      law: the normal law (:data:`LAWS`).
       xi: overlap ``ξ`` [m], shape ``S`` (contacts are where ``ξ > 0``).
       n: unit normal from partner to grain ``i``, :class:`Vec` broadcastable to ``S``.
       v_rel: ``v_i - v_j`` [m/s], :class:`Vec`.
       spin: ``R_i ω_i + R_j ω_j`` [m/s] (wall: ``R_i ω_i``), :class:`Vec`.
       radius_i: ``R_i`` [m], broadcastable to ``S``.
-      k_n: Hertz stiffness [N m^-3/2], broadcastable to ``S``.
-      gamma_n: normal damping [kg s^-1 m^-1/2], broadcastable to ``S``.
+      k, g: the law's stiffness and damping of the contacts (:attr:`Law.pair_jax`).
       gamma_s: tangential damping [kg s^-1 m^-1/2], broadcastable to ``S``.
       mu: Coulomb coefficient [-], broadcastable to ``S``.
     """
@@ -139,8 +354,8 @@ def contact_force(xi, n: Vec, v_rel: Vec, spin: Vec, radius_i, k_n, gamma_n, gam
     sqrt_xi = safe_sqrt(xi, touching)
     xi_pos = jnp.where(touching, xi, 0.0)
     xi_dot = -v_rel.dot(n)
-    f_elastic = k_n * xi_pos * sqrt_xi
-    f_normal = jnp.where(touching, jnp.maximum(f_elastic + gamma_n * sqrt_xi * xi_dot, 0.0), 0.0)
+    f_elastic, f_damping, e_elastic = law.normal_jax(xi_pos, sqrt_xi, xi_dot, k, g)
+    f_normal = jnp.where(touching, jnp.maximum(f_elastic + f_damping, 0.0), 0.0)
 
     v_contact = v_rel - spin.cross(n)
     v_slide = v_contact - n.scale(v_contact.dot(n))
@@ -156,13 +371,42 @@ def contact_force(xi, n: Vec, v_rel: Vec, spin: Vec, radius_i, k_n, gamma_n, gam
         force=n.scale(f_normal) + f_tangent,
         torque=n.scale(-radius_i).cross(f_tangent),
         normal=f_normal,
-        elastic_energy=0.4 * k_n * xi_pos * xi_pos * sqrt_xi,
+        elastic_energy=e_elastic,
         normal_loss=(f_normal - f_elastic) * xi_dot,
         friction_loss=drag * speed2,
         touching=touching,
     )
 
 
-def hertz_stiffness(compliance_sum, r_eff):
-    """``k_n = (4/3) E* sqrt(R*)`` with ``1/E* = c_i + c_j`` and ``c = (1-ν²)/E`` [N m^-3/2]."""
-    return (4.0 / 3.0) * jnp.sqrt(r_eff) / compliance_sum
+@scalar_form
+def contact_scalar(law, xi, nx, ny, nz, vx, vy, vz, sx, sy, sz, k, g, gamma_s, mu):
+    """Scalar form of :func:`contact_force` for one touching contact (``ξ > 0``).
+
+    Returns force on i ``(fx, fy, fz)``, tangential force ``(tx, ty, tz)`` (the torque on a
+    body of radius ``R`` is ``-R n × F_t``), elastic energy, normal loss, friction loss.
+    Written without data-dependent branches where a ``min``/``max`` does (branch mispredictions
+    dominated the dense-bed cost), and with the one division of the Coulomb cap only where the
+    cap applies."""
+    sq = math.sqrt(xi)
+    xi_dot = -(vx * nx + vy * ny + vz * nz)
+    f_el, f_damp, e_el = normal_scalar(law, xi, sq, xi_dot, k, g)
+    f_n = max(f_el + f_damp, 0.0)
+    # contact-point relative velocity v_rel - spin × n, and its tangential part
+    cx = vx - (sy * nz - sz * ny)
+    cy = vy - (sz * nx - sx * nz)
+    cz = vz - (sx * ny - sy * nx)
+    cn = cx * nx + cy * ny + cz * nz
+    tx = cx - cn * nx
+    ty = cy - cn * ny
+    tz = cz - cn * nz
+    sp2 = tx * tx + ty * ty + tz * tz
+    # |F_t| = min(γ_s sqrt(ξ) |v_s|, μ F_n): drag = |F_t| / |v_s|
+    drag = gamma_s * sq
+    cap = mu * f_n
+    if drag * drag * sp2 > cap * cap:
+        drag = cap / math.sqrt(sp2)
+    ftx, fty, ftz = -drag * tx, -drag * ty, -drag * tz
+    return (
+        f_n * nx + ftx, f_n * ny + fty, f_n * nz + ftz, ftx, fty, ftz,
+        e_el, (f_n - f_el) * xi_dot, drag * sp2,
+    )

@@ -12,16 +12,22 @@ The box either follows the primary system of S1, ``M z'' = -C(z'-u') - K(z-u) + 
 ``u = U cos Ωt`` (``z = 0`` is the empty box's static equilibrium), or the prescribed motion of
 S2, ``z = z_offset + A_d cos Ωt``. Work channels (:data:`jaxdamp.model.CHANNELS`) are
 integrated with the trapezoid rule over the powers at consecutive force evaluations.
+
+The pieces the native kernel (:mod:`jaxdamp.native`) shares are defined here once: the body
+force (gravity and settling drag), the primary's acceleration and powers (pure arithmetic: one
+function serves JAX arrays and, compiled, the kernel's scalars) and the quaternion rotation
+(JAX form :func:`rotate`, scalar form :func:`rotate_scalar` side by side).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import NamedTuple
 
 import jax.numpy as jnp
 
-from .contact import safe_norm
+from .contact import safe_norm, scalar_form
 from .energy import mechanical_energy
 from .excitation import base_motion, drive_motion
 from .model import N_CHANNELS, Model, Params, State
@@ -44,10 +50,10 @@ class Forces(NamedTuple):
 
 def forces(r, v, w, z_box, zd_box, idx, p: Params, model: Model) -> Forces:
     """All forces on the grains of one system for the given (predicted) kinematics."""
-    pf = pair_forces(r, v, w, idx, p, model.mixing)
-    wf = wall_forces(r, v, w, z_box, zd_box, p, model.mixing)
-    gravity = jnp.stack([0.0 * p.gravity, 0.0 * p.gravity, -p.gravity])
-    f = pf.force + wf.force + p.mass[:, None] * (gravity - p.drag * v)
+    pf = pair_forces(r, v, w, idx, p, model)
+    wf = wall_forces(r, v, w, z_box, zd_box, p, model)
+    fx, fy, fz = body_force(p.mass, v[:, 0], v[:, 1], v[:, 2], p.gravity, p.drag)
+    f = pf.force + wf.force + jnp.stack([fx, fy, fz], axis=-1)
     return Forces(
         force=f,
         torque=pf.torque + wf.torque,
@@ -60,12 +66,35 @@ def forces(r, v, w, z_box, zd_box, idx, p: Params, model: Model) -> Forces:
     )
 
 
+def body_force(m, vx, vy, vz, gravity, drag):
+    """Gravity along ``-z`` and the settling drag on a grain of mass ``m`` [kg]:
+    ``m (g - drag v)`` [N] with ``g = (0, 0, -gravity)`` [m/s²], ``drag`` [1/s]. Arithmetic
+    only: elementwise on JAX arrays, and compiled as :data:`body_force_scalar`."""
+    return -m * drag * vx, -m * drag * vy, m * (-gravity - drag * vz)
+
+
+def primary_acceleration(z, zd, u, ud, box_z, M, K, C):
+    """``z'' = (-C (z' - u') - K (z - u) + F_gz) / M`` [m/s²] of the primary (S1), with the
+    base at ``u`` [m], ``u'`` [m/s] and the grains' force on the box ``F_gz`` [N]."""
+    return (-C * (zd - ud) - K * (z - u) + box_z) / M
+
+
+def primary_powers(z, zd, u, ud, K, C):
+    """Power of the base on the primary through spring and damper,
+    ``-u' (K (z - u) + C (z' - u'))``, and the loss in the damper ``C (z' - u')²`` [W]."""
+    return -ud * (K * (z - u) + C * (zd - ud)), C * (zd - ud) * (zd - ud)
+
+
+body_force_scalar = scalar_form(body_force)
+primary_acceleration_scalar = scalar_form(primary_acceleration)
+primary_powers_scalar = scalar_form(primary_powers)
+
+
 def _powers(fo: Forces, z, zd, t, v_pred, p: Params, model: Model):
     """Channel powers [W] at one force evaluation (see :data:`jaxdamp.model.CHANNELS`)."""
     if model.system == "primary":
         u, ud = base_motion(t, p)
-        p_in = -ud * (p.K * (z - u) + p.C * (zd - ud))
-        p_c = p.C * (zd - ud) ** 2
+        p_in, p_c = primary_powers(z, zd, u, ud, p.K, p.C)
     else:  # work of the moving walls on the grains
         p_in = -fo.box_z * zd
         p_c = jnp.zeros_like(p_in)
@@ -75,11 +104,12 @@ def _powers(fo: Forces, z, zd, t, v_pred, p: Params, model: Model):
 
 def _primary_acceleration(z, zd, t, box_z, p: Params):
     u, ud = base_motion(t, p)
-    return (-p.C * (zd - ud) - p.K * (z - u) + box_z) / p.M
+    return primary_acceleration(z, zd, u, ud, box_z, p.M, p.K, p.C)
 
 
-def _rotate(q, w, dt):
-    """Quaternions ``(N, 4)`` advanced by a rotation of angular velocity ``w`` over ``dt``."""
+def rotate(q, w, dt):
+    """Quaternions ``(N, 4)`` advanced by a rotation of angular velocity ``w`` over ``dt``:
+    ``q ← dq ⊗ q / |dq ⊗ q|`` with ``dq = (cos h, sin(h) ŵ)``, half angle ``h = |w| dt / 2``."""
     speed = safe_norm(w)
     half = 0.5 * speed * dt
     moving = speed > 0
@@ -92,6 +122,29 @@ def _rotate(q, w, dt):
     new_v = dw[:, None] * qv + qw * dv + jnp.cross(dv, qv)
     out = jnp.concatenate([new_w, new_v], axis=-1)
     return out / jnp.linalg.norm(out, axis=-1, keepdims=True)
+
+
+@scalar_form
+def rotate_scalar(qw, qx, qy, qz, ox, oy, oz, dt):
+    """Scalar form of :func:`rotate` for one quaternion ``(qw, qx, qy, qz)`` and angular
+    velocity ``(ox, oy, oz)`` [rad/s]. For half angles ``h < 0.01`` ``cos h`` and
+    ``sin(h)/|w|`` are taken from their series (exact in float64: next terms < 3e-21), free of
+    ``sin``/``cos``/``sqrt`` calls per grain and step."""
+    h2 = 0.25 * dt * dt * (ox * ox + oy * oy + oz * oz)  # (half angle)^2
+    if h2 < 1e-4:
+        cw = 1.0 - h2 * (0.5 - h2 * (1.0 / 24.0 - h2 / 720.0))
+        s = 0.5 * dt * (1.0 - h2 * (1.0 / 6.0 - h2 * (1.0 / 120.0 - h2 / 5040.0)))
+    else:
+        speed = math.sqrt(ox * ox + oy * oy + oz * oz)
+        cw = math.cos(0.5 * speed * dt)
+        s = math.sin(0.5 * speed * dt) / speed
+    dx, dy, dz = s * ox, s * oy, s * oz
+    nw = cw * qw - (dx * qx + dy * qy + dz * qz)
+    nx = cw * qx + qw * dx + (dy * qz - dz * qy)
+    ny = cw * qy + qw * dy + (dz * qx - dx * qz)
+    nz = cw * qz + qw * dz + (dx * qy - dy * qx)
+    nrm = math.sqrt(nw * nw + nx * nx + ny * ny + nz * nz)
+    return nw / nrm, nx / nrm, ny / nrm, nz / nrm
 
 
 def _finish(state_fields: dict, fo: Forces, power, p: Params) -> State:
@@ -168,7 +221,7 @@ def step(st: State, idx, p: Params, model: Model) -> State:
             r=r1,
             v=st.v + 0.5 * dt * (st.a + a1),
             w=st.w + 0.5 * dt * (st.alpha + alpha1),
-            q=_rotate(st.q, st.w + 0.5 * dt * st.alpha, dt),
+            q=rotate(st.q, st.w + 0.5 * dt * st.alpha, dt),
             a=a1,
             alpha=alpha1,
             z=z1,

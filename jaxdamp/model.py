@@ -3,11 +3,15 @@
 ``Params`` and ``State`` are dataclasses registered with JAX whose every field is an array, so
 a batch of systems is the same pytree with a leading batch axis and ``vmap`` maps over it
 (frequency sweeps, ``Lz`` scans, ...). ``Model`` holds what fixes array shapes and code paths
-(number of grains, system kind, mixing rule, neighbour-list geometry); it is hashable and static
-under ``jit``.
+(number of grains, system kind, contact law, species, neighbour-list geometry); it is hashable
+and static under ``jit``.
 
-Per-pair constants are formed on the fly from per-grain values with the mixing rule
-(:func:`jaxdamp.contact.mix`), which keeps the hot loop free of species tables.
+Contact constants are computed once, here (JaxDEM's ``MaterialTable``): the law's constants of
+every pair of species, ``Params.pair_table`` ``(S, S, F)``, and of every species against the
+walls, ``Params.wall_table`` ``(S, F)``, with the mixing rule applied only in
+:meth:`jaxdamp.contact.Law.mix`. Grains are stored species after species
+(:meth:`Model.species_index`); per contact both engines only look the row up and form the
+radius- and mass-dependent part (:meth:`jaxdamp.contact.Law.pair_jax`).
 """
 
 from __future__ import annotations
@@ -20,8 +24,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import restitution as rst
-from .config import Config, Material
+from .config import Config
+from .contact import LAWS, Law
 
 #: Names of the cumulative work channels, in order (all in J).
 #:   input:       work done on the system by the base through spring and damper (S1) or by the
@@ -48,7 +52,7 @@ class Model:
     Attributes:
       n: number of grains.
       system: ``"primary"`` (S1) or ``"driven"`` (S2).
-      mixing: pair mixing rule for per-grain constants.
+      law: the contact law's name (:data:`jaxdamp.contact.LAWS`).
       cutoff: neighbour-list cutoff ``2 R_max + skin`` [m].
       skin: neighbour-list skin [m]; the list is rebuilt once a grain moved more than skin/2.
       species: grain count of each species, in order (grains are stored species after
@@ -57,7 +61,7 @@ class Model:
 
     n: int
     system: str
-    mixing: str
+    law: str
     cutoff: float
     skin: float
     species: tuple[int, ...] = ()
@@ -68,15 +72,21 @@ class Model:
         starts = np.cumsum((0,) + tuple(counts))
         return tuple(slice(int(a), int(b)) for a, b in zip(starts[:-1], starts[1:]))
 
+    def species_index(self) -> np.ndarray:
+        """Species of every grain, ``(N,)`` int32 (the row of the contact tables)."""
+        counts = self.species or (self.n,)
+        return np.repeat(np.arange(len(counts), dtype=np.int32), counts)
+
 
 @pytree_dataclass
 class Params:
     """Every number the step needs, as arrays (vmappable). Units SI.
 
-    Grain arrays have shape ``(N,)``; all else is scalar (per system).
-    ``compliance = (1-ν²)/E`` [1/Pa]; ``A`` [s] the paper's dissipative constant (γ_n = 1.5 A k_n);
-    ``gamma_n``, ``gamma_s`` [kg s^-1 m^-1/2]; ``mu`` [-]. ``wall_*`` are the walls' values.
-    ``omega`` = 2πf [rad/s]; ``U`` base amplitude (S1) [m]; ``amplitude`` box amplitude (S2) [m];
+    Grain arrays have shape ``(N,)``; the contact tables ``pair_table`` ``(S, S, F)`` (species
+    ``s`` against species ``t``) and ``wall_table`` ``(S, F)`` (species against the walls) hold
+    the law's mixed constants in the columns :attr:`jaxdamp.contact.Law.columns` (Hertz:
+    ``γ_s`` [kg s^-1 m^-1/2], ``μ`` [-], ``E*`` [Pa], ``γ_n`` [kg s^-1 m^-1/2], ``A`` [s]);
+    all else is scalar (per system). ``omega`` = 2πf [rad/s]; ``U`` base amplitude (S1) [m]; ``amplitude`` box amplitude (S2) [m];
     ``z_offset`` box position about which it moves (S2) [m]; ``drag`` settling drag rate [1/s];
     ``t_window`` start of the analysis window [s].
     """
@@ -84,16 +94,8 @@ class Params:
     radius: jnp.ndarray
     mass: jnp.ndarray
     inertia: jnp.ndarray
-    compliance: jnp.ndarray
-    A: jnp.ndarray
-    gamma_n: jnp.ndarray
-    gamma_s: jnp.ndarray
-    mu: jnp.ndarray
-    wall_compliance: jnp.ndarray
-    wall_A: jnp.ndarray
-    wall_gamma_n: jnp.ndarray
-    wall_gamma_s: jnp.ndarray
-    wall_mu: jnp.ndarray
+    pair_table: jnp.ndarray
+    wall_table: jnp.ndarray
     Lx: jnp.ndarray
     Ly: jnp.ndarray
     Lz: jnp.ndarray
@@ -173,23 +175,29 @@ def grain_species(config: Config) -> np.ndarray:
     )
 
 
-def compliance(mat: Material, stiffness_scale: float) -> float:
-    """``(1 - ν²) / (λ E)`` [1/Pa] with the stiffness scale ``λ``."""
-    return (1.0 - mat.nu**2) / (stiffness_scale * mat.E)
+def contact_law(config: Config) -> Law:
+    """The configuration's contact law (:data:`jaxdamp.contact.LAWS`)."""
+    return LAWS[config.contact_law]
 
 
-def _damping(mat: Material, radius: float, stiffness_scale: float) -> tuple[float, float, float]:
-    """Return ``(A, gamma_n, gamma_s)`` of a material; ``radius`` sets the like-pair calibration."""
-    scale = rst.scale_damping(1.0, stiffness_scale)
-    gamma_s = mat.gamma_s * scale
-    if mat.calibration_radius is not None:
-        radius = mat.calibration_radius
-    if mat.restitution is not None:
-        E_star = 0.5 / compliance(mat, stiffness_scale)
-        m = mat.density * 4.0 / 3.0 * math.pi * radius**3
-        A = rst.dissipative_constant(mat.restitution, mat.v_ref, 0.5 * m, 0.5 * radius, E_star)
-        return A, 0.0, gamma_s
-    return 0.0, (mat.gamma_n or 0.0) * scale, gamma_s
+def contact_tables(config: Config) -> tuple[np.ndarray, np.ndarray]:
+    """The contact constants of the configuration, computed once (the only place the mixing
+    rule is applied): ``pair_table`` ``(S, S, F)`` and ``wall_table`` ``(S, F)`` in the
+    columns of the law (:attr:`jaxdamp.contact.Law.columns`). Each species' calibration uses
+    its own mean radius; the walls' uses the first species' (unless the materials fix a
+    ``calibration_radius``)."""
+    law = contact_law(config)
+    lam = config.numerics.stiffness_scale
+    bodies = [law.material(sp.material, sp.radius, lam) for sp in config.grains]
+    S, F = len(bodies), len(law.columns)
+    pair, wall = np.zeros((S, S, F)), np.zeros((S, F))
+    if S:
+        walls = law.material(config.wall_material, config.grains[0].radius, lam)
+        for s in range(S):
+            wall[s] = law.mix(bodies[s], walls, config.mixing)
+            for t in range(S):
+                pair[s, t] = law.mix(bodies[s], bodies[t], config.mixing)
+    return pair, wall
 
 
 def build(config: Config, radii: np.ndarray | None = None) -> tuple[Model, Params]:
@@ -197,25 +205,17 @@ def build(config: Config, radii: np.ndarray | None = None) -> tuple[Model, Param
     if radii is None:
         radii = grain_radii(config)
     species = grain_species(config)
-    lam = config.numerics.stiffness_scale
     n = len(radii)
     mass = np.zeros(n)
-    comp, A, gn, gs, mu = (np.zeros(n) for _ in range(5))
     for i, sp in enumerate(config.grains):
         sel = species == i
-        mat = sp.material
-        mass[sel] = mat.density * 4.0 / 3.0 * np.pi * radii[sel] ** 3
-        comp[sel] = compliance(mat, lam)
-        A[sel], gn[sel], gs[sel] = _damping(mat, sp.radius, lam)
-        mu[sel] = mat.mu
-    wall = config.wall_material
-    ref_radius = config.grains[0].radius if config.grains else 1.0
-    wA, wgn, wgs = _damping(wall, ref_radius, lam) if config.grains else (0.0, 0.0, 0.0)
+        mass[sel] = sp.material.density * 4.0 / 3.0 * np.pi * radii[sel] ** 3
+    pair_table, wall_table = contact_tables(config)
 
     r_max = float(radii.max()) if n else 0.0
     skin = config.numerics.skin * r_max
     model = Model(
-        n=n, system=config.system, mixing=config.mixing, cutoff=2.0 * r_max + skin, skin=skin,
+        n=n, system=config.system, law=config.contact_law, cutoff=2.0 * r_max + skin, skin=skin,
         species=tuple(int(sp.count) for sp in config.grains),
     )
     prim = config.primary
@@ -224,16 +224,8 @@ def build(config: Config, radii: np.ndarray | None = None) -> tuple[Model, Param
         radius=f64(radii),
         mass=f64(mass),
         inertia=f64(0.4 * mass * radii**2),
-        compliance=f64(comp),
-        A=f64(A),
-        gamma_n=f64(gn),
-        gamma_s=f64(gs),
-        mu=f64(mu),
-        wall_compliance=f64(compliance(wall, lam)),
-        wall_A=f64(wA),
-        wall_gamma_n=f64(wgn),
-        wall_gamma_s=f64(wgs),
-        wall_mu=f64(wall.mu),
+        pair_table=f64(pair_table),
+        wall_table=f64(wall_table),
         Lx=f64(config.box.Lx),
         Ly=f64(config.box.Ly),
         Lz=f64(config.box.Lz),
@@ -264,7 +256,8 @@ def impact_speed(config: Config) -> float:
 
 
 def collision_time_limit(config: Config, radii: np.ndarray) -> float:
-    """Hertz collision time [s] of the stiffest, lightest contact at :func:`impact_speed`.
+    """Collision time [s] of the contact law (:attr:`jaxdamp.contact.Law.collision_time`) of the
+    stiffest, lightest contact at :func:`impact_speed`.
 
     Checks the smallest grain of every species against a like grain and against a wall
     (SPEC §3); the shortest wins. (A small grain against a larger one collides longer than
@@ -272,17 +265,19 @@ def collision_time_limit(config: Config, radii: np.ndarray) -> float:
     """
     if len(radii) == 0:
         return math.inf
-    lam = config.numerics.stiffness_scale
+    law = contact_law(config)
+    pair, wall = contact_tables(config)
     species = grain_species(config)
     v = impact_speed(config)
     t_c = math.inf
-    wall_c = compliance(config.wall_material, lam)
     for i, sp in enumerate(config.grains):
-        r = float(radii[species == i].min())
+        sel = species == i
+        if not sel.any():
+            continue
+        r = float(radii[sel].min())
         m = sp.material.density * 4.0 / 3.0 * math.pi * r**3
-        c = compliance(sp.material, lam)
-        t_c = min(t_c, rst.collision_time(0.5 * m, 0.5 * r, 1.0 / (2 * c), v))
-        t_c = min(t_c, rst.collision_time(m, r, 1.0 / (c + wall_c), v))
+        t_c = min(t_c, law.collision_time(pair[i, i], 0.5 * m, 0.5 * r, v))
+        t_c = min(t_c, law.collision_time(wall[i], m, r, v))
     return t_c
 
 

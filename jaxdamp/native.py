@@ -2,8 +2,17 @@
 
 XLA's CPU backend runs the pure-JAX step at ~150–200 µs per system-step for a 250-grain bed
 (``benchmarks/RESULTS.md``): it splits the contact law into many loop passes. This module
-implements *the same* step — same contact law, same velocity-Verlet scheme with predicted
-velocities, same wall geometry, same energy channels — as plain loops compiled by numba:
+implements *the same* step — same velocity-Verlet scheme with predicted velocities, same wall
+geometry, same energy channels — as plain loops compiled by numba. The physics is not retyped
+here: the contact laws and their constants (:mod:`jaxdamp.contact`: ``contact_scalar``,
+``pair_scalar``, the tables ``Params.pair_table`` / ``wall_table`` built once by
+:func:`jaxdamp.model.build`), the base and box motion (:mod:`jaxdamp.excitation`) and the body
+force, primary and rotation (:mod:`jaxdamp.integrate`) are the numba scalar forms defined next
+to their JAX forms, inlined into these loops. Scalars cross into the kernel as named records
+(:data:`SCALAR_RECORD`, :data:`BOX_RECORD`, :data:`DIAG_RECORD`).
+
+* the law's constants of a pair are looked up and formed once per listed pair when the pair
+  list is built, and once per call for the walls, not per contact and step;
 
 * grain pairs come from a half neighbour list (each pair once, Newton's third law applied)
   built inside the kernel on a cell grid from box-frame positions, holding the pairs closer
@@ -20,9 +29,17 @@ stays the reference; ``tests/test_native.py`` checks that both agree.
 
 from __future__ import annotations
 
+import hashlib
 import math
+import os
+from enum import IntEnum
 
 import numpy as np
+
+from .contact import FASTMATH, GAMMA_S, MU, contact_scalar, pair_scalar
+from .excitation import base_motion_scalar, drive_motion_scalar
+from .integrate import (body_force_scalar, primary_acceleration_scalar, primary_powers_scalar,
+                        rotate_scalar)
 
 try:
     from numba import njit, prange
@@ -33,62 +50,79 @@ except ImportError:  # pragma: no cover - numba is a dependency; keep the JAX en
 
 SYSTEMS = {"primary": 0, "driven": 1}
 
-#: LLVM fast-math flags of the kernels: contraction into FMAs, reassociation, reciprocals and
-#: signed zeros. Not ``nnan``/``ninf``: the kernel tests for non-finite states and must keep
-#: those tests (with them the compiler may assume every value finite and drop the checks).
-FASTMATH = {"contract", "reassoc", "arcp", "nsz"}
-MIXING = {"arithmetic": 0, "harmonic": 1, "geometric": 2}
+#: Scalar parameters of a system passed to the kernel, as a numba record (fields by name).
+SCALARS = ("Lx", "Ly", "Lz", "gravity", "M", "K", "C", "U", "amplitude", "omega", "z_offset",
+           "dt", "drag", "t_window")
+SCALAR_RECORD = np.dtype([(name, np.float64) for name in SCALARS])
+#: The box's scalar state (in and out), a record: ``step`` is carried as a float (exact < 2^53).
+BOX = ("z", "zd", "zdd", "t", "z_max", "z_min", "step")
+BOX_RECORD = np.dtype([(name, np.float64) for name in BOX])
+#: Diagnostics of the last force evaluation returned per system, a record.
+DIAG = ("e_elastic", "f_floor_lid", "f_box", "n_floor", "n_lid")
+DIAG_RECORD = np.dtype([(name, np.float64) for name in DIAG])
+#: Slots of the per-evaluation sums of :func:`_forces`.
+OUT = ("box_z", "floor_lid_z", "n_floor", "n_lid", "e_elastic", "pp_normal", "pp_friction",
+       "pw_normal", "pw_friction")
+Out = IntEnum("Out", {name: i for i, name in enumerate(OUT)})
+N_OUT = len(OUT)
+
+#: The modules whose numba scalar forms the kernels inline: a change to any of them must
+#: recompile the cached kernels (numba's cache only watches the kernel's own file).
+_SOURCES = ("contact.py", "excitation.py", "integrate.py", "native.py")
+
+
+def _source_hash() -> str:
+    here = os.path.dirname(os.path.abspath(__file__))
+    h = hashlib.sha256()
+    for name in _SOURCES:
+        with open(os.path.join(here, name), "rb") as fh:
+            h.update(fh.read())
+    return h.hexdigest()
+
+
+def _cache_on_sources(dispatcher):
+    """Key the on-disk cache of ``dispatcher`` also on the sources of :data:`_SOURCES`.
+
+    numba invalidates a cached kernel only when its own file changes; the scalar forms it
+    inlines live in other modules, so editing a law would silently keep the old compiled law.
+    The index key gets the hash of all of them. Uses numba's cache class (internal API);
+    falls back to no on-disk cache if that changes."""
+    try:
+        from numba.core.caching import FunctionCache
+
+        digest = _source_hash()
+
+        class _SourcesCache(FunctionCache):
+            def _index_key(self, sig, codegen):
+                return super()._index_key(sig, codegen) + (digest,)
+
+        dispatcher._cache = _SourcesCache(dispatcher.py_func)
+    except Exception:  # pragma: no cover - numba internals changed: compile every process
+        from numba.core.caching import NullCache
+
+        dispatcher._cache = NullCache()
+    return dispatcher
+
+
+def _kernel(**flags):
+    """``njit`` with the kernel's flags and the source-keyed cache."""
+    def wrap(fn):
+        return _cache_on_sources(njit(cache=True, error_model="numpy", fastmath=FASTMATH,
+                                      **flags)(fn))
+    return wrap
+
 
 if AVAILABLE:
 
-    @njit(cache=True, inline="always", error_model="numpy", fastmath=FASTMATH)
-    def _mix(a, b, rule):
-        if rule == 0:
-            return 0.5 * (a + b)
-        if rule == 2:
-            return math.sqrt(a * b)
-        s = a + b
-        return 2.0 * a * b / s if s > 0 else 0.0
-
-    @njit(cache=True, inline="always", error_model="numpy", fastmath=FASTMATH)
-    def _contact(xi, nx, ny, nz, vx, vy, vz, sx, sy, sz, k_n, g_n, g_s, mu):
-        """Contact law of :func:`jaxdamp.contact.contact_force` for one touching contact.
-
-        Returns force on i (fx, fy, fz), tangential force (tx, ty, tz), elastic energy,
-        normal loss, friction loss. Written without data-dependent branches where a
-        ``min``/``max`` does (branch mispredictions dominated the dense-bed cost), and with
-        the one division of the Coulomb cap only where the cap applies."""
-        sq = math.sqrt(xi)
-        xi_dot = -(vx * nx + vy * ny + vz * nz)
-        f_el = k_n * xi * sq
-        f_n = max(f_el + g_n * sq * xi_dot, 0.0)
-        # contact-point relative velocity v_rel - spin × n, and its tangential part
-        cx = vx - (sy * nz - sz * ny)
-        cy = vy - (sz * nx - sx * nz)
-        cz = vz - (sx * ny - sy * nx)
-        cn = cx * nx + cy * ny + cz * nz
-        tx = cx - cn * nx
-        ty = cy - cn * ny
-        tz = cz - cn * nz
-        sp2 = tx * tx + ty * ty + tz * tz
-        # |F_t| = min(γ_s sqrt(ξ) |v_s|, μ F_n): drag = |F_t| / |v_s|
-        drag = g_s * sq
-        cap = mu * f_n
-        if drag * drag * sp2 > cap * cap:
-            drag = cap / math.sqrt(sp2)
-        ftx, fty, ftz = -drag * tx, -drag * ty, -drag * tz
-        return (
-            f_n * nx + ftx, f_n * ny + fty, f_n * nz + ftz, ftx, fty, ftz,
-            0.4 * k_n * xi * xi * sq, (f_n - f_el) * xi_dot, drag * sp2,
-        )
-
-    @njit(cache=True, error_model="numpy", fastmath=FASTMATH)
-    def _build_pairs(r, z_box, cutoff, pi, pj, pc, ref, R, comp, A, gn, gs, mu, mixing):
+    @_kernel()
+    def _build_pairs(r, z_box, cutoff, pi, pj, pc, ref, R, m, sid, table, law):
         """Half list of the pairs whose surfaces are closer than the skin, ``|r_i - r_j| < R_i +
         R_j + cutoff - 2 R_max`` (box frame; size-aware, as :mod:`jaxdamp.neighbors`), via a
-        cell grid of side ``cutoff``, with the pairs' constants ``pc[k] = (R_i + R_j, k_n, γ_n,
-        γ_s, μ)`` (they depend on the pair only); stores the reference positions. Returns the
-        number of pairs, or minus the number needed when the arrays are too small."""
+        cell grid of side ``cutoff``, with the pairs' constants ``pc[k] = (R_i + R_j, k, g,
+        γ_s, μ)``: the row ``table[sid_i, sid_j]`` of the pair table and the law's radius- and
+        mass-dependent part (:func:`jaxdamp.contact.pair_scalar`), once per listed pair;
+        stores the reference positions. Returns the number of pairs, or minus the number
+        needed when the arrays are too small."""
         n = r.shape[0]
         extra = cutoff - 2.0 * R.max()
         lo = np.full(3, np.inf)
@@ -154,27 +188,29 @@ if AVAILABLE:
                                     pi[k] = i
                                     pj[k] = j
                                     rs = R[i] + R[j]
-                                    k_n = (4.0 / 3.0) * math.sqrt(R[i] * R[j] / rs) / (comp[i] + comp[j])
+                                    row = table[sid[i], sid[j]]
+                                    stiff, damp = pair_scalar(law, row, R[i] * R[j] / rs,
+                                                              m[i] * m[j] / (m[i] + m[j]))
                                     pc[k, 0] = rs
-                                    pc[k, 1] = k_n
-                                    pc[k, 2] = _mix(gn[i], gn[j], mixing) + 1.5 * _mix(A[i], A[j], mixing) * k_n
-                                    pc[k, 3] = _mix(gs[i], gs[j], mixing)
-                                    pc[k, 4] = _mix(mu[i], mu[j], mixing)
+                                    pc[k, 1] = stiff
+                                    pc[k, 2] = damp
+                                    pc[k, 3] = row[GAMMA_S]
+                                    pc[k, 4] = row[MU]
                                 k += 1
         return k if k <= cap else -k
 
-    @njit(cache=True, error_model="numpy", fastmath=FASTMATH)
-    def _pairs(r, z_box, cutoff, pi, pj, pc, ref, R, comp, A, gn, gs, mu, mixing):
+    @_kernel()
+    def _pairs(r, z_box, cutoff, pi, pj, pc, ref, R, m, sid, table, law):
         """:func:`_build_pairs`, growing the pair arrays when they are too small."""
-        k = _build_pairs(r, z_box, cutoff, pi, pj, pc, ref, R, comp, A, gn, gs, mu, mixing)
+        k = _build_pairs(r, z_box, cutoff, pi, pj, pc, ref, R, m, sid, table, law)
         if k < 0:
             pi = np.empty(2 * (-k), np.int64)
             pj = np.empty(2 * (-k), np.int64)
             pc = np.empty((2 * (-k), 5))
-            k = _build_pairs(r, z_box, cutoff, pi, pj, pc, ref, R, comp, A, gn, gs, mu, mixing)
+            k = _build_pairs(r, z_box, cutoff, pi, pj, pc, ref, R, m, sid, table, law)
         return k, pi, pj, pc
 
-    @njit(cache=True, error_model="numpy", fastmath=FASTMATH)
+    @_kernel()
     def _moved_too_far(r, z_box, ref, half_skin2):
         for i in range(r.shape[0]):
             dx = r[i, 0] - ref[i, 0]
@@ -184,26 +220,28 @@ if AVAILABLE:
                 return True
         return False
 
-    @njit(cache=True, error_model="numpy", fastmath=FASTMATH)
-    def _wall_constants(R, comp, A, gn, gs, mu, wc, wA, wgn, wgs, wmu, mixing):
+    @_kernel()
+    def _wall_constants(R, m, sid, wall_table, law):
         """Per grain, the constants of its contact with any wall: ``(N, 4)`` array of
-        ``(k_n, γ_n, γ_s, μ)`` (they depend on the grain and the wall material only)."""
+        ``(k, g, γ_s, μ)`` from the row of its species in the wall table, ``R* = R_i``,
+        ``m* = m_i`` (they depend on the grain and the wall material only)."""
         n = R.shape[0]
         wk = np.empty((n, 4))
         for i in range(n):
-            k_n = (4.0 / 3.0) * math.sqrt(R[i]) / (comp[i] + wc)
-            wk[i, 0] = k_n
-            wk[i, 1] = _mix(gn[i], wgn, mixing) + 1.5 * _mix(A[i], wA, mixing) * k_n
-            wk[i, 2] = _mix(gs[i], wgs, mixing)
-            wk[i, 3] = _mix(mu[i], wmu, mixing)
+            row = wall_table[sid[i]]
+            stiff, damp = pair_scalar(law, row, R[i], m[i])
+            wk[i, 0] = stiff
+            wk[i, 1] = damp
+            wk[i, 2] = row[GAMMA_S]
+            wk[i, 3] = row[MU]
         return wk
 
-    @njit(cache=True, inline="always", error_model="numpy", fastmath=FASTMATH)
-    def _wall(i, xi, nx, ny, nz, v, w, R, zd_box, wk, F, T, out):
+    @_kernel(inline="always")
+    def _wall(law, i, xi, nx, ny, nz, v, w, R, zd_box, wk, F, T, out):
         """Contact of grain ``i`` with a wall of inward normal ``n`` at overlap ``xi > 0``:
         adds to ``F``, ``T`` and the energy channels; returns the force's z component."""
-        fx, fy, fz, tx, ty, tz, e, ln, lf = _contact(
-            xi, nx, ny, nz, v[i, 0], v[i, 1], v[i, 2] - zd_box,
+        fx, fy, fz, tx, ty, tz, e, ln, lf = contact_scalar(
+            law, xi, nx, ny, nz, v[i, 0], v[i, 1], v[i, 2] - zd_box,
             R[i] * w[i, 0], R[i] * w[i, 1], R[i] * w[i, 2],
             wk[i, 0], wk[i, 1], wk[i, 2], wk[i, 3])
         F[i, 0] += fx
@@ -212,26 +250,24 @@ if AVAILABLE:
         T[i, 0] -= R[i] * (ny * tz - nz * ty)
         T[i, 1] -= R[i] * (nz * tx - nx * tz)
         T[i, 2] -= R[i] * (nx * ty - ny * tx)
-        out[4] += e
-        out[7] += ln
-        out[8] += lf
+        out[Out.e_elastic] += e
+        out[Out.pw_normal] += ln
+        out[Out.pw_friction] += lf
         return fz
 
-    @njit(cache=True, error_model="numpy", fastmath=FASTMATH)
-    def _forces(r, v, w, z_box, zd_box, R, m, wk, Lx, Ly, Lz, grav, drag,
+    @_kernel()
+    def _forces(law, r, v, w, z_box, zd_box, R, m, wk, Lx, Ly, Lz, grav, drag,
                 pi, pj, pc, npairs, F, T, out):
-        """Forces (F, T filled in place) and scalars ``out`` = [box_z, floor_lid_z, n_floor,
-        n_lid, e_elastic, pp_normal, pp_friction, pw_normal, pw_friction]. ``wk``: the
-        grains' wall constants (:func:`_wall_constants`)."""
+        """Forces (F, T filled in place) and the sums ``out`` (slots :class:`Out`).
+        ``wk``: the grains' wall constants (:func:`_wall_constants`)."""
         n = r.shape[0]
         for i in range(n):
-            F[i, 0] = -m[i] * drag * v[i, 0]
-            F[i, 1] = -m[i] * drag * v[i, 1]
-            F[i, 2] = m[i] * (-grav - drag * v[i, 2])
+            F[i, 0], F[i, 1], F[i, 2] = body_force_scalar(m[i], v[i, 0], v[i, 1], v[i, 2],
+                                                          grav, drag)
             T[i, 0] = 0.0
             T[i, 1] = 0.0
             T[i, 2] = 0.0
-        for k in range(9):
+        for k in range(out.shape[0]):
             out[k] = 0.0
         # energy sums in registers: F, T and out may alias as far as the compiler knows, so
         # accumulating into out[...] would force a store and reload per contact
@@ -255,8 +291,8 @@ if AVAILABLE:
             sx = R[i] * w[i, 0] + R[j] * w[j, 0]
             sy = R[i] * w[i, 1] + R[j] * w[j, 1]
             sz = R[i] * w[i, 2] + R[j] * w[j, 2]
-            fx, fy, fz, tx, ty, tz, e, ln, lf = _contact(
-                xi, nx, ny, nz, v[i, 0] - v[j, 0], v[i, 1] - v[j, 1], v[i, 2] - v[j, 2],
+            fx, fy, fz, tx, ty, tz, e, ln, lf = contact_scalar(
+                law, xi, nx, ny, nz, v[i, 0] - v[j, 0], v[i, 1] - v[j, 1], v[i, 2] - v[j, 2],
                 sx, sy, sz, pc[p, 1], pc[p, 2], pc[p, 3], pc[p, 4])
             F[i, 0] += fx
             F[i, 1] += fy
@@ -277,86 +313,93 @@ if AVAILABLE:
             e_sum += e
             ln_sum += ln
             lf_sum += lf
-        out[4] = e_sum
-        out[5] = ln_sum
-        out[6] = lf_sum
+        out[Out.e_elastic] = e_sum
+        out[Out.pp_normal] = ln_sum
+        out[Out.pp_friction] = lf_sum
         # walls: floor, lid, x = 0, x = Lx, y = 0, y = Ly (inward normals), unrolled: most
         # grains touch none, so the common path is six compares
         for i in range(n):
             Ri = R[i]
             floor = r[i, 2] - z_box
             if floor < Ri:
-                fz = _wall(i, Ri - floor, 0.0, 0.0, 1.0, v, w, R, zd_box, wk, F, T, out)
-                out[0] -= fz
-                out[1] -= fz
-                out[2] += 1.0
+                fz = _wall(law, i, Ri - floor, 0.0, 0.0, 1.0, v, w, R, zd_box, wk, F, T, out)
+                out[Out.box_z] -= fz
+                out[Out.floor_lid_z] -= fz
+                out[Out.n_floor] += 1.0
             if Lz - floor < Ri:
-                fz = _wall(i, Ri - (Lz - floor), 0.0, 0.0, -1.0, v, w, R, zd_box, wk, F, T, out)
-                out[0] -= fz
-                out[1] -= fz
-                out[3] += 1.0
+                fz = _wall(law, i, Ri - (Lz - floor), 0.0, 0.0, -1.0, v, w, R, zd_box, wk, F, T,
+                           out)
+                out[Out.box_z] -= fz
+                out[Out.floor_lid_z] -= fz
+                out[Out.n_lid] += 1.0
             if r[i, 0] < Ri:
-                out[0] -= _wall(i, Ri - r[i, 0], 1.0, 0.0, 0.0, v, w, R, zd_box, wk, F, T, out)
+                out[Out.box_z] -= _wall(law, i, Ri - r[i, 0], 1.0, 0.0, 0.0, v, w, R, zd_box,
+                                        wk, F, T, out)
             if Lx - r[i, 0] < Ri:
-                out[0] -= _wall(i, Ri - (Lx - r[i, 0]), -1.0, 0.0, 0.0, v, w, R, zd_box, wk, F, T, out)
+                out[Out.box_z] -= _wall(law, i, Ri - (Lx - r[i, 0]), -1.0, 0.0, 0.0, v, w, R,
+                                        zd_box, wk, F, T, out)
             if r[i, 1] < Ri:
-                out[0] -= _wall(i, Ri - r[i, 1], 0.0, 1.0, 0.0, v, w, R, zd_box, wk, F, T, out)
+                out[Out.box_z] -= _wall(law, i, Ri - r[i, 1], 0.0, 1.0, 0.0, v, w, R, zd_box,
+                                        wk, F, T, out)
             if Ly - r[i, 1] < Ri:
-                out[0] -= _wall(i, Ri - (Ly - r[i, 1]), 0.0, -1.0, 0.0, v, w, R, zd_box, wk, F, T, out)
+                out[Out.box_z] -= _wall(law, i, Ri - (Ly - r[i, 1]), 0.0, -1.0, 0.0, v, w, R,
+                                        zd_box, wk, F, T, out)
 
-    @njit(cache=True, error_model="numpy", fastmath=FASTMATH)
-    def _advance_one(b, n_steps, system, mixing, cutoff, skin,
-                     r, v, w, q, a, al, zs, work, power, diag,
-                     R, m, I, comp, A, gn, gs, mu, sc, impulse):
-        """Advance system ``b`` by ``n_steps``. ``zs`` = [z, zd, zdd, t, z_max, z_min, step];
-        ``diag`` = [e_elastic, f_floor_lid, f_box, n_floor, n_lid]; ``sc`` the scalar params."""
-        (wc, wA, wgn, wgs, wmu, Lx, Ly, Lz, grav, M, K, C, U, amp, om, z_off, dt, drag,
-         t_win) = (sc[b, 0], sc[b, 1], sc[b, 2], sc[b, 3], sc[b, 4], sc[b, 5], sc[b, 6],
-                   sc[b, 7], sc[b, 8], sc[b, 9], sc[b, 10], sc[b, 11], sc[b, 12], sc[b, 13],
-                   sc[b, 14], sc[b, 15], sc[b, 16], sc[b, 17], sc[b, 18])
+    @_kernel()
+    def _advance_one(b, n_steps, system, law, cutoff, skin,
+                     r, v, w, q, a, al, box, work, power, diag,
+                     R, m, I, sid, table, wall_table, sc, impulse):
+        """Advance system ``b`` by ``n_steps``. ``box``: the box state (:data:`BOX_RECORD`),
+        ``diag`` the diagnostics (:data:`DIAG_RECORD`), ``sc`` the scalar parameters
+        (:data:`SCALAR_RECORD`), ``table``/``wall_table`` the contact tables, ``sid`` the
+        grains' species."""
+        prm = sc[b]
+        Lx, Ly, Lz, grav, drag, dt = prm.Lx, prm.Ly, prm.Lz, prm.gravity, prm.drag, prm.dt
+        M, K, C, U, om = prm.M, prm.K, prm.C, prm.U, prm.omega
+        amp, z_off, t_win = prm.amplitude, prm.z_offset, prm.t_window
         n = r.shape[1]
         rb, vb, wb, qb, ab, alb = r[b], v[b], w[b], q[b], a[b], al[b]
         Rb, mb, Ib = R[b], m[b], I[b]
+        tab, wtab = table[b], wall_table[b]
         pi = np.empty(16 * n + 16, np.int64)
         pj = np.empty(16 * n + 16, np.int64)
         pc = np.empty((16 * n + 16, 5))
-        cb, Ab, gnb, gsb, mub = comp[b], A[b], gn[b], gs[b], mu[b]
-        wk = _wall_constants(Rb, cb, Ab, gnb, gsb, mub, wc, wA, wgn, wgs, wmu, mixing)
+        wk = _wall_constants(Rb, mb, sid, wtab, law)
         ref = np.empty((n, 3))
-        z, zd, zdd, t, zmax, zmin, step = zs[b, 0], zs[b, 1], zs[b, 2], zs[b, 3], zs[b, 4], zs[b, 5], zs[b, 6]
+        bx = box[b]
+        z, zd, zdd, t, zmax, zmin, step = bx.z, bx.zd, bx.zdd, bx.t, bx.z_max, bx.z_min, bx.step
         npairs = 0
         if n > 1:
-            npairs, pi, pj, pc = _pairs(rb, z, cutoff, pi, pj, pc, ref, Rb, cb, Ab, gnb, gsb, mub, mixing)
+            npairs, pi, pj, pc = _pairs(rb, z, cutoff, pi, pj, pc, ref, Rb, mb, sid, tab, law)
         half_skin2 = 0.25 * skin * skin
         r1 = np.empty((n, 3))
         vp = np.empty((n, 3))
         wp = np.empty((n, 3))
         F = np.empty((n, 3))
         T = np.empty((n, 3))
-        out = np.empty(9)
+        out = np.empty(N_OUT)
         pw = np.empty(7)
         imp0 = 0.0
         imp1 = 0.0
         for _ in range(n_steps):
             if n > 1 and _moved_too_far(rb, z, ref, half_skin2):
-                npairs, pi, pj, pc = _pairs(rb, z, cutoff, pi, pj, pc, ref, Rb, cb, Ab, gnb, gsb, mub, mixing)
+                npairs, pi, pj, pc = _pairs(rb, z, cutoff, pi, pj, pc, ref, Rb, mb, sid, tab, law)
             t1 = t + dt
             for i in range(n):
                 for k in range(3):
                     r1[i, k] = rb[i, k] + dt * vb[i, k] + 0.5 * dt * dt * ab[i, k]
                     vp[i, k] = vb[i, k] + dt * ab[i, k]
                     wp[i, k] = wb[i, k] + dt * alb[i, k]
-            ph = om * t1
             if system == 0:
                 z1 = z + dt * zd + 0.5 * dt * dt * zdd
                 zdp = zd + dt * zdd
             else:
-                z1 = z_off + amp * math.cos(ph)
-                zdp = -amp * om * math.sin(ph)
-                zdd1 = -amp * om * om * math.cos(ph)
-            _forces(r1, vp, wp, z1, zdp, Rb, mb, wk, Lx, Ly, Lz, grav, drag,
+                z1, zdp, zdd1 = drive_motion_scalar(t1, z_off, amp, om)
+            _forces(law, r1, vp, wp, z1, zdp, Rb, mb, wk, Lx, Ly, Lz, grav, drag,
                     pi, pj, pc, npairs, F, T, out)
-            health = out[0] + out[4] + out[5] + out[6] + out[7] + out[8] + z1 + zdp
+            box_z = out[Out.box_z]
+            health = (box_z + out[Out.e_elastic] + out[Out.pp_normal] + out[Out.pp_friction]
+                      + out[Out.pw_normal] + out[Out.pw_friction] + z1 + zdp)
             for i in range(n):
                 health += F[i, 0] + F[i, 1] + F[i, 2] + T[i, 0] + T[i, 1] + T[i, 2]
             if not math.isfinite(health):
@@ -368,44 +411,25 @@ if AVAILABLE:
                 zd = np.nan
                 break
             if system == 0:
-                u1 = U * math.cos(ph)
-                ud1 = -U * om * math.sin(ph)
-                zdd1 = (-C * (zdp - ud1) - K * (z1 - u1) + out[0]) / M
+                u1, ud1 = base_motion_scalar(t1, U, om)
+                zdd1 = primary_acceleration_scalar(z1, zdp, u1, ud1, box_z, M, K, C)
                 zd1 = zd + 0.5 * dt * (zdd + zdd1)
-                pw[0] = -ud1 * (K * (z1 - u1) + C * (zdp - ud1))
-                pw[1] = C * (zdp - ud1) ** 2
+                pw[0], pw[1] = primary_powers_scalar(z1, zdp, u1, ud1, K, C)
             else:
                 zd1 = zdp
-                pw[0] = -out[0] * zdp
+                pw[0] = -box_z * zdp
                 pw[1] = 0.0
-            pw[2], pw[3], pw[4], pw[5] = out[5], out[6], out[7], out[8]
+            pw[2], pw[3] = out[Out.pp_normal], out[Out.pp_friction]
+            pw[4], pw[5] = out[Out.pw_normal], out[Out.pw_friction]
             pdrag = 0.0
             for i in range(n):
                 pdrag += mb[i] * (vp[i, 0] ** 2 + vp[i, 1] ** 2 + vp[i, 2] ** 2)
             pw[6] = drag * pdrag
             for i in range(n):
-                # rotation by the mid-step angular velocity ω + α dt/2 (exact axis-angle)
-                ox = wb[i, 0] + 0.5 * dt * alb[i, 0]
-                oy = wb[i, 1] + 0.5 * dt * alb[i, 1]
-                oz = wb[i, 2] + 0.5 * dt * alb[i, 2]
-                h2 = 0.25 * dt * dt * (ox * ox + oy * oy + oz * oz)  # (half angle)^2
-                if h2 < 1e-4:
-                    # cos h and sin(h)/|ω| by their series: exact in float64 for h < 0.01
-                    # (next terms < 3e-21), and free of sin/cos/sqrt calls per grain and step
-                    cw = 1.0 - h2 * (0.5 - h2 * (1.0 / 24.0 - h2 / 720.0))
-                    s = 0.5 * dt * (1.0 - h2 * (1.0 / 6.0 - h2 * (1.0 / 120.0 - h2 / 5040.0)))
-                else:
-                    speed = math.sqrt(ox * ox + oy * oy + oz * oz)
-                    cw = math.cos(0.5 * speed * dt)
-                    s = math.sin(0.5 * speed * dt) / speed
-                dw, dx, dy, dz = cw, s * ox, s * oy, s * oz
-                qw, qx, qy, qz = qb[i, 0], qb[i, 1], qb[i, 2], qb[i, 3]
-                nw = dw * qw - (dx * qx + dy * qy + dz * qz)
-                nx = dw * qx + qw * dx + (dy * qz - dz * qy)
-                ny = dw * qy + qw * dy + (dz * qx - dx * qz)
-                nz = dw * qz + qw * dz + (dx * qy - dy * qx)
-                nrm = math.sqrt(nw * nw + nx * nx + ny * ny + nz * nz)
-                qb[i, 0], qb[i, 1], qb[i, 2], qb[i, 3] = nw / nrm, nx / nrm, ny / nrm, nz / nrm
+                # rotation by the mid-step angular velocity ω + α dt/2
+                qb[i, 0], qb[i, 1], qb[i, 2], qb[i, 3] = rotate_scalar(
+                    qb[i, 0], qb[i, 1], qb[i, 2], qb[i, 3], wb[i, 0] + 0.5 * dt * alb[i, 0],
+                    wb[i, 1] + 0.5 * dt * alb[i, 1], wb[i, 2] + 0.5 * dt * alb[i, 2], dt)
                 for k in range(3):
                     a1 = F[i, k] / mb[i]
                     al1 = T[i, k] / Ib[i]
@@ -422,25 +446,21 @@ if AVAILABLE:
                 zmax = max(zmax, z1)
                 zmin = min(zmin, z1)
             step += 1
-            imp0 += out[1]
-            imp1 += out[0]
-        zs[b, 0], zs[b, 1], zs[b, 2], zs[b, 3], zs[b, 4], zs[b, 5], zs[b, 6] = z, zd, zdd, t, zmax, zmin, step
-        diag[b, 0], diag[b, 1], diag[b, 2], diag[b, 3], diag[b, 4] = out[4], out[1], out[0], out[2], out[3]
+            imp0 += out[Out.floor_lid_z]
+            imp1 += box_z
+        bx.z, bx.zd, bx.zdd, bx.t, bx.z_max, bx.z_min, bx.step = z, zd, zdd, t, zmax, zmin, step
+        dg = diag[b]
+        dg.e_elastic, dg.f_floor_lid, dg.f_box = out[Out.e_elastic], out[Out.floor_lid_z], box_z
+        dg.n_floor, dg.n_lid = out[Out.n_floor], out[Out.n_lid]
         impulse[b, 0] = imp0 / n_steps
         impulse[b, 1] = imp1 / n_steps
 
-    @njit(cache=True, parallel=True, error_model="numpy", fastmath=FASTMATH)
-    def _advance(n_steps, system, mixing, cutoff, skin, r, v, w, q, a, al, zs, work, power,
-                 diag, R, m, I, comp, A, gn, gs, mu, sc, impulse):
+    @_kernel(parallel=True)
+    def _advance(n_steps, system, law, cutoff, skin, r, v, w, q, a, al, box, work, power,
+                 diag, R, m, I, sid, table, wall_table, sc, impulse):
         for b in prange(r.shape[0]):
-            _advance_one(b, n_steps, system, mixing, cutoff, skin, r, v, w, q, a, al, zs, work,
-                         power, diag, R, m, I, comp, A, gn, gs, mu, sc, impulse)
-
-
-#: Scalar parameters passed to the kernel, in order.
-SCALARS = ("wall_compliance", "wall_A", "wall_gamma_n", "wall_gamma_s", "wall_mu", "Lx", "Ly",
-           "Lz", "gravity", "M", "K", "C", "U", "amplitude", "omega", "z_offset", "dt", "drag",
-           "t_window")
+            _advance_one(b, n_steps, system, law, cutoff, skin, r, v, w, q, a, al, box, work,
+                         power, diag, R, m, I, sid, table, wall_table, sc, impulse)
 
 
 # -- packing of pytrees (one float64 array per call across the JAX/Python boundary) ---------
@@ -499,26 +519,28 @@ def pack_numpy(d, lay):
 def advance_numpy(model, state: dict, params: dict, n_steps: int):
     """Advance a batch given as numpy dicts (fields of ``State`` / ``Params``, leading batch
     axis). Returns ``(new_state_dict, mean_forces (B, 2))``; inputs are not modified."""
+    from .contact import LAWS
+
     f64 = lambda x: np.ascontiguousarray(x, dtype=np.float64)  # noqa: E731
     r, v, w, q = (f64(state[k]).copy() for k in ("r", "v", "w", "q"))
     a, al = f64(state["a"]).copy(), f64(state["alpha"]).copy()
-    zs = np.stack([f64(state[k]) for k in ("z", "zd", "zdd", "t", "z_max", "z_min")]
-                  + [np.asarray(state["step"], np.float64)], axis=1)
     work = f64(state["work"]).copy()
     power = f64(state["power"]).copy()
     B = r.shape[0]
-    diag = np.zeros((B, 5))
+    box = np.empty(B, BOX_RECORD)
+    for k in BOX:
+        box[k] = np.asarray(state[k], np.float64)
+    diag = np.zeros(B, DIAG_RECORD)
     impulse = np.zeros((B, 2))
-    sc = np.stack([np.broadcast_to(f64(params[k]), (B,)) for k in SCALARS], axis=1)
-    _advance(int(n_steps), SYSTEMS[model.system], MIXING[model.mixing], model.cutoff, model.skin,
-             r, v, w, q, a, al, zs, work, power, diag,
+    sc = np.empty(B, SCALAR_RECORD)
+    for k in SCALARS:
+        sc[k] = np.broadcast_to(f64(params[k]), (B,))
+    _advance(int(n_steps), SYSTEMS[model.system], LAWS[model.law].id, model.cutoff, model.skin,
+             r, v, w, q, a, al, box, work, power, diag,
              f64(params["radius"]), f64(params["mass"]), f64(params["inertia"]),
-             f64(params["compliance"]), f64(params["A"]), f64(params["gamma_n"]),
-             f64(params["gamma_s"]), f64(params["mu"]), sc, impulse)
+             model.species_index().astype(np.int64), f64(params["pair_table"]),
+             f64(params["wall_table"]), sc, impulse)
     new = dict(state)
     new.update(r=r, v=v, w=w, q=q, a=a, alpha=al, work=work, power=power,
-               z=zs[:, 0], zd=zs[:, 1], zdd=zs[:, 2], t=zs[:, 3], z_max=zs[:, 4], z_min=zs[:, 5],
-               step=zs[:, 6],
-               e_elastic=diag[:, 0], f_floor_lid=diag[:, 1], f_box=diag[:, 2],
-               n_floor=diag[:, 3], n_lid=diag[:, 4])
+               **{k: box[k].copy() for k in BOX}, **{k: diag[k].copy() for k in DIAG})
     return new, impulse

@@ -4,6 +4,10 @@ Each grain ``i`` sees its neighbours ``idx[i, :]`` (jax-md ``Dense`` format, pad
 Every pair is evaluated from both sides and forces are summed per row: no scatter, and
 Newton's third law holds to the last bit because the two sides run the same arithmetic on
 negated inputs. Pair sums of energies and losses are therefore halved.
+
+The constants of a pair are a row of ``Params.pair_table`` (species of ``i``, species of
+``j``), mixed when the model was built; only the law's radius- and mass-dependent part
+(:attr:`jaxdamp.contact.Law.pair_jax`) is formed here.
 """
 
 from __future__ import annotations
@@ -11,8 +15,9 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import jax.numpy as jnp
+import numpy as np
 
-from .contact import Vec, contact_force, hertz_stiffness, mix
+from .contact import GAMMA_S, LAWS, MU, Vec, contact_force
 
 #: Where padding entries of the neighbour list point: far away, so they never touch.
 _GHOST = 1.0e6
@@ -29,14 +34,14 @@ class PairForces(NamedTuple):
     friction_loss: jnp.ndarray
 
 
-def pair_forces(r, v, w, idx, p, mixing: str) -> PairForces:
+def pair_forces(r, v, w, idx, p, model) -> PairForces:
     """Contact forces between grains.
 
     Args:
       r, v, w: positions [m], velocities [m/s], angular velocities [rad/s], ``(N, 3)``.
       idx: neighbour indices ``(N, K)``, entries ``N`` are padding.
       p: :class:`jaxdamp.model.Params`.
-      mixing: pair mixing rule.
+      model: :class:`jaxdamp.model.Model` (the law and the grains' species).
     """
     n = r.shape[0]
     if n < 2 or idx.shape[1] == 0:
@@ -58,18 +63,19 @@ def pair_forces(r, v, w, idx, p, mixing: str) -> PairForces:
     xi = R_i + R_j - dist
     nrm = dr.scale(1.0 / dist)
 
-    # padding has R_j = 0; give it R* = 1 so that sqrt(R*) has a finite gradient there
-    r_eff = jnp.where(R_j > 0, R_i * R_j / (R_i + R_j), 1.0)
-    k_n = hertz_stiffness(own(p.compliance) + other(p.compliance, 1.0), r_eff)
-    gamma_n = mix(own(p.gamma_n), other(p.gamma_n), mixing) + 1.5 * mix(
-        own(p.A), other(p.A), mixing
-    ) * k_n
-    gamma_s = mix(own(p.gamma_s), other(p.gamma_s), mixing)
-    mu = mix(own(p.mu), other(p.mu), mixing)
+    # padding has R_j = m_j = 0; give it R* = m* = 1 so that square roots have finite gradients
+    real = R_j > 0
+    r_eff = jnp.where(real, R_i * R_j / (R_i + R_j), 1.0)
+    m_i, m_j = own(p.mass), other(p.mass)
+    m_eff = jnp.where(real, m_i * m_j / (m_i + m_j), 1.0)
+    law = LAWS[model.law]
+    row = _rows(p.pair_table, model.species_index(), idx)
+    stiffness, damping = law.pair_jax(row, r_eff, m_eff)
     Rw = p.radius[:, None] * w
     spin = Vec(*(own(Rw[:, k]) + other(Rw[:, k]) for k in range(3)))
 
-    c = contact_force(xi, nrm, pair_vec(v), spin, R_i, k_n, gamma_n, gamma_s, mu)
+    c = contact_force(law, xi, nrm, pair_vec(v), spin, R_i, stiffness, damping,
+                      row[..., GAMMA_S], row[..., MU])
     return PairForces(
         force=c.force.sum(axis=1).stack(),
         torque=c.torque.sum(axis=1).stack(),
@@ -79,9 +85,17 @@ def pair_forces(r, v, w, idx, p, mixing: str) -> PairForces:
     )
 
 
+def _rows(table, species, idx):
+    """Table rows of every (grain, neighbour) slot, ``(N, K, F)`` (``(F,)`` for one species).
+    ``species``: the grains' species ``(N,)`` (static); padding slots get species 0 (they never
+    touch)."""
+    if table.shape[0] == 1:
+        return table[0, 0]
+    sp = jnp.asarray(np.append(species, 0).astype(np.int32))
+    return table[sp[:-1, None], sp[idx]]
+
+
 def all_pairs(n: int) -> jnp.ndarray:
     """A neighbour block listing every other grain: ``(N, N-1)``, the brute-force reference."""
-    import numpy as np
-
     full = np.arange(n)[None, :].repeat(n, axis=0)
     return jnp.asarray(full[~np.eye(n, dtype=bool)].reshape(n, n - 1), dtype=jnp.int32)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 from .config import Config, ConfigError, Material
+from .contact import LAWS
 from .model import collision_time_limit, config_dt, grain_radii, impact_speed
 
 SYSTEMS = ("primary", "driven", "impact")
@@ -21,7 +22,7 @@ def _positive(value, name, allow_zero=False):
         raise ConfigError(f"{name} = {value!r}: must be a finite number {limit}")
 
 
-def _material(mat: Material, name: str, grain: bool) -> None:
+def _material(mat: Material, name: str, grain: bool, law: str) -> None:
     _positive(mat.E, f"{name}.E")
     if not (isinstance(mat.nu, (int, float)) and 0.0 <= mat.nu < 0.5):
         raise ConfigError(f"{name}.nu = {mat.nu!r}: Poisson ratio must be in [0, 0.5)")
@@ -29,21 +30,7 @@ def _material(mat: Material, name: str, grain: bool) -> None:
         _positive(mat.density, f"{name}.density")
     _positive(mat.mu, f"{name}.mu", allow_zero=True)
     _positive(mat.gamma_s, f"{name}.gamma_s", allow_zero=True)
-    if mat.gamma_n is not None and mat.restitution is not None:
-        raise ConfigError(
-            f"{name}: give either gamma_n (thesis) or restitution (paper), not both "
-            f"(gamma_n = {mat.gamma_n}, restitution = {mat.restitution})"
-        )
-    if mat.gamma_n is not None:
-        _positive(mat.gamma_n, f"{name}.gamma_n", allow_zero=True)
-    if mat.restitution is not None:
-        if not (isinstance(mat.restitution, (int, float)) and 0.0 < mat.restitution <= 1.0):
-            raise ConfigError(
-                f"{name}.restitution = {mat.restitution!r}: must be in (0, 1]"
-            )
-        _positive(mat.v_ref, f"{name}.v_ref")
-    if mat.calibration_radius is not None:
-        _positive(mat.calibration_radius, f"{name}.calibration_radius")
+    LAWS[law].check(mat, name)  # the law's own inputs (damping, restitution, ...)
 
 
 def validate(config: Config) -> Config:
@@ -52,13 +39,16 @@ def validate(config: Config) -> Config:
         raise ConfigError(f"system = {config.system!r}: expected one of {SYSTEMS}")
     if config.mixing not in MIXING:
         raise ConfigError(f"mixing = {config.mixing!r}: expected one of {MIXING}")
+    if config.contact_law not in LAWS:
+        raise ConfigError(
+            f"contact_law = {config.contact_law!r}: expected one of {tuple(LAWS)}")
     _positive(config.frequency, "frequency")
     _positive(config.gravity, "gravity", allow_zero=True)
     box = config.box
     for side in ("Lx", "Ly", "Lz"):
         _positive(getattr(box, side), f"box.{side}")
     if box.wall is not None:
-        _material(box.wall, "box.wall", grain=False)
+        _material(box.wall, "box.wall", grain=False, law=config.contact_law)
     if config.system == "impact":
         return _validate_impact(config)
 
@@ -107,7 +97,7 @@ def validate(config: Config) -> Config:
         _positive(sp.radius, f"{name}.radius")
         if not 0.0 <= sp.radius_spread < 1.0:
             raise ConfigError(f"{name}.radius_spread = {sp.radius_spread}: must be in [0, 1)")
-        _material(sp.material, f"{name}.material", grain=True)
+        _material(sp.material, f"{name}.material", grain=True, law=config.contact_law)
         r_max = sp.radius * (1.0 + sp.radius_spread)
         for side in ("Lx", "Ly", "Lz"):
             length = getattr(box, side)
@@ -131,7 +121,7 @@ def validate(config: Config) -> Config:
     dt = config_dt(config, radii)
     if math.isfinite(t_c) and dt > t_c / num.dt_per_collision * (1 + 1e-12):
         raise ConfigError(
-            f"numerics.dt = {dt:.4g} s is too large: the Hertz collision time of the smallest "
+            f"numerics.dt = {dt:.4g} s is too large: the {config.contact_law} collision time of the smallest "
             f"grains at an impact speed of {impact_speed(config):.4g} m/s (numerics.v_impact = "
             f"{num.v_impact}; a driven box needs at least 2 A_d ω) is t_c = {t_c:.4g} s, and dt must be ≤ "
             f"t_c / {num.dt_per_collision:g} = {t_c / num.dt_per_collision:.4g} s "

@@ -2,7 +2,8 @@
 
 The box spans ``x ∈ [0, Lx]``, ``y ∈ [0, Ly]`` and ``z ∈ [z_box, z_box + Lz]``: it moves rigidly
 along ``z`` only, with velocity ``zd_box``. Walls use the same contact law as grain pairs with
-``R* = R_i`` and the wall's material.
+``R* = R_i``, ``m* = m_i`` and the constants of the grain's species against the wall material
+(a row of ``Params.wall_table``, mixed when the model was built).
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
-from .contact import Vec, contact_force, hertz_stiffness, mix
+from .contact import GAMMA_S, LAWS, MU, Vec, contact_force
 
 #: Inward unit normals of floor, lid, x=0, x=Lx, y=0, y=Ly (pointing from the wall to a grain).
 _NORMALS = np.array(
@@ -43,14 +44,14 @@ class WallForces(NamedTuple):
     friction_loss: jnp.ndarray
 
 
-def wall_forces(r, v, w, z_box, zd_box, p, mixing: str) -> WallForces:
+def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
     """Contacts of grains ``(N, 3)`` with the six walls of a box at height ``z_box``.
 
     Args:
       r, v, w: positions [m], velocities [m/s], angular velocities [rad/s], ``(N, 3)``.
       z_box, zd_box: floor position [m] and box velocity [m/s] (scalars).
       p: :class:`jaxdamp.model.Params`.
-      mixing: pair mixing rule.
+      model: :class:`jaxdamp.model.Model` (the law and the grains' species).
     """
     # Signed distance of each centre to each wall plane, (N, 6).
     x, y, z = r[:, 0], r[:, 1], r[:, 2]
@@ -60,17 +61,18 @@ def wall_forces(r, v, w, z_box, zd_box, p, mixing: str) -> WallForces:
     )
     R = p.radius[:, None]
     xi = R - dist
-    k_n = hertz_stiffness(p.compliance[:, None] + p.wall_compliance, R)
-    gamma_n = mix(p.gamma_n, p.wall_gamma_n, mixing)[:, None] + 1.5 * mix(
-        p.A, p.wall_A, mixing
-    )[:, None] * k_n
-    gamma_s = mix(p.gamma_s, p.wall_gamma_s, mixing)[:, None]
-    mu = mix(p.mu, p.wall_mu, mixing)[:, None]
+    law = LAWS[model.law]
+    if p.wall_table.shape[0] == 1:
+        row = p.wall_table[0]  # (F,): one species
+    else:
+        row = p.wall_table[jnp.asarray(model.species_index())][:, None, :]  # (N, 1, F)
+    stiffness, damping = law.pair_jax(row, R, p.mass[:, None])
     normals = Vec(*(jnp.asarray(_NORMALS[:, k]) for k in range(3)))  # (6,) each
     v_rel = Vec(v[:, 0:1], v[:, 1:2], v[:, 2:3] - zd_box)  # the walls move with (0, 0, zd_box)
     Rw = p.radius[:, None] * w
     spin = Vec(Rw[:, 0:1], Rw[:, 1:2], Rw[:, 2:3])
-    c = contact_force(xi, normals, v_rel, spin, R, k_n, gamma_n, gamma_s, mu)
+    c = contact_force(law, xi, normals, v_rel, spin, R, stiffness, damping, row[..., GAMMA_S],
+                      row[..., MU])
 
     fz = c.force.z  # (N, 6): force of wall on grain
     return WallForces(

@@ -18,7 +18,8 @@ STEEL = Material(E=2e9, nu=0.3, density=7850.0, mu=0.0, gamma_n=0.0, gamma_s=0.0
 
 
 def config(n=2, radius=2.5e-3, material=STEEL, box=(0.05, 0.05, 0.05), system="driven",
-           gravity=0.0, frequency=10.0, amplitude=0.0, primary=None, **numerics) -> Config:
+           gravity=0.0, frequency=10.0, amplitude=0.0, primary=None, contact_law="hertz",
+           **numerics) -> Config:
     num = dict(duration=0.01, chunk=0.005, record_dt=1e-4)
     num.update(numerics)
     return Config(
@@ -30,6 +31,7 @@ def config(n=2, radius=2.5e-3, material=STEEL, box=(0.05, 0.05, 0.05), system="d
         primary=primary if system == "primary" else None,
         numerics=Numerics(**num),
         gravity=gravity,
+        contact_law=contact_law,
         name="test",
     )
 
@@ -53,10 +55,14 @@ def start(cfg: Config, r, v, w=None, z=0.0, zd=0.0, dt=None, **param_changes):
     return model, pb, st, nbrs
 
 
-def run_steps(model, pb, st, nbrs, n_records, record_every):
-    """Advance (re-allocating neighbour lists on overflow) and return
+#: The two implementations of the step (``numerics.engine``); physics tests run on both.
+ENGINES = ("jax", "native")
+
+
+def run_steps(model, pb, st, nbrs, n_records, record_every, engine="jax"):
+    """Advance with ``engine`` (re-allocating neighbour lists on overflow) and return
     (final batched state, nbrs, records of system 0 as numpy)."""
-    st, nbrs, recs = advance(model, st, nbrs, pb, n_records, record_every, 1.5)
+    st, nbrs, recs = advance(model, st, nbrs, pb, n_records, record_every, 1.5, engine=engine)
     return st, nbrs, {k: np.asarray(v[0]) for k, v in recs.items()}
 
 

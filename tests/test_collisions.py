@@ -11,9 +11,9 @@ import pytest
 
 from jaxdamp import restitution as rst
 from jaxdamp.config import Material
-from jaxdamp.model import build
+from jaxdamp.model import build, contact_law
 
-from helpers import config, run_steps, start
+from helpers import ENGINES, config, run_steps, start
 
 R = 2.5e-3
 PAPER = Material(E=2e9, nu=0.3, density=7850.0, mu=0.0, restitution=0.75, v_ref=1.0)
@@ -27,8 +27,14 @@ def _pair_constants(mat):
     return m, E_star
 
 
-def _head_on(mat, v, dt_fraction=50.0):
-    """Two grains approach along x at relative speed v; returns (measured ε, contact time)."""
+def _A(cfg, wall=False):
+    """The (mixed) dissipative constant ``A`` of a like pair (or grain–wall) from the tables."""
+    p, col = build(cfg)[1], contact_law(cfg).column("A")
+    return float(p.wall_table[0, col] if wall else p.pair_table[0, 0, col])
+
+
+def _head_on(mat, v, dt_fraction=50.0, engine="jax"):
+    """Two grains approach along x at relative speed v; returns (measured ε, contact time, A)."""
     cfg = config(n=2, radius=R, material=mat, v_impact=v, dt_per_collision=dt_fraction)
     model, params = build(cfg)
     dt = float(params.dt)
@@ -38,14 +44,14 @@ def _head_on(mat, v, dt_fraction=50.0):
     vel = [[v / 2, 0, 0], [-v / 2, 0, 0]]
     model, pb, st, nbrs = start(cfg, r, vel)
     n_steps = int((gap / v) / dt) + int(3 * dt_fraction)
-    st, nbrs, rec = run_steps(model, pb, st, nbrs, n_steps, 1)
+    st, nbrs, rec = run_steps(model, pb, st, nbrs, n_steps, 1, engine=engine)
     v_out = np.asarray(st.v[0])
     eps = (v_out[1, 0] - v_out[0, 0]) / v
     touching = rec["e_elastic"] > 0
-    return eps, touching.sum() * dt, float(params.A[0])
+    return eps, touching.sum() * dt, _A(cfg)
 
 
-def _on_floor(mat, v, dt_fraction=50.0):
+def _on_floor(mat, v, dt_fraction=50.0, engine="jax"):
     """One grain hits the resting floor at speed v (no gravity); returns (ε, contact time)."""
     cfg = config(n=1, radius=R, material=mat, v_impact=v, dt_per_collision=dt_fraction)
     model, params = build(cfg)
@@ -53,16 +59,17 @@ def _on_floor(mat, v, dt_fraction=50.0):
     gap = 0.1 * R
     model, pb, st, nbrs = start(cfg, [[0.025, 0.025, R + gap]], [[0, 0, -v]])
     n_steps = int((gap / v) / dt) + int(3 * dt_fraction)
-    st, nbrs, rec = run_steps(model, pb, st, nbrs, n_steps, 1)
+    st, nbrs, rec = run_steps(model, pb, st, nbrs, n_steps, 1, engine=engine)
     eps = float(st.v[0][0, 2]) / v
     return eps, (rec["e_elastic"] > 0).sum() * dt
 
 
+@pytest.mark.parametrize("engine", ENGINES)
 @pytest.mark.parametrize("v", SPEEDS)
-def test_pair_restitution_matches_calibration(v):
+def test_pair_restitution_matches_calibration(v, engine):
     """Measured ε of a head-on pair collision equals ε(A, v) of the force law within 0.5 %."""
     m, E_star = _pair_constants(PAPER)
-    eps, _, A = _head_on(PAPER, v)
+    eps, _, A = _head_on(PAPER, v, engine=engine)
     expected = rst.collision(A=A, m_star=m / 2, R_star=R / 2, E_star=E_star, v=v).restitution
     assert eps == pytest.approx(expected, rel=5e-3)
     if v == 1.0:
@@ -74,30 +81,31 @@ def test_restitution_decreases_with_speed():
     assert eps[0] > eps[1] > eps[2]
 
 
+@pytest.mark.parametrize("engine", ENGINES)
 @pytest.mark.parametrize("v", (0.3, 3.0))
-def test_wall_restitution_matches_calibration(v):
+def test_wall_restitution_matches_calibration(v, engine):
     m, _ = _pair_constants(PAPER)
     E_star_wall = 1.0 / (2 * (1 - PAPER.nu**2) / PAPER.E)
-    model, params = build(config(n=1, radius=R, material=PAPER))
-    A = float(params.A[0])
-    eps, _ = _on_floor(PAPER, v)
+    A = _A(config(n=1, radius=R, material=PAPER), wall=True)
+    eps, _ = _on_floor(PAPER, v, engine=engine)
     expected = rst.collision(A=A, m_star=m, R_star=R, E_star=E_star_wall, v=v).restitution
     assert eps == pytest.approx(expected, rel=5e-3)
 
 
+@pytest.mark.parametrize("engine", ENGINES)
 @pytest.mark.parametrize("v", (0.5, 2.0))
-def test_contact_duration_is_hertz_time(v):
+def test_contact_duration_is_hertz_time(v, engine):
     """Undamped contact lasts the Hertz collision time within 2 % (pair and wall).
 
     dt = t_c/500 here so that counting steps resolves the duration to 0.2 %.
     """
     m, E_star = _pair_constants(ELASTIC)
-    eps, duration, _ = _head_on(ELASTIC, v, dt_fraction=500)
+    eps, duration, _ = _head_on(ELASTIC, v, dt_fraction=500, engine=engine)
     t_c = rst.collision_time(m / 2, R / 2, E_star, v)
     assert duration == pytest.approx(t_c, rel=0.02)
     assert eps == pytest.approx(1.0, abs=1e-3)  # elastic
 
-    eps_w, duration_w = _on_floor(ELASTIC, v, dt_fraction=500)
+    eps_w, duration_w = _on_floor(ELASTIC, v, dt_fraction=500, engine=engine)
     E_star_wall = 1.0 / (2 * (1 - ELASTIC.nu**2) / ELASTIC.E)
     assert duration_w == pytest.approx(rst.collision_time(m, R, E_star_wall, v), rel=0.02)
     assert eps_w == pytest.approx(1.0, abs=1e-3)

@@ -10,7 +10,7 @@ from jaxdamp.config import Material, Primary, apply_overrides
 from jaxdamp.model import CH, build
 from jaxdamp.runner import run
 
-from helpers import config, run_steps, start
+from helpers import ENGINES, config, run_steps, start
 
 
 def _gas(n=27, side=0.02, seed=1):
@@ -24,7 +24,8 @@ def _gas(n=27, side=0.02, seed=1):
 ELASTIC = Material(E=2e9, nu=0.3, density=7850.0, mu=0.3, gamma_n=0.0, gamma_s=0.0)
 
 
-def test_energy_conserved_without_damping():
+@pytest.mark.parametrize("engine", ENGINES)
+def test_energy_conserved_without_damping(engine):
     """γ_n = γ_s = 0, no primary damping, a free box (K = C = U = 0): the total mechanical
     energy (grains + box) is conserved to 1e-6 relative over 1e5 steps with ~40 % of the
     samples inside collisions (27 grains in a 2 cm box).
@@ -37,7 +38,7 @@ def test_energy_conserved_without_damping():
                  primary=Primary(M=0.05, K=0.0, C=0.0, U=0.0), v_impact=1.0,
                  dt_per_collision=400)
     model, pb, st, nbrs = start(cfg, *_gas(n))
-    st, nbrs, rec = run_steps(model, pb, st, nbrs, 1000, 100)
+    st, nbrs, rec = run_steps(model, pb, st, nbrs, 1000, 100, engine=engine)
     e0 = float(st.e_start[0])
     assert np.all(rec["work"] == 0.0)  # nothing dissipates, nothing drives
     err = np.abs(rec["balance_residual"]) / e0
@@ -73,7 +74,8 @@ def test_collision_energy_error_converges_at_order_two_and_a_half():
     assert 2.2 < min(order) and max(order) < 3.0
 
 
-def test_sliding_sphere_ends_rolling_at_five_sevenths():
+@pytest.mark.parametrize("engine", ENGINES)
+def test_sliding_sphere_ends_rolling_at_five_sevenths(engine):
     """A sphere launched sliding (ω = 0) on the floor with Coulomb friction ends rolling
     without slip at 5/7 of its initial speed (1 %)."""
     steel = presets.SANCHEZ_STEEL
@@ -87,7 +89,7 @@ def test_sliding_sphere_ends_rolling_at_five_sevenths():
     dt = float(pb.dt[0])
     n_rec = 30
     every = int(0.001 / dt)  # 30 ms: sliding stops after 2/7 v0 / (μ g) ≈ 10 ms
-    st, nbrs, rec = run_steps(model, pb, st, nbrs, n_rec, every)
+    st, nbrs, rec = run_steps(model, pb, st, nbrs, n_rec, every, engine=engine)
     v = np.asarray(st.v[0][0])
     w = np.asarray(st.w[0][0])
     assert v[0] == pytest.approx(5 / 7 * v0, rel=0.01)
@@ -98,13 +100,14 @@ def test_sliding_sphere_ends_rolling_at_five_sevenths():
     assert loss == pytest.approx(0.5 * m * v0**2 * 2 / 7, rel=0.02)
 
 
+@pytest.mark.parametrize("engine", ENGINES)
 @pytest.mark.parametrize("system", ["primary", "driven"])
-def test_energy_balance_closes_in_driven_damper(system):
+def test_energy_balance_closes_in_driven_damper(system, engine):
     """input work = Δ(mechanical energy) + all losses, to better than 1e-3 relative, for a
     damper (40 grains, friction and collisions) on the primary (S1) and in a driven box (S2)."""
     cfg = presets.get("sanchez2012-optimal")
     over = ["grains.0.count=40", "box.Lz=0.06", "numerics.duration=0.2",
-            "numerics.chunk=0.1", "numerics.settle_time=0.3"]
+            "numerics.chunk=0.1", "numerics.settle_time=0.3", f"numerics.engine='{engine}'"]
     if system == "driven":
         over += ["system='driven'", "drive.amplitude=0.004", "frequency=20"]
     cfg = apply_overrides(cfg, over)

@@ -12,7 +12,7 @@ from jaxdamp import mixtures, presets
 from jaxdamp import neighbors as nb
 from jaxdamp import restitution as rst
 from jaxdamp.config import ConfigError
-from jaxdamp.model import build, grain_species
+from jaxdamp.model import build, contact_law
 from jaxdamp.pairs import all_pairs, pair_forces
 from jaxdamp.validation import validate
 
@@ -80,18 +80,22 @@ def test_per_species_damping_and_mixing_rule():
     the arithmetic mean (the config's rule); the walls keep the reference's A in every class."""
     cfg = presets.get("varela2023-c")  # radii σ̂ R_ref and σ R_ref: neither is the reference's
     model, p = build(cfg)
-    sp = grain_species(cfg)
-    A = np.asarray(p.A)
-    E_star = 0.5 / float(p.compliance[0])
+    law = contact_law(cfg)
+    table = np.asarray(p.pair_table)
+    A = table[:, :, law.column("A")]
+    E_star = float(table[0, 0, law.column("E_star")])
     for s, species in enumerate(cfg.grains):
         R = species.radius
         m = 7850 * 4 / 3 * math.pi * R**3
-        A_s = float(A[sp == s][0])
-        assert rst.restitution(0.5 * m, 0.5 * R, E_star, 1.0, A=A_s) == pytest.approx(0.75, abs=1e-6)
+        assert rst.restitution(0.5 * m, 0.5 * R, E_star, 1.0, A=A[s, s]) == pytest.approx(0.75, abs=1e-6)
     # A scales with the radius at fixed ε (β ∝ A / R): the small species' is smaller
-    assert A[sp == 1][0] / A[sp == 0][0] == pytest.approx(cfg.grains[1].radius / cfg.grains[0].radius,
-                                                          rel=1e-6)
-    assert float(p.wall_A) == pytest.approx(float(build(REF)[1].A[0]), rel=1e-12)
+    assert A[1, 1] / A[0, 0] == pytest.approx(cfg.grains[1].radius / cfg.grains[0].radius, rel=1e-6)
+    assert A[0, 1] == pytest.approx(0.5 * (A[0, 0] + A[1, 1]), rel=1e-12)  # arithmetic mixing
+    # the walls' A (mixed arithmetically with each species') is the reference's in every class
+    ref_p = build(REF)[1]
+    A_wall_ref = 2 * float(ref_p.wall_table[0, law.column("A")]) - float(ref_p.pair_table[0, 0, law.column("A")])
+    wall_A = np.asarray(p.wall_table)[:, law.column("A")]
+    np.testing.assert_allclose(2 * wall_A - np.diag(A), A_wall_ref, rtol=1e-12)
     assert cfg.mixing == "arithmetic"
 
 
@@ -104,7 +108,8 @@ def test_time_step_follows_the_smallest_grains_and_the_drive():
         r = sigma * R_REF
         m = 7850 * 4 / 3 * math.pi * r**3
         v = 2 * 0.03 * 2 * math.pi * 70
-        t_c = rst.collision_time(0.5 * m, 0.5 * r, 0.5 / float(p.compliance[0]), v)
+        E_star = float(p.pair_table[0, 0, contact_law(cfg).column("E_star")])
+        t_c = rst.collision_time(0.5 * m, 0.5 * r, E_star, v)
         assert float(p.dt) == pytest.approx(t_c / 50, rel=1e-12)
         dts[sigma] = float(p.dt)
     assert dts[0.1] / dts[1.0] == pytest.approx(0.1, rel=1e-9)  # t_c ∝ R at fixed material
@@ -155,9 +160,8 @@ def test_tenfold_mixture_neighbour_list_equals_all_pairs_and_stays_small():
     R = np.asarray(p.radius)
     nbrs = nb.allocate(model, jnp.asarray(r)[None], 1.0, radius=p.radius)
     idx = np.asarray(nbrs.idx[0])
-    got = pair_forces(jnp.asarray(r), jnp.asarray(v), jnp.asarray(w), nbrs.idx[0], p, "arithmetic")
-    ref = pair_forces(jnp.asarray(r), jnp.asarray(v), jnp.asarray(w), all_pairs(model.n), p,
-                      "arithmetic")
+    got = pair_forces(jnp.asarray(r), jnp.asarray(v), jnp.asarray(w), nbrs.idx[0], p, model)
+    ref = pair_forces(jnp.asarray(r), jnp.asarray(v), jnp.asarray(w), all_pairs(model.n), p, model)
     scale = float(jnp.abs(ref.force).max())
     assert scale > 0
     np.testing.assert_allclose(got.force, ref.force, atol=1e-12 * scale)

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from jaxdamp import native, presets
+from jaxdamp.contact import LAWS
 from jaxdamp.config import Box, Config, Drive, Material, Numerics, Primary, Species, apply_overrides
 from jaxdamp.runner import run
 
@@ -81,8 +82,9 @@ def test_cell_grid_pair_list_is_complete_and_grows():
         ones = np.ones(n)
         ref = np.empty((n, 3))
         pi, pj, pc = np.empty(1, np.int64), np.empty(1, np.int64), np.empty((1, 5))
-        k, pi, pj, pc = native._pairs(r, 0.0, cutoff, pi, pj, pc, ref, ones * 1e-3, ones * 1e-9,
-                                      ones * 0, ones, ones, ones * 0.3, 0)
+        table = np.ones((1, 1, len(LAWS["hertz"].columns)))
+        k, pi, pj, pc = native._pairs(r, 0.0, cutoff, pi, pj, pc, ref, ones * 1e-3, ones,
+                                      np.zeros(n, np.int64), table, LAWS["hertz"].id)
         got = {(int(a), int(b)) for a, b in zip(pi[:k], pj[:k])}
         d = np.linalg.norm(r[:, None] - r[None], axis=-1)
         want = {(i, j) for i in range(n) for j in range(i + 1, n) if d[i, j] < cutoff}

@@ -32,8 +32,8 @@ def test_neighbor_list_forces_equal_all_pairs():
     model, params = build(cfg)
     r, v, w = _dense_packing(n, radius, 0.02, seed=3)
     nbrs = nb.allocate(model, jnp.asarray(r)[None], 1.5)
-    ref = pair_forces(jnp.asarray(r), jnp.asarray(v), jnp.asarray(w), all_pairs(n), params, "arithmetic")
-    got = pair_forces(jnp.asarray(r), jnp.asarray(v), jnp.asarray(w), nbrs.idx[0], params, "arithmetic")
+    ref = pair_forces(jnp.asarray(r), jnp.asarray(v), jnp.asarray(w), all_pairs(n), params, model)
+    got = pair_forces(jnp.asarray(r), jnp.asarray(v), jnp.asarray(w), nbrs.idx[0], params, model)
     scale = float(jnp.abs(ref.force).max())
     assert scale > 0 and float(ref.friction_loss) > 0
     np.testing.assert_allclose(got.force, ref.force, atol=1e-12 * scale)

@@ -1,0 +1,232 @@
+"""One definition of the physics for both engines: the JAX forms and the numba scalar forms of
+every registered contact law, of the excitation and of the integrator's pieces agree to
+round-off on random inputs covering every branch; the contact tables are built once."""
+
+import dataclasses
+import math
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jaxdamp import contact, excitation, integrate
+from jaxdamp.config import Box, Config, ConfigError, Drive, Material, Species
+from jaxdamp.contact import LAWS, Vec
+from jaxdamp.model import build, contact_tables
+from jaxdamp.validation import validate
+
+pytest.importorskip("numba")
+
+RTOL = 1e-12
+LAW_NAMES = tuple(LAWS)
+
+
+def _close(a, b, scale, what):
+    """``a == b`` to ``RTOL`` relative to each value, or to ``RTOL * scale`` absolutely (values
+    formed by a cancellation, e.g. the normal loss of a nearly elastic contact)."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    np.testing.assert_allclose(a, b, rtol=RTOL, atol=RTOL * scale, err_msg=what)
+
+
+def _random_rows(law, rng, n):
+    """Random but physical table rows of ``law`` (``γ_s``, ``μ`` first)."""
+    rows = np.empty((n, len(law.columns)))
+    for c, name in enumerate(law.columns):
+        lo, hi = {"gamma_s": (0.0, 300.0), "mu": (0.0, 0.8), "E_star": (1e8, 1e11),
+                  "gamma_n": (0.0, 100.0), "A": (0.0, 1e-5), "k": (1e3, 1e7),
+                  "zeta": (0.0, 0.9)}[name]
+        rows[:, c] = rng.uniform(lo, hi, n)
+    return rows
+
+
+def _contacts(rng, n):
+    """``n`` touching contacts in four groups: generic; zero slip (axis-aligned normal, normal
+    velocity and spin only); fast separation (normal force clipped to zero); strong tangential
+    damping with little friction (Coulomb cap) — and their opposite by the rows' spread."""
+    xi = rng.uniform(1e-7, 1e-4, n)
+    nrm = rng.normal(size=(n, 3))
+    nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+    v = rng.normal(0, 1.0, (n, 3))
+    spin = rng.normal(0, 0.3, (n, 3))
+    q = n // 4
+    nrm[q:2 * q] = [0.0, 0.0, 1.0]  # zero slip: v ∥ n and spin ∥ n give v_s = 0 exactly
+    v[q:2 * q, :2] = 0.0
+    spin[q:2 * q, :2] = 0.0
+    v[2 * q:3 * q] = 50.0 * nrm[2 * q:3 * q]  # separating fast: F_n clipped to 0
+    return xi, nrm, v, spin
+
+
+@pytest.mark.parametrize("name", LAW_NAMES)
+def test_pair_constants_jax_equal_scalar(name):
+    law = LAWS[name]
+    rng = np.random.default_rng(1)
+    rows = _random_rows(law, rng, 200)
+    r_eff, m_eff = rng.uniform(1e-4, 1e-2, 200), rng.uniform(1e-6, 1e-1, 200)
+    k_j, g_j = law.pair_jax(jnp.asarray(rows), jnp.asarray(r_eff), jnp.asarray(m_eff))
+    got = np.array([law.pair_scalar(rows[i], r_eff[i], m_eff[i]) for i in range(200)])
+    via = np.array([contact.pair_scalar(law.id, rows[i], r_eff[i], m_eff[i]) for i in range(200)])
+    _close(got[:, 0], k_j, 0.0, "k")
+    _close(got[:, 1], g_j, 0.0, "g")
+    np.testing.assert_array_equal(via, got)  # the kernel's dispatch picks this law
+
+
+@pytest.mark.parametrize("name", LAW_NAMES)
+def test_contact_jax_equals_scalar_on_every_branch(name):
+    law = LAWS[name]
+    rng = np.random.default_rng(7)
+    n = 400
+    xi, nrm, v, spin = _contacts(rng, n)
+    rows = _random_rows(law, rng, n)
+    rows[3 * (n // 4):, contact.GAMMA_S] *= 100.0  # strong viscous friction: capped by μ F_n
+    r_eff, m_eff = rng.uniform(1e-3, 3e-3, n), rng.uniform(1e-4, 1e-3, n)
+    k, g = (np.asarray(x) for x in law.pair_jax(jnp.asarray(rows), r_eff, m_eff))
+    R_i = rng.uniform(1e-3, 3e-3, n)
+    c = contact.contact_force(law, jnp.asarray(xi), Vec.of(jnp.asarray(nrm)), Vec.of(jnp.asarray(v)),
+                              Vec.of(jnp.asarray(spin)), jnp.asarray(R_i), jnp.asarray(k),
+                              jnp.asarray(g), jnp.asarray(rows[:, contact.GAMMA_S]),
+                              jnp.asarray(rows[:, contact.MU]))
+    s = np.array([contact.contact_scalar(law.id, xi[i], *nrm[i], *v[i], *spin[i], k[i], g[i],
+                                         rows[i, contact.GAMMA_S], rows[i, contact.MU])
+                  for i in range(n)])
+    f_scale = float(np.abs(s[:, :3]).max())
+    _close(s[:, :3], c.force.stack(), f_scale, "force")
+    torque = -R_i[:, None] * np.cross(nrm, s[:, 3:6])
+    _close(torque, c.torque.stack(), f_scale * R_i.max(), "torque")
+    p_scale = f_scale * float(np.abs(v).max())
+    _close(s[:, 6], c.elastic_energy, f_scale * xi.max(), "elastic energy")
+    _close(s[:, 7], c.normal_loss, p_scale, "normal loss")
+    _close(s[:, 8], c.friction_loss, p_scale, "friction loss")
+
+    # every branch was taken
+    fn = np.asarray(c.normal)
+    assert (fn == 0).sum() >= n // 8 and (fn > 0).sum() >= n // 2, "clipped and pressing"
+    ft = np.linalg.norm(s[:, 3:6], axis=1)
+    vc = v - np.cross(spin, nrm)  # contact-point velocity, recomputed independently
+    slide = vc - nrm * np.sum(vc * nrm, axis=1, keepdims=True)
+    vs = np.linalg.norm(slide, axis=1)
+    capped = (fn > 0) & np.isclose(ft, rows[:, contact.MU] * fn, rtol=1e-9) & (vs > 0)
+    viscous = (fn > 0) & (ft < rows[:, contact.MU] * fn * (1 - 1e-9))
+    zero_slip = vs == 0
+    assert capped.sum() >= 20 and viscous.sum() >= 20 and zero_slip.sum() >= n // 8
+    assert np.all(ft[zero_slip] == 0)
+
+
+def test_contact_jax_is_zero_without_overlap():
+    """Separated contacts (ξ ≤ 0) carry no force, energy or loss in the JAX form (the scalar
+    form is only called for touching contacts)."""
+    rng = np.random.default_rng(3)
+    for law in LAWS.values():
+        xi = -rng.uniform(0, 1e-4, 50)
+        _, nrm, v, spin = _contacts(rng, 50)
+        row = _random_rows(law, rng, 1)[0]
+        k, g = law.pair_jax(jnp.asarray(row), 1e-3, 1e-4)
+        c = contact.contact_force(law, jnp.asarray(xi), Vec.of(jnp.asarray(nrm)),
+                                  Vec.of(jnp.asarray(v)), Vec.of(jnp.asarray(spin)), 1e-3, k, g,
+                                  row[contact.GAMMA_S], row[contact.MU])
+        for a in (c.force.stack(), c.torque.stack(), c.elastic_energy, c.normal_loss,
+                  c.friction_loss):
+            assert np.all(np.asarray(a) == 0)
+
+
+def test_rotation_jax_equals_scalar_small_and_large_angles():
+    """The kernel's rotation (series below half-angle 0.01, sin/cos above) against the JAX
+    form's exact axis-angle rotation, both regimes."""
+    rng = np.random.default_rng(5)
+    n = 200
+    q = rng.normal(size=(n, 4))
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    w = rng.normal(size=(n, 3))
+    w /= np.linalg.norm(w, axis=1, keepdims=True)
+    dt = 1e-5
+    half = np.concatenate([rng.uniform(1e-9, 9e-3, n // 2), rng.uniform(0.011, 1.5, n // 2)])
+    w *= (2 * half / dt)[:, None]
+    w[0] = 0.0  # no rotation at all
+    assert (half < 0.01).sum() >= n // 2 - 1 and (half > 0.01).sum() == n // 2
+    ref = np.asarray(integrate.rotate(jnp.asarray(q), jnp.asarray(w), dt))
+    got = np.array([integrate.rotate_scalar(*q[i], *w[i], dt) for i in range(n)])
+    np.testing.assert_allclose(got, ref, rtol=0, atol=1e-14)
+    np.testing.assert_allclose(got[0], q[0], rtol=0, atol=1e-15)
+
+
+def test_body_force_primary_and_excitation_jax_equal_scalar():
+    """Gravity with the settling drag, the primary's acceleration and powers, the base and the
+    box motion: the kernel's scalar forms against the JAX forms."""
+    rng = np.random.default_rng(9)
+    m, drag, grav = rng.uniform(1e-4, 1e-2, 50), rng.uniform(0, 30, 50), 9.8
+    vel = rng.normal(0, 1, (50, 3))
+    ref = np.stack([np.asarray(x) for x in integrate.body_force(
+        jnp.asarray(m), *(jnp.asarray(vel[:, k]) for k in range(3)), grav, jnp.asarray(drag))], 1)
+    got = np.array([integrate.body_force_scalar(m[i], *vel[i], grav, drag[i]) for i in range(50)])
+    _close(got, ref, 0.0, "body force")
+    assert np.all(drag > 0) and np.all(ref[:, 2] != -m * grav)  # the drag acts
+
+    M, K, C = 2.37, 21500.0, 7.6
+    for _ in range(20):
+        z, zd, u, ud, fz = rng.normal(0, 1e-3, 5)
+        a_ref = integrate.primary_acceleration(jnp.asarray(z), zd, u, ud, fz, M, K, C)
+        _close(integrate.primary_acceleration_scalar(z, zd, u, ud, fz, M, K, C), a_ref, 1.0, "z''")
+        p_ref = integrate.primary_powers(jnp.asarray(z), zd, u, ud, K, C)
+        _close(integrate.primary_powers_scalar(z, zd, u, ud, K, C), p_ref, 1e-6, "powers")
+
+    cfg = Config(system="driven", frequency=14.5, grains=(), box=Box(0.1, 0.1, 0.1),
+                 drive=Drive(0.02))
+    p = dataclasses.replace(build(cfg)[1], U=jnp.asarray(0.0045), z_offset=jnp.asarray(0.013))
+    for t in rng.uniform(0, 10, 20):
+        _close(excitation.base_motion_scalar(t, float(p.U), float(p.omega)),
+               excitation.base_motion(jnp.asarray(t), p), 1.0, "base motion")
+        _close(excitation.drive_motion_scalar(t, float(p.z_offset), float(p.amplitude),
+                                              float(p.omega)),
+               excitation.drive_motion(jnp.asarray(t), p), 100.0, "drive motion")
+
+
+STEEL = Material(E=2e9, nu=0.3, density=7850.0, mu=0.3, gamma_n=40.0, gamma_s=120.0)
+GLASS = Material(E=5e9, nu=0.22, density=2500.0, mu=0.5, gamma_s=50.0, restitution=0.8)
+
+
+def _two_species(law="hertz", mixing="harmonic", **extra):
+    return Config(
+        system="driven", frequency=30.0, drive=Drive(0.003), mixing=mixing, contact_law=law,
+        grains=(Species(count=3, radius=2e-3, material=dataclasses.replace(STEEL, **extra)),
+                Species(count=4, radius=1e-3, material=dataclasses.replace(GLASS, **extra))),
+        box=Box(0.02, 0.02, 0.02, wall=dataclasses.replace(STEEL, mu=0.1, **extra)),
+    )
+
+
+@pytest.mark.parametrize("name", LAW_NAMES)
+def test_tables_hold_the_mixed_constants_once(name):
+    """``pair_table[s, t]`` is the law's mix of the two species' materials (symmetric),
+    ``wall_table[s]`` the mix with the wall's; the grains are stored species after species."""
+    law = LAWS[name]
+    cfg = _two_species(name, **({"linear_stiffness": 1e4} if name == "linear" else {}))
+    model, p = build(cfg)
+    pair, wall = (np.asarray(x) for x in (p.pair_table, p.wall_table))
+    assert pair.shape == (2, 2, len(law.columns)) and wall.shape == (2, len(law.columns))
+    np.testing.assert_array_equal(pair, pair.transpose(1, 0, 2))
+    lam = cfg.numerics.stiffness_scale
+    mats = [law.material(sp.material, sp.radius, lam) for sp in cfg.grains]
+    w = law.material(cfg.box.wall, cfg.grains[0].radius, lam)
+    for s in range(2):
+        np.testing.assert_array_equal(wall[s], law.mix(mats[s], w, "harmonic"))
+        for t in range(2):
+            np.testing.assert_array_equal(pair[s, t], law.mix(mats[s], mats[t], "harmonic"))
+    mu = law.column("mu")
+    assert pair[0, 1, mu] == pytest.approx(2 * 0.3 * 0.5 / 0.8)  # harmonic mean
+    np.testing.assert_array_equal(model.species_index(), [0, 0, 0, 1, 1, 1, 1])
+    np.testing.assert_array_equal(contact_tables(cfg)[0], pair)
+
+
+def test_contact_law_is_validated_by_name():
+    cfg = _two_species()
+    assert validate(cfg) is cfg
+    with pytest.raises(ConfigError, match=r"contact_law = 'hooke'.*" + ".*".join(LAW_NAMES)):
+        validate(cfg.replace(contact_law="hooke"))
+
+
+def test_mix_rules():
+    assert contact.mix(1.0, 3.0, "arithmetic") == 2.0
+    assert contact.mix(1.0, 4.0, "geometric") == 2.0
+    assert contact.mix(1.0, 3.0, "harmonic") == 1.5
+    assert contact.mix(0.0, 0.0, "harmonic") == 0.0
+    with pytest.raises(ValueError, match="mixing rule"):
+        contact.mix(1.0, 1.0, "median")
+    assert math.isfinite(contact.mix(0.0, 2.0, "geometric"))
