@@ -50,6 +50,10 @@ class Material:
       calibration_radius: radius [m] of the like-pair collision at which ``restitution`` holds;
         ``None`` means the species' own radius (for walls: the first species'). Fixing it for
         the walls keeps the wall's constant the same across mixtures of different sizes.
+      linear_stiffness: contact stiffness ``k`` [N/m] of the linear spring–dashpot law
+        (``Config.contact_law = "linear"``, required there) for a contact between two bodies of
+        this material; there ``restitution`` (default 1) holds at every speed and ``E``,
+        ``nu``, ``v_ref``, ``calibration_radius`` play no role.
     """
 
     E: float
@@ -61,6 +65,7 @@ class Material:
     restitution: float | None = None
     v_ref: float = 1.0
     calibration_radius: float | None = None
+    linear_stiffness: float | None = None
 
 
 @dataclass(frozen=True)
@@ -222,7 +227,8 @@ class Config:
       mixing: how per-species constants combine for a pair: ``"arithmetic"``, ``"harmonic"``
         or ``"geometric"`` mean (the 2023 paper: arithmetic).
       contact_law: the normal contact law by name, one of :data:`jaxdamp.contact.LAWS`:
-        ``"hertz"`` (Hertz + viscoelastic, SPEC §2).
+        ``"hertz"`` (Hertz + viscoelastic, SPEC §2) or ``"linear"`` (linear spring–dashpot
+        with a speed-independent restitution; needs ``Material.linear_stiffness``).
       name: preset or user label.
       notes: free text, e.g. deviations from a source.
     """

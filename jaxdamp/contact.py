@@ -34,6 +34,18 @@ e.g. Hertz ``k_n = (4/3) E* sqrt(R*)``). The mixing rule (:func:`mix`) is applie
 so both parameterisations (thesis ``γ_n``, paper ``A`` from a restitution) share one code
 path; elastic energy ``(2/5) k_n ξ^{5/2}``.
 
+**Linear spring–dashpot** (``"linear"``)::
+
+    F_n = max(0, k ξ + γ ξ'),   γ = 2 ζ sqrt(k m*)
+
+with the contact stiffness ``k`` [N/m] (``Material.linear_stiffness``) and the damping ratio
+``ζ`` set from the material's ``restitution`` ``e`` so that every collision, at every speed,
+has restitution exactly ``e``: ``e = exp(-ζ (π - 2 arcsin ζ)/sqrt(1 - ζ²))`` for the
+never-attractive force (:func:`restitution.linear_restitution`; the textbook
+``exp(-πζ/sqrt(1-ζ²))`` holds only with an attractive tail). The force acts for
+``(π - 2 arcsin ζ)/ω_d``, ``ω_d = sqrt(k/m*) sqrt(1-ζ²)``, which sets the time step; elastic
+energy ``k ξ²/2``.
+
 All functions are pure; SI units.
 """
 
@@ -250,6 +262,83 @@ def _finite(x) -> bool:
 
 
 # ---------------------------------------------------------------------------------------------
+# linear spring–dashpot
+
+#: Table columns of the linear law: contact stiffness ``k`` [N/m], damping ratio ``ζ`` [-].
+LINEAR_COLUMNS = _columns("k", "zeta")
+_L_K, _L_Z = (LINEAR_COLUMNS.index(c) for c in ("k", "zeta"))
+
+
+def linear_material(mat: Material, radius: float, stiffness_scale: float) -> dict:
+    """Per-material constants of the linear law: ``k = λ linear_stiffness`` [N/m], the
+    restitution ``e`` (``restitution``, or 1 if not given; ``v_ref`` plays no role: it holds at
+    every speed), ``γ_s`` (scaled by ``λ^{3/5}`` as for Hertz) and ``μ``. ``radius`` is not
+    needed."""
+    return dict(k=stiffness_scale * mat.linear_stiffness,
+                e=1.0 if mat.restitution is None else float(mat.restitution),
+                gamma_s=mat.gamma_s * rst.scale_damping(1.0, stiffness_scale), mu=mat.mu)
+
+
+def linear_mix(a: dict, b: dict, rule: str) -> tuple[float, ...]:
+    """Table row of two materials: ``k``, ``e``, ``γ_s``, ``μ`` by the mixing ``rule``, and the
+    damping ratio ``ζ`` that gives the mixed ``e`` exactly
+    (:func:`restitution.linear_damping_ratio`)."""
+    e = mix(a["e"], b["e"], rule)
+    return (mix(a["gamma_s"], b["gamma_s"], rule), mix(a["mu"], b["mu"], rule),
+            mix(a["k"], b["k"], rule), rst.linear_damping_ratio(e))
+
+
+def linear_pair_jax(row, r_eff, m_eff):
+    """``(k, γ)`` of contacts from their table rows ``(..., F)``: ``k`` [N/m] and
+    ``γ = 2 ζ sqrt(k m*)`` [kg/s] (wall: ``m* = m_i``). ``r_eff`` is not needed."""
+    k = row[..., _L_K]
+    return k, 2.0 * row[..., _L_Z] * jnp.sqrt(k * m_eff)
+
+
+@scalar_form
+def linear_pair_scalar(row, r_eff, m_eff):
+    """Scalar form of :func:`linear_pair_jax` for one table row ``(F,)``."""
+    k = row[_L_K]
+    return k, 2.0 * row[_L_Z] * math.sqrt(k * m_eff)
+
+
+def linear_normal_jax(xi, sqrt_xi, xi_dot, k, g):
+    """Elastic force ``k ξ`` [N], damping force ``γ ξ'`` [N] (before the clip) and elastic
+    energy ``k ξ²/2`` [J] at overlaps ``ξ ≥ 0``."""
+    f_el = k * xi
+    return f_el, g * xi_dot, 0.5 * f_el * xi
+
+
+@scalar_form
+def linear_normal_scalar(xi, sqrt_xi, xi_dot, k, g):
+    """Scalar form of :func:`linear_normal_jax`."""
+    f_el = k * xi
+    return f_el, g * xi_dot, 0.5 * f_el * xi
+
+
+def linear_collision_time(row, m_eff: float, r_eff: float, v: float) -> float:
+    """The time the force of a linear contact acts [s], at any speed:
+    ``(π - 2 arcsin ζ)/ω_d``, ``ω_d = sqrt(k/m*) sqrt(1 - ζ²)`` (:func:`restitution.linear_collision`;
+    ``π/ω_0`` without damping; the overlap lasts ``2ζ/ω_0`` longer)."""
+    return rst.linear_collision(float(row[_L_K]), m_eff, float(row[_L_Z])).force_duration
+
+
+def linear_check(mat: Material, name: str) -> None:
+    """Material inputs of the linear law: ``linear_stiffness`` > 0, ``restitution`` in (0, 1]
+    (or none: elastic); ``gamma_n`` (the Hertz law's damping) is refused."""
+    k = mat.linear_stiffness
+    if not (_finite(k) and k > 0):
+        raise ConfigError(f"{name}.linear_stiffness = {k!r}: contact_law = 'linear' needs a "
+                          "contact stiffness [N/m], a finite number > 0")
+    if mat.gamma_n not in (None, 0, 0.0):
+        raise ConfigError(f"{name}.gamma_n = {mat.gamma_n!r}: gamma_n is the Hertz law's damping; "
+                          "with contact_law = 'linear' give the restitution instead")
+    if mat.restitution is not None and not (_finite(mat.restitution)
+                                            and 0.0 < mat.restitution <= 1.0):
+        raise ConfigError(f"{name}.restitution = {mat.restitution!r}: must be in (0, 1]")
+
+
+# ---------------------------------------------------------------------------------------------
 # the registry
 
 
@@ -291,19 +380,29 @@ HERTZ = Law("hertz", 0, HERTZ_COLUMNS, hertz_material, hertz_mix, hertz_pair_jax
             hertz_pair_scalar, hertz_normal_jax, hertz_normal_scalar, hertz_collision_time,
             hertz_check)
 
+LINEAR = Law("linear", 1, LINEAR_COLUMNS, linear_material, linear_mix, linear_pair_jax,
+             linear_pair_scalar, linear_normal_jax, linear_normal_scalar, linear_collision_time,
+             linear_check)
+
 #: The contact laws by name.
-LAWS: dict[str, Law] = {law.name: law for law in (HERTZ,)}
+LAWS: dict[str, Law] = {law.name: law for law in (HERTZ, LINEAR)}
+_LINEAR_ID = LINEAR.id
 
 
 @scalar_form
 def pair_scalar(law, row, r_eff, m_eff):
     """The native kernel's per-contact ``(k, g)`` of law number ``law`` (:attr:`Law.id`)."""
+    if law == _LINEAR_ID:
+        return linear_pair_scalar(row, r_eff, m_eff)
     return hertz_pair_scalar(row, r_eff, m_eff)
 
 
 @scalar_form
 def normal_scalar(law, xi, sqrt_xi, xi_dot, k, g):
-    """The native kernel's normal force terms of law number ``law`` (:attr:`Law.id`)."""
+    """The native kernel's normal force terms of law number ``law`` (:attr:`Law.id`); the law
+    is the same for every contact of a call, so the branch is always predicted."""
+    if law == _LINEAR_ID:
+        return linear_normal_scalar(xi, sqrt_xi, xi_dot, k, g)
     return hertz_normal_scalar(xi, sqrt_xi, xi_dot, k, g)
 
 

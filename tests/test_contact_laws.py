@@ -10,10 +10,13 @@ import numpy as np
 import pytest
 
 from jaxdamp import contact, excitation, integrate
+from jaxdamp import restitution as rst
 from jaxdamp.config import Box, Config, ConfigError, Drive, Material, Species
 from jaxdamp.contact import LAWS, Vec
 from jaxdamp.model import build, contact_tables
 from jaxdamp.validation import validate
+
+from helpers import ENGINES, config, run_steps, start
 
 pytest.importorskip("numba")
 
@@ -230,3 +233,158 @@ def test_mix_rules():
     with pytest.raises(ValueError, match="mixing rule"):
         contact.mix(1.0, 1.0, "median")
     assert math.isfinite(contact.mix(0.0, 2.0, "geometric"))
+
+
+# ---------------------------------------------------------------------------------------------
+# the linear spring–dashpot law
+
+LINEAR = Material(E=2e9, nu=0.3, density=7850.0, restitution=0.75, linear_stiffness=1e5)
+R_LIN = 2.5e-3
+#: Tolerance of the DEM measurements against the closed forms: time discretisation at
+#: dt = t_f/200 (velocity Verlet with predicted velocities; measured: ε 4e-4 high, overlap and
+#: force durations within 1e-5 relative, with the contact's ends interpolated).
+TOL = 1e-3
+
+
+def test_linear_closed_forms_against_an_ode_solver():
+    """The clipped law's restitution and durations (Schwager & Pöschel 2007) against scipy's
+    integration of ``m ξ'' = -max(0, k ξ + γ ξ')``, under-, critically and overdamped; and
+    ``ζ(e)`` inverts ``e(ζ)``."""
+    from scipy.integrate import solve_ivp
+
+    k, m, v = 1e5, 2.6e-4, 0.7
+    for zeta in (0.0, 0.05, 0.3, 0.9, 1.0, 1.7):
+        g = 2 * zeta * math.sqrt(k * m)
+
+        def rhs(_, y):
+            return [y[1], -max(0.0, k * y[0] + g * y[1]) / m if y[0] > 0 else 0.0]
+
+        def force_end(_, y):
+            return k * y[0] + g * y[1]
+
+        def overlap_end(_, y):
+            return y[0]
+
+        force_end.terminal, force_end.direction = False, -1
+        overlap_end.terminal, overlap_end.direction = True, -1
+        sol = solve_ivp(rhs, (0, 1e-2), [1e-300, v], method="DOP853", rtol=1e-12, atol=1e-18,
+                        events=(force_end, overlap_end), max_step=1e-6)
+        t_f = sol.t_events[0][0] if zeta > 0 else sol.t_events[1][0]
+        t_o, e = sol.t_events[1][0], -sol.y_events[1][0][1] / v
+        ref = rst.linear_collision(k, m, zeta)
+        assert ref.restitution == pytest.approx(e, rel=1e-8)
+        assert ref.force_duration == pytest.approx(t_f, rel=1e-6)
+        assert ref.duration == pytest.approx(t_o, rel=1e-6)
+        if zeta > 0:
+            assert rst.linear_damping_ratio(e) == pytest.approx(zeta, rel=1e-6)
+    assert rst.linear_collision(k, m, 0.0).duration == pytest.approx(math.pi * math.sqrt(m / k))
+    for e in (1.0, 0.9, 0.5, 0.1, 0.01):
+        assert rst.linear_restitution(rst.linear_damping_ratio(e)) == pytest.approx(e, rel=1e-13)
+
+
+def _linear_collision(v, engine, wall, e):
+    """A head-on pair (or grain–floor) collision of the linear law at speed ``v``, gravity 0.
+    Returns (ε, overlap duration, force duration or None, the closed-form collision)."""
+    mat = dataclasses.replace(LINEAR, restitution=e)
+    cfg = config(n=1 if wall else 2, radius=R_LIN, material=mat, contact_law="linear",
+                 dt_per_collision=200)
+    model, params = build(cfg)
+    law, dt = LAWS["linear"], float(params.dt)
+    row = np.asarray(params.wall_table[0] if wall else params.pair_table[0, 0])
+    m = float(params.mass[0])
+    ref = rst.linear_collision(row[law.column("k")], m if wall else m / 2, row[law.column("zeta")])
+    gap = 20.3 * dt * v  # 20 steps of free flight
+    c = 0.025
+    if wall:
+        r, vel = [[c, c, R_LIN + gap]], [[0, 0, -v]]
+    else:
+        r, vel = [[c - R_LIN - gap / 2, c, c], [c + R_LIN + gap / 2, c, c]], [[v / 2, 0, 0], [-v / 2, 0, 0]]
+    model, pb, st, nbrs = start(cfg, r, vel)
+    st, nbrs, rec = run_steps(model, pb, st, nbrs, 30 + int(1.2 * ref.duration / dt), 1,
+                              engine=engine)
+    vout = np.asarray(st.v[0])
+    eps = vout[0, 2] / v if wall else (vout[1, 0] - vout[0, 0]) / v
+    # overlap from the elastic energy k ξ²/2; ends of the contact by linear extrapolation of
+    # ξ(t) (ξ' = v on the way in, -ε v on the way out)
+    t = rec["t"]
+    xi = np.sqrt(2 * rec["e_elastic"] / row[law.column("k")])
+    on = np.flatnonzero(xi > 0)
+    a, b = on[0], on[-1]
+    assert on.size == b - a + 1 and b < len(t) - 3  # one contact, ended within the run
+    t0 = t[a] - xi[a] / v
+    duration = t[b] + xi[b] / (eps * v) - t0
+    force = None
+    if wall:  # the force on the box is the contact force: it ends where k ξ + γ ξ' = 0
+        f = -rec["force_box"]
+        pos = np.flatnonzero(f > 0)
+        j = pos[-1]
+        force = t[j] + f[j] * (t[j] - t[j - 1]) / (f[j - 1] - f[j]) - t0
+    return eps, duration, force, ref
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize("wall", [False, True], ids=["pair", "wall"])
+def test_linear_restitution_is_the_material_input_at_every_speed(engine, wall):
+    """The measured ε equals the material's restitution (0.75) at 0.1, 1 and 5 m/s, and the
+    overlap (and, at the wall, the force) lasts the closed-form time, within ``TOL``: pair and
+    wall, both engines. It is *not* ``exp(-πζ/sqrt(1-ζ²))`` at the same ζ (that is the law with
+    an attractive tail)."""
+    for v in (0.1, 1.0, 5.0):
+        eps, duration, force, ref = _linear_collision(v, engine, wall, 0.75)
+        print(f"v = {v}: ε = {eps:.6f}, overlap {duration:.6e} s (closed form {ref.duration:.6e}),"
+              f" force {force} s (closed form {ref.force_duration:.6e})")
+        assert eps == pytest.approx(0.75, abs=TOL)
+        assert eps == pytest.approx(ref.restitution, abs=TOL)
+        assert duration == pytest.approx(ref.duration, rel=TOL)
+        if force is not None:
+            assert force == pytest.approx(ref.force_duration, rel=TOL)
+    zeta = rst.linear_damping_ratio(0.75)
+    assert abs(eps - math.exp(-math.pi * zeta / math.sqrt(1 - zeta**2))) > 10 * TOL
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_linear_elastic_collision_lasts_half_a_period(engine):
+    """e = 1: ζ = 0, ε = 1 and the collision lasts t_c = π/ω_d = π sqrt(m*/k) (pair)."""
+    eps, duration, _, ref = _linear_collision(1.0, engine, False, 1.0)
+    m = 7850 * 4 / 3 * math.pi * R_LIN**3
+    assert ref.duration == pytest.approx(math.pi * math.sqrt(m / 2 / 1e5), rel=1e-14)
+    assert eps == pytest.approx(1.0, abs=TOL)
+    assert duration == pytest.approx(ref.duration, rel=TOL)
+
+
+def test_linear_time_step_uses_the_linear_collision_time():
+    """dt = t_c / dt_per_collision with the linear law's force duration of the lightest like
+    pair or grain–wall contact (independent of v_impact), and the check names it."""
+    from jaxdamp.model import collision_time_limit, grain_radii
+
+    mat = dataclasses.replace(LINEAR, restitution=0.5)
+    cfg = config(n=20, radius=R_LIN, material=mat, contact_law="linear", v_impact=3.0)
+    cfg = cfg.replace(box=dataclasses.replace(cfg.box, wall=dataclasses.replace(mat, linear_stiffness=4e5)))
+    m = 7850 * 4 / 3 * math.pi * R_LIN**3
+    zeta = rst.linear_damping_ratio(0.5)
+    expected = min(rst.linear_collision(1e5, m / 2, zeta).force_duration,
+                   rst.linear_collision(2.5e5, m, zeta).force_duration)  # wall: k mixed 1e5, 4e5
+    t_c = collision_time_limit(cfg, grain_radii(cfg))
+    assert t_c == pytest.approx(expected, rel=1e-12)
+    assert float(build(cfg)[1].dt) == pytest.approx(t_c / 50, rel=1e-12)
+    assert collision_time_limit(cfg.replace(numerics=dataclasses.replace(cfg.numerics, v_impact=0.1)),
+                                grain_radii(cfg)) == t_c
+    with pytest.raises(ConfigError, match="linear collision time"):
+        validate(cfg.replace(numerics=dataclasses.replace(cfg.numerics, dt=t_c / 40)))
+
+
+def test_linear_material_inputs_are_validated():
+    cfg = config(n=2, radius=R_LIN, material=LINEAR, contact_law="linear")
+    assert validate(cfg) is cfg
+    no_k = config(n=2, radius=R_LIN, material=dataclasses.replace(LINEAR, linear_stiffness=None),
+                  contact_law="linear")
+    with pytest.raises(ConfigError, match=r"grains\.0\.material\.linear_stiffness = None"):
+        validate(no_k)
+    hertz_damping = config(n=2, radius=R_LIN, material=dataclasses.replace(
+        LINEAR, restitution=None, gamma_n=40.0), contact_law="linear")
+    with pytest.raises(ConfigError, match=r"grains\.0\.material\.gamma_n = 40.0"):
+        validate(hertz_damping)
+    elastic = config(n=2, radius=R_LIN, material=dataclasses.replace(LINEAR, restitution=None),
+                     contact_law="linear")
+    p = build(validate(elastic))[1]
+    assert float(p.pair_table[0, 0, LAWS["linear"].column("zeta")]) == 0.0  # e = 1
