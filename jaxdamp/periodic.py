@@ -165,8 +165,7 @@ class Orbit:
     ``max_i |x*_i - start_i| / s_i`` from the orbit (small when the transient has settled on
     it: the orbit is the attractor the run reaches); ``sim_seconds`` the simulated
     system-seconds spent (transient + every evaluation of ``P^k``, tangents counted once);
-    ``attempts`` ``[(k, converged, residual,
-    max|λ|)]`` of every ``k`` tried."""
+    ``attempts`` ``[(k, converged, residual, max|λ|)]`` of every ``k`` tried."""
 
     state: np.ndarray
     k: int
