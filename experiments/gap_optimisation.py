@@ -15,10 +15,9 @@ drive period at the primary's f0 = 15.157 Hz):
 4. **DEM, brute-force scan** of the steady-state dissipation per cycle over Lz (native engine,
    one batched sweep) — the reference optimum — and the **optimiser** (optax Adam on the
    window estimator) from Lz0 = 0.07 and 0.25 m; simulated seconds of each approach.
-6. **DEM, the estimator that works** (``--steady-only`` runs just this part): central
-   differences of steady-state runs with common random numbers (``SteadyProblem``), amplitude
-   Z at f0 — a steady-state scan with the same protocol and the optimiser from 0.07 and 0.25 m
-   (``steady_summary.md``, ``steady.png``, ``steady.h5``).
+6. The estimator that works for the DEM — replicated steady states with central differences
+   (:class:`jaxdamp.design.SteadyProblem`) — and the searches that beat a scan are in
+   ``experiments/design_optimisation.py``.
 5. **S3 (smooth model, exact gradients)**: derivative vs central differences at three gaps,
    a dense gap scan, the optimiser from Lz0 = 0.07 and 0.25 m (gap = Lz − 0.039 m), for the
    dissipation at f0 and (full mode) the band objective (smooth max of Z over 14–16 Hz).
@@ -42,7 +41,7 @@ import jaxdamp
 from jaxdamp import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.model import primary_frequency
-from jaxdamp.optimize import (DEMProblem, Objective, S3Problem, optimize, scan_optimum)
+from jaxdamp.design import DEMProblem, Objective, S3Problem, optimize, scan_optimum
 from jaxdamp.sweep import sweep
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -188,7 +187,7 @@ def s3_part(s, raw, progress, log):
     for kind in s["s3_objectives"]:
         obj = Objective(kind, band=(14.0, 14.5, 15.0, 15.5, 16.0) if kind == "band" else None)
         dur = min(s["s3_duration"], 2.0) if kind == "band" else s["s3_duration"]
-        prob = S3Problem(base, obj, duration=dur)
+        prob = S3Problem(base, obj, duration=dur, gradient="transient")
         r = {"duration": dur, "h_bed": prob.h_bed, "config": prob.config.to_json(),
              "objective": obj.to_json(prob.config)}
         t0 = time.perf_counter()
@@ -227,108 +226,6 @@ def s3_part(s, raw, progress, log):
     return out
 
 
-STEADY = dict(
-    full=dict(grains=250, h=0.005, burn_in=1.0, average=1.5, blocks=5, lr=0.03, decay=0.9,
-              max_iter=12, scan_lz=(0.06, 0.07, 0.085, 0.1, 0.11, 0.1225, 0.135, 0.15, 0.175,
-                                    0.2, 0.25)),
-    quick=dict(grains=60, h=0.005, burn_in=0.1, average=0.1, blocks=3, lr=0.03, decay=0.9,
-               max_iter=1, scan_lz=(0.07, 0.12, 0.2)),
-)
-
-
-def steady_part(quick, out, progress, log):
-    """The estimator that works: central differences of steady-state runs with common random
-    numbers (:class:`jaxdamp.optimize.SteadyProblem`), amplitude Z at f0. A steady-state scan
-    with the same protocol (one batch, same settled bed) gives the reference optimum; the
-    optimiser runs from Lz0 = 0.07 and 0.25 m. Writes ``steady.h5``, ``steady.png`` and
-    ``steady_summary.md``."""
-    from jaxdamp.optimize import SteadyProblem
-
-    s = STEADY["quick" if quick else "full"]
-    raw = os.path.join(out, "raw")
-    base = apply_overrides(presets.get("sanchez2012-optimal"),
-                           {"grains.0.count": s["grains"], "numerics.settle_time": 0.3})
-    t0 = time.perf_counter()
-    prob = SteadyProblem(base, Objective("amplitude"), h=s["h"], burn_in=s["burn_in"],
-                         average=s["average"], blocks=s["blocks"])
-    settle_wall = time.perf_counter() - t0
-    lzs = np.asarray(s["scan_lz"])
-    t0 = time.perf_counter()
-    rawv = prob.block_raw(lzs)[0]  # (L, blocks)
-    scan_wall = time.perf_counter() - t0
-    Z = np.sqrt(2 * rawv.mean(-1))
-    Z_se = np.sqrt(2 * rawv).std(-1, ddof=1) / np.sqrt(s["blocks"])
-    scan_sim = len(lzs) * (s["burn_in"] + s["average"])
-    best = scan_optimum(lzs, Z, False)
-    log(f"steady scan: Z optimum Lz = {best:.4g} m ({scan_wall:.0f} s wall)")
-    runs = {}
-    for lz0 in (0.07, 0.25):
-        r = optimize(prob, lz0, lr=s["lr"], decay=s["decay"], max_iter=s["max_iter"], xtol=5e-4,
-                     out=os.path.join(raw, f"steady_opt_{lz0:g}.h5"), progress=progress)
-        runs[lz0] = r
-        log(f"steady optimiser from {lz0}: Lz = {r.lz:.4g} ({r.reason}), {r.sim_seconds:.3g} sim s, "
-            f"{r.wall:.0f} s wall")
-    with h5py.File(os.path.join(out, "steady.h5"), "w") as h:
-        h.attrs["config"] = prob.config.to_json()
-        h.attrs["problem"] = json.dumps(prob.describe())
-        h.attrs["objective"] = "amplitude Z = sqrt(2 <(z - z_s)^2>) at f0"
-        g = h.create_group("scan")
-        for k, v, u in (("lz", lzs, "m"), ("Z", Z, "m"), ("Z_se", Z_se, "m")):
-            g.create_dataset(k, data=v).attrs["units"] = u
-        g.attrs.update(optimum=best, sim_seconds=scan_sim, wall_time=scan_wall)
-        for lz0, r in runs.items():
-            gg = h.create_group(f"optimiser_from_{lz0:g}")
-            _hist_group(gg, r)
-            gg.attrs.update(lz=r.lz, reason=r.reason, sim_seconds=r.sim_seconds, wall_time=r.wall)
-    plt = _plt()
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4))
-    a1.errorbar(lzs, Z * 1e3, yerr=Z_se * 1e3, fmt="ko-", ms=3, label="steady-state scan (same protocol)")
-    for lz0, r in runs.items():
-        a1.plot(r.history["lz"], r.history["objective"] * 1e3, "s--", ms=4,
-                label=f"optimiser iterates from {lz0:g} m")
-        a2.plot(np.arange(len(r.history["lz"])), r.history["lz"], "o-", label=f"from {lz0:g} m")
-    a2.axhline(best, color="k", ls=":", label=f"scan optimum {best:.4g} m")
-    a2.axhline(THESIS_LZ, color="g", ls=":", label="thesis 0.1225 m")
-    a1.set_xlabel("Lz [m]"); a1.set_ylabel("Z at f0 [mm]"); a1.legend(fontsize=7)
-    a2.set_xlabel("iterate"); a2.set_ylabel("Lz [m]"); a2.legend(fontsize=7)
-    fig.suptitle("DEM, amplitude at f0: central differences of steady states (common random numbers)",
-                 fontsize=9)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out, "steady.png"), dpi=120)
-    plt.close(fig)
-    cmd = "python experiments/gap_optimisation.py --steady-only" + (" --quick" if quick else "")
-    L = [f"# The DEM estimator that works: steady-state central differences (issue 4)\n",
-         f"Command: `{cmd}`; machine: {os.cpu_count()} cores (shared with other jobs while it ran), "
-         f"jaxdamp {jaxdamp.__version__}. Settling {settle_wall:.0f} s wall.\n",
-         f"Problem: `SteadyProblem` on `sanchez2012-optimal` (N = {s['grains']}), objective Z at "
-         f"f0 = {prob.freqs[0]:.4g} Hz (sqrt(2 <(z - z_s)²>) over the averaging time); every "
-         f"evaluation runs Lz ± {s['h']} m from the same settled bed (bed height "
-         f"{prob.bed.height:.4g} m) for {s['burn_in']} s burn-in + {s['average']} s averaging, "
-         f"as one batch; standard errors from {s['blocks']} blocks.\n",
-         "## Steady-state scan (same protocol, one batch of all heights)\n",
-         "| Lz [m] | Z [mm] | SE [mm] |", "| --- | --- | --- |"]
-    L += [f"| {lz:g} | {z * 1e3:.2f} | {e * 1e3:.2f} |" for lz, z, e in zip(lzs, Z, Z_se)]
-    L += ["", f"Scan optimum (parabola through the smallest three): **Lz = {best:.4g} m** "
-          f"(thesis {THESIS_LZ} m); {scan_sim:.3g} simulated system-seconds, {scan_wall:.0f} s wall.\n",
-          "## Optimiser (optax Adam, lr 0.03 m × 0.9^k, projection, stops on small steps or a "
-          "gradient within its SE for 3 iterates)\n",
-          "| start Lz0 | final Lz | vs scan optimum | vs 0.1225 | iterates | stop | simulated s | "
-          "cost / scan | wall [s] |", "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
-    for lz0, r in runs.items():
-        L.append(f"| {lz0:g} | {r.lz:.4g} | {100 * (r.lz / best - 1):+.1f} % | "
-                 f"{100 * (r.lz / THESIS_LZ - 1):+.1f} % | {len(r.history['lz'])} | {r.reason} | "
-                 f"{r.sim_seconds:.3g} | {r.sim_seconds / scan_sim:.2f} | {r.wall:.0f} |")
-    L += ["", "Iterates (Lz [m], Z [mm], dZ/dLz ± SE [-]):", ""]
-    for lz0, r in runs.items():
-        L.append(f"- from {lz0:g}: " + "; ".join(
-            f"{x:.4f}, {v * 1e3:.1f}, {g:+.3f} ± {e:.3f}" for x, v, g, e in
-            zip(r.history["lz"], r.history["objective"], r.history["gradient"],
-                r.history["gradient_se"])))
-    with open(os.path.join(out, "steady_summary.md"), "w") as fh:
-        fh.write("\n".join(L) + "\n")
-    return dict(scan=dict(lz=lzs, Z=Z, Z_se=Z_se, optimum=best, sim_seconds=scan_sim), runs=runs)
-
-
 def _plt():
     import matplotlib
 
@@ -344,8 +241,6 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help="tiny settings (~1.5 min)")
     ap.add_argument("--out", default=os.path.join(HERE, "gap_optimisation"))
     ap.add_argument("--no-progress", action="store_true")
-    ap.add_argument("--steady-only", action="store_true",
-                    help="run only part 6, the steady-state estimator (steady_summary.md)")
     args = ap.parse_args(argv)
     s = settings(args.quick)
     raw = os.path.join(args.out, "raw")
@@ -358,19 +253,16 @@ def main(argv=None):
         if progress:
             print(msg, flush=True)
 
-    if args.steady_only:
-        return {"steady": steady_part(args.quick, args.out, progress, log)}
     t0 = time.perf_counter()
     s3 = s3_part(s, raw, progress, log)
     t_s3 = time.perf_counter() - t0
     dem = dem_part(s, raw, progress, log)
-    steady = steady_part(args.quick, args.out, progress, log)
     wall = time.perf_counter() - t0
     command = "python experiments/gap_optimisation.py" + (" --quick" if args.quick else "")
     _write_data(args.out, s, s3, dem, wall, command)
     _figure(args.out, s3, dem)
     _summary(args.out, s, s3, dem, wall, t_s3, command, args.quick)
-    return {"s3": s3, "dem": dem, "steady": steady, "wall": wall}
+    return {"s3": s3, "dem": dem, "wall": wall}
 
 
 def _hist_group(g, res):
@@ -504,12 +396,10 @@ def _figure(out, s3, dem):
     plt.close(fig)
 
 
-STEADY_LINK = ("- **The DEM estimator that works** is not pathwise: central differences of "
-               "steady-state runs with common random numbers (`SteadyProblem`, the default of "
-               "`jaxdamp optimize` for the DEM), on the amplitude Z at f0: "
-               "[steady_summary.md](steady_summary.md) (steady-state scan with the same protocol, "
-               "optimiser from 0.07 and 0.25 m, costs). The findings below are those of the "
-               "pathwise window estimator.")
+STEADY_LINK = ("- **The DEM estimator that works** is not pathwise: replicated steady states "
+               "with central differences (`jaxdamp.design.SteadyProblem`) and the searches "
+               "built on it are in `experiments/design_optimisation.py`. The findings below are "
+               "those of the pathwise window estimator.")
 
 
 def _fmt(x):

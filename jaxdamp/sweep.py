@@ -167,7 +167,7 @@ def reuse_or_run(config: Config, axes: dict, out: str, **kwargs) -> SweepResult:
 def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = False,
           progress: bool = True, echo=print, shard: bool = True,
           max_chunks: int | None = None, snapshots: int = 0,
-          replicates: int = 1) -> SweepResult | None:
+          replicates: int = 1, beds: dict | None = None) -> SweepResult | None:
     """Run every grid point of ``axes`` (``{dotted key: values}``) as one batch.
 
     Args:
@@ -184,6 +184,8 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
         the bed at the drive's turning points and at its largest speeds).
       replicates: independent realisations per grid point: beds settled from the seeds
         :func:`jaxdamp.stats.replicate_seed` ``(seed, 0..R-1)``, run in the same batch.
+      beds: a cache of settled beds by geometry, filled and reused across calls (repeated
+        sweeps of one damper, e.g. an optimiser's evaluations, settle each bed once).
 
     S3 configurations (``system = "impact"``) go to :func:`jaxdamp.impact.sweep` (same result
     and file layout; ``resume``, ``shard`` and ``max_chunks`` do not apply: it runs whole).
@@ -246,12 +248,15 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
     else:
         wall_before = 0.0
         keys = [_geometry_key(c) for c in configs]
-        first = {k: i for i, k in reversed(list(enumerate(keys)))}  # one bed per geometry
-        order = sorted(first.values())
-        settled = settle_many([configs[i] for i in order], model, [built[i][1] for i in order])
-        beds = {keys[i]: b for i, b in zip(order, settled)}
-        say(f"settled {len(beds)} bed(s) in one batch: heights "
-            + ", ".join(f"{b.height:.5g}" for b in settled) + " m")
+        beds = {} if beds is None else beds
+        first = {k: i for i, k in reversed(list(enumerate(keys))) if k not in beds}
+        order = sorted(first.values())  # one new bed per geometry, all settled in one batch
+        if order:
+            settled = settle_many([configs[i] for i in order], model,
+                                  [built[i][1] for i in order])
+            beds.update({keys[i]: b for i, b in zip(order, settled)})
+            say(f"settled {len(order)} bed(s) in one batch: heights "
+                + ", ".join(f"{b.height:.5g}" for b in settled) + " m")
         r0, v0, w0, q0, z0 = [], [], [], [], []
         for c, (m, p), key in zip(configs, built, keys):
             bed = beds[key]

@@ -1,0 +1,50 @@
+"""The single-particle model standing in for the bed: the cheap half of multi-fidelity design.
+
+The thesis (§5.3.2) replaces the whole bed of an S1 damper by one particle of the bed's mass
+with restitution ``e = 0`` moving in the free height ``gap = Lz − h_bed`` (``h_bed`` the settled
+bed's height). :func:`s3_config` builds that S3 configuration from a DEM configuration;
+:func:`propose` scans the surrogate's objective densely over the gap (one ``vmap`` batch of the
+smooth model: seconds) and returns the box height of its optimum — a starting point for the
+DEM search (:func:`jaxdamp.design.search.trust_region`), which corrects it with the DEM.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..config import Config, Impactor
+from .objectives import Objective
+
+
+def s3_config(config: Config, h_bed: float, restitution: float = 0.0) -> Config:
+    """The S3 model of the S1 damper ``config`` with a settled bed ``h_bed`` [m] high:
+    one particle of the granulate's mass, ``e = restitution``, gap ``Lz − h_bed``."""
+    from ..model import grain_mass
+
+    return dataclasses.replace(
+        config, system="impact", grains=(), name=f"{config.name} (S3 surrogate)",
+        impactor=Impactor(mass=grain_mass(config), restitution=restitution,
+                          gap=config.box.Lz - h_bed, method="smooth"))
+
+
+def propose(config: Config, objective: Objective, h_bed: float, lo: float, hi: float,
+            n: int = 41, duration: float = 3.0) -> dict:
+    """The surrogate's optimum ``Lz`` over ``[lo, hi]`` [m] by a dense scan of ``n`` gaps.
+
+    Returns ``{"lz": the proposal, "lz_grid", "values", "sim_seconds", "at_bound"}``."""
+    from ..config import apply_overrides
+    from .s3 import S3Problem
+    from .surface import quadratic_optimum
+
+    cfg = apply_overrides(s3_config(config, h_bed), {"numerics.analysis_window": 0.5})
+    prob = S3Problem(cfg, objective, duration=duration, h_bed=h_bed)
+    lz = np.linspace(lo, hi, n)
+    v = prob.scan(lz - h_bed)
+    k = int(np.argmax(v) if objective.maximise else np.argmin(v))
+    best = float(lz[k])
+    if 0 < k < n - 1:
+        best = quadratic_optimum(lz[k - 1:k + 2], v[k - 1:k + 2], objective.maximise).x
+    return {"lz": best, "lz_grid": lz, "values": v, "sim_seconds": prob.sim_seconds,
+            "at_bound": k in (0, n - 1)}
