@@ -221,6 +221,7 @@ def cmd_frf(args) -> int:
 
 def cmd_optimize(args) -> int:
     import json
+    import math
 
     import h5py
 
@@ -309,7 +310,10 @@ def cmd_optimize(args) -> int:
             print(f"warning: no interior optimum of {objective.kind} on the feasible range — it "
                   "lies on (or beyond) a bound; widen --lo/--hi or choose another objective")
     else:
-        print(f"result Lz = {prob.to_lz(x_best):.5g} m (no response surface for this problem)")
+        g = res.history["gradient"][-1] if method == "gradient" and len(res.history["x"]) else math.nan
+        print(f"optimum Lz = {prob.to_lz(x_best):.5g} m ({var} = {x_best:.5g} m); "
+              f"{objective.kind} = {res.value:.5g} {objective.unit}, last gradient {g:.3g} "
+              f"(exact: no interval)")
     print(f"cost: {sim:.4g} simulated system-seconds" + (f" (of which S3 surrogate {sim_extra:.3g})"
                                                           if sim_extra else ""))
     if args.out:

@@ -57,8 +57,8 @@ found.
 * ``dissipation`` ``E`` [J]: impact (contact) loss per drive period, ``W_impact(kT) / k`` (the
   ``impact`` work channel of :func:`~jaxdamp.impact.smooth_step`);
 * ``damping`` ``C_eq = E / (π Ω Z²)`` [N s/m], the equivalent viscous damping (§7);
-* ``band`` (:func:`objective_and_gradient`): the smooth maximum :func:`smooth_max` of ``Z``
-  over several frequencies, one orbit per frequency.
+* ``band`` (:func:`objective_and_gradient`): the smooth maximum of ``Z`` over several
+  frequencies (:func:`jaxdamp.design.objectives.smooth_max`), one orbit per frequency.
 
 **Implicit derivative.** ``x*(θ)`` solves ``P^k(x*; θ) = x*``, so with ``A = ∂P^k/∂x``::
 
@@ -143,8 +143,6 @@ TOL = 1e-10
 STABILITY_MARGIN = 1e-3
 #: Objectives averaged over the orbit (one frequency), see :func:`orbit_averages`.
 KINDS = ("amplitude", "dissipation", "damping")
-#: Exponent of the band's smooth maximum (as :mod:`jaxdamp.design.objectives`).
-BAND_P = 16.0
 
 
 class NoStableOrbit(RuntimeError):
@@ -535,21 +533,6 @@ class Orbits(list):
         return float(sum(o.sim_seconds for o in self))
 
 
-def smooth_max(z, p: float = BAND_P):
-    """``(Σ z^p)^(1/p)`` of positive ``z`` (scaled; the band's smooth maximum of
-    :mod:`jaxdamp.design.objectives`)."""
-    z = jnp.asarray(z)
-    s = jax.lax.stop_gradient(jnp.max(z))
-    return s * jnp.sum((z / s) ** p) ** (1.0 / p)
-
-
-def _band_frequencies(config: Config) -> tuple:
-    from .model import primary_frequency
-
-    f0 = primary_frequency(config) or config.frequency
-    return tuple(float(f) for f in np.linspace(0.9 * f0, 1.1 * f0, 9))
-
-
 def objective_and_gradient(config: Config, objective, frequency=None, gap: float | None = None,
                            *, param: str = "gap", k_max: int = 4, start=None,
                            transient: float = 3.0, p: float | None = None, **options):
@@ -562,9 +545,10 @@ def objective_and_gradient(config: Config, objective, frequency=None, gap: float
       ``"dissipation"`` (impact loss per drive period ``E`` [J]), ``"damping"``
       (``C_eq = E/(π Ω Z²)`` [N s/m]) at ``frequency`` [Hz] (default the config's);
       ``orbit`` is an :class:`Orbit`;
-    * ``"band"`` — the smooth maximum :func:`smooth_max` (exponent ``p``, default
-      :data:`BAND_P`) of ``Z`` at the frequencies ``frequency`` (a sequence; default 9 points
-      over ``f0 ± 10 %``), one orbit per frequency; ``orbit`` is an :class:`Orbits`;
+    * ``"band"`` — the band objective of :class:`jaxdamp.design.objectives.Objective` (the
+      smooth maximum of ``Z``, exponent ``p``) at the frequencies ``frequency`` (a sequence;
+      default 9 points over ``f0 ± 10 %``), one orbit per frequency; ``orbit`` is an
+      :class:`Orbits`;
     * an objective object with ``kind``, ``frequencies(config)`` and
       ``combine(Z, E, frequencies)`` (:class:`jaxdamp.design.objectives.Objective`): the
       orbits at its frequencies (or ``frequency``), the per-frequency ``Z, E`` and their
@@ -577,19 +561,18 @@ def objective_and_gradient(config: Config, objective, frequency=None, gap: float
     :func:`orbit` (``tol``, ``margin``, ``max_iter``, ``n_steps``, ``refine``). The orbits'
     ``sim_seconds`` include the ``k`` periods of the derivative run."""
     combine = None
+    if isinstance(objective, str) and objective == "band":
+        from .design.objectives import Objective
+
+        freqs = None if frequency is None else tuple(float(f) for f in np.atleast_1d(frequency))
+        objective = Objective("band", band=freqs, **({} if p is None else {"p": p}))
+        frequency = None
     if isinstance(objective, str):
-        if objective == "band":
-            freqs = (_band_frequencies(config) if frequency is None
-                     else tuple(float(f) for f in np.atleast_1d(frequency)))
-            pp = BAND_P if p is None else p
-            combine = lambda Z, E: smooth_max(Z, pp)  # noqa: E731
-            single = False
-        elif objective in KINDS:
-            freqs = (float(config.frequency if frequency is None else frequency),)
-            single = True
-        else:
+        if objective not in KINDS:
             raise ValueError(f"objective {objective!r}: expected one of {KINDS + ('band',)} "
                              "or an Objective")
+        freqs = (float(config.frequency if frequency is None else frequency),)
+        single = True
     else:
         freqs = (tuple(objective.frequencies(config)) if frequency is None
                  else tuple(float(f) for f in np.atleast_1d(frequency)))
