@@ -39,7 +39,7 @@ from jaxdamp import efficiency as ef
 from jaxdamp import mixtures
 from jaxdamp.cli import efficiency_figures  # noqa: F401  (same figure code as the CLI)
 from jaxdamp.model import grain_radii, grain_species
-from jaxdamp.plots import _plt, save_figure, snapshot_figure
+from jaxdamp.figures import figure, save, snapshot_grid_figure
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 CLASS_NAMES = {"a": "class a (equal mass)", "b": "class b (equal number)",
@@ -167,10 +167,10 @@ def write_data(path, runs):
 
 
 def figures(out, runs, classes, s):
-    plt = _plt()
     ref = runs[0]
     # ⟨E_d⟩/m vs A_d, one panel per class (figs. 2, 6, 9)
-    fig, axes = plt.subplots(1, len(classes), figsize=(5 * len(classes), 4.2), squeeze=False)
+    fig = figure((5 * len(classes), 4.2), layout="tight")
+    axes = fig.subplots(1, len(classes), squeeze=False)
     for ax, klass in zip(axes[0], classes):
         for run in [ref] + [r for r in runs if r["name"].endswith(f"-{klass}")]:
             r = run["result"]
@@ -181,10 +181,11 @@ def figures(out, runs, classes, s):
         ax.set_xlabel("drive amplitude A_d [cm]")
         ax.set_ylabel("⟨E_d⟩ / m [1/kg] (mean ± std over periods)")
         ax.legend(fontsize=7)
-    save_figure(fig, os.path.join(out, "efficiency.png"))
+    save(fig, os.path.join(out, "efficiency.png"))
 
     # contacts and force vs phase at A_d = 3 cm (figs. 4, 5, 7, 10, 11)
-    fig, axes = plt.subplots(2, len(classes), figsize=(5 * len(classes), 7), squeeze=False)
+    fig = figure((5 * len(classes), 7), layout="tight")
+    axes = fig.subplots(2, len(classes), squeeze=False)
     for j, klass in enumerate(classes):
         for run in [ref] + [r for r in runs if r["name"].endswith(f"-{klass}")]:
             r = run["result"]
@@ -200,11 +201,12 @@ def figures(out, runs, classes, s):
         for i in range(2):
             axes[i, j].set_xlabel("phase t/T (box at its top at 0)")
             axes[i, j].legend(fontsize=7)
-    save_figure(fig, os.path.join(out, "contacts_force.png"))
+    save(fig, os.path.join(out, "contacts_force.png"))
 
     # phase plots at σ = 0.5 (figs. 8, 12)
     pc = [k for k in "bc" if k in classes]
-    fig, axes = plt.subplots(1, max(len(pc), 1), figsize=(6 * max(len(pc), 1), 4.5), squeeze=False)
+    fig = figure((6 * max(len(pc), 1), 4.5), layout="tight")
+    axes = fig.subplots(1, max(len(pc), 1), squeeze=False)
     for ax, klass in zip(axes[0], pc):
         for run in [ref] + [r for r in runs if r["name"].endswith(f"-{klass}") and r["sigma"] == 0.5]:
             r = run["result"]
@@ -219,7 +221,7 @@ def figures(out, runs, classes, s):
         ax.set_xlabel("z [cm] (lab frame)")
         ax.set_ylabel("v_z [m/s]")
         ax.legend(fontsize=7)
-    save_figure(fig, os.path.join(out, "phase_plots.png"))
+    save(fig, os.path.join(out, "phase_plots.png"))
 
     # snapshots (fig. 3): reference and class a at the smallest σ run
     rows = []
@@ -239,8 +241,8 @@ def figures(out, runs, classes, s):
                            r.snapshots["z_box"][k, j]))
         rows.append((f"{'reference' if run is ref else 'class a, ' + label(run)}, A_d = 3 cm",
                      frames, grain_radii(r.config), grain_species(r.config),
-                     (r.config.box.Lx, r.config.box.Lz)))
-    snapshot_figure(os.path.join(out, "snapshots.png"), rows, "driven box at 70 Hz")
+                     (r.config.box.Lx, r.config.box.Ly, r.config.box.Lz)))
+    save(snapshot_grid_figure(rows, "driven box at 70 Hz"), os.path.join(out, "snapshots.png"))
 
 
 def balance_drift(raw, progress, amplitude=0.03, periods=5, transient=2):

@@ -235,7 +235,7 @@ def _figure(out, v, path):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from jaxdamp.plots import save_figure
+    from jaxdamp.figures import save
 
     fig, (a1, a2, a3) = plt.subplots(1, 3, figsize=(16, 4.5))
     sc = out["scan"]
@@ -274,7 +274,7 @@ def _figure(out, v, path):
     a3.set_ylabel("DEM simulated system-seconds")
     fig.suptitle("sanchez2012-optimal: maximise C_eq at f0 over Lz", fontsize=9)
     fig.tight_layout()
-    save_figure(fig, path)
+    save(fig, path)
 
 
 def _summary(out, v, path, prov):

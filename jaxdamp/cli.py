@@ -139,7 +139,7 @@ def cmd_frf(args) -> int:
 
     from .analysis import RESIDUALS, fit_frf_replicates
     from .model import grain_mass
-    from .plots import frf_figure
+    from .figures import frf_figure, save
     from .sweep import steady_or_window, sweep, write_fit
 
     cfg = _base_config(args)
@@ -208,13 +208,13 @@ def cmd_frf(args) -> int:
         with h5py.File(args.out, "a") as h:
             write_fit(h, fit_all, args.residuals)
         png = args.png or args.out.rsplit(".", 1)[0] + ".png"
-        frf_figure(png, np.asarray(freqs), Z, lz or [None], p, m_p, fits,
+        save(frf_figure(np.asarray(freqs), Z, lz or [None], p, m_p, fits,
                    title=(f"{cfg.name}: one particle, m = {m_p:.4g} kg, e = "
                           f"{cfg.impactor.restitution:g}" if impact else
                           f"{cfg.name}: N = {cfg.n_grains}")
                    + f", {res.summary['wall_time']:.0f} s wall"
                    + (f", mean of R = {R} beds ± 2 SE" if R > 1 else ""),
-                   model="S3" if impact else "DEM", Z_se=Z_se)
+                   model="S3" if impact else "DEM", Z_se=Z_se), png)
         print(f"wrote {args.out} and {png}")
     return 0
 
@@ -383,11 +383,11 @@ def efficiency_figures(results, stem, title):
     import numpy as np
 
     from .model import grain_radii, grain_species
-    from .plots import efficiency_figure, phase_figure, snapshot_figure
+    from .figures import efficiency_figure, phase_figure, save, snapshot_grid_figure
 
     curves = [(lab, r.amplitudes, r.summary["E_d_mean_per_mass"],
                r.summary["E_d_std_per_mass"]) for lab, r in results]
-    paths = [efficiency_figure(f"{stem}.png", curves, title)]
+    paths = [save(efficiency_figure(curves, title), f"{stem}.png")]
     cases, rows = [], []
     for lab, r in results:
         k = int(np.argmin(np.abs(r.amplitudes - 0.03)))
@@ -403,10 +403,10 @@ def efficiency_figures(results, stem, title):
                                r.snapshots["z_box"][k, j]))
             rows.append((f"{lab}, A_d = {r.amplitudes[k] * 100:.3g} cm", frames,
                          grain_radii(r.config), grain_species(r.config),
-                         (r.config.box.Lx, r.config.box.Lz)))
-    paths.append(phase_figure(f"{stem}_phase.png", cases, title))
+                         (r.config.box.Lx, r.config.box.Ly, r.config.box.Lz)))
+    paths.append(save(phase_figure(cases, title), f"{stem}_phase.png"))
     if rows:
-        paths.append(snapshot_figure(f"{stem}_snapshots.png", rows, title))
+        paths.append(save(snapshot_grid_figure(rows, title), f"{stem}_snapshots.png"))
     return paths
 
 
@@ -510,24 +510,23 @@ PLOT_KINDS = {
 def cmd_plot(args) -> int:
     import os
 
-    from . import visual
+    from . import figures
 
     stem = os.path.splitext(os.fspath(args.file))[0]
     out = args.out or f"{stem}_{args.kind}.png"
     if args.kind == "frf":
         if args.t0 is not None or args.t1 is not None:
             raise ConfigError("--t0/--t1 do not apply to --kind frf (a sweep's FRF has no time axis)")
-        visual.frf_from_file(args.file, out)
+        fig = figures.frf_from_file(args.file)
+    elif args.kind == "band":
+        fig = figures.band_from_file(args.file, args.t0, args.t1)
+    elif args.kind == "energy":
+        fig = figures.energy_from_file(args.file, args.t0, args.t1)
+    elif args.kind == "snapshot":
+        fig = figures.snapshot_from_file(args.file, args.frame, args.color)
     else:
-        if args.kind == "band":
-            fig = visual.band_from_file(args.file, args.t0, args.t1)
-        elif args.kind == "energy":
-            fig = visual.energy_from_file(args.file, args.t0, args.t1)
-        elif args.kind == "snapshot":
-            fig = visual.snapshot_from_file(args.file, args.frame, args.color)
-        else:
-            fig = visual.poincare_from_file(args.file, args.t0, args.t1, args.phase)
-        visual.save(fig, out)
+        fig = figures.poincare_from_file(args.file, args.t0, args.t1, args.phase)
+    figures.save(fig, out)
     print(f"wrote {out}")
     return 0
 
@@ -538,7 +537,7 @@ def cmd_export(args) -> int:
     from .export import export
 
     if args.format in ("gif", "mp4"):
-        from .visual import animate
+        from .figures import animate
 
         out = args.out or os.path.splitext(os.fspath(args.file))[0] + "." + args.format
         if os.path.splitext(out)[1].lower() != "." + args.format:

@@ -3,7 +3,7 @@ polydata with a ParaView ``.pvd`` collection. Small self-contained writers, no d
 beyond numpy and h5py.
 
 Also the shared helpers that open an output file and check what it holds
-(:func:`open_output`, :func:`file_kind`, :func:`require`), used by :mod:`jaxdamp.visual`.
+(:func:`open_output`, :func:`file_kind`, :func:`require`), used by :mod:`jaxdamp.figures`.
 
 Conventions of the written files (SI units, lab frame, as in the run file):
 

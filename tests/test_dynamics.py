@@ -269,14 +269,20 @@ def test_classify_driven_duffing_chaotic_and_periodic():
     assert (regular.label, regular.period) == ("periodic", 1)
 
 
-def test_plots_write_files(tmp_path, logistic):
-    from jaxdamp import plots
+def test_figures_write_files(tmp_path, logistic):
+    from jaxdamp import figures
 
     sec = dyn.poincare_section(T, QUASI, F)
     sp = dyn.power_spectrum(T, PERIOD2, F)
     r = dyn.lyapunov_kantz(logistic, 1, 1)
-    for p in (plots.poincare_figure(tmp_path / "p.png", sec),
-              plots.poincare_figure(tmp_path / "r.png", sec, kind="return"),
-              plots.spectrum_figure(tmp_path / "s.png", sp, fmax=5 * F),
-              plots.kantz_figure(tmp_path / "k.png", r)):
+    for name, fig in (("p", figures.poincare_figure(sec)),
+                      ("r", figures.poincare_figure(sec, kind="return")),
+                      ("s", figures.spectrum_figure(sp, fmax=5 * F)),
+                      ("k", figures.kantz_figure(r))):
+        p = figures.save(fig, tmp_path / f"{name}.png")
         assert p.exists() and p.stat().st_size > 5000
+        ax = fig.axes[0]  # (fig.axes[1] of a section is its colour bar, "time t [s]")
+        assert "[" in ax.get_xlabel() and "[" in ax.get_ylabel()
+    # the return map has one point fewer than the section
+    assert len(figures.poincare_figure(sec, kind="return").axes[0].collections[0].get_offsets()) \
+        == len(sec.t) - 1

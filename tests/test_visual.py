@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from matplotlib import image as mpimg
 
-from jaxdamp import cli, presets, visual
+from jaxdamp import cli, figures, presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.runner import run
 from jaxdamp.sweep import sweep
@@ -39,8 +39,8 @@ def sweep_file(tmp_path_factory):
 
 
 def _png_size(kind):
-    w, h = visual.FIGSIZE[kind]
-    return round(h * visual.DPI), round(w * visual.DPI)
+    w, h = figures.FIGSIZE[kind]
+    return round(h * figures.DPI), round(w * figures.DPI)
 
 
 @pytest.mark.parametrize("kind", ["band", "energy", "snapshot", "poincare", "frf"])
@@ -51,9 +51,7 @@ def test_every_plot_kind_writes_a_png_of_the_expected_size(kind, run_file, sweep
     assert cli.main(["plot", str(src), "--kind", kind, "--out", str(out)]) == 0
     assert f"wrote {out}" in capsys.readouterr().out
     img = mpimg.imread(out)
-    # frf is drawn by jaxdamp.plots.frf_figure: 7 × 4.5 in at 120 dpi
-    expected = (540, 840) if kind == "frf" else _png_size(kind)
-    assert img.shape[:2] == expected
+    assert img.shape[:2] == _png_size(kind)
     assert out.stat().st_size > 20_000
     # not a blank canvas: many distinct colours
     assert len(np.unique(img.reshape(-1, img.shape[-1]), axis=0)) > 50
@@ -71,7 +69,7 @@ def test_band_figure_draws_the_series_in_the_window(run_file):
     with h5py.File(run_file) as h:
         s = {k: h["series"][k][()] for k in ("t", "z_box", "z_cm", "z_lowest", "z_highest")}
         Lz = json.loads(h.attrs["config"])["box"]["Lz"]
-    fig = visual.band_from_file(run_file, t0=0.03, t1=0.07)
+    fig = figures.band_from_file(run_file, t0=0.03, t1=0.07)
     ax = fig.axes[0]
     m = (s["t"] >= 0.03) & (s["t"] <= 0.07)
     lines = {line.get_label(): line for line in ax.get_lines()}
@@ -86,10 +84,10 @@ def test_band_figure_draws_the_series_in_the_window(run_file):
     lo, hi = s["z_lowest"][m].min() * 1e3, s["z_highest"][m].max() * 1e3
     assert band[:, 1].min() == pytest.approx(lo) and band[:, 1].max() == pytest.approx(hi)
     # the default window is the last BAND_PERIODS drive periods (here: the whole short run)
-    fig = visual.band_from_file(run_file)
+    fig = figures.band_from_file(run_file)
     x = fig.axes[0].get_lines()[0].get_xdata()
     f = 15.16
-    assert x[0] >= max(s["t"][0], s["t"][-1] - visual.BAND_PERIODS / f) - 1e-12
+    assert x[0] >= max(s["t"][0], s["t"][-1] - figures.BAND_PERIODS / f) - 1e-12
     assert x[-1] == s["t"][-1]
 
 
@@ -97,13 +95,70 @@ def test_poincare_points_are_the_series_once_per_period(run_file):
     with h5py.File(run_file) as h:
         t, z, v = (h["series"][k][()] for k in ("t", "z_cm", "vz_cm"))
     f = 15.16
-    fig = visual.poincare_from_file(run_file)
+    fig = figures.poincare_from_file(run_file)
     pts = fig.axes[0].collections[0].get_offsets()
     tk = np.arange(math.ceil(t[0] * f), math.floor(t[-1] * f) + 1) / f
     assert len(pts) == len(tk) >= 1
     # against linear interpolation of the 4 kHz samples (the section uses a cubic spline)
     np.testing.assert_allclose(pts[:, 0], np.interp(tk, t, z) * 1e3, atol=0.05)
     np.testing.assert_allclose(pts[:, 1], np.interp(tk, t, v), atol=0.05)
+
+
+def _assert_labelled(fig):
+    """The project rule: every drawn axis has a label with a unit in brackets, or says what it
+    counts or is a ratio of."""
+    for ax in fig.axes:
+        if not ax.axison:
+            continue
+        if getattr(ax, "_colorbar", None) is not None:  # a colour bar: its long axis
+            assert "[" in ax.get_ylabel(), ax.get_ylabel()
+            continue
+        # a shared x axis is labelled once, on the bottom panel
+        xlabel = next((a.get_xlabel() for a in ax.get_shared_x_axes().get_siblings(ax)
+                       if a.get_xlabel()), "")
+        labels = [xlabel, ax.get_ylabel()] + ([ax.get_zlabel()] if ax.name == "3d" else [])
+        for lab in labels:
+            assert lab and ("[" in lab or "ratio" in lab or "grains" in lab or "phase" in lab), \
+                (ax.get_title(), labels)
+
+
+def test_every_figure_has_labelled_axes(run_file, sweep_file):
+    with h5py.File(run_file) as h:
+        r, ts = h["snapshots/r"][()], h["snapshots/t"][()]
+        zb = np.interp(ts, h["series/t"][()], h["series/z_box"][()])
+        radius, species = h["grains/radius"][()], h["grains/species"][()]
+        box = json.loads(h.attrs["config"])["box"]
+    box = (box["Lx"], box["Ly"], box["Lz"])
+    rows = [("bed", [(f"t = {ts[k]:.3f} s", r[k], zb[k]) for k in (0, 2, 4)], radius, species,
+             box), ("again", [("last", r[-1], zb[-1])], radius, species, box)]
+    for fig in (figures.band_from_file(run_file), figures.energy_from_file(run_file),
+                figures.frf_from_file(sweep_file), figures.poincare_from_file(run_file),
+                figures.snapshot_from_file(run_file, 0, "height"),
+                figures.snapshot_from_file(run_file), figures.snapshot_grid_figure(rows, "test")):
+        _assert_labelled(fig)
+
+
+def test_snapshot_panels_share_one_drawing_routine(run_file):
+    """The side-view grid and the 3-D figure draw the same grains to scale: circles of radius
+    r in the side view, the same colours per species in both."""
+    from matplotlib.collections import PatchCollection
+
+    with h5py.File(run_file) as h:
+        r = h["snapshots/r"][-1]
+        radius, species = h["grains/radius"][()], h["grains/species"][()]
+        box = json.loads(h.attrs["config"])["box"]
+    box = (box["Lx"], box["Ly"], box["Lz"])
+    fig = figures.figure((3, 3))
+    ax = fig.subplots()
+    figures.draw_snapshot(ax, r, radius, species, box, 0.0)
+    pc = next(c for c in ax.collections if isinstance(c, PatchCollection))
+    assert len(pc.get_paths()) == len(radius)
+    ext = pc.get_paths()[0].get_extents()  # the first (largest) circle, in mm
+    assert len(ax.get_legend().get_texts()) == len(np.unique(species))
+    fig3 = figures.snapshot_figure(r, radius, species, box)
+    sc = fig3.axes[0].collections[-1]
+    np.testing.assert_allclose(sc.get_facecolors()[0][:3], pc.get_facecolors()[0][:3])
+    assert ext.width == pytest.approx(2 * radius.max() * 1e3, rel=1e-6)
 
 
 def _read_xyz(path):
@@ -235,8 +290,8 @@ def test_gif_has_one_frame_per_exported_snapshot(run_file, tmp_path, capsys):
                      "--every", "2"]) == 0
     with Image.open(out) as im:
         assert im.n_frames == 3
-        assert im.size == (round(visual.FIGSIZE["animation"][0] * 80),
-                           round(visual.FIGSIZE["animation"][1] * 80))
+        assert im.size == (round(figures.FIGSIZE["animation"][0] * 80),
+                           round(figures.FIGSIZE["animation"][1] * 80))
     mp4 = tmp_path / "grains.mp4"
     rc = cli.main(["export", str(run_file), "--format", "mp4", "--out", str(mp4)])
     if shutil.which("ffmpeg"):

@@ -1,0 +1,242 @@
+"""Response figures: the FRF (amplitude ratio versus frequency), the bed-band plot and the
+energy channels of a run.
+
+- :func:`frf_figure` — Z/U versus f per ``Lz`` with the analytic FRFs; :func:`frf_from_file`
+  draws it from a sweep file.
+- :func:`band_figure` — the thesis' bed-band plot: floor and lid of the box, the band between
+  the lowest and highest grain centre, the centre of mass, and the force of the grains on the
+  box, versus time; :func:`band_from_file` from a run file.
+- :func:`energy_figure` — cumulative work channels and the energy-balance residual;
+  :func:`energy_from_file` from a run file.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+
+from ..analysis import frf_amplitude
+from ..export import OutputFileError, require
+from . import FIGSIZE, figure
+from ._files import open_file, run_title, time_window
+
+#: default time window of the band plot, in drive periods before the end of the run
+BAND_PERIODS = 4
+
+BAND_PATHS = ("series/t", "series/z_box", "series/z_cm", "series/z_lowest", "series/z_highest",
+              "series/force_box")
+ENERGY_PATHS = ("series/t", "series/work", "series/balance_residual")
+
+
+# -- FRF -----------------------------------------------------------------------------------------
+def frf_figure(f, Z, lz_values, primary, grain_mass, fits=None, title="", model="DEM",
+               Z_se=None):
+    """Amplitude ratio Z/U versus f for each Lz, with the analytic FRFs of the primary alone
+    (mass M) and with the grains as a rigid mass (M + m_p).
+
+    Args:
+      f: frequencies [Hz], ``(F,)``; Z: amplitudes [m], ``(F, L)``; lz_values: ``(L,)`` [m] or
+      ``[None]``; primary: :class:`jaxdamp.config.Primary`; grain_mass [kg];
+      fits: optional ``[(M_ef, C_ef), ...]`` per Lz, drawn dotted.
+      model: legend label of the simulated points (``"DEM"``, ``"S3"``).
+      Z_se: optional standard errors of ``Z`` across replicates [m], ``(F, L)``: error bars
+        of ± 2 SE.
+    """
+    fig = figure(FIGSIZE["frf"])
+    ax = fig.subplots()
+    ff = np.linspace(min(f) * 0.9, max(f) * 1.05, 400)
+    U = primary.U
+    ax.plot(ff, frf_amplitude(ff, primary.M, primary.K, primary.C, U) / U, "k-", lw=0.8,
+            label=f"analytic, mass M = {primary.M:g} kg")
+    ax.plot(ff, frf_amplitude(ff, primary.M + grain_mass, primary.K, primary.C, U) / U, "k--",
+            lw=0.8, label=f"analytic, mass M + m_p = {primary.M + grain_mass:.3g} kg")
+    for j, lz in enumerate(lz_values):
+        lab = f"{model}, Lz = {lz:g} m" if lz is not None else model
+        line, = ax.plot(f, Z[:, j] / U, "o-", label=lab)
+        if Z_se is not None and np.isfinite(Z_se[:, j]).any():
+            ax.errorbar(f, Z[:, j] / U, yerr=2 * np.nan_to_num(Z_se[:, j]) / U, fmt="none",
+                        ecolor=line.get_color(), capsize=2, lw=0.8)
+        if fits is not None and fits[j] is not None:
+            M, C = fits[j]
+            ax.plot(ff, frf_amplitude(ff, M, primary.K, C, U) / U, ":", color=line.get_color(),
+                    label=f"fit: M_ef = {M:.3g} kg, C_ef = {C:.3g} N s/m")
+    ax.set_yscale("log")
+    ax.set_xlabel("excitation frequency f [Hz]")
+    ax.set_ylabel("amplitude ratio Z / U")
+    ax.set_title(title, fontsize=9)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    return fig
+
+
+def frf_from_file(h5_or_path):
+    """:func:`frf_figure` of a sweep file: amplitude ratio Z/U versus frequency, one curve per
+    ``box.Lz``, with the fitted FRFs when ``/fit`` is present."""
+    from ..config import from_json
+    from ..model import grain_mass
+
+    h5, close = open_file(h5_or_path)
+    try:
+        require(h5, "the FRF figure", "sweep", ("summary/amplitude",))
+        axes = json.loads(h5.attrs["axes"])
+        keys = list(axes)
+        if "frequency" not in keys:
+            raise OutputFileError(f"{h5.filename}: the FRF figure needs a sweep over 'frequency'; "
+                                  f"this one sweeps {', '.join(keys)}")
+        cfg = from_json(h5.attrs["base_config"])
+        if cfg.system != "primary":
+            raise OutputFileError(f"{h5.filename}: the FRF figure needs an S1 sweep (system "
+                                  f"'primary'); this one is {cfg.system!r}")
+        f = np.asarray(axes["frequency"], float)
+        Z = np.asarray(h5["summary/amplitude"][()], float).reshape([len(axes[k]) for k in keys])
+        if keys[0] != "frequency":
+            Z = Z.T
+        Z = Z.reshape(len(f), -1)
+        other = [k for k in keys if k != "frequency"]
+        if other and other[0] != "box.Lz":
+            raise OutputFileError(f"{h5.filename}: the FRF figure draws one curve per box.Lz; "
+                                  f"this sweep's second axis is {other[0]!r}")
+        lz = [float(x) for x in axes["box.Lz"]] if other else [None]
+        fits = None
+        if "fit/M_ef" in h5 and "fit/C_ef" in h5:
+            fits = list(zip(h5["fit/M_ef"][()], h5["fit/C_ef"][()]))
+        order = np.argsort(f)
+        title = f"{cfg.name}: {os.path.basename(h5.filename)}, N = {cfg.n_grains} grains"
+        return frf_figure(f[order], Z[order], lz, cfg.primary, grain_mass(cfg), fits,
+                          title=title)
+    finally:
+        if close:
+            h5.close()
+
+
+# -- bed band ------------------------------------------------------------------------------------
+def band_figure(t, z_box, Lz, z_lowest, z_highest, z_cm, force_box, *, weight=None,
+                frequency=None, t0=None, t1=None, periods=BAND_PERIODS, title="", path=""):
+    """The bed-band plot of the thesis versus time ``t`` [s].
+
+    Top panel (heights in mm, lab frame): the floor ``z_box`` and the lid ``z_box + Lz`` of the
+    box, the band between the lowest and highest grain centre filled, and the bed's centre of
+    mass ``z_cm``. Bottom panel: the vertical force of the grains on the box ``force_box`` [N]
+    (interval average, positive upwards; with ``weight`` = ``m_p g`` [N], the level ``−m_p g``
+    of a bed resting on the floor is drawn as a reference). Default window:
+    the last ``periods`` drive periods of ``frequency`` [Hz] (the whole run without it).
+    """
+    m = time_window(t, t0, t1, frequency, periods, "band plot", path)
+    t = np.asarray(t)[m]
+    mm = 1e3
+    zb, zl, zh, zc = (np.asarray(x)[m] * mm for x in (z_box, z_lowest, z_highest, z_cm))
+    F = np.asarray(force_box)[m]
+    fig = figure(FIGSIZE["band"])
+    ax, axf = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [2.2, 1]})
+    ax.fill_between(t, zl, zh, color="tab:orange", alpha=0.45, lw=0,
+                    label="grains (lowest … highest centre)")
+    ax.plot(t, zb, "k-", lw=1.4, label="floor $z_{box}$")
+    ax.plot(t, zb + Lz * mm, "k--", lw=1.4, label=f"lid $z_{{box}} + L_z$ ($L_z$ = {Lz * mm:g} mm)")
+    ax.plot(t, zc, "-", color="tab:red", lw=1.0, label="centre of mass $z_{cm}$")
+    ax.set_ylabel("height z [mm] (lab frame)")
+    ax.legend(fontsize=8, loc="upper left", ncol=2, framealpha=0.85)
+    ax.grid(alpha=0.3)
+    axf.plot(t, F, "-", color="tab:blue", lw=0.9, label="grains on box $F_{gz}$")
+    if weight is not None:
+        axf.axhline(-weight, color="0.4", ls=":", lw=1.0,
+                    label=f"bed resting on the floor: $-m_p g$ = {-weight:.3g} N")
+    axf.axhline(0.0, color="0.7", lw=0.6)
+    axf.set_ylabel("force on box [N]")
+    axf.set_xlabel("time t [s]")
+    axf.legend(fontsize=8, loc="upper left")
+    axf.grid(alpha=0.3)
+    if frequency:
+        title = (title + "\n" if title else "") + (
+            f"f = {frequency:g} Hz, t = {t[0]:.4g} … {t[-1]:.4g} s "
+            f"({(t[-1] - t[0]) * frequency:.2g} periods)")
+    ax.set_title(title, fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def band_from_file(h5_or_path, t0=None, t1=None, periods=BAND_PERIODS):
+    """:func:`band_figure` of a run file."""
+    h5, close = open_file(h5_or_path)
+    try:
+        require(h5, "the band plot", "run", BAND_PATHS)
+        s = {k: h5["series"][k][()] for k in ("t", "z_box", "z_lowest", "z_highest", "z_cm",
+                                                  "force_box")}
+        cfg = json.loads(h5.attrs["config"])
+        weight = (float(h5["grains/mass"][()].sum()) * float(cfg["gravity"])
+                  if "grains/mass" in h5 else None)
+        return band_figure(s["t"], s["z_box"], float(cfg["box"]["Lz"]), s["z_lowest"],
+                           s["z_highest"], s["z_cm"], s["force_box"], weight=weight,
+                           frequency=float(cfg["frequency"]), t0=t0, t1=t1, periods=periods,
+                           title=run_title(h5, cfg), path=h5.filename)
+    finally:
+        if close:
+            h5.close()
+
+
+# -- energy --------------------------------------------------------------------------------------
+GRANULAR = ("pp_normal", "pp_friction", "pw_normal", "pw_friction")
+_LABELS = {"input": "input work", "primary_damping": "primary damper C",
+           "pp_normal": "grain–grain, normal", "pp_friction": "grain–grain, friction",
+           "pw_normal": "grain–wall, normal", "pw_friction": "grain–wall, friction",
+           "drag": "settling drag"}
+
+
+def energy_figure(t, work, channels, residual, *, t0=None, t1=None, title="", path=""):
+    """Cumulative work channels [J] since t = 0 and the energy-balance residual [J] versus time.
+
+    Panels: input work, loss in the primary's damper and the total granular loss; the four
+    granular channels (grain–grain / grain–wall, normal / friction); the residual
+    ``E(t) − E(0) + losses − input`` with its size relative to the energy turned over.
+    """
+    m = time_window(t, t0, t1, what="energy figure", path=path)
+    t = np.asarray(t)[m]
+    W = np.asarray(work)[m]
+    res = np.asarray(residual)[m]
+    col = {name: W[:, i] for i, name in enumerate(channels)}
+    gran = sum(col[c] for c in GRANULAR if c in col)
+    fig = figure(FIGSIZE["energy"])
+    a1, a2, a3 = fig.subplots(3, 1, sharex=True, gridspec_kw={"height_ratios": [1.3, 1.3, 1]})
+    for name, style in (("input", "k-"), ("primary_damping", "-")):
+        if name in col:
+            a1.plot(t, col[name], style, lw=1.1, label=_LABELS[name])
+    a1.plot(t, gran, "-", lw=1.1, color="tab:red", label="granular loss (sum of 4 channels)")
+    if "drag" in col and np.any(col["drag"] != 0):
+        a1.plot(t, col["drag"], ":", label=_LABELS["drag"])
+    a1.set_ylabel("cumulative work [J]")
+    a1.legend(fontsize=8, loc="upper left")
+    for name in GRANULAR:
+        if name in col:
+            a2.plot(t, col[name], lw=1.0, label=_LABELS[name])
+    a2.plot(t, gran, "k--", lw=0.8, label="sum")
+    a2.set_ylabel("granular loss [J]")
+    a2.legend(fontsize=8, loc="upper left", ncol=2)
+    a3.plot(t, res, "-", color="tab:purple", lw=0.9)
+    turnover = np.abs(col.get("input", np.zeros_like(t))) + sum(
+        np.abs(v) for k, v in col.items() if k != "input")
+    rel = float(np.max(np.abs(res)) / max(np.max(turnover), 1e-300))
+    a3.set_ylabel("balance residual [J]")
+    a3.set_xlabel("time t [s]")
+    a3.set_title(f"residual E(t) − E(0) + losses − input; max |residual| / max(|input| + losses) "
+                 f"= {rel:.2g}", fontsize=8)
+    for a in (a1, a2, a3):
+        a.grid(alpha=0.3)
+    a1.set_title(title, fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def energy_from_file(h5_or_path, t0=None, t1=None):
+    """:func:`energy_figure` of a run file."""
+    h5, close = open_file(h5_or_path)
+    try:
+        require(h5, "the energy figure", "run", ENERGY_PATHS)
+        g = h5["series"]
+        channels = json.loads(g["work"].attrs["channels"])
+        cfg = json.loads(h5.attrs["config"])
+        return energy_figure(g["t"][()], g["work"][()], channels, g["balance_residual"][()],
+                             t0=t0, t1=t1, title=run_title(h5, cfg), path=h5.filename)
+    finally:
+        if close:
+            h5.close()
