@@ -28,13 +28,10 @@ import jax.numpy as jnp
 import numpy as np
 
 import jaxdamp
-from jaxdamp import neighbors as nb
-from jaxdamp import presets
+from jaxdamp import driver, presets
 from jaxdamp import restitution as rst
 from jaxdamp.config import Box, Config, Drive, Numerics, Species
-from jaxdamp.integrate import box_frame
-from jaxdamp.model import build
-from jaxdamp.simulate import advance, init_states
+from jaxdamp.model import build, contact_law
 
 STEPS_BEFORE = 20  # steps of free flight before contact
 STEPS_PER_COLLISION = 50
@@ -55,8 +52,8 @@ def measure(cfg: Config, speeds: np.ndarray, wall: bool):
     model, params = build(cfg)
     R = float(params.radius[0])
     m = float(params.mass[0])
-    E_eff = 1.0 / (2 * float(params.compliance[0])) if not wall else 1.0 / (
-        float(params.compliance[0]) + float(params.wall_compliance))
+    row = np.asarray(params.wall_table[0] if wall else params.pair_table[0, 0])  # mixed constants
+    E_eff = float(row[contact_law(cfg).column("E_star")])
     m_eff, R_eff = (m, R) if wall else (m / 2, R / 2)
     dts = np.array([rst.collision_time(m_eff, R_eff, E_eff, v) / STEPS_PER_COLLISION for v in speeds])
     B = len(speeds)
@@ -74,11 +71,10 @@ def measure(cfg: Config, speeds: np.ndarray, wall: bool):
     q = np.zeros((B, n, 4))
     q[..., 0] = 1
     zeros = np.zeros((B, n, 3))
-    st = init_states(model, pb, r, v, zeros, q, jnp.zeros(B), jnp.zeros(B))
-    nbrs = nb.allocate(model, box_frame(st), 1.5)
+    batch = driver.start(model, pb, r, v, zeros, q, np.zeros(B), np.zeros(B), engine="jax")
     n_steps = STEPS_BEFORE + 4 * STEPS_PER_COLLISION
-    st, nbrs, rec = advance(model, st, nbrs, pb, n_steps, 1, 1.5)
-    vout = np.asarray(st.v)
+    batch, rec = driver.advance(batch, n_steps, 1)
+    vout = np.asarray(batch.states.v)
     eps = vout[:, 0, 2] / speeds if wall else (vout[:, 1, 0] - vout[:, 0, 0]) / speeds
     contact = (np.asarray(rec["e_elastic"]) > 0).sum(axis=1) * dts
     return eps, contact, dts, (m_eff, R_eff, E_eff), params
@@ -113,8 +109,9 @@ def main(argv=None):
     ]:
         cfg = _config(mat, radius, 1 if wall else 2, lam)
         eps, contact, dts, consts, params = measure(cfg, speeds, wall)
-        mix_A = float(params.A[0] + params.wall_A) / 2 if wall else float(params.A[0])
-        g = float(params.gamma_n[0] + params.wall_gamma_n) / 2 if wall else float(params.gamma_n[0])
+        law = contact_law(cfg)
+        row = np.asarray(params.wall_table[0] if wall else params.pair_table[0, 0])
+        mix_A, g = float(row[law.column("A")]), float(row[law.column("gamma_n")])
         if mix_A > 0:
             ref, dur, pade = reference(consts, speeds, A=mix_A)
         else:

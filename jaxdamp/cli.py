@@ -140,7 +140,9 @@ def cmd_frf(args) -> int:
     from .analysis import RESIDUALS, fit_frf_replicates
     from .model import grain_mass
     from .figures import frf_figure, save
-    from .sweep import steady_or_window, sweep, write_fit
+    from .grid import steady_or_window
+    from .io.sweepfile import write_fit
+    from .sweep import sweep
 
     cfg = _base_config(args)
     overrides = list(args.set or [])
@@ -227,6 +229,7 @@ def cmd_optimize(args) -> int:
 
     from .design import Objective, adaptive_scan, make_problem, optimize, trust_region
     from .design.surrogate import propose
+    from .io import optimisation as optimisation_file
 
     cfg = apply_overrides(_base_config(args), list(args.set or []))
     band = tuple(_float_list(args.band)) if args.band else None
@@ -300,7 +303,7 @@ def cmd_optimize(args) -> int:
         opt, sim = sr.optimum, sr.sim_seconds + sim_extra
         x_best = opt.x
         if args.out:
-            _write_search_log(args.out, cfg, objective, prob, sr, method, sim)
+            optimisation_file.write_search(args.out, cfg, objective, prob, sr, method, sim)
     if opt is not None:
         ci = (f" [{prob.to_lz(opt.lo):.5g}, {prob.to_lz(opt.hi):.5g}] m (95 %, jackknife over "
               f"{opt.replicates} replicates)" if opt.replicates > 1 else " (no replicates: no interval)")
@@ -325,32 +328,6 @@ def cmd_optimize(args) -> int:
                      "sim_seconds": sim, "method": method})
         print(f"wrote {args.out}")
     return 0
-
-
-def _write_search_log(path, cfg, objective, prob, sr, method, sim) -> None:
-    """HDF5 log of a scan or trust-region search (``docs/output.md``)."""
-    import json
-
-    import h5py
-
-    from . import __version__
-
-    with h5py.File(path, "w") as h:
-        h.attrs["format"] = "jaxdamp-optimize/2"
-        h.attrs["jaxdamp_version"] = __version__
-        h.attrs["config"] = cfg.to_json()
-        h.attrs["objective"] = objective.to_json(cfg)
-        h.attrs["variable"] = prob.variable
-        h.attrs["method"] = method
-        h.attrs["problem"] = json.dumps(prob.describe())
-        h.attrs["rounds"] = json.dumps(sr.rounds)
-        h.attrs["status"] = "finished"
-        g = h.create_group("points")
-        for name, data, unit in (("x", sr.x, "m"), ("lz", prob.to_lz(sr.x), "m"),
-                                 ("mean", sr.mean, objective.unit), ("se", sr.se, objective.unit),
-                                 ("values", sr.J, objective.unit)):
-            g.create_dataset(name, data=data).attrs["units"] = unit
-        h.attrs["sim_seconds"] = sim
 
 
 def _amplitudes(text):

@@ -255,58 +255,17 @@ def measure(config: Config, amplitudes, periods: int = 50, transient: int = 10,
                               replicates=R, replicate_summary=stack("summary", reduce=False),
                               steady=stats.to_arrays(steady, (len(amplitudes),)))
     if out:
-        write(out, result, transient=transient, samples_per_period=samples_per_period)
+        from .io import efficiency as efficiency_file
+
+        efficiency_file.write(out, result, transient, samples_per_period, SUMMARY_UNITS,
+                              PHASE_UNITS)
     return result
 
 
-def write(path: str, result: EfficiencyResult, transient: int, samples_per_period: int) -> None:
-    """Store ``result`` in the ``/efficiency`` group of the sweep file ``path``."""
-    import h5py
-
-    with h5py.File(path, "a") as h5:
-        if "efficiency" in h5:
-            del h5["efficiency"]
-        g = h5.create_group("efficiency")
-        g.attrs["E_max"] = "4 m A_d^2 omega^2 (Sack et al. 2013 read literally; SPEC §4)"
-        g.attrs["energies"] = "J per drive period (the paper's eqs. 4-5 times T)"
-        g.attrs["E_d_fit"] = ("linear fit to E_d(t) (one-period integrals from every sample t "
-                              "in the window), read at the window's middle")
-        g.attrs["transient_periods"] = transient
-        g.attrs["samples_per_period"] = samples_per_period
-        g.create_dataset("amplitude", data=result.amplitudes).attrs["units"] = "m"
-        g.attrs["replicates"] = result.replicates
-        if result.steady is not None:
-            from .io import write_steady
-
-            write_steady(g, result.steady, result.replicates,
-                         lambda q: "1/kg" if q.endswith("per_mass") else "1")
-        if result.replicate_summary is not None:
-            rs = g.create_group("replicate_summary")
-            for k, v in result.replicate_summary.items():
-                rs.create_dataset(k, data=v).attrs["units"] = SUMMARY_UNITS.get(k, "")
-        for part, units in (("summary", SUMMARY_UNITS), ("per_period", None),
-                            ("phase", PHASE_UNITS)):
-            sub = g.create_group(part)
-            for k, v in getattr(result, part).items():
-                u = units.get(k, "") if units else ("s" if k == "t_end" else
-                                                    "1" if k == "E_d" else "J")
-                sub.create_dataset(k, data=v).attrs["units"] = u
-
-
 def read(path: str) -> EfficiencyResult:
-    """Load an :class:`EfficiencyResult` written by :func:`measure`."""
-    import h5py
-
+    """Load an :class:`EfficiencyResult` written by :func:`measure` (``/efficiency``)."""
     from .config import from_json
+    from .io import efficiency as efficiency_file
 
-    with h5py.File(path, "r") as h5:
-        if "efficiency" not in h5:
-            raise ConfigError(f"{path} holds no efficiency analysis (run `jaxdamp efficiency`)")
-        g = h5["efficiency"]
-        parts = {p: {k: g[p][k][()] for k in g[p]} for p in ("summary", "per_period", "phase")}
-        snaps = ({k: h5["snapshots"][k][()] for k in h5["snapshots"]}
-                 if "snapshots" in h5 else None)
-        return EfficiencyResult(amplitudes=g["amplitude"][()], snapshots=snaps,
-                                config=from_json(h5.attrs["base_config"]),
-                                wall_time=float(h5.attrs.get("wall_time", np.nan)), path=path,
-                                **parts)
+    d = efficiency_file.read(path)
+    return EfficiencyResult(config=from_json(d.pop("config_json")), **d)

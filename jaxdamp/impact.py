@@ -62,7 +62,6 @@ momentum conservation (and the thesis' own code, appendix B) need ``(1 + e) v_z-
 from __future__ import annotations
 
 import functools
-import json
 import math
 import time
 from dataclasses import dataclass
@@ -921,12 +920,11 @@ def simulate(config: Config) -> ImpactRun:
 def sweep(config: Config, axes: dict, out: str | None = None, progress: bool = True,
           echo=print):
     """The S3 counterpart of :func:`jaxdamp.sweep.sweep`: same grid, same
-    :class:`~jaxdamp.sweep.SweepResult`, same HDF5 layout (``/summary``, ``/axes``,
+    :class:`~jaxdamp.grid.SweepResult`, same HDF5 layout (``/summary``, ``/axes``,
     ``/records`` ``(P, T)``). ``"smooth"`` runs all points as one ``vmap`` batch; ``"event"``
     loops over them (numba; one core each)."""
-    import h5py
-
-    from .sweep import SweepResult, grid_configs, write_header
+    from .grid import SweepResult, grid_configs
+    from .io.sweepfile import SweepFile
 
     for key in axes:
         if key.startswith(("box.", "grains")):
@@ -963,26 +961,15 @@ def sweep(config: Config, axes: dict, out: str | None = None, progress: bool = T
     n_rec = records["t"].shape[1] - 1
     duration = n_rec * configs[0].numerics.record_dt
     if out:
-        with h5py.File(out, "w") as h5:
-            write_header(h5, config, axes, configs, dt, duration, f"impact-{method}")
-            h5.attrs["devices"] = 1
-            sg = h5.create_group("summary")
-            for k, v in summary.items():
-                sg.create_dataset(k, data=v).attrs["units"] = SUMMARY_UNITS.get(
-                    k, "s" if k == "wall_time" else "")
-            ag = h5.create_group("axes")
-            for k, v in axes.items():
-                ag.create_dataset(k, data=np.asarray(v, float))
-            rg = h5.create_group("records")
-            for k, v in records.items():
-                ds = rg.create_dataset(k, data=v)
-                ds.attrs["units"] = RECORD_UNITS.get(k, "")
-            rg["work"].attrs["channels"] = json.dumps(list(CHANNELS))
-            if method == "event":
-                ig = h5.create_group("impacts")
-                for i, r in enumerate(runs):
-                    g = ig.create_group(str(i))
-                    for k, v in r.impacts.items():
-                        g.create_dataset(k, data=v)
-            h5.attrs["status"] = "finished"
+        sf = SweepFile.create(out, config, axes, configs, dt, duration, f"impact-{method}")
+        sf.write_summary(summary, SUMMARY_UNITS)
+        sf.write_records(records, RECORD_UNITS, channels=CHANNELS)
+        if method == "event":
+            ig = sf.h5.create_group("impacts")
+            for i, r in enumerate(runs):
+                g = ig.create_group(str(i))
+                for k, v in r.impacts.items():
+                    g.create_dataset(k, data=v)
+        sf.finish(wall)
+        sf.close()
     return SweepResult(axes=axes, configs=configs, summary=summary, records=records, path=out)

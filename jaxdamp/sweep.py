@@ -17,80 +17,23 @@ and a checkpoint; ``resume=True`` skips finished chunks.
 from __future__ import annotations
 
 import dataclasses
-import itertools
-import json
 import math
 import os
 import time
-from dataclasses import dataclass
 
-import h5py
 import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import __version__
 from . import driver, stats
 from .analysis import analysis_start, steady_state_summary
-from .config import Config, ConfigError, apply_overrides
-from .io import write_steady
+from .config import Config, ConfigError
+from .grid import SweepResult, geometry_key, grid_configs, replicate_configs
+from .io.sweepfile import SweepFile, holds
 from .model import build, config_dt, grain_radii
 from .packing import settle_many
 from .runner import initial_box_position, schedule
 from .simulate import resolve_engine
-from .validation import validate
-
-
-@dataclass
-class SweepResult:
-    """``axes``: ``{key: values}``; ``configs``: one per point (grid order, last axis fastest);
-    ``summary``: ``{name: array shaped like the grid}``; ``records``: per-point samples
-    (dict of arrays ``(P, T)``); ``path``: the HDF5 file or ``None``; ``snapshots``: with
-    ``sweep(..., snapshots=k)``, ``{"t": (k,), "r": (P, k, N, 3), "v": (P, k, N, 3), "z_box": (P, k)}`` at the
-    ends of the last ``k`` chunks, else ``None``.
-
-    With ``R = replicates`` independent beds per grid point, ``records`` and ``snapshots``
-    have ``P = grid points × R`` rows (:meth:`point`), ``summary`` holds the mean over the
-    replicates of each fixed-window value, ``replicate_summary`` the values of every replicate
-    (grid shape + ``(R,)``), and ``steady`` the steady-state estimates over replicates from
-    the detected steady state (:func:`jaxdamp.stats.steady`, as :func:`jaxdamp.stats.to_arrays`:
-    ``{quantity: {"mean", "se", "ci95", "n", "values", "batch_se", "start", "stationary"}}``)."""
-
-    axes: dict
-    configs: list
-    summary: dict
-    records: dict
-    path: str | None
-    snapshots: dict | None = None
-    replicates: int = 1
-    replicate_summary: dict | None = None
-    steady: dict | None = None
-
-    def point(self, index: int, replicate: int = 0) -> int:
-        """Row of grid point ``index`` (grid order), replicate ``replicate``, in ``records``
-        and ``snapshots`` (replicates are the fastest axis)."""
-        return index * self.replicates + replicate
-
-
-def grid_configs(config: Config, axes: dict) -> list[Config]:
-    """One configuration per grid point (``itertools.product`` order), each validated."""
-    keys = list(axes)
-    if len(keys) > 2:
-        raise ConfigError(f"a sweep takes at most two axes, got {keys}")
-    out = []
-    for values in itertools.product(*(axes[k] for k in keys)):
-        out.append(validate(apply_overrides(config, dict(zip(keys, map(float, values))))))
-    return out
-
-
-def _geometry_key(cfg: Config) -> str:
-    """What the settled bed depends on (not Lz, not the excitation)."""
-    d = cfg.to_dict()
-    num = d["numerics"]
-    keep = {k: num[k] for k in ("seed", "stiffness_scale", "skin", "capacity_multiplier",
-                                "settle_time", "settle_speed", "settle_drag", "engine")}
-    return json.dumps([d["grains"], d["box"]["Lx"], d["box"]["Ly"], d["box"]["wall"],
-                       d["gravity"], d["mixing"], keep], sort_keys=True)
 
 
 def _mesh_sharding(batch: int):
@@ -110,50 +53,6 @@ def _pad_and_shard(tree, padded, sharding):
         return jax.device_put(x, sharding) if sharding is not None else x
 
     return jax.tree_util.tree_map(one, tree)
-
-
-def _axes_json(axes: dict, replicates: int = 1) -> str:
-    d = {k: list(map(float, v)) for k, v in axes.items()}
-    if replicates > 1:
-        d["replicates"] = int(replicates)
-    return json.dumps(d)
-
-
-def replicate_configs(grid: list[Config], replicates: int) -> list[Config]:
-    """Every grid configuration repeated ``replicates`` times with the seeds of
-    :func:`jaxdamp.stats.replicate_seed` (replicates fastest)."""
-    if replicates < 1:
-        raise ConfigError(f"replicates = {replicates}: need at least 1")
-    return [c if k == 0 else dataclasses.replace(
-                c, numerics=dataclasses.replace(
-                    c.numerics, seed=stats.replicate_seed(c.numerics.seed, k)))
-            for c in grid for k in range(replicates)]
-
-
-def write_header(h5, config: Config, axes: dict, configs: list, dt: float, duration: float,
-                 engine: str, replicates: int = 1) -> None:
-    """The root attributes of a sweep file (``docs/output.md``), shared by every model."""
-    h5.attrs["format"] = "jaxdamp-sweep/1"
-    h5.attrs["jaxdamp_version"] = __version__
-    h5.attrs["base_config"] = config.to_json()
-    h5.attrs["axes"] = _axes_json(axes, replicates)
-    h5.attrs["replicates"] = int(replicates)
-    h5.attrs["configs"] = json.dumps([c.to_json() for c in configs])
-    h5.attrs["dt"] = dt
-    h5.attrs["duration"] = duration
-    h5.attrs["engine"] = engine
-
-
-def holds(path: str, config: Config, axes: dict, replicates: int = 1) -> bool:
-    """Whether the sweep file ``path`` exists and holds the sweep ``(config, axes)``."""
-    if not os.path.exists(path):
-        return False
-    try:
-        with h5py.File(path, "r") as h5:
-            return (h5.attrs.get("base_config") == config.to_json()
-                    and h5.attrs.get("axes") == _axes_json(axes, replicates) and "checkpoint" in h5)
-    except OSError:  # not an HDF5 file (e.g. cut short while being created)
-        return False
 
 
 def reuse_or_run(config: Config, axes: dict, out: str, **kwargs) -> SweepResult:
@@ -226,28 +125,16 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
     drive = dict(engine=engine, multiplier=base.numerics.capacity_multiplier,
                  place=lambda tree: _pad_and_shard(tree, padded, sharding))
 
-    h5 = None
+    sf = None
     start_chunk = 0
     if resume and out and os.path.exists(out):
-        h5 = h5py.File(out, "a")
-        if (h5.attrs["base_config"] != config.to_json()
-                or h5.attrs["axes"] != _axes_json(axes, R)):
-            h5.close()
-            raise ConfigError(f"--resume: {out} holds a different sweep")
-        g = h5["checkpoint"]
-        start_chunk = int(g.attrs["chunk"])
-        # compute time already spent on this sweep (older files: the finished summary's)
-        wall_before = float(h5.attrs.get("wall_time", h5["summary/wall_time"][()]
-                                         if "summary/wall_time" in h5 else 0.0))
-        arrays = {}
-        g.visititems(lambda n, o: arrays.__setitem__(n, o[()]) if isinstance(o, h5py.Dataset) else None)
+        sf, arrays, start_chunk, wall_before = SweepFile.resume(
+            out, config, axes, R, sched.records_per_chunk)
         batch = driver.restore(model, pb, arrays, **drive).replace(params=pb_s)
-        for ds in h5["records"].values():
-            ds.resize(start_chunk * sched.records_per_chunk, axis=1)
         say(f"resuming sweep at chunk {start_chunk}/{sched.n_chunks}")
     else:
         wall_before = 0.0
-        keys = [_geometry_key(c) for c in configs]
+        keys = [geometry_key(c) for c in configs]
         beds = {} if beds is None else beds
         first = {k: i for i, k in reversed(list(enumerate(keys))) if k not in beds}
         order = sorted(first.values())  # one new bed per geometry, all settled in one batch
@@ -269,10 +156,8 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
         batch = driver.start(model, pb, np.stack(r0), np.stack(v0), np.stack(w0), np.stack(q0),
                              np.asarray(z0), np.zeros(P), **drive).replace(params=pb_s)
         if out:
-            h5 = h5py.File(out, "w")
-            write_header(h5, config, axes, configs, dt, sched.duration, engine, R)
-            h5.attrs["devices"] = len(jax.devices())
-            h5.create_group("records")
+            sf = SweepFile.create(out, config, axes, configs, dt, sched.duration, engine, R,
+                                  devices=len(jax.devices()))
 
     bar = None
     if progress:
@@ -289,32 +174,16 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
             batch, recs = driver.advance(batch, sched.records_per_chunk, sched.record_every,
                                          systems=P)
         except driver.SimulationDiverged as e:
-            if h5 is not None:  # the file keeps every finished chunk and its checkpoint
-                h5.attrs["status"] = "diverged"
-                h5.attrs["message"] = str(e)
-                h5.close()
+            if sf is not None:  # the file keeps every finished chunk and its checkpoint
+                sf.set_status("diverged", str(e))
+                sf.close()
             raise
-        if h5 is not None:
-            g = h5["records"]
-            for k, v in recs.items():
-                if k not in g:
-                    g.create_dataset(k, data=v, maxshape=(P, None) + v.shape[2:], chunks=True)
-                else:
-                    n0 = g[k].shape[1]
-                    g[k].resize(n0 + v.shape[1], axis=1)
-                    g[k][:, n0:] = v
-            if "checkpoint" in h5:
-                del h5["checkpoint"]
-            ck = h5.create_group("checkpoint")
-            for k, v in driver.checkpoint(batch, P).items():
-                ck.create_dataset(k, data=v)
-            ck.attrs["chunk"] = chunk + 1
-            h5.attrs["wall_time"] = wall_before + time.perf_counter() - wall0
-            h5.flush()
+        if sf is not None:
+            sf.append_records(recs)
+            sf.write_checkpoint(driver.checkpoint(batch, P), chunk + 1,
+                                wall_before + time.perf_counter() - wall0)
         if chunk >= sched.n_chunks - snapshots:
-            _keep_snapshot(h5, snaps, batch.states, P)
-            if h5 is not None:
-                h5.flush()
+            _keep_snapshot(sf, snaps, batch.states, P)
         for k, v in recs.items():
             mem.setdefault(k, []).append(v)
         if bar is not None:
@@ -322,15 +191,14 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
     if bar is not None:
         bar.close()
     if stop < sched.n_chunks:
-        if h5 is not None:
-            h5.attrs["status"] = "partial"
-            h5.close()
+        if sf is not None:
+            sf.set_status("partial")
+            sf.close()
         return None
     wall = wall_before + time.perf_counter() - wall0  # over every session of a resumed sweep
-    if h5 is not None:
-        records = {k: h5["records"][k][()] for k in h5["records"]}
-        if "snapshots" in h5:
-            snaps = {k: h5["snapshots"][k][()] for k in h5["snapshots"]}
+    if sf is not None:
+        records = sf.records()
+        snaps = sf.snapshots() or snaps
     else:
         records = {k: np.concatenate(v, axis=1) for k, v in mem.items()}
         snaps = {k: np.stack(v, axis=1 if k != "t" else 0) for k, v in snaps.items()}
@@ -347,94 +215,24 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
     summary["wall_time"] = wall
     steady = stats.to_arrays(
         [stats.steady(series[g * R:(g + 1) * R]) for g in range(len(grid))], shape)
-    if h5 is not None:
-        sg = h5.require_group("summary")
-        for k, v in summary.items():
-            if k in sg:
-                del sg[k]
-            sg.create_dataset(k, data=v).attrs["units"] = units.get(k, "s" if k == "wall_time" else "")
-        write_replicates(h5, per_rep, units, steady, R)
-        ag = h5.require_group("axes")
-        for k, v in axes.items():
-            if k not in ag:
-                ag.create_dataset(k, data=np.asarray(v, float))
-        h5.attrs["wall_time"] = wall
-        h5.attrs["status"] = "finished"
-        h5.close()
+    if sf is not None:
+        sf.write_summary(summary, units, per_rep, steady, R, stats.unit)
+        sf.finish(wall)
+        sf.close()
     return SweepResult(axes=axes, configs=grid, summary=summary, records=records, path=out,
                        snapshots=snaps or None, replicates=R, replicate_summary=per_rep,
                        steady=steady)
 
 
-def write_replicates(h5, per_rep: dict, units: dict, steady: dict, R: int) -> None:
-    """``/replicate_summary/<name>`` (grid + ``(R,)``) and ``/steady/<quantity>/<field>``
-    (``docs/output.md``): the replicate values and the steady-state estimates over them."""
-    rg = h5.require_group("replicate_summary")
-    rg.attrs["replicates"] = R
-    for k, v in per_rep.items():
-        if k in rg:
-            del rg[k]
-        rg.create_dataset(k, data=v).attrs["units"] = units.get(k, "")
-    write_steady(h5, steady, R, stats.unit)
-
-
-def steady_or_window(res: SweepResult, key: str) -> tuple[np.ndarray, int]:
-    """Per-replicate values of ``key`` (grid shape + ``(R,)``): the steady mean over the
-    detected steady state where the replicate became stationary, else its fixed-window
-    value (``summary``); and how many replicates fell back to the fixed window."""
-    steady = res.steady[key]["values"]
-    window = res.replicate_summary[key]
-    ok = np.asarray(res.steady[key]["stationary"], bool) & np.isfinite(steady)
-    return np.where(ok, steady, window), int((~ok).sum())
-
-
-def write_fit(h5, fits: dict, used: str) -> None:
-    """``/fit`` of an FRF sweep file: ``M_ef``, ``C_ef`` (the ``used`` weighting), their
-    standard errors across replicates ``se_M_ef``, ``se_C_ef``, and ``<weighting>/...`` for
-    every weighting (:data:`jaxdamp.analysis.RESIDUALS`), one entry per ``Lz``."""
-    if "fit" in h5:
-        del h5["fit"]
-    g = h5.create_group("fit")
-    g.attrs["residuals"] = used
-    g.attrs["replicates"] = int(fits[used][0]["replicates"])
-
-    def put(grp, fl):
-        for name, key, unit in (("M_ef", "M_ef", "kg"), ("C_ef", "C_ef", "N s/m"),
-                                ("se_M_ef", "se_M", "kg"), ("se_C_ef", "se_C", "N s/m"),
-                                ("M_ef_of_mean", "M_mean_fit", "kg"),
-                                ("C_ef_of_mean", "C_mean_fit", "N s/m")):
-            grp.create_dataset(name, data=np.array([f[key] for f in fl])).attrs["units"] = unit
-
-    put(g, fits[used])
-    for w, fl in fits.items():
-        put(g.create_group(w), fl)
-
-
-def _keep_snapshot(h5, mem: dict, states, P: int) -> None:
-    """Append the batch's positions and velocities (and the time) to ``/snapshots`` of the
-    file (resumable: the snapshot count follows the chunk count) or to ``mem``."""
+def _keep_snapshot(sf, mem: dict, states, P: int) -> None:
+    """The batch's positions, velocities and box heights now: into the file's
+    ``/snapshots`` (resumable) or into ``mem``."""
     t = float(np.asarray(states.t)[0])
     per_point = {k: np.asarray(getattr(states, f))[:P]
                  for k, f in (("r", "r"), ("v", "v"), ("z_box", "z"))}
-    if h5 is None:
-        mem.setdefault("t", []).append(t)
-        for k, x in per_point.items():
-            mem.setdefault(k, []).append(x)
+    if sf is not None:
+        sf.append_snapshot(t, per_point)
         return
-    g = h5.require_group("snapshots")
-    if "t" not in g:
-        g.create_dataset("t", shape=(0,), maxshape=(None,), dtype="f8").attrs["units"] = "s"
-        for k, x in per_point.items():
-            g.create_dataset(k, shape=(P, 0) + x.shape[1:], maxshape=(P, None) + x.shape[1:],
-                             chunks=True, dtype="f8").attrs["units"] = _SNAPSHOT_UNITS[k]
-    n = g["t"].shape[0]
-    if n and float(g["t"][n - 1]) >= t:  # a resumed sweep re-running a stored chunk
-        n = int(np.searchsorted(g["t"][()], t))
-    g["t"].resize(n + 1, axis=0)
-    g["t"][n] = t
+    mem.setdefault("t", []).append(t)
     for k, x in per_point.items():
-        g[k].resize(n + 1, axis=1)
-        g[k][:, n] = x
-
-
-_SNAPSHOT_UNITS = {"r": "m", "v": "m/s", "z_box": "m"}
+        mem.setdefault(k, []).append(x)

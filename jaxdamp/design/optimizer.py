@@ -22,8 +22,8 @@ from dataclasses import dataclass
 import jax.numpy as jnp
 import numpy as np
 
-from .. import __version__
 from ..config import ConfigError
+from ..io import optimisation as optimisation_file
 
 
 @dataclass
@@ -47,11 +47,6 @@ class OptimizeResult:
     optimum: object = None
 
 
-LOG_FIELDS = {
-    "x": "m", "lz": "m", "objective": "", "objective_se": "", "gradient": "1/m",
-    "gradient_se": "1/m", "step": "m", "learning_rate": "m", "wall_time": "s",
-    "sim_seconds": "s",
-}
 
 
 def optimize(problem, x0: float, lr: float = 0.01, decay: float = 0.9, max_iter: int = 30,
@@ -86,8 +81,8 @@ def optimize(problem, x0: float, lr: float = 0.01, decay: float = 0.9, max_iter:
     sched = optax.exponential_decay(lr, transition_steps=1, decay_rate=decay)
     opt = optax.adam(sched, b1=b1, b2=b2)
     opt_state = opt.init(jnp.zeros(()))
-    hist = {k: [] for k in LOG_FIELDS}
-    h5 = _open_log(out, problem, x0, lo, hi, dict(lr=lr, decay=decay, b1=b1, b2=b2, max_iter=max_iter,
+    hist = {k: [] for k in optimisation_file.LOG_FIELDS}
+    h5 = optimisation_file.open_log(out, problem, x0, lo, hi, dict(lr=lr, decay=decay, b1=b1, b2=b2, max_iter=max_iter,
                    xtol=xtol, patience=patience, se_factor=se_factor), config_json)
     bar = None
     if progress:
@@ -110,12 +105,12 @@ def optimize(problem, x0: float, lr: float = 0.01, decay: float = 0.9, max_iter:
                 why = est.extra.get("reason", "")
                 reason = (f"non-finite objective or gradient at {problem.variable} = {x:.6g}"
                           + (f": {why}" if why else ""))
-                _log(h5, hist, x, problem, est, 0.0, float(sched(k)), t_start, sim_total)
+                optimisation_file.log(h5, hist, x, problem, est, 0.0, float(sched(k)), t_start, sim_total)
                 break
             updates, opt_state = opt.update(jnp.asarray(sign * est.grad), opt_state)
             x_new = float(np.clip(x + float(updates), lo, hi))
             step = x_new - x
-            _log(h5, hist, x, problem, est, step, float(sched(k)), t_start, sim_total)
+            optimisation_file.log(h5, hist, x, problem, est, step, float(sched(k)), t_start, sim_total)
             if bar is not None:
                 bar.update(1)
                 bar.set_postfix({problem.variable: f"{x:.5f}", "obj": f"{est.value:.4g}",
@@ -160,42 +155,6 @@ def optimize(problem, x0: float, lr: float = 0.01, decay: float = 0.9, max_iter:
         h5.attrs["result"] = json.dumps(result)
         h5.close()
     return res
-
-
-def _open_log(out, problem, x0, lo, hi, settings, config_json):
-    if out is None:
-        return None
-    import h5py
-
-    h5 = h5py.File(out, "w")
-    h5.attrs["format"] = "jaxdamp-optimize/1"
-    h5.attrs["jaxdamp_version"] = __version__
-    h5.attrs["config"] = config_json or problem.config.to_json()
-    h5.attrs["objective"] = problem.objective.to_json(problem.config)
-    h5.attrs["variable"] = problem.variable
-    h5.attrs["problem"] = json.dumps(problem.describe())
-    h5.attrs["settings"] = json.dumps(dict(settings, x0=float(x0), lo=float(lo), hi=float(hi)))
-    h5.attrs["status"] = "running"
-    g = h5.create_group("iterations")
-    for k, unit in LOG_FIELDS.items():
-        g.create_dataset(k, shape=(0,), maxshape=(None,), dtype="f8").attrs["units"] = unit
-    return h5
-
-
-def _log(h5, hist, x, problem, est, step, lr, t_start, sim_total):
-    row = {"x": x, "lz": float(problem.to_lz(x)), "objective": est.value,
-           "objective_se": est.value_se, "gradient": est.grad, "gradient_se": est.grad_se,
-           "step": step, "learning_rate": lr, "wall_time": time.perf_counter() - t_start,
-           "sim_seconds": sim_total}
-    for k, v in row.items():
-        hist[k].append(float(v))
-    if h5 is not None:
-        g = h5["iterations"]
-        for k, v in row.items():
-            ds = g[k]
-            ds.resize(ds.shape[0] + 1, axis=0)
-            ds[-1] = v
-        h5.flush()
 
 
 def scan_optimum(xs, values, maximise: bool) -> float:

@@ -55,7 +55,7 @@ class SteadyProblem:
                  progress: bool = False):
         from ..model import build
         from ..packing import settle_many
-        from ..sweep import _geometry_key, replicate_configs
+        from ..grid import geometry_key, replicate_configs
         from ..validation import validate
 
         if config.system != "primary":
@@ -78,7 +78,7 @@ class SteadyProblem:
         t0 = time.perf_counter()
         settled = settle_many(cfgs, model, [build(c)[1] for c in cfgs])
         self.settle_wall = time.perf_counter() - t0
-        self.beds.update({_geometry_key(c): b for c, b in zip(cfgs, settled)})
+        self.beds.update({geometry_key(c): b for c, b in zip(cfgs, settled)})
         self.bed_height = max(b.height for b in settled)
 
     def bounds(self, margin: float | None = None, hi: float | None = None):
@@ -91,7 +91,8 @@ class SteadyProblem:
 
         Returns ``{"lz": (L,), "J": (L, R), "Z": (F, L, R), "E": (F, L, R),
         "not_stationary": int, "sim_seconds": float, "wall": float}``."""
-        from ..sweep import steady_or_window, sweep
+        from ..grid import steady_or_window
+        from ..sweep import sweep
 
         lzs = [float(x) for x in np.atleast_1d(lzs)]
         lo = self.bed_height + 0.5 * self.margin

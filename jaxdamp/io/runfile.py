@@ -12,41 +12,24 @@ Schema of a run file (every dataset has a ``units`` attribute; see ``docs/output
     /snapshots/t (S,)       s;  /snapshots/r (S,N,3) m;  /snapshots/q (S,N,4) unit quaternions
     /summary                attrs: steady-state scalars (units in attr 'units' JSON)
     /steady/<quantity>/...  steady-state estimates from the detected steady state
-                            (:func:`write_steady`; same layout in sweep files)
+                            (:func:`jaxdamp.io.common.write_steady`; as in sweep files)
     /checkpoint             the full state and neighbour list after the last finished chunk
 """
 
 from __future__ import annotations
 
 import json
-import time
 
 import h5py
 import numpy as np
 
-from . import __version__
-from .config import Config
-from .energy import RECORD_UNITS
-from .model import CHANNELS
+from ..config import Config
+from ..energy import RECORD_UNITS
+from ..model import CHANNELS
+from .common import append as _append
+from .common import stamp
 
 FORMAT = "jaxdamp-run/1"
-
-
-def _append(group, name, values, units=None, **attrs):
-    values = np.asarray(values)
-    if name not in group:
-        ds = group.create_dataset(
-            name, data=values, maxshape=(None,) + values.shape[1:], chunks=True
-        )
-        if units is not None:
-            ds.attrs["units"] = units
-        for k, v in attrs.items():
-            ds.attrs[k] = v
-        return
-    ds = group[name]
-    n0 = ds.shape[0]
-    ds.resize(n0 + values.shape[0], axis=0)
-    ds[n0:] = values
 
 
 class RunFile:
@@ -61,17 +44,8 @@ class RunFile:
     def create(cls, path: str, config: Config, radii, masses, species, bed, extra_attrs=None):
         f = cls(path, "w")
         h = f.h5
-        h.attrs["format"] = FORMAT
-        h.attrs["jaxdamp_version"] = __version__
-        h.attrs["created"] = time.strftime("%Y-%m-%dT%H:%M:%S%z")
-        h.attrs["config"] = config.to_json()
-        h.attrs["system"] = config.system
-        h.attrs["preset"] = config.name
-        h.attrs["status"] = "running"
-        h.attrs["message"] = ""
-        h.attrs["units"] = "SI (m, kg, s, N, J, W); angles in rad"
-        for k, v in (extra_attrs or {}).items():
-            h.attrs[k] = v
+        stamp(h, FORMAT, config=config.to_json(), system=config.system, preset=config.name,
+              status="running", message="", **(extra_attrs or {}))
         g = h.create_group("grains")
         g.create_dataset("radius", data=np.asarray(radii)).attrs["units"] = "m"
         g.create_dataset("mass", data=np.asarray(masses)).attrs["units"] = "kg"
@@ -157,33 +131,9 @@ class RunFile:
         self.h5.close()
 
 
-def state_to_arrays(state, nbrs) -> dict:
-    """Checkpoint form of a (batch of) ``State`` and ``Neighbors``: ``{"state/<field>": array,
-    "nbrs/<field>": array}``, exact copies."""
-    import dataclasses
-
-    from . import neighbors as nb
-
-    out = {f"state/{f.name}": np.asarray(getattr(state, f.name)) for f in dataclasses.fields(state)}
-    out.update({f"nbrs/{k}": v for k, v in nb.to_numpy(nbrs).items()})
-    return out
-
-
-def arrays_to_state(arrays: dict):
-    """Inverse of :func:`state_to_arrays`: ``(State, Neighbors)`` as JAX arrays."""
-    import jax.numpy as jnp
-
-    from . import neighbors as nb
-    from .model import State
-
-    st = {k.split("/", 1)[1]: jnp.asarray(v) for k, v in arrays.items() if k.startswith("state/")}
-    nbr = {k.split("/", 1)[1]: v for k, v in arrays.items() if k.startswith("nbrs/")}
-    return State(**st), nb.from_numpy(nbr)
-
-
 def read_config(path: str) -> Config:
     """The configuration stored in a run file."""
-    from .config import from_json
+    from ..config import from_json
 
     with h5py.File(path, "r") as h:
         return from_json(h.attrs["config"])
@@ -219,25 +169,3 @@ def describe(path: str) -> str:
     return "\n".join(lines)
 
 
-def write_steady(h5, steady: dict, replicates: int, units) -> None:
-    """``/steady/<quantity>/{mean, se, ci95, n, values, batch_se, start, stationary}``: the
-    steady-state estimates of :func:`jaxdamp.stats.to_arrays` (grid-shaped ``mean`` … ``n``,
-    grid + ``(R,)`` for the rest), with units, the number of replicates and the method in
-    attributes. ``units(quantity)`` gives the unit of a quantity. Used by run and sweep files."""
-    from .stats import DETECT_ON
-
-    if "steady" in h5:
-        del h5["steady"]
-    st = h5.create_group("steady")
-    st.attrs["replicates"] = int(replicates)
-    st.attrs["method"] = (
-        "per-period series; start of the steady state by MSER on " + ", ".join(DETECT_ON)
-        + " (the later of the two; at least 1 period dropped, 5 kept); mean +- standard error "
-        "across independent replicates (Student-t 95 % half-width in ci95; NaN for one "
-        "replicate); batch_se: within-run batch means (5 batches)")
-    for q, fields in steady.items():
-        g = st.create_group(q)
-        g.attrs["units"] = units(q)
-        for f, v in fields.items():
-            d = g.create_dataset(f, data=np.asarray(v))
-            d.attrs["units"] = "s" if f == "start" else "1" if f in ("n", "stationary") else units(q)

@@ -1,0 +1,91 @@
+"""What a sweep is: the grid of configurations (× independent replicates) and its result.
+
+Shared by the DEM sweep (:mod:`jaxdamp.sweep`) and the single-particle model's sweep
+(:func:`jaxdamp.impact.sweep`), which therefore do not import each other.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import json
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import stats
+from .config import Config, ConfigError, apply_overrides
+from .validation import validate
+
+
+@dataclass
+class SweepResult:
+    """``axes``: ``{key: values}``; ``configs``: one per point (grid order, last axis fastest);
+    ``summary``: ``{name: array shaped like the grid}``; ``records``: per-point samples
+    (dict of arrays ``(P, T)``); ``path``: the HDF5 file or ``None``; ``snapshots``: with
+    ``sweep(..., snapshots=k)``, ``{"t": (k,), "r": (P, k, N, 3), "v": (P, k, N, 3), "z_box": (P, k)}`` at the
+    ends of the last ``k`` chunks, else ``None``.
+
+    With ``R = replicates`` independent beds per grid point, ``records`` and ``snapshots``
+    have ``P = grid points × R`` rows (:meth:`point`), ``summary`` holds the mean over the
+    replicates of each fixed-window value, ``replicate_summary`` the values of every replicate
+    (grid shape + ``(R,)``), and ``steady`` the steady-state estimates over replicates from
+    the detected steady state (:func:`jaxdamp.stats.steady`, as :func:`jaxdamp.stats.to_arrays`:
+    ``{quantity: {"mean", "se", "ci95", "n", "values", "batch_se", "start", "stationary"}}``)."""
+
+    axes: dict
+    configs: list
+    summary: dict
+    records: dict
+    path: str | None
+    snapshots: dict | None = None
+    replicates: int = 1
+    replicate_summary: dict | None = None
+    steady: dict | None = None
+
+    def point(self, index: int, replicate: int = 0) -> int:
+        """Row of grid point ``index`` (grid order), replicate ``replicate``, in ``records``
+        and ``snapshots`` (replicates are the fastest axis)."""
+        return index * self.replicates + replicate
+
+
+def grid_configs(config: Config, axes: dict) -> list[Config]:
+    """One configuration per grid point (``itertools.product`` order), each validated."""
+    keys = list(axes)
+    if len(keys) > 2:
+        raise ConfigError(f"a sweep takes at most two axes, got {keys}")
+    out = []
+    for values in itertools.product(*(axes[k] for k in keys)):
+        out.append(validate(apply_overrides(config, dict(zip(keys, map(float, values))))))
+    return out
+
+
+def geometry_key(cfg: Config) -> str:
+    """What the settled bed depends on (not Lz, not the excitation)."""
+    d = cfg.to_dict()
+    num = d["numerics"]
+    keep = {k: num[k] for k in ("seed", "stiffness_scale", "skin", "capacity_multiplier",
+                                "settle_time", "settle_speed", "settle_drag", "engine")}
+    return json.dumps([d["grains"], d["box"]["Lx"], d["box"]["Ly"], d["box"]["wall"],
+                       d["gravity"], d["mixing"], keep], sort_keys=True)
+
+
+def replicate_configs(grid: list[Config], replicates: int) -> list[Config]:
+    """Every grid configuration repeated ``replicates`` times with the seeds of
+    :func:`jaxdamp.stats.replicate_seed` (replicates fastest)."""
+    if replicates < 1:
+        raise ConfigError(f"replicates = {replicates}: need at least 1")
+    return [c if k == 0 else dataclasses.replace(
+                c, numerics=dataclasses.replace(
+                    c.numerics, seed=stats.replicate_seed(c.numerics.seed, k)))
+            for c in grid for k in range(replicates)]
+
+
+def steady_or_window(res: SweepResult, key: str) -> tuple[np.ndarray, int]:
+    """Per-replicate values of ``key`` (grid shape + ``(R,)``): the steady mean over the
+    detected steady state where the replicate became stationary, else its fixed-window
+    value (``summary``); and how many replicates fell back to the fixed window."""
+    steady = res.steady[key]["values"]
+    window = res.replicate_summary[key]
+    ok = np.asarray(res.steady[key]["stationary"], bool) & np.isfinite(steady)
+    return np.where(ok, steady, window), int((~ok).sum())

@@ -1,0 +1,77 @@
+"""Optimiser and search logs (``jaxdamp optimize --out``; ``docs/output.md``).
+
+``jaxdamp-optimize/1``: one row per iterate of the gradient optimiser, appended and flushed as
+it runs (:func:`open_log`, :func:`log`); ``jaxdamp-optimize/2``: a scan or trust-region search
+with every evaluated point (:func:`write_search`).
+"""
+
+from __future__ import annotations
+
+import json
+import time
+
+import h5py
+
+from .common import stamp
+
+#: Iterate fields of the gradient optimiser's log and their units.
+LOG_FIELDS = {
+    "x": "m", "lz": "m", "objective": "", "objective_se": "", "gradient": "1/m",
+    "gradient_se": "1/m", "step": "m", "learning_rate": "m", "wall_time": "s",
+    "sim_seconds": "s",
+}
+
+
+def open_log(out, problem, x0, lo, hi, settings, config_json):
+    if out is None:
+        return None
+    h5 = h5py.File(out, "w")
+    stamp(h5, "jaxdamp-optimize/1")
+    h5.attrs["config"] = config_json or problem.config.to_json()
+    h5.attrs["objective"] = problem.objective.to_json(problem.config)
+    h5.attrs["variable"] = problem.variable
+    h5.attrs["problem"] = json.dumps(problem.describe())
+    h5.attrs["settings"] = json.dumps(dict(settings, x0=float(x0), lo=float(lo), hi=float(hi)))
+    h5.attrs["status"] = "running"
+    g = h5.create_group("iterations")
+    for k, unit in LOG_FIELDS.items():
+        g.create_dataset(k, shape=(0,), maxshape=(None,), dtype="f8").attrs["units"] = unit
+    return h5
+
+
+def log(h5, hist, x, problem, est, step, lr, t_start, sim_total):
+    row = {"x": x, "lz": float(problem.to_lz(x)), "objective": est.value,
+           "objective_se": est.value_se, "gradient": est.grad, "gradient_se": est.grad_se,
+           "step": step, "learning_rate": lr, "wall_time": time.perf_counter() - t_start,
+           "sim_seconds": sim_total}
+    for k, v in row.items():
+        hist[k].append(float(v))
+    if h5 is not None:
+        g = h5["iterations"]
+        for k, v in row.items():
+            ds = g[k]
+            ds.resize(ds.shape[0] + 1, axis=0)
+            ds[-1] = v
+        h5.flush()
+
+
+
+def write_search(path, cfg, objective, prob, sr, method, sim) -> None:
+    """HDF5 log of a scan or trust-region search (``docs/output.md``)."""
+    with h5py.File(path, "w") as h:
+        stamp(h, "jaxdamp-optimize/2")
+        h.attrs["config"] = cfg.to_json()
+        h.attrs["objective"] = objective.to_json(cfg)
+        h.attrs["variable"] = prob.variable
+        h.attrs["method"] = method
+        h.attrs["problem"] = json.dumps(prob.describe())
+        h.attrs["rounds"] = json.dumps(sr.rounds)
+        h.attrs["status"] = "finished"
+        g = h.create_group("points")
+        for name, data, unit in (("x", sr.x, "m"), ("lz", prob.to_lz(sr.x), "m"),
+                                 ("mean", sr.mean, objective.unit), ("se", sr.se, objective.unit),
+                                 ("values", sr.J, objective.unit)):
+            g.create_dataset(name, data=data).attrs["units"] = unit
+        h.attrs["sim_seconds"] = sim
+
+

@@ -1,0 +1,209 @@
+"""HDF5 sweep files: many systems of one damper (a grid × replicates), DEM or S3.
+
+Layout (``docs/output.md``, "Sweep file schema")::
+
+    /                       attrs: format, jaxdamp_version, created, base_config (JSON), axes
+                                   (JSON), replicates, configs (JSON list), dt, duration,
+                                   engine, devices, status, message, wall_time
+    /axes/<key>             the swept values
+    /records/<name>         (P, T, ...) samples of every point × replicate (replicates fastest)
+    /checkpoint             batched state and neighbour lists after the last finished chunk
+    /snapshots/...          t (S,), r, v (P, S, N, 3), z_box (P, S)
+    /summary/<name>         grid-shaped mean over replicates of each fixed-window scalar
+    /replicate_summary/...  grid + (R,)
+    /steady/<quantity>/...  steady-state estimates over replicates (:func:`write_steady`)
+    /fit/...                FRF fits (``jaxdamp frf``)
+    /impacts/<point>/...    S3 event-driven only
+    /efficiency/...         ``jaxdamp efficiency`` only (:mod:`jaxdamp.io.efficiency`)
+"""
+
+from __future__ import annotations
+
+import json
+import os
+
+import h5py
+import numpy as np
+
+from .common import put, stamp, write_steady
+
+FORMAT = "jaxdamp-sweep/1"
+SNAPSHOT_UNITS = {"r": "m", "v": "m/s", "z_box": "m"}
+
+
+def axes_json(axes: dict, replicates: int = 1) -> str:
+    """The ``axes`` attribute: ``{key: values}`` (plus ``replicates`` when > 1)."""
+    d = {k: list(map(float, v)) for k, v in axes.items()}
+    if replicates > 1:
+        d["replicates"] = int(replicates)
+    return json.dumps(d)
+
+
+def holds(path: str, config, axes: dict, replicates: int = 1) -> bool:
+    """Whether the sweep file ``path`` exists, holds the sweep ``(config, axes, replicates)``
+    and has a checkpoint to continue from or reuse."""
+    if not os.path.exists(path):
+        return False
+    try:
+        with h5py.File(path, "r") as h5:
+            return (h5.attrs.get("base_config") == config.to_json()
+                    and h5.attrs.get("axes") == axes_json(axes, replicates)
+                    and "checkpoint" in h5)
+    except OSError:  # not an HDF5 file (e.g. cut short while being created)
+        return False
+
+
+class SweepFile:
+    """A sweep file open for writing."""
+
+    def __init__(self, h5: h5py.File):
+        self.h5 = h5
+
+    @classmethod
+    def create(cls, path: str, config, axes: dict, configs: list, dt: float, duration: float,
+               engine: str, replicates: int = 1, devices: int = 1) -> "SweepFile":
+        h5 = h5py.File(path, "w")
+        stamp(h5, FORMAT, base_config=config.to_json(), axes=axes_json(axes, replicates),
+              replicates=int(replicates), configs=json.dumps([c.to_json() for c in configs]),
+              dt=float(dt), duration=float(duration), engine=engine, devices=int(devices),
+              status="running", message="")
+        h5.create_group("records")
+        ag = h5.create_group("axes")
+        for k, v in axes.items():
+            put(ag, k, np.asarray(v, float))
+        return cls(h5)
+
+    @classmethod
+    def resume(cls, path: str, config, axes: dict, replicates: int, records_per_chunk: int):
+        """Open ``path`` to continue the sweep: ``(file, checkpoint arrays, chunk, compute time
+        so far)``; samples after the checkpoint are dropped. Refuses a different sweep."""
+        from ..config import ConfigError
+
+        h5 = h5py.File(path, "a")
+        if (h5.attrs["base_config"] != config.to_json()
+                or h5.attrs["axes"] != axes_json(axes, replicates)):
+            h5.close()
+            raise ConfigError(f"--resume: {path} holds a different sweep")
+        g = h5["checkpoint"]
+        chunk = int(g.attrs["chunk"])
+        wall = float(h5.attrs.get("wall_time", h5["summary/wall_time"][()]
+                                  if "summary/wall_time" in h5 else 0.0))
+        arrays = {}
+        g.visititems(lambda n, o: arrays.__setitem__(n, o[()])
+                     if isinstance(o, h5py.Dataset) else None)
+        for ds in h5["records"].values():
+            ds.resize(chunk * records_per_chunk, axis=1)
+        return cls(h5), arrays, chunk, wall
+
+    # -- while running --------------------------------------------------------------------
+    def append_records(self, recs: dict) -> None:
+        """Append samples ``(P, T, ...)`` along the time axis."""
+        from ..energy import RECORD_UNITS
+
+        g = self.h5["records"]
+        for k, v in recs.items():
+            if k not in g:
+                ds = g.create_dataset(k, data=v, maxshape=(v.shape[0], None) + v.shape[2:],
+                                      chunks=True)
+                ds.attrs["units"] = RECORD_UNITS.get(k, "")
+            else:
+                n0 = g[k].shape[1]
+                g[k].resize(n0 + v.shape[1], axis=1)
+                g[k][:, n0:] = v
+
+    def write_checkpoint(self, arrays: dict, chunk: int, wall_time: float) -> None:
+        if "checkpoint" in self.h5:
+            del self.h5["checkpoint"]
+        ck = self.h5.create_group("checkpoint")
+        for k, v in arrays.items():
+            ck.create_dataset(k, data=v)
+        ck.attrs["chunk"] = chunk
+        self.h5.attrs["wall_time"] = wall_time
+        self.h5.flush()
+
+    def append_snapshot(self, t: float, per_point: dict) -> None:
+        """Append the batch's ``r``, ``v`` ``(P, N, 3)`` and ``z_box`` ``(P,)`` at time ``t``
+        (resumable: a snapshot at or before the last stored time overwrites from there)."""
+        g = self.h5.require_group("snapshots")
+        P = next(iter(per_point.values())).shape[0]
+        if "t" not in g:
+            g.create_dataset("t", shape=(0,), maxshape=(None,), dtype="f8").attrs["units"] = "s"
+            for k, x in per_point.items():
+                g.create_dataset(k, shape=(P, 0) + x.shape[1:], maxshape=(P, None) + x.shape[1:],
+                                 chunks=True, dtype="f8").attrs["units"] = SNAPSHOT_UNITS[k]
+        n = g["t"].shape[0]
+        if n and float(g["t"][n - 1]) >= t:  # a resumed sweep re-running a stored chunk
+            n = int(np.searchsorted(g["t"][()], t))
+        g["t"].resize(n + 1, axis=0)
+        g["t"][n] = t
+        for k, x in per_point.items():
+            g[k].resize(n + 1, axis=1)
+            g[k][:, n] = x
+        self.h5.flush()
+
+    def set_status(self, status: str, message: str = "") -> None:
+        self.h5.attrs["status"] = status
+        self.h5.attrs["message"] = message
+        self.h5.flush()
+
+    # -- results --------------------------------------------------------------------------
+    def records(self) -> dict:
+        return {k: self.h5["records"][k][()] for k in self.h5["records"]}
+
+    def snapshots(self) -> dict:
+        if "snapshots" not in self.h5:
+            return {}
+        return {k: self.h5["snapshots"][k][()] for k in self.h5["snapshots"]}
+
+    def write_summary(self, summary: dict, units: dict, per_replicate: dict | None = None,
+                      steady: dict | None = None, replicates: int = 1, steady_units=None) -> None:
+        """``/summary/<name>`` (grid-shaped), ``/replicate_summary/<name>`` (grid + ``(R,)``)
+        and ``/steady`` (:func:`write_steady`)."""
+        sg = self.h5.require_group("summary")
+        for k, v in summary.items():
+            put(sg, k, v, units.get(k, "s" if k == "wall_time" else ""))
+        if per_replicate is not None:
+            rg = self.h5.require_group("replicate_summary")
+            rg.attrs["replicates"] = replicates
+            for k, v in per_replicate.items():
+                put(rg, k, v, units.get(k, ""))
+        if steady is not None:
+            write_steady(self.h5, steady, replicates, steady_units)
+
+    def write_records(self, records: dict, units: dict, channels=None) -> None:
+        """All samples at once (S3 sweeps)."""
+        rg = self.h5.require_group("records")
+        for k, v in records.items():
+            put(rg, k, v, units.get(k, ""))
+        if channels is not None and "work" in rg:
+            rg["work"].attrs["channels"] = json.dumps(list(channels))
+
+    def finish(self, wall_time: float) -> None:
+        self.h5.attrs["wall_time"] = wall_time
+        self.set_status("finished")
+
+    def close(self) -> None:
+        self.h5.close()
+
+
+def write_fit(h5, fits: dict, used: str) -> None:
+    """``/fit`` of an FRF sweep file: ``M_ef``, ``C_ef`` (the ``used`` weighting), their
+    standard errors across replicates ``se_M_ef``, ``se_C_ef``, the fit of the mean FRF, and
+    ``<weighting>/...`` for every weighting (:data:`jaxdamp.analysis.RESIDUALS`), one entry
+    per ``Lz``."""
+    if "fit" in h5:
+        del h5["fit"]
+    g = h5.create_group("fit")
+    g.attrs["residuals"] = used
+    g.attrs["replicates"] = int(fits[used][0]["replicates"])
+
+    def fill(grp, fl):
+        for name, key, unit in (("M_ef", "M_ef", "kg"), ("C_ef", "C_ef", "N s/m"),
+                                ("se_M_ef", "se_M", "kg"), ("se_C_ef", "se_C", "N s/m"),
+                                ("M_ef_of_mean", "M_mean_fit", "kg"),
+                                ("C_ef_of_mean", "C_mean_fit", "N s/m")):
+            put(grp, name, np.array([f[key] for f in fl]), unit)
+
+    fill(g, fits[used])
+    for w, fl in fits.items():
+        fill(g.create_group(w), fl)
