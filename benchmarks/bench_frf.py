@@ -29,13 +29,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxdamp import neighbors as nb
-from jaxdamp import presets
+from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
-from jaxdamp.integrate import box_frame
-from jaxdamp.model import build
-from jaxdamp.packing import settle
-from jaxdamp.simulate import chunk_fn, init_states
+from jaxdamp.engine import neighbors as nb
+from jaxdamp.engine.packing import settle
+from jaxdamp.engine.simulate import chunk_fn, init_states
+from jaxdamp.physics.integrate import box_frame
+from jaxdamp.physics.model import build
 
 LAMMPS_INPUT = """
 units si

@@ -24,13 +24,13 @@ import jax.numpy as jnp
 import numpy as np
 
 import jaxdamp
-from jaxdamp import efficiency as ef
-from jaxdamp import mixtures
-from jaxdamp import neighbors as nb
-from jaxdamp.integrate import box_frame
-from jaxdamp.model import build
-from jaxdamp.runner import run
-from jaxdamp.simulate import chunk_fn
+from jaxdamp.cases import presets
+from jaxdamp.engine import neighbors as nb
+from jaxdamp.engine.simulate import chunk_fn
+from jaxdamp.physics.integrate import box_frame
+from jaxdamp.physics.model import build
+from jaxdamp.studies import efficiency as ef
+from jaxdamp.studies.runner import run
 
 
 def driven_state(cfg):
@@ -74,7 +74,7 @@ def main():
     families = [("varela2023-reference", None)] + [
         (f"varela2023-{k}", s) for s in args.sigma for k in args.classes]
     for name, sigma in families:
-        cfg, model, params, state = driven_state(mixtures.family(name, sigma))
+        cfg, model, params, state = driven_state(presets.family(name, sigma))
         t_nat, k_aware = time_chunk(model, params, state, args.batch, args.steps, "native")
         t_jax, _ = time_chunk(model, params, state, 1, args.jax_steps, "jax")
         t_uni, k_uni = time_chunk(model, params, state, 1, args.jax_steps, "jax", uniform=True)

@@ -6,7 +6,7 @@
 
 Beds are FCC lattices settled for a short time (realistic contact numbers); the timed loop is
 the production chunk function (neighbour-list checks, rebuilds, records every 100 steps), with
-the pure-JAX engine and the compiled CPU engine (numba, :mod:`jaxdamp.native`). Also prints the cost of the force kernels alone (pairs, walls) for one system.
+the pure-JAX engine and the compiled CPU engine (numba, :mod:`jaxdamp.engine.native`). Also prints the cost of the force kernels alone (pairs, walls) for one system.
 Do not run while other jobs use the cores.
 """
 
@@ -21,15 +21,15 @@ import jax.numpy as jnp
 import numpy as np
 
 import jaxdamp
-from jaxdamp import neighbors as nb
-from jaxdamp import presets
+from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
-from jaxdamp.integrate import box_frame
-from jaxdamp.model import build
-from jaxdamp.packing import settle
-from jaxdamp.pairs import pair_forces
-from jaxdamp.simulate import chunk_fn, init_states
-from jaxdamp.walls import wall_forces
+from jaxdamp.engine import neighbors as nb
+from jaxdamp.engine.packing import settle
+from jaxdamp.engine.simulate import chunk_fn, init_states
+from jaxdamp.physics.integrate import box_frame
+from jaxdamp.physics.model import build
+from jaxdamp.physics.pairs import pair_forces
+from jaxdamp.physics.walls import wall_forces
 
 
 def bed(n: int):

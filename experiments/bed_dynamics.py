@@ -4,9 +4,9 @@
     python experiments/bed_dynamics.py --quick    # < 1 min: 3 frequencies, 1.6 s each
 
 ``sanchez2012-optimal`` (N = 250, Lz = 0.1225 m, C = 7.6 N s/m) driven at every frequency of
-the list in one batched sweep (:func:`jaxdamp.sweep.sweep`, samples every 1 ms). For each
+the list in one batched sweep (:func:`jaxdamp.studies.sweep.sweep`, samples every 1 ms). For each
 frequency, after a transient, the bed's centre of mass is classified
-(:func:`jaxdamp.dynamics.classify`: periodic-k from the stroboscopic section, else Kantz's
+(:func:`jaxdamp.analysis.dynamics.classify`: periodic-k from the stroboscopic section, else Kantz's
 largest Lyapunov exponent and the spectrum decide between quasi-periodic and chaotic). The
 observable is the lab-frame ``z_cm`` (the thesis' "trayectoria del centro de masa", fig. 4.2);
 ``z_cm - z_box`` (the bed relative to its box) is classified too as a cross-check: in S1 the box
@@ -35,12 +35,12 @@ import h5py
 import numpy as np
 
 import jaxdamp
-from jaxdamp import dynamics as dyn
-from jaxdamp import presets
-from jaxdamp.analysis import frf_amplitude
+from jaxdamp.analysis import dynamics as dyn
+from jaxdamp.analysis.response import frf_amplitude
+from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
-from jaxdamp.model import grain_mass
-from jaxdamp.sweep import reuse_or_run
+from jaxdamp.physics.model import grain_mass
+from jaxdamp.studies.sweep import reuse_or_run
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 #: Frequencies [Hz] of the full mode: the thesis' regions (periodic < 7.5, transition 7.5–11,
@@ -391,7 +391,7 @@ def _summary(out, res, cfg, s, rows, det, m_p, wall, wall_sim, wall_analysis, co
         "Observable: the lab-frame centre of mass `z_cm` of the bed (what the thesis analyses); "
         "`z_cm − z_box` (the bed in the box's frame) is classified as a cross-check — it is another "
         "observable of the same deterministic system (the box position is a state variable in S1), "
-        "so the regimes should agree. Classifier: `jaxdamp.dynamics.classify` with its defaults "
+        "so the regimes should agree. Classifier: `jaxdamp.analysis.dynamics.classify` with its defaults "
         "(periodic-k if the stroboscopic return map repeats after k ≤ 8 periods within 1e-2 of the "
         "series' std; otherwise chaotic if λ/f > 0.02 and the harmonic-masked periodogram is broadband "
         "(< 90 % of the rest in 20 lines), quasi-periodic if λ/f ≤ 0.02 and line spectrum, "

@@ -7,7 +7,7 @@
 Families (SPEC §5; Varela-Rosales et al. 2023): the monodisperse reference (300 steel grains,
 R = 2.5 mm) and binary mixtures of class a (equal mass), b (equal number) and c (equal number and
 mass) at size ratios σ, in an 8 cm cube driven at 70 Hz over A_d = 2–4 cm. For every family and
-σ one batched amplitude sweep (:func:`jaxdamp.efficiency.measure`), 10 transient periods then 50
+σ one batched amplitude sweep (:func:`jaxdamp.studies.efficiency.measure`), 10 transient periods then 50
 analysed (the paper's 50). Small σ costs ~1/σ more steps (dt follows the smallest grains): the
 ``--low-sigmas`` run with ``--low-periods`` analysed periods, stated in the summary, with the
 projected cost of the full protocol.
@@ -35,11 +35,11 @@ import h5py
 import numpy as np
 
 import jaxdamp
-from jaxdamp import efficiency as ef
-from jaxdamp import mixtures
+from jaxdamp.cases import presets
 from jaxdamp.cli import efficiency_figures  # noqa: F401  (same figure code as the CLI)
-from jaxdamp.model import grain_radii, grain_species
 from jaxdamp.figures import figure, save, snapshot_grid_figure
+from jaxdamp.physics.model import grain_radii, grain_species
+from jaxdamp.studies import efficiency as ef
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 CLASS_NAMES = {"a": "class a (equal mass)", "b": "class b (equal number)",
@@ -57,7 +57,7 @@ def settings(args):
 
 
 def run_family(name, sigma, amps, raw, periods, transient, progress, seed=0, settle=None):
-    cfg = mixtures.family(name, sigma)
+    cfg = presets.family(name, sigma)
     if settle is not None:  # quick mode: the transient period erases the start anyway
         cfg = cfg.replace(numerics=dataclasses.replace(cfg.numerics, settle_time=settle))
     if seed:
@@ -250,12 +250,12 @@ def balance_drift(raw, progress, amplitude=0.03, periods=5, transient=2):
     gained over the analysed periods, relative to the dissipation (E_pp + E_pw) in them, for
     dt = t_c/50 (the default) and t_c/100. Velocity Verlet's energy error per Hertz collision
     falls as (dt/t_c)^2.5, so the drift should fall ~5.7× (tests/test_energy.py)."""
-    from jaxdamp import runner
     from jaxdamp.config import apply_overrides
+    from jaxdamp.studies import runner
 
     rows = []
     for n in (50, 100):
-        cfg = apply_overrides(mixtures.family("varela2023-reference"),
+        cfg = apply_overrides(presets.family("varela2023-reference"),
                               {"drive.amplitude": amplitude, "numerics.dt_per_collision": n})
         cfg = ef.protocol(cfg, periods=periods, transient=transient)
         t0 = time.perf_counter()
@@ -362,7 +362,7 @@ def write_summary(args, s, runs, elapsed, replicas=(), drift=()):
               for r in rep}
         for line in claims(rep, rp, with_diagnostics=False):
             P(f"- {line}")
-        P(f"- sweep wall times: " + ", ".join(
+        P("- sweep wall times: " + ", ".join(
             f"{r['name'].replace('varela2023-', '')}: {r['result'].wall_time:.0f} s" for r in rep))
         P("")
     P("Figures: `efficiency.png` (figs. 2, 6, 9), `contacts_force.png` (figs. 4, 5, 7, 10, 11), "

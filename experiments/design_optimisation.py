@@ -7,7 +7,7 @@ Damper ``sanchez2012-optimal`` (250 grains, 1-DOF primary, f0 = 15.157 Hz); defa
 of ``jaxdamp optimize``: the equivalent viscous damping added by the grains at f0,
 ``C_eq = E / (π Ω Z²)`` [N s/m], maximised (``jaxdamp.design.objectives``). Every DEM number
 comes from independent replicates (independently seeded settled beds) with the start of each
-run's steady state detected by MSER (``jaxdamp.stats``).
+run's steady state detected by MSER (``jaxdamp.analysis.stats``).
 
 1. **Reference derivative** ``dC_eq/dLz`` at Lz = 0.09, 0.11 and 0.14 m: ``R_ref`` beds ×
    ``Lz ± h`` (common random numbers inside each pair), with its 95 % interval.
@@ -39,11 +39,11 @@ import h5py
 import numpy as np
 
 import jaxdamp
-from jaxdamp import presets
+from jaxdamp.analysis.stats import t_quantile
+from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.design import Objective, SteadyProblem, adaptive_scan, optimize, trust_region
 from jaxdamp.design.surrogate import propose
-from jaxdamp.stats import t_quantile
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 THESIS_LZ = 0.1225

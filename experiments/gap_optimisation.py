@@ -38,11 +38,11 @@ import jax
 import numpy as np
 
 import jaxdamp
-from jaxdamp import presets
+from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
-from jaxdamp.model import primary_frequency
 from jaxdamp.design import DEMProblem, Objective, S3Problem, optimize, scan_optimum
-from jaxdamp.sweep import sweep
+from jaxdamp.physics.model import primary_frequency
+from jaxdamp.studies.sweep import sweep
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 THESIS_LZ = 0.1225

@@ -5,7 +5,7 @@
 
 For each primary damping ``C`` (7.6 and 26.3 N s/m) one batched sweep runs every
 (frequency, ``Lz``) point of ``sanchez2012-optimal`` together (the bed is settled once). Per
-``Lz`` the analytic 1-DOF FRF is fitted with ``U, K`` fixed (:func:`jaxdamp.analysis.fit_frf`):
+``Lz`` the analytic 1-DOF FRF is fitted with ``U, K`` fixed (:func:`jaxdamp.analysis.response.fit_frf`):
 ``M_ef``, ``C_ef`` and their standard errors. Then the thesis' questions: where ``C_ef/C`` peaks,
 where the resonant amplitude is smallest, where ``M_ef`` crosses ``M``, and whether ``M_ef``
 overshoots ``M + m_p`` at small ``Lz`` and undershoots ``M`` at large ``Lz``.
@@ -27,11 +27,11 @@ import h5py
 import numpy as np
 
 import jaxdamp
-from jaxdamp import presets
-from jaxdamp.analysis import fit_frf, frf_amplitude, optimal_gap, resonance
+from jaxdamp.analysis.response import fit_frf, frf_amplitude, optimal_gap, resonance
+from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
-from jaxdamp.model import grain_mass
-from jaxdamp.sweep import reuse_or_run
+from jaxdamp.physics.model import grain_mass
+from jaxdamp.studies.sweep import reuse_or_run
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 #: Box heights [m] of the thesis' scan (SPEC §5) used in the full mode.

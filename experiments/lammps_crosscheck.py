@@ -6,7 +6,7 @@
 System: preset ``varela2023-reference`` (S2: cube of 8 cm driven as ``z = A_d cos(2π f t)``,
 f = 70 Hz, 300 frictionless steel spheres, R = 2.5 mm, E = 2e9 Pa, ν = 0.3, ε = 0.75 at 1 m/s).
 Both codes start from the same settled bed (jaxdamp's ``packing.settle``, run inside
-``jaxdamp.runner.run``) and use the same time step (``params.dt`` of the run's configuration).
+``jaxdamp.studies.runner.run``) and use the same time step (``params.dt`` of the run's configuration).
 
 **Mapping to LAMMPS** (``pair_style granular``; ``fix wall/gran granular``, three plane pairs):
 
@@ -25,7 +25,7 @@ Both codes start from the same settled bed (jaxdamp's ``packing.settle``, run in
   jaxdamp's ``(4/3) E*_pw sqrt(R)``.
 
 The mapping is verified with LAMMPS before it is used: binary head-on collisions (restitution
-at 1 m/s vs 0.75 and vs :func:`jaxdamp.restitution.restitution` at several speeds, contact
+at 1 m/s vs 0.75 and vs :func:`jaxdamp.physics.restitution.restitution` at several speeds, contact
 duration), one sphere resting on each of the six walls under gravity (equilibrium overlap vs
 ``(m g / k_n)^{2/3}``; also without the compensation, to measure the bug), sphere–wall
 collisions (restitution vs jaxdamp's grain–wall pair), and an energy-accounting closure test
@@ -41,8 +41,8 @@ work of the inertial force, ``W = ∫ M A_d ω² cos(ωt) v_cm,z dt`` (accumulat
 (``(2/5) k_n ξ^{5/2}`` over grain pairs and walls) energy, evaluated from full-precision
 snapshots written at the step nearest to every period boundary ``t = nT``.
 
-**jaxdamp**: ``jaxdamp.runner.run`` on the same cases; the per-period dissipation is the
-cumulative granular loss (``jaxdamp.energy.granular_loss`` of the recorded work channels)
+**jaxdamp**: ``jaxdamp.studies.runner.run`` on the same cases; the per-period dissipation is the
+cumulative granular loss (``jaxdamp.physics.energy.granular_loss`` of the recorded work channels)
 interpolated at ``t = nT`` (samples every T/500).
 
 Dissipation per period is reported as mean ± std over the analysed periods and normalised as
@@ -198,8 +198,8 @@ class Mapping:
 
 
 def build_mapping(cfg) -> Mapping:
-    """The numbers jaxdamp uses (``jaxdamp.model.build``) and their LAMMPS equivalents."""
-    from jaxdamp.model import build, contact_law
+    """The numbers jaxdamp uses (``jaxdamp.physics.model.build``) and their LAMMPS equivalents."""
+    from jaxdamp.physics.model import build, contact_law
 
     model, p = build(cfg)
     sp = cfg.grains[0]
@@ -391,7 +391,7 @@ print "RESULT $(v_c:%.17g) $(v_v:%.17g)"
 def mapping_checks(mp: Mapping, workdir: str, exe=None, speeds=(1.0, 5.0, 20.0),
                    walls=tuple(WALLS)) -> dict:
     """All LAMMPS checks of the mapping against jaxdamp's force law (exact integration)."""
-    from jaxdamp.restitution import collision
+    from jaxdamp.physics.restitution import collision
 
     out = {"pair": [], "wall": [], "static": []}
     for v in speeds:
@@ -541,10 +541,11 @@ def lammps_bed(mp: Mapping, cfg, amplitude: float, r0, v0, n_periods: int, workd
 
 
 def jaxdamp_case(amplitude: float, n_periods: int, settle_time=None, progress=False):
-    """``jaxdamp.runner.run`` of the reference preset at ``amplitude`` for ``n_periods``."""
-    from jaxdamp import presets, runner
+    """``jaxdamp.studies.runner.run`` of the reference preset at ``amplitude`` for ``n_periods``."""
+    from jaxdamp.cases import presets
     from jaxdamp.config import apply_overrides
-    from jaxdamp.energy import granular_loss
+    from jaxdamp.physics.energy import granular_loss
+    from jaxdamp.studies import runner
 
     base = presets.get(PRESET)
     T = 1.0 / base.frequency
@@ -611,7 +612,7 @@ def main(argv=None):
     t_start = time.perf_counter()
 
     import jaxdamp
-    from jaxdamp import presets
+    from jaxdamp.cases import presets
 
     version = lammps_version(exe)
     print(f"LAMMPS: {version}")
@@ -862,7 +863,7 @@ def write_outputs(out, cases, checks, closure, s, version, command, elapsed, che
       "(pair_granular docs, `damping viscoelastic`; the same expression `damp_normal = a*meff` "
       "in `fix_wall_gran.cpp`), so η_n0 = γ_n / (m* sqrt(R*)) reproduces γ_n sqrt(ξ) ξ' exactly.\n")
     w(f"## Mapping checks (LAMMPS runs, dt = {mp0.dt:.6g} s; {checks_wall:.1f} s wall)\n")
-    w("Binary head-on collisions (reference: `jaxdamp.restitution.collision`, the exact "
+    w("Binary head-on collisions (reference: `jaxdamp.physics.restitution.collision`, the exact "
       "integral of the force law):\n")
     w("| v [m/s] | ε LAMMPS | ε reference | rel. diff | overlap time LAMMPS [µs] | reference [µs] |")
     w("| --- | --- | --- | --- | --- | --- |")

@@ -5,7 +5,7 @@
 For each impact speed one independent two-grain (or grain–floor) system is set up; all speeds
 run together as one batch (``vmap``), each with its own time step ``t_c(v)/50``. The measured
 restitution and contact time are compared with the numerically integrated force law
-(:mod:`jaxdamp.restitution`, scipy) and with Müller & Pöschel's Padé approximant, for
+(:mod:`jaxdamp.physics.restitution`, scipy) and with Müller & Pöschel's Padé approximant, for
 
 * the 2023 paper's grains (ε = 0.75 at 1 m/s, E = 2e9 Pa), grain–grain and grain–wall;
 * the thesis' grains (γ_n = 3660) at the thesis modulus (λ = 1) and at the reduced modulus of
@@ -28,10 +28,11 @@ import jax.numpy as jnp
 import numpy as np
 
 import jaxdamp
-from jaxdamp import driver, presets
-from jaxdamp import restitution as rst
+from jaxdamp.cases import presets
 from jaxdamp.config import Box, Config, Drive, Numerics, Species
-from jaxdamp.model import build, contact_law
+from jaxdamp.engine import driver
+from jaxdamp.physics import restitution as rst
+from jaxdamp.physics.model import build, contact_law
 
 STEPS_BEFORE = 20  # steps of free flight before contact
 STEPS_PER_COLLISION = 50

@@ -6,7 +6,7 @@
 ``sanchez2012-optimal`` (Lz = 0.1225 m, C = 7.6 N s/m) near its resonance, for the thesis'
 modulus E = 2.03e11 Pa (``stiffness_scale = 1``, dt 6.3x smaller than the default), the
 preset's E = 2.03e9 (``0.01``) and E = 2.03e8 (``0.001``). ``gamma_n``, ``gamma_s`` scale as
-``stiffness_scale**0.6`` (:mod:`jaxdamp.restitution`): every binary collision keeps its
+``stiffness_scale**0.6`` (:mod:`jaxdamp.physics.restitution`): every binary collision keeps its
 restitution and tangential impulse, only collisions last longer (λ^-0.4) and static overlaps
 grow (λ^-2/3). What this leaves to measure is the collective effect: longer-lasting contacts in
 a dense bed, more overlap, a softer bed. Each modulus is one batched sweep over frequencies;
@@ -26,11 +26,11 @@ import h5py
 import numpy as np
 
 import jaxdamp
-from jaxdamp import presets
-from jaxdamp.analysis import resonance
+from jaxdamp.analysis.response import resonance
+from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
-from jaxdamp.model import collision_time_limit, grain_radii
-from jaxdamp.sweep import reuse_or_run
+from jaxdamp.physics.model import collision_time_limit, grain_radii
+from jaxdamp.studies.sweep import reuse_or_run
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCALES = (1.0, 0.01, 0.001)

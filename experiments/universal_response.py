@@ -27,11 +27,11 @@ import h5py
 import numpy as np
 
 import jaxdamp
-from jaxdamp import presets
-from jaxdamp.analysis import frf_amplitude, resonance
+from jaxdamp.analysis.response import frf_amplitude, resonance
+from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
-from jaxdamp.model import grain_mass
-from jaxdamp.sweep import reuse_or_run, sweep
+from jaxdamp.physics.model import grain_mass
+from jaxdamp.studies.sweep import reuse_or_run, sweep
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 CASES = ((3660.0, 10980.0), (0.0, 10980.0), (3660.0, 0.0), (0.0, 0.0))

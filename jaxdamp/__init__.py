@@ -3,20 +3,26 @@
 Float64 is switched on at import (energy accounting over millions of steps needs it); set
 ``JAXDAMP_X64=0`` in the environment before importing to keep JAX's float32 default.
 
-Modules, by concept:
+The physics is in ``docs/physics.md``; file schemas in ``docs/output.md``. Subpackages, from
+the bottom layer up (a module imports only from its own layer or below):
 
-* :mod:`jaxdamp.config`, :mod:`jaxdamp.presets` — what to simulate (SI units, validated).
-* :mod:`jaxdamp.restitution` — restitution, collision time, damping calibration (numpy).
-* :mod:`jaxdamp.model` — configuration → JAX pytrees (``Params``, ``State``).
-* :mod:`jaxdamp.contact` — the contact laws (normal Hertz + viscoelastic, Coulomb-capped friction).
-* :mod:`jaxdamp.walls` — sphere–wall contacts with the six moving box walls.
-* :mod:`jaxdamp.neighbors` — jax-md neighbour lists, batch-aware rebuilds.
-* :mod:`jaxdamp.integrate` — the velocity-Verlet step of grains and box (S1 primary or S2 drive).
-* :mod:`jaxdamp.energy` — energies, work channels and the energy balance.
-* :mod:`jaxdamp.packing` — initial FCC lattice and settling under gravity.
-* :mod:`jaxdamp.runner` — chunked runs: records, overflow handling, checkpoints, resume.
-* :mod:`jaxdamp.io` — HDF5 output.
-* :mod:`jaxdamp.analysis` — analytic FRF and steady-state quantities.
+* :mod:`jaxdamp.config`, :mod:`jaxdamp.validation` — what to simulate: a validated tree of
+  frozen dataclasses (SI units); :mod:`jaxdamp.cases` — the sources' presets and the
+  binary-mixture builders.
+* :mod:`jaxdamp.physics` — the physics once for both engines: contact laws (JAX and scalar
+  forms side by side, registered by name), pair and wall mappings, excitation, the
+  velocity-Verlet step, energies and records, restitution calibration, configuration → arrays.
+* :mod:`jaxdamp.engine` — running it: neighbour lists, the jitted chunk, the compiled CPU
+  kernel, settling, and the one simulation driver.
+* :mod:`jaxdamp.analysis` — FRF and steady-state summaries, replicate statistics and
+  steady-state detection, nonlinear dynamics of the bed.
+* :mod:`jaxdamp.io` — every output file kind (run, sweep, efficiency, optimiser logs) and
+  reading them back.
+* :mod:`jaxdamp.studies` — a single run, batched sweeps with replicates, efficiency.
+* :mod:`jaxdamp.s3` — the single-particle impact damper (event-driven and smooth) and its
+  periodic orbits with exact steady-state derivatives.
+* :mod:`jaxdamp.design` — design objectives, problems, searches and optimisers with intervals.
+* :mod:`jaxdamp.figures` — every figure.
 * :mod:`jaxdamp.cli` — the ``jaxdamp`` command line.
 """
 

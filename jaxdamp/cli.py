@@ -6,7 +6,7 @@ import argparse
 import sys
 import textwrap
 
-from .config import ConfigError, apply_overrides, load_toml
+from jaxdamp.config import ConfigError, apply_overrides, load_toml
 
 EPILOG_RUN = textwrap.dedent(
     """\
@@ -35,7 +35,7 @@ EPILOG_RUN = textwrap.dedent(
 
 
 def _base_config(args):
-    from . import presets
+    from jaxdamp.cases import presets
 
     if args.preset is None and args.config is None:
         raise ConfigError("give --preset NAME or --config FILE.toml (see `jaxdamp presets`)")
@@ -60,11 +60,11 @@ def _run_config(args):
 
 
 def print_steady(steady: dict, keys=("amplitude", "granular_loss_per_cycle", "phase")) -> None:
-    """Print the steady-state estimates of one point (:func:`jaxdamp.stats.summarise` arrays):
+    """Print the steady-state estimates of one point (:func:`jaxdamp.analysis.stats.summarise` arrays):
     mean ± SE over replicates, the detected start of the steady state, the batch-means error."""
     import numpy as np
 
-    from .stats import format_estimate, unit
+    from jaxdamp.analysis.stats import format_estimate, unit
 
     a = steady[keys[0]]
     start = np.atleast_1d(a["start"]).ravel()
@@ -83,13 +83,13 @@ def print_steady(steady: dict, keys=("amplitude", "granular_loss_per_cycle", "ph
 
 
 def cmd_run(args) -> int:
-    from .runner import run
-    from .validation import validate
+    from jaxdamp.studies.runner import run
+    from jaxdamp.validation import validate
 
     cfg = validate(_run_config(args))
     R = _replicates(args)
     if R > 1:  # R independent beds in one batch: a sweep of one point (sweep file layout)
-        from .sweep import sweep
+        from jaxdamp.studies.sweep import sweep
 
         res = sweep(cfg, {}, out=args.out, resume=args.resume, progress=not args.no_progress,
                     replicates=R)
@@ -137,12 +137,12 @@ def cmd_frf(args) -> int:
     import h5py
     import numpy as np
 
-    from .analysis import RESIDUALS, fit_frf_replicates
-    from .model import grain_mass
-    from .figures import frf_figure, save
-    from .grid import steady_or_window
-    from .io.sweepfile import write_fit
-    from .sweep import sweep
+    from jaxdamp.analysis.response import RESIDUALS, fit_frf_replicates
+    from jaxdamp.figures import frf_figure, save
+    from jaxdamp.io.sweepfile import write_fit
+    from jaxdamp.physics.model import grain_mass
+    from jaxdamp.studies.grid import steady_or_window
+    from jaxdamp.studies.sweep import sweep
 
     cfg = _base_config(args)
     overrides = list(args.set or [])
@@ -227,9 +227,9 @@ def cmd_optimize(args) -> int:
 
     import h5py
 
-    from .design import Objective, adaptive_scan, make_problem, optimize, trust_region
-    from .design.surrogate import propose
-    from .io import optimisation as optimisation_file
+    from jaxdamp.design import Objective, adaptive_scan, make_problem, optimize, trust_region
+    from jaxdamp.design.surrogate import propose
+    from jaxdamp.io import optimisation as optimisation_file
 
     cfg = apply_overrides(_base_config(args), list(args.set or []))
     band = tuple(_float_list(args.band)) if args.band else None
@@ -359,8 +359,8 @@ def efficiency_figures(results, stem, title):
     EfficiencyResult), ...]``. Returns the paths written."""
     import numpy as np
 
-    from .model import grain_radii, grain_species
-    from .figures import efficiency_figure, phase_figure, save, snapshot_grid_figure
+    from jaxdamp.figures import efficiency_figure, phase_figure, save, snapshot_grid_figure
+    from jaxdamp.physics.model import grain_radii, grain_species
 
     curves = [(lab, r.amplitudes, r.summary["E_d_mean_per_mass"],
                r.summary["E_d_std_per_mass"]) for lab, r in results]
@@ -390,8 +390,8 @@ def efficiency_figures(results, stem, title):
 def cmd_efficiency(args) -> int:
     import numpy as np
 
-    from . import efficiency as ef
-    from . import mixtures
+    from jaxdamp.cases import mixtures, presets
+    from jaxdamp.studies import efficiency as ef
 
     amps = _amplitudes(args.amplitude) if args.amplitude else (
         [0.02, 0.03, 0.04] if args.quick else list(__import__("numpy").linspace(0.02, 0.04, 9)))
@@ -402,7 +402,7 @@ def cmd_efficiency(args) -> int:
         if mixtures.FAMILIES[args.preset] is None and args.sigma:
             raise ConfigError("--sigma: the reference system (varela2023-reference) is "
                               "monodisperse; use varela2023-a, -b or -c")
-        bases = [(s, mixtures.family(args.preset, s)) for s in sigmas]
+        bases = [(s, presets.family(args.preset, s)) for s in sigmas]
     else:
         if args.sigma:
             raise ConfigError(f"--sigma applies to the binary-mixture families "
@@ -432,7 +432,7 @@ def cmd_efficiency(args) -> int:
                   f"{s['E_d_fit'][i]:.4f}  {s['E_d_mean_per_mass'][i]:12.4g}  "
                   f"{s['E_pp'][i]:8.4g}  {s['E_pw'][i]:8.4g}  {s['contacts_mean'][i]:8.3g}  "
                   f"{s['balance_error'][i]:.1e}")
-        from .stats import format_estimate
+        from jaxdamp.analysis.stats import format_estimate
 
         print(f"  steady state from the data (MSER on per-period E_d, {R} replicate(s)):")
         for i, a in enumerate(r.amplitudes):
@@ -452,7 +452,7 @@ def cmd_efficiency(args) -> int:
 
 
 def cmd_presets(args) -> int:
-    from . import presets
+    from jaxdamp.cases import presets
 
     if args.show:
         cfg = presets.get(args.show)
@@ -464,7 +464,7 @@ def cmd_presets(args) -> int:
 
 
 def cmd_info(args) -> int:
-    from .io import describe
+    from jaxdamp.io import describe
 
     print(describe(args.file))
     return 0
@@ -487,7 +487,7 @@ PLOT_KINDS = {
 def cmd_plot(args) -> int:
     import os
 
-    from . import figures
+    from jaxdamp import figures
 
     stem = os.path.splitext(os.fspath(args.file))[0]
     out = args.out or f"{stem}_{args.kind}.png"
@@ -511,10 +511,10 @@ def cmd_plot(args) -> int:
 def cmd_export(args) -> int:
     import os
 
-    from .export import export
+    from jaxdamp.io.export import export
 
     if args.format in ("gif", "mp4"):
-        from .figures import animate
+        from jaxdamp.figures import animate
 
         out = args.out or os.path.splitext(os.fspath(args.file))[0] + "." + args.format
         if os.path.splitext(out)[1].lower() != "." + args.format:

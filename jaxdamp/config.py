@@ -2,7 +2,7 @@
 
 A :class:`Config` is a tree of frozen dataclasses holding plain Python numbers (SI units). It is
 what users write (presets, TOML files, ``--set key=value``), what every output file stores (as
-JSON), and what :mod:`jaxdamp.model` turns into JAX arrays. Nothing here touches JAX.
+JSON), and what :mod:`jaxdamp.physics.model` turns into JAX arrays. Nothing here touches JAX.
 
 Two systems (SPEC §1):
 
@@ -10,12 +10,12 @@ Two systems (SPEC §1):
   ``u(t) = U cos(2π f t)``.
 * ``system = "driven"`` (S2): the box itself moves as ``z(t) = A_d cos(2π f t)``.
 * ``system = "impact"`` (S3): the primary of S1 with the whole bed replaced by one point mass
-  (:class:`Impactor`, modelled by :mod:`jaxdamp.impact`); ``grains`` must be empty and the box
+  (:class:`Impactor`, modelled by :mod:`jaxdamp.s3.impact`); ``grains`` must be empty and the box
   is not used (the free height is ``impactor.gap``).
 
 Contact damping is given per material either directly (``gamma_n``, ``gamma_s``; thesis) or as a
 coefficient of restitution ``restitution`` at impact speed ``v_ref`` for a like-pair collision
-(paper), which :mod:`jaxdamp.restitution` turns into the dissipative constant ``A``.
+(paper), which :mod:`jaxdamp.physics.restitution` turns into the dissipative constant ``A``.
 """
 
 from __future__ import annotations
@@ -134,7 +134,7 @@ class Drive:
 
 @dataclass(frozen=True)
 class Impactor:
-    """The single particle of S3 (SPEC §1 S3; thesis §2.1.3, §5.3.2), see :mod:`jaxdamp.impact`.
+    """The single particle of S3 (SPEC §1 S3; thesis §2.1.3, §5.3.2), see :mod:`jaxdamp.s3.impact`.
 
     Attributes:
       mass: particle mass ``m`` [kg] (the bed's total mass ``m_p`` when it stands for a bed).
@@ -184,11 +184,11 @@ class Numerics:
       stiffness_scale: factor on every Young's modulus. Damping constants ``gamma_n`` and
         ``gamma_s`` are scaled by ``stiffness_scale**0.6``, which leaves the outcome of every
         binary collision (restitution, tangential impulse) unchanged and only lengthens the
-        collision time (see :mod:`jaxdamp.restitution`). A visible, recorded choice.
+        collision time (see :mod:`jaxdamp.physics.restitution`). A visible, recorded choice.
       settle_time: maximum simulated time for settling the bed before driving [s].
       settle_speed: settling stops once every grain is slower than this [m/s].
       settle_drag: viscous drag rate [1/s] on grains during settling only.
-      engine: ``"auto"`` (the compiled CPU kernel of :mod:`jaxdamp.native` when JAX runs on
+      engine: ``"auto"`` (the compiled CPU kernel of :mod:`jaxdamp.engine.native` when JAX runs on
         the CPU, else pure JAX), ``"jax"`` or ``"native"``. Both compute the same step;
         gradients always use JAX.
     """
@@ -226,7 +226,7 @@ class Config:
       gravity: ``g`` [m/s^2] along ``-z``.
       mixing: how per-species constants combine for a pair: ``"arithmetic"``, ``"harmonic"``
         or ``"geometric"`` mean (the 2023 paper: arithmetic).
-      contact_law: the normal contact law by name, one of :data:`jaxdamp.contact.LAWS`:
+      contact_law: the normal contact law by name, one of :data:`jaxdamp.physics.contact.LAWS`:
         ``"hertz"`` (Hertz + viscoelastic, SPEC §2) or ``"linear"`` (linear spring–dashpot
         with a speed-independent restitution; needs ``Material.linear_stiffness``).
       name: preset or user label.

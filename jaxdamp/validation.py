@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import math
 
-from .config import Config, ConfigError, Material
-from .contact import LAWS
-from .model import collision_time_limit, config_dt, grain_radii, impact_speed
+from jaxdamp.config import Config, ConfigError, Material
+from jaxdamp.physics.contact import LAWS
+from jaxdamp.physics.model import collision_time_limit, config_dt, grain_radii, impact_speed
 
 SYSTEMS = ("primary", "driven", "impact")
 MIXING = ("arithmetic", "harmonic", "geometric")
@@ -82,7 +82,7 @@ def validate(config: Config) -> Config:
     if num.engine not in ("auto", "jax", "native"):
         raise ConfigError(f"numerics.engine = {num.engine!r}: expected 'auto', 'jax' or 'native'")
     if num.engine == "native":
-        from . import native
+        from jaxdamp.engine import native
 
         if not native.AVAILABLE:
             raise ConfigError("numerics.engine = 'native' needs numba (pip install numba)")
@@ -136,7 +136,7 @@ def validate(config: Config) -> Config:
 
 
 def _validate_impact(config: Config) -> Config:
-    """Checks of an S3 (single-particle impact damper) configuration, see :mod:`jaxdamp.impact`."""
+    """Checks of an S3 (single-particle impact damper) configuration, see :mod:`jaxdamp.s3.impact`."""
     if config.grains:
         raise ConfigError(f"grains: system 'impact' (S3) models the bed as one particle; grains must "
                           f"be empty (got {config.n_grains} grains) — set impactor.mass instead")

@@ -4,15 +4,13 @@ from __future__ import annotations
 
 import dataclasses
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxdamp import neighbors as nb
 from jaxdamp.config import Box, Config, Drive, Material, Numerics, Species
-from jaxdamp.integrate import box_frame
-from jaxdamp.model import build
-from jaxdamp.simulate import advance, chunk_fn, init_states, take
+from jaxdamp.engine import driver
+from jaxdamp.engine.simulate import chunk_fn
+from jaxdamp.physics.model import build
 
 STEEL = Material(E=2e9, nu=0.3, density=7850.0, mu=0.0, gamma_n=0.0, gamma_s=0.0)
 
@@ -49,10 +47,10 @@ def start(cfg: Config, r, v, w=None, z=0.0, zd=0.0, dt=None, **param_changes):
     w = np.zeros((n, 3)) if w is None else np.asarray(w, float).reshape(n, 3)
     q = np.zeros((n, 4))
     q[:, 0] = 1.0
-    pb = jax.tree_util.tree_map(lambda x: jnp.asarray(x)[None], params)  # batch of one
-    st = init_states(model, pb, r[None], v[None], w[None], q[None], jnp.full(1, z), jnp.full(1, zd))
-    nbrs = nb.allocate(model, box_frame(st), cfg.numerics.capacity_multiplier)
-    return model, pb, st, nbrs
+    pb = driver.batched(params)
+    b = driver.start(model, pb, r[None], v[None], w[None], q[None], np.full(1, z), np.full(1, zd),
+                     engine="jax", multiplier=cfg.numerics.capacity_multiplier)
+    return model, pb, b.states, b.nbrs
 
 
 #: The two implementations of the step (``numerics.engine``); physics tests run on both.
@@ -62,8 +60,15 @@ ENGINES = ("jax", "native")
 def run_steps(model, pb, st, nbrs, n_records, record_every, engine="jax"):
     """Advance with ``engine`` (re-allocating neighbour lists on overflow) and return
     (final batched state, nbrs, records of system 0 as numpy)."""
-    st, nbrs, recs = advance(model, st, nbrs, pb, n_records, record_every, 1.5, engine=engine)
-    return st, nbrs, {k: np.asarray(v[0]) for k, v in recs.items()}
+    b, recs = advance(model, st, nbrs, pb, n_records, record_every, engine=engine)
+    return b.states, b.nbrs, {k: np.asarray(v[0]) for k, v in recs.items()}
+
+
+def advance(model, st, nbrs, pb, n_records, record_every, engine="jax", on_realloc=None):
+    """One driver chunk from given states and lists (no non-finite check: tests may blow
+    up on purpose): ``(batch, records)``."""
+    b = driver.Batch(model, pb, st, nbrs, driver.resolve_engine(engine), 1.5)
+    return driver.advance(b, n_records, record_every, on_realloc=on_realloc, check=False)
 
 
 def trajectory(model, pb, st, nbrs, n_steps, every=1):
@@ -72,6 +77,6 @@ def trajectory(model, pb, st, nbrs, n_steps, every=1):
     fn = chunk_fn(model, 1, every)
     for _ in range(n_steps // every):
         st, nbrs, _ = fn(st, nbrs, pb)
-        s0 = take(st, 0)
+        s0 = driver.take(st, 0)
         out.append({k: np.asarray(getattr(s0, k)) for k in ("r", "v", "w", "t", "e_elastic")})
     return st, out

@@ -1,10 +1,10 @@
-"""Design quantities read off FRFs and Lz scans (jaxdamp.analysis), against independent results."""
+"""Design quantities read off FRFs and Lz scans (jaxdamp.analysis.response), against independent results."""
 
 import numpy as np
 import pytest
 from scipy.optimize import minimize_scalar
 
-from jaxdamp.analysis import crossings, fit_frf, frf_amplitude, optimal_gap, resonance
+from jaxdamp.analysis.response import crossings, fit_frf, frf_amplitude, optimal_gap, resonance
 
 M, K, C, U = 2.37, 21500.0, 26.3, 0.0045
 

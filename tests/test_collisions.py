@@ -1,6 +1,6 @@
 """Binary collisions against the calibrated restitution and the Hertz collision time.
 
-Reference values come from :mod:`jaxdamp.restitution`, which integrates one collision of the
+Reference values come from :mod:`jaxdamp.physics.restitution`, which integrates one collision of the
 force law with scipy (an independent ODE solver): the DEM step must reproduce them.
 """
 
@@ -8,12 +8,11 @@ import math
 
 import numpy as np
 import pytest
-
-from jaxdamp import restitution as rst
-from jaxdamp.config import Material
-from jaxdamp.model import build, contact_law
-
 from helpers import ENGINES, config, run_steps, start
+
+from jaxdamp.config import Material
+from jaxdamp.physics import restitution as rst
+from jaxdamp.physics.model import build, contact_law
 
 R = 2.5e-3
 PAPER = Material(E=2e9, nu=0.3, density=7850.0, mu=0.0, restitution=0.75, v_ref=1.0)

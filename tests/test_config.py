@@ -2,7 +2,8 @@
 
 import pytest
 
-from jaxdamp import cli, presets
+from jaxdamp import cli
+from jaxdamp.cases import presets
 from jaxdamp.config import ConfigError, apply_overrides, from_dict, load_toml
 from jaxdamp.validation import validate
 

@@ -8,15 +8,14 @@ import math
 import jax.numpy as jnp
 import numpy as np
 import pytest
-
-from jaxdamp import contact, excitation, integrate
-from jaxdamp import restitution as rst
-from jaxdamp.config import Box, Config, ConfigError, Drive, Material, Species
-from jaxdamp.contact import LAWS, Vec
-from jaxdamp.model import build, contact_tables
-from jaxdamp.validation import validate
-
 from helpers import ENGINES, config, run_steps, start
+
+from jaxdamp.config import Box, Config, ConfigError, Drive, Material, Species
+from jaxdamp.physics import contact, excitation, integrate
+from jaxdamp.physics import restitution as rst
+from jaxdamp.physics.contact import LAWS, Vec
+from jaxdamp.physics.model import build, contact_tables
+from jaxdamp.validation import validate
 
 pytest.importorskip("numba")
 
@@ -355,7 +354,7 @@ def test_linear_elastic_collision_lasts_half_a_period(engine):
 def test_linear_time_step_uses_the_linear_collision_time():
     """dt = t_c / dt_per_collision with the linear law's force duration of the lightest like
     pair or grain–wall contact (independent of v_impact), and the check names it."""
-    from jaxdamp.model import collision_time_limit, grain_radii
+    from jaxdamp.physics.model import collision_time_limit, grain_radii
 
     mat = dataclasses.replace(LINEAR, restitution=0.5)
     cfg = config(n=20, radius=R_LIN, material=mat, contact_law="linear", v_impact=3.0)

@@ -6,11 +6,20 @@ import h5py
 import numpy as np
 import pytest
 
-from jaxdamp import presets
+from jaxdamp.cases import presets
 from jaxdamp.cli import main
 from jaxdamp.config import apply_overrides
-from jaxdamp.design import (DEMProblem, Objective, S3Problem, SteadyProblem, adaptive_scan,
-                            quadratic_optimum, scan_optimum, smooth_max, trust_region)
+from jaxdamp.design import (
+    DEMProblem,
+    Objective,
+    S3Problem,
+    SteadyProblem,
+    adaptive_scan,
+    quadratic_optimum,
+    scan_optimum,
+    smooth_max,
+    trust_region,
+)
 from jaxdamp.design.objectives import equivalent_damping
 
 
@@ -172,7 +181,7 @@ def test_cli_optimize_s3_reaches_the_dense_scan_optimum(tmp_path, capsys):
     exact orbit gradients) from gap0 = 0.031 m ends within 2 % of the optimum of a dense scan
     of the same orbit objective (0.075–0.095 m, 11 gaps, parabola through the best three); the
     log holds every iterate."""
-    from jaxdamp import periodic
+    from jaxdamp.s3 import periodic
 
     out = tmp_path / "opt.h5"
     assert main(["optimize", "--preset", "sanchez2012-impact", "--quick", "--out", str(out),

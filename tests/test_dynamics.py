@@ -1,4 +1,4 @@
-"""Nonlinear-dynamics toolbox (jaxdamp.dynamics) against systems whose answers are known.
+"""Nonlinear-dynamics toolbox (jaxdamp.analysis.dynamics) against systems whose answers are known.
 
 Largest Lyapunov exponents: logistic map at r = 4 (ln 2 per iteration, exactly) and the
 Lorenz system (σ=10, ρ=28, β=8/3; 0.906 per unit time, Wolf et al. 1985 / Sprott), from the
@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from jaxdamp import dynamics as dyn
+from jaxdamp.analysis import dynamics as dyn
 
 LORENZ_LAMBDA = 0.906  # [1/time unit]
 DT_LORENZ = 0.01

@@ -1,4 +1,4 @@
-"""Dissipation efficiency (jaxdamp.efficiency, `jaxdamp efficiency`): the analysis against
+"""Dissipation efficiency (jaxdamp.studies.efficiency, `jaxdamp efficiency`): the analysis against
 planted records, E_pp + E_pw against the energy balance of a driven-box run, and the CLI."""
 
 import dataclasses
@@ -10,11 +10,11 @@ import h5py
 import numpy as np
 import pytest
 
-from jaxdamp import efficiency as ef
-from jaxdamp import mixtures, presets
+from jaxdamp.cases import mixtures, presets
 from jaxdamp.config import ConfigError
-from jaxdamp.model import CH, N_CHANNELS
-from jaxdamp.runner import run, schedule
+from jaxdamp.physics.model import CH, N_CHANNELS
+from jaxdamp.studies import efficiency as ef
+from jaxdamp.studies.runner import run, schedule
 
 REF = presets.get("varela2023-reference")
 
@@ -34,7 +34,7 @@ def test_protocol_aligns_steps_samples_chunks_and_periods():
     assert num.record_dt == pytest.approx(T / 100, rel=1e-14) and num.dt * k == pytest.approx(T / 100)
     # dt is at most t_c / 50 at the largest amplitude
     loud = REF.replace(drive=dataclasses.replace(REF.drive, amplitude=0.04))
-    from jaxdamp.model import config_dt, grain_radii
+    from jaxdamp.physics.model import config_dt, grain_radii
 
     assert num.dt <= config_dt(loud, grain_radii(loud)) * (1 + 1e-12)
     sched = schedule(cfg, num.dt)

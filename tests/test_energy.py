@@ -4,13 +4,12 @@ import math
 
 import numpy as np
 import pytest
-
-from jaxdamp import presets
-from jaxdamp.config import Material, Primary, apply_overrides
-from jaxdamp.model import CH, build
-from jaxdamp.runner import run
-
 from helpers import ENGINES, config, run_steps, start
+
+from jaxdamp.cases import presets
+from jaxdamp.config import Material, Primary, apply_overrides
+from jaxdamp.physics.model import CH, build
+from jaxdamp.studies.runner import run
 
 
 def _gas(n=27, side=0.02, seed=1):

@@ -79,7 +79,7 @@ def test_bed_dynamics_quick(tmp_path):
 
     import h5py
 
-    from jaxdamp.analysis import frf_amplitude
+    from jaxdamp.analysis.response import frf_amplitude
 
     out = _load("bed_dynamics").main(["--quick", "--out", str(tmp_path), "--no-progress"])
     res, rows, cfg = out["result"], out["rows"], out["config"]

@@ -6,12 +6,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from helpers import config, start
 
 from jaxdamp.config import Material
-from jaxdamp.energy import granular_loss
-from jaxdamp.simulate import chunk_fn
-
-from helpers import config, start
+from jaxdamp.engine.simulate import chunk_fn
+from jaxdamp.physics.energy import granular_loss
 
 MAT = Material(E=2e9, nu=0.3, density=7850.0, mu=0.3, gamma_n=50.0, gamma_s=150.0)
 

@@ -1,4 +1,4 @@
-"""S3, the single-particle impact damper (jaxdamp.impact): collision law, exact event-driven
+"""S3, the single-particle impact damper (jaxdamp.s3.impact): collision law, exact event-driven
 model against the analytic FRF and its own energy balance, the smooth JAX model against the
 event-driven one, its gradient against finite differences, the sweep dispatch and validation."""
 
@@ -10,10 +10,12 @@ import jax
 import numpy as np
 import pytest
 
-from jaxdamp import cli, impact, presets
-from jaxdamp.analysis import frf_amplitude
+from jaxdamp import cli
+from jaxdamp.analysis.response import frf_amplitude
+from jaxdamp.cases import presets
 from jaxdamp.config import ConfigError, apply_overrides
-from jaxdamp.sweep import sweep
+from jaxdamp.s3 import impact
+from jaxdamp.studies.sweep import sweep
 from jaxdamp.validation import validate
 
 

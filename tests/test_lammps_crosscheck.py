@@ -28,7 +28,7 @@ def lc():
 
 @pytest.fixture(scope="module")
 def mapping(lc):
-    from jaxdamp import presets
+    from jaxdamp.cases import presets
 
     return lc.build_mapping(presets.get(lc.PRESET))
 
@@ -45,7 +45,7 @@ def test_mapping_constants(lc, mapping):
 @needs_lmp
 def test_binary_collision_restitution(lc, mapping, tmp_path):
     """Head-on at 1 m/s in LAMMPS: ε = 0.75 within 1 % and jaxdamp's integrated law within 0.1 %."""
-    from jaxdamp.restitution import restitution
+    from jaxdamp.physics.restitution import restitution
 
     r = lc.lammps_pair_collision(mapping, 1.0, str(tmp_path))
     assert r["mass"] == pytest.approx(mapping.mass, rel=1e-12)
@@ -66,7 +66,7 @@ def test_static_wall_overlap(lc, mapping, tmp_path):
 @needs_lmp
 def test_wall_collision_restitution(lc, mapping, tmp_path):
     """Sphere on the floor at 1 m/s: jaxdamp's grain–wall restitution within 1 %."""
-    from jaxdamp.restitution import restitution
+    from jaxdamp.physics.restitution import restitution
 
     r = lc.lammps_wall_collision(mapping, 1.0, str(tmp_path))
     ref = restitution(mapping.mass, mapping.R, mapping.E_star_pw, 1.0,

@@ -1,4 +1,4 @@
-"""Binary mixtures (jaxdamp.mixtures): the paper's classes a, b, c, per-species damping, the time
+"""Binary mixtures (jaxdamp.cases.mixtures): the paper's classes a, b, c, per-species damping, the time
 step from the smallest grains, and size-aware neighbour lists on a tenfold size ratio."""
 
 import dataclasses
@@ -8,12 +8,12 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxdamp import mixtures, presets
-from jaxdamp import neighbors as nb
-from jaxdamp import restitution as rst
+from jaxdamp.cases import mixtures, presets
 from jaxdamp.config import ConfigError
-from jaxdamp.model import build, contact_law
-from jaxdamp.pairs import all_pairs, pair_forces
+from jaxdamp.engine import neighbors as nb
+from jaxdamp.physics import restitution as rst
+from jaxdamp.physics.model import build, contact_law
+from jaxdamp.physics.pairs import all_pairs, pair_forces
 from jaxdamp.validation import validate
 
 REF = presets.get("varela2023-reference")
@@ -56,7 +56,7 @@ def test_class_a_exact_numbers_and_presets():
     assert _mass(a) / (N_REF * R_REF**3) - 1 == pytest.approx(267 * 1.125 / 300 - 1, abs=1e-14)
     assert mixtures.granulate_mass(REF) == pytest.approx(0.154, abs=5e-4)  # the paper's 0.154 kg
     for name in ("varela2023-b", "varela2023-c"):
-        assert presets.get(name) == mixtures.family(name, 0.5)
+        assert presets.get(name) == presets.family(name, 0.5)
 
 
 def test_builder_errors_name_the_parameter():
@@ -72,7 +72,7 @@ def test_builder_errors_name_the_parameter():
     with pytest.raises(ConfigError, match="one-species"):
         mixtures.binary(presets.get("varela2023-a"), "a", 0.5)
     with pytest.raises(ConfigError, match="not a binary-mixture family"):
-        mixtures.family("sanchez2012-optimal")
+        presets.family("sanchez2012-optimal")
 
 
 def test_per_species_damping_and_mixing_rule():
@@ -186,13 +186,11 @@ def test_tenfold_mixture_neighbour_list_equals_all_pairs_and_stays_small():
 def test_native_engine_lists_the_same_contacts_on_a_tenfold_mixture():
     """The compiled engine's size-aware pair list: 20 steps on the σ = 0.1 mixture agree with the
     JAX engine (neighbour list as above) to round-off."""
-    from jaxdamp import native
+    from jaxdamp.engine import native
 
     if not native.AVAILABLE:
         pytest.skip("numba is not installed")
-    from helpers import start
-
-    from jaxdamp.simulate import advance
+    from helpers import advance, start
 
     base = REF.replace(grains=(dataclasses.replace(REF.grains[0], count=54),), gravity=9.8)
     cfg = mixtures.binary(base, "b", 0.1)
@@ -203,8 +201,8 @@ def test_native_engine_lists_the_same_contacts_on_a_tenfold_mixture():
     out = {}
     for engine in ("jax", "native"):
         model, pb, st, nbrs = start(cfg, r, v)
-        st, _, rec = advance(model, st, nbrs, pb, 2, 10, 1.5, engine=engine)
-        out[engine] = (np.asarray(st.r[0]), np.asarray(rec["work"][0]))
+        b, rec = advance(model, st, nbrs, pb, 2, 10, engine=engine)
+        out[engine] = (np.asarray(b.states.r[0]), np.asarray(rec["work"][0]))
     np.testing.assert_allclose(out["native"][0], out["jax"][0], rtol=0, atol=1e-13)
     np.testing.assert_allclose(out["native"][1], out["jax"][1], rtol=1e-9, atol=1e-15)
     assert out["jax"][1][-1, 2] > 0  # grain-grain contacts did dissipate

@@ -4,13 +4,13 @@ import dataclasses
 
 import numpy as np
 import pytest
-
-from jaxdamp import native, presets
-from jaxdamp.contact import LAWS
-from jaxdamp.config import Box, Config, Drive, Material, Numerics, Primary, Species, apply_overrides
-from jaxdamp.runner import run
-
 from helpers import start
+
+from jaxdamp.cases import presets
+from jaxdamp.config import Box, Config, Drive, Material, Numerics, Primary, Species, apply_overrides
+from jaxdamp.engine import native
+from jaxdamp.physics.contact import LAWS
+from jaxdamp.studies.runner import run
 
 pytestmark = pytest.mark.skipif(not native.AVAILABLE, reason="numba not installed")
 
@@ -49,7 +49,7 @@ def test_native_equals_jax_on_a_mixture(system, mixing, law):
     v = rng.normal(0, 0.5, (50, 3))
     w = rng.normal(0, 100.0, (50, 3))
     model, pb, st, nbrs = start(cfg, r, v, w)
-    from jaxdamp.simulate import chunk_fn
+    from jaxdamp.engine.simulate import chunk_fn
 
     out = {e: chunk_fn(model, 6, 100, engine=e)(st, nbrs, pb) for e in ("jax", "native")}
     (sa, _, ra), (sb, _, rb) = out["jax"], out["native"]
@@ -105,10 +105,16 @@ def test_kernel_caches_are_keyed_on_the_physics_sources():
     """The kernels inline scalar forms from contact.py, excitation.py and integrate.py; numba's
     own cache would only notice edits to native.py and keep a stale law (checked by hand:
     an edited elastic energy was ignored), so every kernel's cache key holds their hash."""
+    import os
+
+    from jaxdamp.physics import contact, excitation, integrate
+
     digest = native._source_hash()
     kernels = [native._build_pairs, native._pairs, native._moved_too_far, native._wall_constants,
                native._wall, native._forces, native._advance_one, native._advance]
     for k in kernels:
         key = k._cache._index_key((), k.targetctx.codegen())
         assert key[-1] == digest, k.py_func.__name__
-    assert set(native._SOURCES) >= {"contact.py", "excitation.py", "integrate.py"}
+    files = set(native._source_files())
+    for mod in (contact, excitation, integrate, native):
+        assert os.path.abspath(mod.__file__) in files, mod.__name__

@@ -4,15 +4,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+from helpers import advance, config, start
 
-from jaxdamp import neighbors as nb
 from jaxdamp.config import Material
-from jaxdamp.integrate import box_frame
-from jaxdamp.model import build
-from jaxdamp.pairs import all_pairs, pair_forces
-from jaxdamp.simulate import advance
-
-from helpers import config, start
+from jaxdamp.engine import neighbors as nb
+from jaxdamp.physics.integrate import box_frame
+from jaxdamp.physics.model import build
+from jaxdamp.physics.pairs import all_pairs, pair_forces
 
 MAT = Material(E=2e9, nu=0.3, density=7850.0, mu=0.3, gamma_n=50.0, gamma_s=150.0)
 
@@ -54,9 +52,10 @@ def test_overflow_reallocates_and_redoes_the_chunk():
     small = nb._build(model, 2, box_frame(st))
     assert bool(small.overflow.any())
     calls = []
-    out_a, nb_a, rec_a = advance(model, st, small, pb, 5, 20, 1.5,
-                                 on_realloc=lambda old, new: calls.append((old, new)))
-    out_b, nb_b, rec_b = advance(model, st, good, pb, 5, 20, 1.5)
+    a, rec_a = advance(model, st, small, pb, 5, 20,
+                       on_realloc=lambda old, new: calls.append((old, new)))
+    b, rec_b = advance(model, st, good, pb, 5, 20)
+    out_a, nb_a, out_b = a.states, a.nbrs, b.states
     assert calls and calls[0][0] == 2 and calls[0][1] > 2
     assert not bool(nb_a.overflow.any())
     np.testing.assert_allclose(out_a.r, out_b.r, rtol=0, atol=1e-15)

@@ -1,5 +1,5 @@
 """Steady-state gradients of S3 by implicit differentiation of the periodic orbit
-(jaxdamp.periodic): the orbit is a fixed point of the stroboscopic map with consistent Floquet
+(jaxdamp.s3.periodic): the orbit is a fixed point of the stroboscopic map with consistent Floquet
 multipliers, the implicit derivative matches finite differences of re-solved orbits and of
 long-time averages of the smooth model, and an irregular response is reported as such.
 
@@ -15,8 +15,9 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxdamp import impact, periodic, presets
+from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
+from jaxdamp.s3 import impact, periodic
 
 F = 15.16  # Hz, the preset's frequency
 
@@ -99,7 +100,7 @@ def _long_loss(p, n_rec, record_every):
 
 def test_implicit_derivative_matches_finite_differences_of_long_time_averages():
     """The impact loss per period averaged over 30 s of the smooth model after a 5 s
-    transient (:func:`jaxdamp.impact.smooth_window_loss`, same step dt = T/N) at gap ± h:
+    transient (:func:`jaxdamp.s3.impact.smooth_window_loss`, same step dt = T/N) at gap ± h:
     its value is the orbit's, its central difference the implicit derivative (1e-4)."""
     gap, h = 0.0835, 1e-6
     orb = _orbit(gap)

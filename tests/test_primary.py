@@ -2,11 +2,11 @@
 
 import pytest
 
-from jaxdamp import presets
-from jaxdamp.analysis import frf_amplitude
+from jaxdamp.analysis.response import frf_amplitude
+from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
-from jaxdamp.model import build
-from jaxdamp.runner import run
+from jaxdamp.physics.model import build
+from jaxdamp.studies.runner import run
 
 
 @pytest.mark.parametrize("engine", ["jax", "native"])

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from jaxdamp import restitution as rst
+from jaxdamp.physics import restitution as rst
 
 # The 2023 paper's grains: steel, E = 2e9 Pa, ν = 0.3, ρ = 7850, R = 2.5 mm, like pair.
 R = 2.5e-3

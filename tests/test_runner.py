@@ -6,10 +6,11 @@ import h5py
 import numpy as np
 import pytest
 
-from jaxdamp import cli, presets
+from jaxdamp import cli
+from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides, from_json
-from jaxdamp.energy import RECORD_UNITS
-from jaxdamp.runner import SimulationDiverged, run
+from jaxdamp.physics.energy import RECORD_UNITS
+from jaxdamp.studies.runner import SimulationDiverged, run
 
 SMALL = ["grains.0.count=30", "box.Lz=0.05", "numerics.duration=0.08", "numerics.chunk=0.02",
          "numerics.settle_time=0.2", "numerics.record_dt=1e-3"]

@@ -51,7 +51,7 @@ def test_stiffness_full(tmp_path):
     M + m_p); the thesis modulus and the preset's reduced one agree on the resonant amplitude
     and on the granular loss per cycle at 15 Hz within 10 % (summary: +2.7 %, +4 %), and the
     1000× softer grains within 20 % (summary: +9.9 %)."""
-    from jaxdamp.analysis import frf_amplitude
+    from jaxdamp.analysis.response import frf_amplitude
 
     rows = _load("stiffness").main(["--out", str(tmp_path), "--no-progress"])
     assert set(rows) == {1.0, 0.01, 0.001}
@@ -111,7 +111,7 @@ def test_bed_dynamics_full(tmp_path):
     never reaches the lid; from 14 to 15.5 Hz the bed hits the lid more than once per period and
     holds the amplitude far below the rigid-mass resonance; every point gets a regime label and
     the sections have one point per period."""
-    from jaxdamp.analysis import frf_amplitude
+    from jaxdamp.analysis.response import frf_amplitude
 
     out = _load("bed_dynamics").main(["--out", str(tmp_path), "--no-progress"])
     res, rows, cfg = out["result"], out["rows"], out["config"]
@@ -144,7 +144,7 @@ def test_gap_scan_full(tmp_path):
     resonant amplitude fall at the thesis' optimum Lz = 0.1225 m (± one scan step), where M_ef is
     within 5 % of M and C_ef/C exceeds 3; no height loses damping (C_ef > 0.9 C); at the smallest box M_ef exceeds
     M + m_p (overshoot) and at the tallest it is below M_ef of the smallest."""
-    from jaxdamp.model import grain_mass
+    from jaxdamp.physics.model import grain_mass
 
     mod = _load("gap_scan")
     res = mod.main(["--out", str(tmp_path), "--no-progress"])

@@ -1,10 +1,10 @@
-"""Steady-state statistics: per-period series, MSER detection, replicate errors (jaxdamp.stats)."""
+"""Steady-state statistics: per-period series, MSER detection, replicate errors (jaxdamp.analysis.stats)."""
 
 import numpy as np
 import pytest
 
-from jaxdamp import stats
-from jaxdamp.model import CH, N_CHANNELS
+from jaxdamp.analysis import stats
+from jaxdamp.physics.model import CH, N_CHANNELS
 
 
 def test_mser_finds_the_end_of_a_transient():
@@ -77,9 +77,9 @@ def test_replicated_sweep_has_independent_beds_and_a_detected_steady_state():
     """A 1-point sweep of a small damper with R = 3 replicates: the beds differ (seeds
     0, 1, 2), replicate 0 is the unreplicated run to round-off, and every steady-state
     estimate carries R, a detected start and a flag."""
-    from jaxdamp import presets
+    from jaxdamp.cases import presets
     from jaxdamp.config import apply_overrides
-    from jaxdamp.sweep import sweep
+    from jaxdamp.studies.sweep import sweep
 
     cfg = apply_overrides(presets.get("sanchez2012-optimal"),
                           ["grains.0.count=20", "numerics.duration=0.4", "numerics.chunk=0.1",

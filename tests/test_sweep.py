@@ -8,10 +8,10 @@ import sys
 import numpy as np
 import pytest
 
-from jaxdamp import presets
-from jaxdamp.analysis import fit_frf, frf_amplitude
+from jaxdamp.analysis.response import fit_frf, frf_amplitude
+from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
-from jaxdamp.sweep import sweep
+from jaxdamp.studies.sweep import sweep
 
 SMALL = ["grains.0.count=20", "numerics.duration=0.04", "numerics.chunk=0.01",
          "numerics.settle_time=0.05", "numerics.record_dt=1e-3"]
@@ -44,7 +44,7 @@ import jax
 assert len(jax.devices()) == 4, jax.devices()
 sys.path.insert(0, {tests!r})
 from test_sweep import _small_grid
-from jaxdamp.sweep import sweep
+from jaxdamp.studies.sweep import sweep
 cfg, axes = _small_grid()
 a = sweep(cfg, axes, progress=False, echo=None, shard=True)
 b = sweep(cfg, axes, progress=False, echo=None, shard=False)
@@ -93,7 +93,7 @@ def test_reuse_or_run_reads_back_resumes_or_replaces(tmp_path):
     another sweep is replaced."""
     import h5py
 
-    from jaxdamp.sweep import holds, reuse_or_run
+    from jaxdamp.studies.sweep import holds, reuse_or_run
 
     cfg, axes = _small_grid()
     path = str(tmp_path / "raw.h5")

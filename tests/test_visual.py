@@ -11,10 +11,11 @@ import numpy as np
 import pytest
 from matplotlib import image as mpimg
 
-from jaxdamp import cli, figures, presets
+from jaxdamp import cli, figures
+from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
-from jaxdamp.runner import run
-from jaxdamp.sweep import sweep
+from jaxdamp.studies.runner import run
+from jaxdamp.studies.sweep import sweep
 
 RUN = ["grains.0.count=30", "numerics.duration=0.1", "numerics.chunk=0.02",
        "numerics.settle_time=0.1"]

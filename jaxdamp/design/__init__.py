@@ -20,14 +20,14 @@
 
 from __future__ import annotations
 
-from ..config import Config, ConfigError, apply_overrides
-from .objectives import DEFAULT, OBJECTIVES, Estimate, Objective, smooth_max
-from .optimizer import OptimizeResult, optimize, scan_optimum
-from .s3 import S3Problem
-from .search import SearchResult, adaptive_scan, trust_region
-from .steady import SteadyProblem
-from .surface import Optimum, quadratic_optimum
-from .windows import DEMProblem
+from jaxdamp.config import Config, ConfigError, apply_overrides
+from jaxdamp.design.objectives import DEFAULT, OBJECTIVES, Estimate, Objective, smooth_max
+from jaxdamp.design.optimizer import OptimizeResult, optimize, scan_optimum
+from jaxdamp.design.s3 import S3Problem
+from jaxdamp.design.search import SearchResult, adaptive_scan, trust_region
+from jaxdamp.design.steady import SteadyProblem
+from jaxdamp.design.surface import Optimum, quadratic_optimum
+from jaxdamp.design.windows import DEMProblem
 
 __all__ = ["DEFAULT", "OBJECTIVES", "DEFAULTS", "DEMProblem", "Estimate", "Objective",
            "OptimizeResult", "Optimum", "S3Problem", "SearchResult", "SteadyProblem",

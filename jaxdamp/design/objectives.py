@@ -37,8 +37,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..config import Config, ConfigError
-from ..model import primary_frequency
+from jaxdamp.config import Config, ConfigError
+from jaxdamp.physics.model import primary_frequency
 
 OBJECTIVES = ("damping", "amplitude", "band", "dissipation")
 #: Objectives that are maximised (the others are minimised).

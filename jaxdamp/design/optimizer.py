@@ -22,8 +22,8 @@ from dataclasses import dataclass
 import jax.numpy as jnp
 import numpy as np
 
-from ..config import ConfigError
-from ..io import optimisation as optimisation_file
+from jaxdamp.config import ConfigError
+from jaxdamp.io import optimisation as optimisation_file
 
 
 @dataclass

@@ -1,11 +1,11 @@
 """The single-particle model (S3) as a design problem: the gap as design variable.
 
-:class:`S3Problem` evaluates the objective on the smooth model of :mod:`jaxdamp.impact`
+:class:`S3Problem` evaluates the objective on the smooth model of :mod:`jaxdamp.s3.impact`
 (penalty contacts, ``jax``-differentiable) for every frequency of the objective in one
 ``vmap`` batch. Two derivatives:
 
 * ``gradient="orbit"`` (default) — the exact steady-state derivative on the stable periodic
-  orbit by implicit differentiation of the stroboscopic map (:mod:`jaxdamp.periodic`): no
+  orbit by implicit differentiation of the stroboscopic map (:mod:`jaxdamp.s3.periodic`): no
   transient, no horizon. Where the motion has no stable periodic orbit (irregular responses,
   bifurcations) it returns NaN and says why (``Estimate.extra["reason"]``): the optimiser
   then stops or falls back instead of using a meaningless number.
@@ -26,8 +26,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..config import Config, ConfigError, apply_overrides
-from .objectives import Estimate, Objective
+from jaxdamp.config import Config, ConfigError, apply_overrides
+from jaxdamp.design.objectives import Estimate, Objective
 
 
 def _first_harmonic_amplitude(t, z, omega, weights):
@@ -52,14 +52,14 @@ class S3Problem:
       refine: orbit method: steps per contact time relative to the smooth model's default.
         At the default step the gap derivative oscillates with the gap (±25 % for dZ, up to
         46 % for dE at 0.095 m) while the values change by < 1e-4; ``refine = 2`` converges
-        it to ~2e-3 (measured, :mod:`jaxdamp.periodic`) for twice the cost.
+        it to ~2e-3 (measured, :mod:`jaxdamp.s3.periodic`) for twice the cost.
     """
 
     variable = "gap"
 
     def __init__(self, config: Config, objective: Objective, duration: float | None = None,
                  h_bed: float | None = None, gradient: str = "orbit", refine: int = 2):
-        from .. import impact
+        from jaxdamp.s3 import impact
 
         if config.system != "impact":
             raise ConfigError("S3Problem needs an S3 configuration (system = 'impact')")
@@ -88,7 +88,7 @@ class S3Problem:
     def _per_frequency(self, p):
         """Amplitude ``Z`` [m] (first harmonic) and impact loss per period ``E`` [J] over the
         analysis window of one run."""
-        from .. import impact
+        from jaxdamp.s3 import impact
 
         _, rec = impact.smooth_run(p, self.n_rec, self.record_every)
         w = (rec["t"] >= p.t_window).astype(rec["t"].dtype)
@@ -118,7 +118,7 @@ class S3Problem:
         where the orbit method finds no stable periodic orbit)."""
         t0 = time.perf_counter()
         if self.gradient == "orbit":
-            from .. import periodic
+            from jaxdamp.s3 import periodic
 
             v, g, orbit = periodic.objective_and_gradient(
                 self.config, self.objective, gap=float(gap), refine=self.refine,

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .surface import Optimum, quadratic_optimum
+from jaxdamp.design.surface import Optimum, quadratic_optimum
 
 
 def scan_points(problem, xs):

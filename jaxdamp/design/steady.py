@@ -3,14 +3,16 @@
 The bed is chaotic: pathwise derivatives of a steady-state average do not exist in any useful
 sense (tangents grow at 500–800 s⁻¹; ``docs/physics.md`` §6), so the DEM is evaluated by what
 a designer can trust — steady-state averages over **independent replicates** (independently
-seeded settled beds, :mod:`jaxdamp.stats`), all run in one batch through
-:func:`jaxdamp.sweep.sweep` (and so through the one driver):
+seeded settled beds, :mod:`jaxdamp.analysis.stats`), all run in one batch through
+:func:`jaxdamp.studies.sweep.sweep` (and so through the one driver):
 
 * an evaluation at heights ``Lz_1..Lz_L`` and the objective's frequencies runs
   ``F × L × R`` systems for ``duration`` seconds; for every system the start of the steady state
-  is detected from its per-period amplitude and dissipation (MSER) and the steady means of
-  ``Z`` and ``E`` are taken after it (a system that never became stationary uses its fixed
-  final window and is counted in ``not_stationary``);
+  is detected from its per-period amplitude and dissipation (MSER), and the steady means of
+  ``Z`` and ``E`` are taken over **one common window per bed** — from the latest start among
+  the heights that bed runs at (:func:`jaxdamp.analysis.stats.shared_window`), so that the
+  bed's shared transient cancels in differences (systems that never became stationary are
+  counted in ``not_stationary``);
 * the objective of every replicate is formed from its own ``Z_f, E_f``
   (:meth:`jaxdamp.design.objectives.Objective.combine`), so replicate values are independent
   and the standard error across them, ``s/√R``, is calibrated;
@@ -30,8 +32,8 @@ import time
 
 import numpy as np
 
-from ..config import Config, ConfigError, apply_overrides
-from .objectives import Estimate, Objective
+from jaxdamp.config import Config, ConfigError, apply_overrides
+from jaxdamp.design.objectives import Estimate, Objective
 
 
 class SteadyProblem:
@@ -53,10 +55,10 @@ class SteadyProblem:
     def __init__(self, config: Config, objective: Objective, h: float = 0.005,
                  replicates: int = 4, duration: float = 3.0, margin: float = 0.005,
                  progress: bool = False):
-        from ..model import build
-        from ..packing import settle_many
-        from ..grid import geometry_key, replicate_configs
-        from ..validation import validate
+        from jaxdamp.engine.packing import settle_many
+        from jaxdamp.physics.model import build
+        from jaxdamp.studies.grid import geometry_key, replicate_configs
+        from jaxdamp.validation import validate
 
         if config.system != "primary":
             raise ConfigError("SteadyProblem needs an S1 configuration (system = 'primary')")
@@ -91,8 +93,8 @@ class SteadyProblem:
 
         Returns ``{"lz": (L,), "J": (L, R), "Z": (F, L, R), "E": (F, L, R),
         "not_stationary": int, "sim_seconds": float, "wall": float}``."""
-        from ..grid import steady_or_window
-        from ..sweep import sweep
+        from jaxdamp.analysis import stats
+        from jaxdamp.studies.sweep import sweep
 
         lzs = [float(x) for x in np.atleast_1d(lzs)]
         lo = self.bed_height + 0.5 * self.margin
@@ -102,12 +104,22 @@ class SteadyProblem:
         t0 = time.perf_counter()
         res = sweep(self.config, {"frequency": list(self.freqs), "box.Lz": lzs},
                     replicates=self.R, beds=self.beds, progress=self.progress, echo=None)
-        Z, nz = steady_or_window(res, "amplitude")
-        E, ne = steady_or_window(res, "granular_loss_per_cycle")
+        F, L, R = len(self.freqs), len(lzs), self.R
+        Z, E = np.empty((F, L, R)), np.empty((F, L, R))
+        not_stationary = 0
+        for f, freq in enumerate(self.freqs):
+            for r in range(R):  # one bed at every height: one common window (module doc)
+                series = [stats.per_period({k: res.records[k][res.point(f * L + li, r)]
+                                            for k in ("t", "z_box", "work")}, freq)
+                          for li in range(L)]
+                w = stats.shared_window(series)
+                Z[f, :, r] = w["amplitude"]
+                E[f, :, r] = w["granular_loss_per_cycle"]
+                not_stationary += 0 if w["stationary"] else L
         J = np.asarray(self.objective.combine(Z, E, self.freqs), float)  # (L, R)
         cost = len(self.freqs) * len(lzs) * self.R * self.duration
         self.sim_seconds += cost
-        out = {"lz": np.asarray(lzs), "J": J, "Z": Z, "E": E, "not_stationary": max(nz, ne),
+        out = {"lz": np.asarray(lzs), "J": J, "Z": Z, "E": E, "not_stationary": not_stationary,
                "sim_seconds": cost, "wall": time.perf_counter() - t0}
         self.evaluations.append(out)
         return out
@@ -137,7 +149,7 @@ class SteadyProblem:
         """Response-surface optimum (:func:`jaxdamp.design.surface.quadratic_optimum`) of
         every evaluated point within ``width`` (default ``6 h``, at least the 3 nearest points)
         of ``centre``, pooling all evaluations so far; ``None`` with fewer than 3 points."""
-        from .surface import quadratic_optimum
+        from jaxdamp.design.surface import quadratic_optimum
 
         if not self.evaluations:
             return None

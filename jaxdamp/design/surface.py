@@ -68,7 +68,7 @@ def _fit(x, y, w, maximise):
 def quadratic_optimum(x, J, maximise: bool) -> Optimum:
     """Optimum of the replicated objective ``J`` ``(L, R)`` at points ``x`` ``(L,)`` (module
     doc). ``J`` of shape ``(L,)`` is one realisation (no interval)."""
-    from ..stats import t_quantile
+    from jaxdamp.analysis.stats import t_quantile
 
     x = np.asarray(x, float)
     J = np.asarray(J, float)

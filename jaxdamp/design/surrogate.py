@@ -14,14 +14,14 @@ import dataclasses
 
 import numpy as np
 
-from ..config import Config, Impactor
-from .objectives import Objective
+from jaxdamp.config import Config, Impactor
+from jaxdamp.design.objectives import Objective
 
 
 def s3_config(config: Config, h_bed: float, restitution: float = 0.0) -> Config:
     """The S3 model of the S1 damper ``config`` with a settled bed ``h_bed`` [m] high:
     one particle of the granulate's mass, ``e = restitution``, gap ``Lz − h_bed``."""
-    from ..model import grain_mass
+    from jaxdamp.physics.model import grain_mass
 
     return dataclasses.replace(
         config, system="impact", grains=(), name=f"{config.name} (S3 surrogate)",
@@ -34,9 +34,9 @@ def propose(config: Config, objective: Objective, h_bed: float, lo: float, hi: f
     """The surrogate's optimum ``Lz`` over ``[lo, hi]`` [m] by a dense scan of ``n`` gaps.
 
     Returns ``{"lz": the proposal, "lz_grid", "values", "sim_seconds", "at_bound"}``."""
-    from ..config import apply_overrides
-    from .s3 import S3Problem
-    from .surface import quadratic_optimum
+    from jaxdamp.config import apply_overrides
+    from jaxdamp.design.s3 import S3Problem
+    from jaxdamp.design.surface import quadratic_optimum
 
     cfg = apply_overrides(s3_config(config, h_bed), {"numerics.analysis_window": 0.5})
     prob = S3Problem(cfg, objective, duration=duration, h_bed=h_bed)

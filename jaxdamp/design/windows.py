@@ -29,8 +29,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..config import Config, ConfigError
-from .objectives import Estimate, Objective
+from jaxdamp.config import Config, ConfigError
+from jaxdamp.design.objectives import Estimate, Objective
 
 
 @dataclass
@@ -82,9 +82,9 @@ class DEMProblem:
                  n_windows: int = 8, burn_in: float = 1.0, warm_burn_in: float = 0.5,
                  record_every: int = 25, mode: str = "forward", engine: str = "auto",
                  margin: float = 0.005, progress: bool = False):
-        from ..model import build
-        from ..packing import settle
-        from ..validation import validate
+        from jaxdamp.engine.packing import settle
+        from jaxdamp.physics.model import build
+        from jaxdamp.validation import validate
 
         if config.system != "primary":
             raise ConfigError("DEMProblem needs an S1 configuration (system = 'primary')")
@@ -130,7 +130,7 @@ class DEMProblem:
 
     def _advance(self, states, params, seconds: float, pieces: int = 1):
         """Forward ``seconds`` (whole steps) with the forward engine; returns the new states."""
-        from .. import driver
+        from jaxdamp.engine import driver
 
         batch = driver.attach(self.model, params, states, engine=self.engine,
                               multiplier=self.config.numerics.capacity_multiplier)
@@ -145,8 +145,8 @@ class DEMProblem:
         ``(1 + 1/K)`` periods per frequency. Warm-started from ``warm.last`` when every grain
         fits under the new lid (advanced at the old ``Lz`` by up to two periods until it does),
         else from the settled bed."""
-        from .. import driver
-        from ..runner import initial_box_position
+        from jaxdamp.engine import driver
+        from jaxdamp.studies.runner import initial_box_position
 
         t0 = time.perf_counter()
         F, K = len(self.freqs), self.n_windows
@@ -195,7 +195,7 @@ class DEMProblem:
         seconds = np.asarray(seconds, float)
         if np.allclose(seconds, seconds[0]):
             return self._advance(states, params, float(seconds[0]))
-        from ..driver import stack, take
+        from jaxdamp.engine.driver import stack, take
 
         out = [self._advance(jax.tree_util.tree_map(lambda x: x[i:i + 1], states),
                              jax.tree_util.tree_map(lambda x: x[i:i + 1], params), s)
@@ -206,7 +206,7 @@ class DEMProblem:
 
     def _window_values(self, fn, states, nbrs, params, lz_vec):
         """Per-window raw quantity: dissipation per cycle, or mean (z - z_s)² (amplitude)."""
-        from ..energy import granular_loss
+        from jaxdamp.physics.energy import granular_loss
 
         p = dataclasses.replace(params, Lz=lz_vec)
         out, out_nbrs, recs = fn(states, nbrs, p)
@@ -219,7 +219,7 @@ class DEMProblem:
     def _derivative_fn(self, mode):
         key = (mode, self.n_rec, self.record_every)
         if key not in self._fns:
-            from ..simulate import chunk_fn
+            from jaxdamp.engine.simulate import chunk_fn
 
             fn = chunk_fn(self.model, self.n_rec, self.record_every, remat=(mode == "reverse"),
                           engine="jax")
@@ -243,8 +243,8 @@ class DEMProblem:
     def window_values(self, ens: Ensemble, lz: float | None = None, engine: str = "jax"):
         """Per-window raw values at ``lz`` (default ``ens.lz``) from the ensemble's start states
         — forward only (``engine="auto"``: native), for finite differences."""
-        from .. import driver
-        from ..simulate import chunk_fn
+        from jaxdamp.engine import driver
+        from jaxdamp.engine.simulate import chunk_fn
 
         lz = ens.lz if lz is None else lz
         key = ("values", engine, self.n_rec, self.record_every)
@@ -263,7 +263,7 @@ class DEMProblem:
     def window_derivatives(self, ens: Ensemble, mode: str | None = None):
         """Per-window raw values and their derivatives w.r.t. ``Lz`` at ``ens.lz`` (``(F·K,)``
         each) through the JAX engine; neighbour lists re-allocated and redone on overflow."""
-        from .. import driver
+        from jaxdamp.engine import driver
 
         fn = self._derivative_fn(mode or self.mode)
         B = ens.states.t.shape[0]
@@ -280,7 +280,7 @@ class DEMProblem:
 
     def _windows(self, ens: Ensemble):
         """The ensemble's start states as a driver batch (neighbour lists for the windows)."""
-        from .. import driver
+        from jaxdamp.engine import driver
 
         return driver.attach(self.model, ens.params, ens.states, engine="jax",
                              multiplier=self.config.numerics.capacity_multiplier, at_least=12)

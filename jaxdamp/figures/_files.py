@@ -1,5 +1,5 @@
 """Helpers shared by the ``*_from_file`` figures: open a file or a path, a run's title, a
-time window of its series. (Reading and checking output files is :mod:`jaxdamp.export`'s.)"""
+time window of its series. (Reading and checking output files is :mod:`jaxdamp.io.export`'s.)"""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import os
 
 import numpy as np
 
-from ..export import OutputFileError, open_output
+from jaxdamp.io.export import OutputFileError, open_output
 
 
 def open_file(h5_or_path):

@@ -18,9 +18,9 @@ import shutil
 
 import numpy as np
 
-from ..export import OutputFileError, load_snapshots
-from . import FIGSIZE, SPECIES_COLOURS, figure
-from ._files import open_file, run_title
+from jaxdamp.figures._files import open_file, run_title
+from jaxdamp.figures.style import FIGSIZE, SPECIES_COLOURS, figure
+from jaxdamp.io.export import OutputFileError, load_snapshots
 
 MM = 1e3  # m → mm: every bed drawing is in mm
 COLOURINGS = ("species", "height")

@@ -1,4 +1,4 @@
-"""Figures of :mod:`jaxdamp.dynamics`: stroboscopic Poincaré sections
+"""Figures of :mod:`jaxdamp.analysis.dynamics`: stroboscopic Poincaré sections
 (:func:`poincare_figure`; :func:`poincare_from_file` for a run file's centre of mass), power
 spectra with the drive's lines (:func:`spectrum_figure`) and Kantz's divergence curve with its
 Lyapunov fit (:func:`kantz_figure`)."""
@@ -9,17 +9,17 @@ import json
 
 import numpy as np
 
-from ..export import require
-from . import FIGSIZE, figure
-from ._files import open_file, run_title, time_window
+from jaxdamp.figures._files import open_file, run_title, time_window
+from jaxdamp.figures.style import FIGSIZE, figure
+from jaxdamp.io.export import require
 
 POINCARE_PATHS = ("series/t", "series/z_cm", "series/vz_cm")
 
 
 def poincare_figure(section, kind="velocity", *, velocity=None, trajectory=None, x_scale=1.0,
                     unit="x", xlabel=None, ylabel=None, title=""):
-    """Scatter of a stroboscopic Poincaré section (:class:`jaxdamp.dynamics.PoincareSection`,
-    from :func:`jaxdamp.dynamics.poincare_section`), the points coloured by their time.
+    """Scatter of a stroboscopic Poincaré section (:class:`jaxdamp.analysis.dynamics.PoincareSection`,
+    from :func:`jaxdamp.analysis.dynamics.poincare_section`), the points coloured by their time.
 
     ``kind="velocity"``: ``(x_k, v_k)`` with ``v_k`` = ``velocity`` (values at ``section.t``,
     e.g. a recorded velocity sampled by a second section) or else the section's spline
@@ -70,9 +70,9 @@ def poincare_figure(section, kind="velocity", *, velocity=None, trajectory=None,
 def poincare_from_file(h5_or_path, t0=None, t1=None, phase=0.0):
     """:func:`poincare_figure` of a run file's centre of mass: ``(z_cm, vz_cm)`` sampled once
     per drive period (at phase ``phase`` [rad] of ``cos 2πft``) by
-    :func:`jaxdamp.dynamics.poincare_section` in the window ``[t0, t1]`` [s], over the thin
+    :func:`jaxdamp.analysis.dynamics.poincare_section` in the window ``[t0, t1]`` [s], over the thin
     trajectory in the same plane."""
-    from ..dynamics import poincare_section
+    from jaxdamp.analysis.dynamics import poincare_section
 
     h5, close = open_file(h5_or_path)
     try:
@@ -97,7 +97,7 @@ def poincare_from_file(h5_or_path, t0=None, t1=None, phase=0.0):
 
 
 def spectrum_figure(spectrum, fmax=None, unit="x", title=""):
-    """PSD (log scale) of :func:`jaxdamp.dynamics.power_spectrum` with the drive's harmonics
+    """PSD (log scale) of :func:`jaxdamp.analysis.dynamics.power_spectrum` with the drive's harmonics
     (dashed) and subharmonics (dotted) marked and labelled; ``unit`` is the series' unit."""
     fig = figure(FIGSIZE["spectrum"])
     ax = fig.subplots()
@@ -120,7 +120,7 @@ def spectrum_figure(spectrum, fmax=None, unit="x", title=""):
 
 
 def kantz_figure(result, title=""):
-    """Kantz's ``S(Δn)`` (:func:`jaxdamp.dynamics.lyapunov_kantz`) against ``Δn·dt`` with the
+    """Kantz's ``S(Δn)`` (:func:`jaxdamp.analysis.dynamics.lyapunov_kantz`) against ``Δn·dt`` with the
     fitted line over its fit range; the slope is the largest Lyapunov exponent."""
     fig = figure(FIGSIZE["kantz"])
     ax = fig.subplots()

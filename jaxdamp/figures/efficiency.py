@@ -1,12 +1,12 @@
 """Dissipation-efficiency figures of a driven box (the 2023 paper): ``⟨E_d⟩ / m`` versus drive
 amplitude (:func:`efficiency_figure`) and phase-resolved panels over one drive period
-(:func:`phase_figure`). Data: :class:`jaxdamp.efficiency.EfficiencyResult`."""
+(:func:`phase_figure`). Data: :class:`jaxdamp.studies.efficiency.EfficiencyResult`."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from . import FIGSIZE, figure
+from jaxdamp.figures.style import FIGSIZE, figure
 
 
 def efficiency_figure(curves, title=""):
@@ -33,7 +33,7 @@ def phase_figure(cases, title=""):
 
     Args:
       cases: ``[(label, phase dict, species names), ...]`` with the arrays of one point of
-        :attr:`jaxdamp.efficiency.EfficiencyResult.phase` (``phase``, ``contacts``,
+        :attr:`jaxdamp.studies.efficiency.EfficiencyResult.phase` (``phase``, ``contacts``,
         ``force_floor_lid``, ``z_cm_species``, ``vz_cm_species``, ``z_box``).
     Panels: grains touching floor or lid; vertical force of the grains on floor + lid; the
     centre of mass' phase plot ``v_z(z)`` per species, ``z`` measured from the box's mid-plane

@@ -17,10 +17,10 @@ import os
 
 import numpy as np
 
-from ..analysis import frf_amplitude
-from ..export import OutputFileError, require
-from . import FIGSIZE, figure
-from ._files import open_file, run_title, time_window
+from jaxdamp.analysis.response import frf_amplitude
+from jaxdamp.figures._files import open_file, run_title, time_window
+from jaxdamp.figures.style import FIGSIZE, figure
+from jaxdamp.io.export import OutputFileError, require
 
 #: default time window of the band plot, in drive periods before the end of the run
 BAND_PERIODS = 4
@@ -74,8 +74,8 @@ def frf_figure(f, Z, lz_values, primary, grain_mass, fits=None, title="", model=
 def frf_from_file(h5_or_path):
     """:func:`frf_figure` of a sweep file: amplitude ratio Z/U versus frequency, one curve per
     ``box.Lz``, with the fitted FRFs when ``/fit`` is present."""
-    from ..config import from_json
-    from ..model import grain_mass
+    from jaxdamp.config import from_json
+    from jaxdamp.physics.model import grain_mass
 
     h5, close = open_file(h5_or_path)
     try:

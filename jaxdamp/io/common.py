@@ -1,5 +1,6 @@
 """What every jaxdamp file shares: attributes with provenance, datasets with units, appendable
-datasets, the checkpoint form of a state, and the steady-state estimates group."""
+datasets, and the steady-state estimates group. (The checkpoint form of a state is the
+driver's: :func:`jaxdamp.engine.driver.checkpoint`.)"""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import time
 
 import numpy as np
 
-from .. import __version__
+from jaxdamp import __version__
 
 
 def stamp(h5, fmt: str, **attrs) -> None:
@@ -51,36 +52,12 @@ def append(group, name, values, units=None, **attrs):
 
 
 
-def state_to_arrays(state, nbrs) -> dict:
-    """Checkpoint form of a (batch of) ``State`` and ``Neighbors``: ``{"state/<field>": array,
-    "nbrs/<field>": array}``, exact copies."""
-    import dataclasses
-
-    from .. import neighbors as nb
-
-    out = {f"state/{f.name}": np.asarray(getattr(state, f.name)) for f in dataclasses.fields(state)}
-    out.update({f"nbrs/{k}": v for k, v in nb.to_numpy(nbrs).items()})
-    return out
-
-
-def arrays_to_state(arrays: dict):
-    """Inverse of :func:`state_to_arrays`: ``(State, Neighbors)`` as JAX arrays."""
-    import jax.numpy as jnp
-
-    from .. import neighbors as nb
-    from ..model import State
-
-    st = {k.split("/", 1)[1]: jnp.asarray(v) for k, v in arrays.items() if k.startswith("state/")}
-    nbr = {k.split("/", 1)[1]: v for k, v in arrays.items() if k.startswith("nbrs/")}
-    return State(**st), nb.from_numpy(nbr)
-
-
 def write_steady(h5, steady: dict, replicates: int, units) -> None:
     """``/steady/<quantity>/{mean, se, ci95, n, values, batch_se, start, stationary}``: the
-    steady-state estimates of :func:`jaxdamp.stats.to_arrays` (grid-shaped ``mean`` … ``n``,
+    steady-state estimates of :func:`jaxdamp.analysis.stats.to_arrays` (grid-shaped ``mean`` … ``n``,
     grid + ``(R,)`` for the rest), with units, the number of replicates and the method in
     attributes. ``units(quantity)`` gives the unit of a quantity. Used by run and sweep files."""
-    from ..stats import DETECT_ON
+    from jaxdamp.analysis.stats import DETECT_ON
 
     if "steady" in h5:
         del h5["steady"]

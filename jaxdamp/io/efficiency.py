@@ -5,12 +5,12 @@ from __future__ import annotations
 import h5py
 import numpy as np
 
-from .common import write_steady
+from jaxdamp.io.common import write_steady
 
 
 def write(path: str, result, transient: int, samples_per_period: int, summary_units: dict,
           phase_units: dict) -> None:
-    """Store ``result`` (:class:`jaxdamp.efficiency.EfficiencyResult`) in the ``/efficiency``
+    """Store ``result`` (:class:`jaxdamp.studies.efficiency.EfficiencyResult`) in the ``/efficiency``
     group of the sweep file ``path``; units of its summary and phase arrays as given."""
     with h5py.File(path, "a") as h5:
         if "efficiency" in h5:
@@ -41,9 +41,9 @@ def write(path: str, result, transient: int, samples_per_period: int, summary_un
 
 
 def read(path: str) -> dict:
-    """The fields of the :class:`jaxdamp.efficiency.EfficiencyResult` stored by :func:`write`
+    """The fields of the :class:`jaxdamp.studies.efficiency.EfficiencyResult` stored by :func:`write`
     (the configuration as JSON under ``config_json``)."""
-    from ..config import ConfigError
+    from jaxdamp.config import ConfigError
 
     with h5py.File(path, "r") as h5:
         if "efficiency" not in h5:

@@ -12,7 +12,7 @@ import time
 
 import h5py
 
-from .common import stamp
+from jaxdamp.io.common import stamp
 
 #: Iterate fields of the gradient optimiser's log and their units.
 LOG_FIELDS = {

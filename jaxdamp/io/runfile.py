@@ -7,7 +7,7 @@ Schema of a run file (every dataset has a ``units`` attribute; see ``docs/output
     /grains/radius (N,)     m        /grains/mass (N,) kg      /grains/species (N,)
     /settle                 attrs: bed_height [m], time [s], max_speed [m/s];
                             r0 (N,3) settled positions (box frame) [m]
-    /series/<name> (T,)     sampled time series (see jaxdamp.energy.RECORD_UNITS);
+    /series/<name> (T,)     sampled time series (see jaxdamp.physics.energy.RECORD_UNITS);
     /series/work (T, 7)     cumulative work channels, attr 'channels'
     /snapshots/t (S,)       s;  /snapshots/r (S,N,3) m;  /snapshots/q (S,N,4) unit quaternions
     /summary                attrs: steady-state scalars (units in attr 'units' JSON)
@@ -23,11 +23,11 @@ import json
 import h5py
 import numpy as np
 
-from ..config import Config
-from ..energy import RECORD_UNITS
-from ..model import CHANNELS
-from .common import append as _append
-from .common import stamp
+from jaxdamp.config import Config
+from jaxdamp.io.common import append as _append
+from jaxdamp.io.common import stamp
+from jaxdamp.physics.energy import RECORD_UNITS
+from jaxdamp.physics.model import CHANNELS
 
 FORMAT = "jaxdamp-run/1"
 
@@ -133,7 +133,7 @@ class RunFile:
 
 def read_config(path: str) -> Config:
     """The configuration stored in a run file."""
-    from ..config import from_json
+    from jaxdamp.config import from_json
 
     with h5py.File(path, "r") as h:
         return from_json(h.attrs["config"])

@@ -25,7 +25,7 @@ import os
 import h5py
 import numpy as np
 
-from .common import put, stamp, write_steady
+from jaxdamp.io.common import put, stamp, write_steady
 
 FORMAT = "jaxdamp-sweep/1"
 SNAPSHOT_UNITS = {"r": "m", "v": "m/s", "z_box": "m"}
@@ -77,7 +77,7 @@ class SweepFile:
     def resume(cls, path: str, config, axes: dict, replicates: int, records_per_chunk: int):
         """Open ``path`` to continue the sweep: ``(file, checkpoint arrays, chunk, compute time
         so far)``; samples after the checkpoint are dropped. Refuses a different sweep."""
-        from ..config import ConfigError
+        from jaxdamp.config import ConfigError
 
         h5 = h5py.File(path, "a")
         if (h5.attrs["base_config"] != config.to_json()
@@ -98,7 +98,7 @@ class SweepFile:
     # -- while running --------------------------------------------------------------------
     def append_records(self, recs: dict) -> None:
         """Append samples ``(P, T, ...)`` along the time axis."""
-        from ..energy import RECORD_UNITS
+        from jaxdamp.physics.energy import RECORD_UNITS
 
         g = self.h5["records"]
         for k, v in recs.items():
@@ -189,7 +189,7 @@ class SweepFile:
 def write_fit(h5, fits: dict, used: str) -> None:
     """``/fit`` of an FRF sweep file: ``M_ef``, ``C_ef`` (the ``used`` weighting), their
     standard errors across replicates ``se_M_ef``, ``se_C_ef``, the fit of the mean FRF, and
-    ``<weighting>/...`` for every weighting (:data:`jaxdamp.analysis.RESIDUALS`), one entry
+    ``<weighting>/...`` for every weighting (:data:`jaxdamp.analysis.response.RESIDUALS`), one entry
     per ``Lz``."""
     if "fit" in h5:
         del h5["fit"]

@@ -20,7 +20,7 @@ force of the grains on floor + lid, and the centre of mass ``z``, ``v_z`` per sp
 
 :func:`protocol` sets a run's timing so that periods, samples and chunks line up exactly
 (``dt`` divides ``T / samples_per_period``); :func:`measure` runs an amplitude sweep through
-:func:`jaxdamp.sweep.sweep` and writes the analysis into the sweep file's ``/efficiency``.
+:func:`jaxdamp.studies.sweep.sweep` and writes the analysis into the sweep file's ``/efficiency``.
 """
 
 from __future__ import annotations
@@ -30,8 +30,8 @@ import math
 
 import numpy as np
 
-from .config import Config, ConfigError
-from .model import CH, config_dt, grain_radii
+from jaxdamp.config import Config, ConfigError
+from jaxdamp.physics.model import CH, config_dt, grain_radii
 
 #: Units of the per-point scalars of :func:`analyse`.
 SUMMARY_UNITS = {
@@ -99,7 +99,7 @@ def _sample_index(t, frequency, spp):
 
 def analyse(config: Config, records: dict, periods: int, samples_per_period: int = 100) -> dict:
     """Efficiency of one run from its records (arrays over samples, see
-    :data:`jaxdamp.energy.RECORD_UNITS`); the last ``periods`` whole periods are analysed.
+    :data:`jaxdamp.physics.energy.RECORD_UNITS`); the last ``periods`` whole periods are analysed.
 
     Returns ``{"summary": {name: float}, "per_period": {name: (n,)}, "phase": {name: (spp,[S])}}``
     where ``per_period`` covers every simulated period (``E_pp``, ``E_pw``, ``E_input``,
@@ -122,7 +122,7 @@ def analyse(config: Config, records: dict, periods: int, samples_per_period: int
     n_total = len(E_pp)
     if periods > n_total:
         raise ConfigError(f"periods = {periods}: the run covers only {n_total} whole periods")
-    from .mixtures import granulate_mass
+    from jaxdamp.cases.mixtures import granulate_mass
 
     mass = granulate_mass(config)
     emax = e_max(mass, config.drive.amplitude, f)
@@ -198,7 +198,7 @@ class EfficiencyResult:
     ``phase`` are means over the replicates, ``replicate_summary`` ``{name: (P, R)}`` holds
     each replicate's values, and ``steady`` the estimates of ``E_d`` and ``E_d_per_mass`` over
     replicates from each replicate's detected steady state (MSER on its per-period ``E_d``;
-    :func:`jaxdamp.stats.to_arrays` layout: ``mean``, ``se``, ``ci95``, ``n`` ``(P,)``,
+    :func:`jaxdamp.analysis.stats.to_arrays` layout: ``mean``, ``se``, ``ci95``, ``n`` ``(P,)``,
     ``values``, ``batch_se``, ``start``, ``stationary`` ``(P, R)``)."""
 
     amplitudes: np.ndarray
@@ -220,12 +220,12 @@ def measure(config: Config, amplitudes, periods: int = 50, transient: int = 10,
     """Run ``config`` at every drive amplitude [m] as one batch and analyse its efficiency.
 
     With ``out`` the sweep file is reused or resumed when it already holds this sweep
-    (:func:`jaxdamp.sweep.reuse_or_run`) and the analysis is written to its ``/efficiency``
+    (:func:`jaxdamp.studies.sweep.reuse_or_run`) and the analysis is written to its ``/efficiency``
     group (units in attributes, the ``E_max`` formula in ``/efficiency`` attrs).
     ``replicates``: independent beds per amplitude, in the same batch (:class:`EfficiencyResult`).
     """
-    from . import stats
-    from . import sweep as sw
+    from jaxdamp.analysis import stats
+    from jaxdamp.studies import sweep as sw
 
     amplitudes = np.asarray([float(a) for a in amplitudes])
     cfg = protocol(config, periods, transient, samples_per_period, amplitudes)
@@ -255,7 +255,7 @@ def measure(config: Config, amplitudes, periods: int = 50, transient: int = 10,
                               replicates=R, replicate_summary=stack("summary", reduce=False),
                               steady=stats.to_arrays(steady, (len(amplitudes),)))
     if out:
-        from .io import efficiency as efficiency_file
+        from jaxdamp.io import efficiency as efficiency_file
 
         efficiency_file.write(out, result, transient, samples_per_period, SUMMARY_UNITS,
                               PHASE_UNITS)
@@ -264,8 +264,8 @@ def measure(config: Config, amplitudes, periods: int = 50, transient: int = 10,
 
 def read(path: str) -> EfficiencyResult:
     """Load an :class:`EfficiencyResult` written by :func:`measure` (``/efficiency``)."""
-    from .config import from_json
-    from .io import efficiency as efficiency_file
+    from jaxdamp.config import from_json
+    from jaxdamp.io import efficiency as efficiency_file
 
     d = efficiency_file.read(path)
     return EfficiencyResult(config=from_json(d.pop("config_json")), **d)

@@ -9,8 +9,18 @@ from __future__ import annotations
 import dataclasses
 import math
 
-from .config import (Box, Config, ConfigError, Drive, Impactor, Material, Numerics, Primary,
-                     Species)
+from jaxdamp.cases import mixtures
+from jaxdamp.config import (
+    Box,
+    Config,
+    ConfigError,
+    Drive,
+    Impactor,
+    Material,
+    Numerics,
+    Primary,
+    Species,
+)
 
 #: Steel of the thesis (table 3.1 / §3.2): E = 2.03e11 Pa, ν = 0.28, ρ = 8030, μ = 0.3.
 SANCHEZ_STEEL = Material(
@@ -113,10 +123,8 @@ def varela2023_reference() -> Config:
 
 
 def varela2023_class(klass: str, sigma: float = 0.5) -> Config:
-    """A class a/b/c mixture of the 2023 paper (:mod:`jaxdamp.mixtures`), σ = 0.5 by default."""
-    from .mixtures import binary
-
-    return binary(varela2023_reference(), klass, sigma)
+    """A class a/b/c mixture of the 2023 paper (:mod:`jaxdamp.cases.mixtures`), σ = 0.5 by default."""
+    return mixtures.binary(varela2023_reference(), klass, sigma)
 
 
 PRESETS = {
@@ -148,3 +156,16 @@ def describe() -> list[tuple[str, str]]:
         notes = make().notes
         out.append((name, notes.split(". ")[0]))
     return out
+
+
+def family(name: str, sigma: float | None = None, reference: Config | None = None) -> Config:
+    """The configuration of a paper family: ``varela2023-reference`` (σ ignored) or
+    ``varela2023-a|b|c`` at ``sigma`` (default 0.5)."""
+    if name not in mixtures.FAMILIES:
+        raise ConfigError(f"preset {name!r} is not a binary-mixture family; known: "
+                          f"{', '.join(mixtures.FAMILIES)}")
+    reference = reference or get("varela2023-reference")
+    klass = mixtures.FAMILIES[name]
+    if klass is None:
+        return reference
+    return mixtures.binary(reference, klass, 0.5 if sigma is None else sigma)

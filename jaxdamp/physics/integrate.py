@@ -10,10 +10,10 @@ One step from ``t`` to ``t + dt``::
 
 The box either follows the primary system of S1, ``M z'' = -C(z'-u') - K(z-u) + F_gz`` with
 ``u = U cos Ωt`` (``z = 0`` is the empty box's static equilibrium), or the prescribed motion of
-S2, ``z = z_offset + A_d cos Ωt``. Work channels (:data:`jaxdamp.model.CHANNELS`) are
+S2, ``z = z_offset + A_d cos Ωt``. Work channels (:data:`jaxdamp.physics.model.CHANNELS`) are
 integrated with the trapezoid rule over the powers at consecutive force evaluations.
 
-The pieces the native kernel (:mod:`jaxdamp.native`) shares are defined here once: the body
+The pieces the native kernel (:mod:`jaxdamp.engine.native`) shares are defined here once: the body
 force (gravity and settling drag), the primary's acceleration and powers (pure arithmetic: one
 function serves JAX arrays and, compiled, the kernel's scalars) and the quaternion rotation
 (JAX form :func:`rotate`, scalar form :func:`rotate_scalar` side by side).
@@ -27,12 +27,12 @@ from typing import NamedTuple
 
 import jax.numpy as jnp
 
-from .contact import safe_norm, scalar_form
-from .energy import mechanical_energy
-from .excitation import base_motion, drive_motion
-from .model import N_CHANNELS, Model, Params, State
-from .pairs import pair_forces
-from .walls import wall_forces
+from jaxdamp.physics.contact import safe_norm, scalar_form
+from jaxdamp.physics.energy import mechanical_energy
+from jaxdamp.physics.excitation import base_motion, drive_motion
+from jaxdamp.physics.model import N_CHANNELS, Model, Params, State
+from jaxdamp.physics.pairs import pair_forces
+from jaxdamp.physics.walls import wall_forces
 
 
 class Forces(NamedTuple):
@@ -91,7 +91,7 @@ primary_powers_scalar = scalar_form(primary_powers)
 
 
 def _powers(fo: Forces, z, zd, t, v_pred, p: Params, model: Model):
-    """Channel powers [W] at one force evaluation (see :data:`jaxdamp.model.CHANNELS`)."""
+    """Channel powers [W] at one force evaluation (see :data:`jaxdamp.physics.model.CHANNELS`)."""
     if model.system == "primary":
         u, ud = base_motion(t, p)
         p_in, p_c = primary_powers(z, zd, u, ud, p.K, p.C)

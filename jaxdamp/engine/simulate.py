@@ -2,12 +2,12 @@
 
 Everything here works on a *batch* of ``B`` independent systems (``B = 1`` for a single run):
 states, params and neighbour lists carry a leading batch axis. The physics step is
-``vmap``-ed; the neighbour-list rebuild is decided once per batch (:mod:`jaxdamp.neighbors`).
+``vmap``-ed; the neighbour-list rebuild is decided once per batch (:mod:`jaxdamp.engine.neighbors`).
 
 A chunk runs ``n_records × record_every`` steps and returns the states, neighbour lists and
-``n_records`` samples per system (:func:`jaxdamp.energy.record`). The host-side helper
-:func:`advance` re-allocates the neighbour lists and redoes the chunk when they overflowed,
-so no contact is ever dropped.
+``n_records`` samples per system (:func:`jaxdamp.physics.energy.record`). Allocating the
+neighbour lists, redoing a chunk whose lists overflowed and every other host-side step of the
+time loop is the driver's (:mod:`jaxdamp.engine.driver`).
 """
 
 from __future__ import annotations
@@ -18,22 +18,21 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import neighbors as nb
-from .energy import record
-from .integrate import box_frame, initial_state, step
-from .model import Model, Params, State
-
+from jaxdamp.engine import neighbors as nb
+from jaxdamp.physics.energy import record
+from jaxdamp.physics.integrate import box_frame, initial_state, step
+from jaxdamp.physics.model import Model, Params, State
 
 ENGINES = ("auto", "jax", "native")
 
 
 def resolve_engine(engine: str) -> str:
-    """``"auto"`` is the compiled CPU engine (:mod:`jaxdamp.native`) when JAX runs on the CPU
+    """``"auto"`` is the compiled CPU engine (:mod:`jaxdamp.engine.native`) when JAX runs on the CPU
     and numba is installed, else the pure-JAX engine."""
     if engine not in ENGINES:
         raise ValueError(f"engine = {engine!r}: expected one of {ENGINES}")
     if engine == "auto":
-        from . import native
+        from jaxdamp.engine import native
 
         return "native" if native.AVAILABLE and jax.default_backend() == "cpu" else "jax"
     return engine
@@ -101,7 +100,7 @@ def _native_block(model: Model, record_every: int):
 
     State and params cross into Python as two packed float64 arrays: :func:`jax.pure_callback`
     costs ~35 µs per array per call (measured), so 2 arrays instead of ~50 matter."""
-    from . import native
+    from jaxdamp.engine import native
 
     def host(state_packed, params_packed):
         # the callback may hand over jax Arrays: slicing those would dispatch JAX ops (ms)
@@ -135,37 +134,6 @@ def init_states(model: Model, params: Params, r, v, w, q, z, zd, t=0.0) -> State
 
 
 def _all_pairs_idx(model: Model):
-    from .pairs import all_pairs
+    from jaxdamp.physics.pairs import all_pairs
 
     return all_pairs(model.n) if model.n >= 2 else jnp.zeros((model.n, 0), jnp.int32)
-
-
-def advance(model, states, nbrs, params, n_records, record_every, multiplier, on_realloc=None,
-            engine="jax"):
-    """Run one chunk; on neighbour-list overflow re-allocate (larger) and redo it.
-
-    Returns ``(states, nbrs, records)`` with records as numpy arrays. ``on_realloc(old, new)``
-    is called with the capacities whenever the lists are re-allocated.
-    """
-    fn = chunk_fn(model, n_records, record_every, engine=resolve_engine(engine))
-    while True:
-        out_states, out_nbrs, recs = fn(states, nbrs, params)
-        if model.n < 2 or not bool(np.any(np.asarray(out_nbrs.overflow))):
-            return out_states, out_nbrs, jax.tree_util.tree_map(np.asarray, recs)
-        old = nb.capacity(nbrs)
-        nbrs = nb.allocate(
-            model, box_frame(states), multiplier, at_least=int(np.ceil(old * 1.5)) + 1,
-            radius=params.radius,
-        )
-        if on_realloc is not None:
-            on_realloc(old, nb.capacity(nbrs))
-
-
-def stack(tree_list):
-    """Stack single-system pytrees into a batch (leading axis)."""
-    return jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *tree_list)
-
-
-def take(tree, i):
-    """System ``i`` of a batched pytree."""
-    return jax.tree_util.tree_map(lambda x: x[i], tree)

@@ -1,13 +1,13 @@
-"""A compiled CPU engine (numba) for forward runs: the step of :mod:`jaxdamp.integrate`, fast.
+"""A compiled CPU engine (numba) for forward runs: the step of :mod:`jaxdamp.physics.integrate`, fast.
 
 XLA's CPU backend runs the pure-JAX step at ~150–200 µs per system-step for a 250-grain bed
 (``benchmarks/RESULTS.md``): it splits the contact law into many loop passes. This module
 implements *the same* step — same velocity-Verlet scheme with predicted velocities, same wall
 geometry, same energy channels — as plain loops compiled by numba. The physics is not retyped
-here: the contact laws and their constants (:mod:`jaxdamp.contact`: ``contact_scalar``,
+here: the contact laws and their constants (:mod:`jaxdamp.physics.contact`: ``contact_scalar``,
 ``pair_scalar``, the tables ``Params.pair_table`` / ``wall_table`` built once by
-:func:`jaxdamp.model.build`), the base and box motion (:mod:`jaxdamp.excitation`) and the body
-force, primary and rotation (:mod:`jaxdamp.integrate`) are the numba scalar forms defined next
+:func:`jaxdamp.physics.model.build`), the base and box motion (:mod:`jaxdamp.physics.excitation`) and the body
+force, primary and rotation (:mod:`jaxdamp.physics.integrate`) are the numba scalar forms defined next
 to their JAX forms, inlined into these loops. Scalars cross into the kernel as named records
 (:data:`SCALAR_RECORD`, :data:`BOX_RECORD`, :data:`DIAG_RECORD`).
 
@@ -36,10 +36,14 @@ from enum import IntEnum
 
 import numpy as np
 
-from .contact import FASTMATH, GAMMA_S, MU, contact_scalar, pair_scalar
-from .excitation import base_motion_scalar, drive_motion_scalar
-from .integrate import (body_force_scalar, primary_acceleration_scalar, primary_powers_scalar,
-                        rotate_scalar)
+from jaxdamp.physics.contact import FASTMATH, GAMMA_S, MU, contact_scalar, pair_scalar
+from jaxdamp.physics.excitation import base_motion_scalar, drive_motion_scalar
+from jaxdamp.physics.integrate import (
+    body_force_scalar,
+    primary_acceleration_scalar,
+    primary_powers_scalar,
+    rotate_scalar,
+)
 
 try:
     from numba import njit, prange
@@ -66,26 +70,35 @@ OUT = ("box_z", "floor_lid_z", "n_floor", "n_lid", "e_elastic", "pp_normal", "pp
 Out = IntEnum("Out", {name: i for i, name in enumerate(OUT)})
 N_OUT = len(OUT)
 
-#: The modules whose numba scalar forms the kernels inline: a change to any of them must
-#: recompile the cached kernels (numba's cache only watches the kernel's own file).
-_SOURCES = ("contact.py", "excitation.py", "integrate.py", "native.py")
+#: The scalar forms the kernels inline (with the forms they call, from the same modules): a
+#: change to their source files must recompile the cached kernels (numba's cache only watches
+#: the kernel's own file).
+_INLINED = (contact_scalar, pair_scalar, base_motion_scalar, drive_motion_scalar,
+            body_force_scalar, primary_acceleration_scalar, primary_powers_scalar, rotate_scalar)
+
+
+def _source_files() -> tuple[str, ...]:
+    """This module's file and the files defining :data:`_INLINED` (wherever they live)."""
+    files = {os.path.abspath(__file__)}
+    for f in _INLINED:
+        files.add(os.path.abspath(getattr(f, "py_func", f).__code__.co_filename))
+    return tuple(sorted(files))
 
 
 def _source_hash() -> str:
-    here = os.path.dirname(os.path.abspath(__file__))
     h = hashlib.sha256()
-    for name in _SOURCES:
-        with open(os.path.join(here, name), "rb") as fh:
+    for name in _source_files():
+        with open(name, "rb") as fh:
             h.update(fh.read())
     return h.hexdigest()
 
 
 def _cache_on_sources(dispatcher):
-    """Key the on-disk cache of ``dispatcher`` also on the sources of :data:`_SOURCES`.
+    """Key the on-disk cache of ``dispatcher`` also on the sources of :data:`_INLINED`.
 
     numba invalidates a cached kernel only when its own file changes; the scalar forms it
     inlines live in other modules, so editing a law would silently keep the old compiled law.
-    The index key gets the hash of all of them. Uses numba's cache class (internal API);
+    The index key gets the hash of all of them (:func:`_source_files`). Uses numba's cache class (internal API);
     falls back to no on-disk cache if that changes."""
     try:
         from numba.core.caching import FunctionCache
@@ -117,10 +130,10 @@ if AVAILABLE:
     @_kernel()
     def _build_pairs(r, z_box, cutoff, pi, pj, pc, ref, R, m, sid, table, law):
         """Half list of the pairs whose surfaces are closer than the skin, ``|r_i - r_j| < R_i +
-        R_j + cutoff - 2 R_max`` (box frame; size-aware, as :mod:`jaxdamp.neighbors`), via a
+        R_j + cutoff - 2 R_max`` (box frame; size-aware, as :mod:`jaxdamp.engine.neighbors`), via a
         cell grid of side ``cutoff``, with the pairs' constants ``pc[k] = (R_i + R_j, k, g,
         γ_s, μ)``: the row ``table[sid_i, sid_j]`` of the pair table and the law's radius- and
-        mass-dependent part (:func:`jaxdamp.contact.pair_scalar`), once per listed pair;
+        mass-dependent part (:func:`jaxdamp.physics.contact.pair_scalar`), once per listed pair;
         stores the reference positions. Returns the number of pairs, or minus the number
         needed when the arrays are too small."""
         n = r.shape[0]
@@ -519,7 +532,7 @@ def pack_numpy(d, lay):
 def advance_numpy(model, state: dict, params: dict, n_steps: int):
     """Advance a batch given as numpy dicts (fields of ``State`` / ``Params``, leading batch
     axis). Returns ``(new_state_dict, mean_forces (B, 2))``; inputs are not modified."""
-    from .contact import LAWS
+    from jaxdamp.physics.contact import LAWS
 
     f64 = lambda x: np.ascontiguousarray(x, dtype=np.float64)  # noqa: E731
     r, v, w, q = (f64(state[k]).copy() for k in ("r", "v", "w", "q"))

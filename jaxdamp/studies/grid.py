@@ -1,7 +1,7 @@
 """What a sweep is: the grid of configurations (× independent replicates) and its result.
 
-Shared by the DEM sweep (:mod:`jaxdamp.sweep`) and the single-particle model's sweep
-(:func:`jaxdamp.impact.sweep`), which therefore do not import each other.
+Shared by the DEM sweep (:mod:`jaxdamp.studies.sweep`) and the single-particle model's sweep
+(:func:`jaxdamp.s3.impact.sweep`), which therefore do not import each other.
 """
 
 from __future__ import annotations
@@ -13,9 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import stats
-from .config import Config, ConfigError, apply_overrides
-from .validation import validate
+from jaxdamp.analysis import stats
+from jaxdamp.config import Config, ConfigError, apply_overrides
+from jaxdamp.validation import validate
 
 
 @dataclass
@@ -30,7 +30,7 @@ class SweepResult:
     have ``P = grid points × R`` rows (:meth:`point`), ``summary`` holds the mean over the
     replicates of each fixed-window value, ``replicate_summary`` the values of every replicate
     (grid shape + ``(R,)``), and ``steady`` the steady-state estimates over replicates from
-    the detected steady state (:func:`jaxdamp.stats.steady`, as :func:`jaxdamp.stats.to_arrays`:
+    the detected steady state (:func:`jaxdamp.analysis.stats.steady`, as :func:`jaxdamp.analysis.stats.to_arrays`:
     ``{quantity: {"mean", "se", "ci95", "n", "values", "batch_se", "start", "stationary"}}``)."""
 
     axes: dict
@@ -72,7 +72,7 @@ def geometry_key(cfg: Config) -> str:
 
 def replicate_configs(grid: list[Config], replicates: int) -> list[Config]:
     """Every grid configuration repeated ``replicates`` times with the seeds of
-    :func:`jaxdamp.stats.replicate_seed` (replicates fastest)."""
+    :func:`jaxdamp.analysis.stats.replicate_seed` (replicates fastest)."""
     if replicates < 1:
         raise ConfigError(f"replicates = {replicates}: need at least 1")
     return [c if k == 0 else dataclasses.replace(

@@ -199,15 +199,15 @@ def per_period(records: dict, frequency: float, channels: tuple[str, ...] = ()) 
     Args:
       records: samples ``t`` [s], ``z_box`` [m], ``work`` ``(T, N_CHANNELS)`` [J] (one system).
       frequency: drive frequency ``f`` [Hz]; periods start at ``t = 0``.
-      channels: work channels (names of :data:`jaxdamp.model.CHANNELS`) to add as
+      channels: work channels (names of :data:`jaxdamp.physics.model.CHANNELS`) to add as
         ``<name>_per_cycle``.
     Returns:
       ``{"t_start": (P,), "amplitude": (P,), "phase": (P,), "granular_loss_per_cycle": (P,),
       ...}`` for the ``P`` periods lying wholly inside the samples.
     """
-    from .analysis import first_harmonic
-    from .energy import granular_loss
-    from .model import CH
+    from jaxdamp.analysis.response import first_harmonic
+    from jaxdamp.physics.energy import granular_loss
+    from jaxdamp.physics.model import CH
 
     t = np.asarray(records["t"], float)
     z = np.asarray(records["z_box"], float)
@@ -293,6 +293,30 @@ def summarise(records_list: list[dict], frequency: float, n_batches: int = 5) ->
     :func:`steady`."""
     series = [per_period(r, frequency, channels=CHANNELS) for r in records_list]
     return to_arrays([steady(series, n_batches=n_batches)], ())
+
+
+def shared_window(series_list: list[dict], keys=DETECT_ON, **mser_kwargs) -> dict:
+    """Steady means of runs that share their random numbers — one settled bed at several lid
+    heights, say — over **one common window**: from the latest of their detected starts
+    (:func:`detect`) to the end. A common window keeps what the runs share (the slow transient
+    of the primary, the bed's start) common to all of them, so that it cancels in their
+    differences (common random numbers); separate windows would add the difference of their
+    transient remnants to every finite difference.
+
+    Returns ``{"start": period index, "stationary": all stationary and ≥ ``min_keep``
+    periods left, key: (n,) means}``; with too few periods left, the final ``min_keep``
+    periods (flagged not stationary)."""
+    dets = [detect(s, **mser_kwargs) for s in series_list]
+    n = min(len(s["t_start"]) for s in series_list)
+    keep = mser_kwargs.get("min_keep", 5)
+    start = max(d.period for d in dets)
+    ok = all(d.stationary for d in dets) and n - start >= keep
+    if n - start < keep:
+        start = max(0, n - keep)
+    out = {"start": start, "stationary": bool(ok)}
+    for k in keys:
+        out[k] = np.array([float(np.mean(np.asarray(s[k], float)[start:n])) for s in series_list])
+    return out
 
 
 def to_arrays(estimates: list[dict], shape: tuple) -> dict:

@@ -3,8 +3,8 @@
 A sweep varies one or two numeric configuration fields over a grid (e.g. ``frequency`` ×
 ``box.Lz``). All points share the grains (so one static ``Model``), the time step (the smallest
 any point needs) and the sampling; everything else is a per-point ``Params`` array, and the
-points run together as one batch through :func:`jaxdamp.simulate.advance`
-(``vmap`` for the JAX engine, ``prange`` over cores for the native one).
+points run together as one batch through the driver (:func:`jaxdamp.engine.driver.advance`:
+``vmap`` for the JAX engine, ``prange`` over cores for the native one).
 
 The bed is settled once per distinct geometry (grains, base, walls, seed — not ``Lz``, not the
 excitation). The batch axis is sharded over every device JAX sees
@@ -25,15 +25,16 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import driver, stats
-from .analysis import analysis_start, steady_state_summary
-from .config import Config, ConfigError
-from .grid import SweepResult, geometry_key, grid_configs, replicate_configs
-from .io.sweepfile import SweepFile, holds
-from .model import build, config_dt, grain_radii
-from .packing import settle_many
-from .runner import initial_box_position, schedule
-from .simulate import resolve_engine
+from jaxdamp.analysis import stats
+from jaxdamp.analysis.response import analysis_start, steady_state_summary
+from jaxdamp.config import Config, ConfigError
+from jaxdamp.engine import driver
+from jaxdamp.engine.packing import settle_many
+from jaxdamp.engine.simulate import resolve_engine
+from jaxdamp.io.sweepfile import SweepFile, holds
+from jaxdamp.physics.model import build, config_dt, grain_radii
+from jaxdamp.studies.grid import SweepResult, geometry_key, grid_configs, replicate_configs
+from jaxdamp.studies.runner import initial_box_position, schedule
 
 
 def _mesh_sharding(batch: int):
@@ -82,15 +83,15 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
         (``/snapshots`` in the file; e.g. chunks of a quarter drive period and 4 snapshots give
         the bed at the drive's turning points and at its largest speeds).
       replicates: independent realisations per grid point: beds settled from the seeds
-        :func:`jaxdamp.stats.replicate_seed` ``(seed, 0..R-1)``, run in the same batch.
+        :func:`jaxdamp.analysis.stats.replicate_seed` ``(seed, 0..R-1)``, run in the same batch.
       beds: a cache of settled beds by geometry, filled and reused across calls (repeated
         sweeps of one damper, e.g. an optimiser's evaluations, settle each bed once).
 
-    S3 configurations (``system = "impact"``) go to :func:`jaxdamp.impact.sweep` (same result
+    S3 configurations (``system = "impact"``) go to :func:`jaxdamp.s3.impact.sweep` (same result
     and file layout; ``resume``, ``shard`` and ``max_chunks`` do not apply: it runs whole).
     """
-    if config.system == "impact":  # S3: the single-particle model of jaxdamp.impact
-        from . import impact
+    if config.system == "impact":  # S3: the single-particle model of jaxdamp.s3.impact
+        from jaxdamp.s3 import impact
 
         if replicates != 1:
             raise ConfigError(f"replicates = {replicates}: the single-particle model (S3) is "

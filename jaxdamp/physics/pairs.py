@@ -7,7 +7,7 @@ negated inputs. Pair sums of energies and losses are therefore halved.
 
 The constants of a pair are a row of ``Params.pair_table`` (species of ``i``, species of
 ``j``), mixed when the model was built; only the law's radius- and mass-dependent part
-(:attr:`jaxdamp.contact.Law.pair_jax`) is formed here.
+(:attr:`jaxdamp.physics.contact.Law.pair_jax`) is formed here.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
-from .contact import GAMMA_S, LAWS, MU, Vec, contact_force
+from jaxdamp.physics.contact import GAMMA_S, LAWS, MU, Vec, contact_force
 
 #: Where padding entries of the neighbour list point: far away, so they never touch.
 _GHOST = 1.0e6
@@ -40,8 +40,8 @@ def pair_forces(r, v, w, idx, p, model) -> PairForces:
     Args:
       r, v, w: positions [m], velocities [m/s], angular velocities [rad/s], ``(N, 3)``.
       idx: neighbour indices ``(N, K)``, entries ``N`` are padding.
-      p: :class:`jaxdamp.model.Params`.
-      model: :class:`jaxdamp.model.Model` (the law and the grains' species).
+      p: :class:`jaxdamp.physics.model.Params`.
+      model: :class:`jaxdamp.physics.model.Model` (the law and the grains' species).
     """
     n = r.shape[0]
     if n < 2 or idx.shape[1] == 0:

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import h5py
 import numpy as np
 
-from .config import ConfigError
+from jaxdamp.config import ConfigError
 
 RUN_FORMAT = "jaxdamp-run/"
 SWEEP_FORMAT = "jaxdamp-sweep/"

@@ -9,9 +9,9 @@ and static under ``jit``.
 Contact constants are computed once, here (JaxDEM's ``MaterialTable``): the law's constants of
 every pair of species, ``Params.pair_table`` ``(S, S, F)``, and of every species against the
 walls, ``Params.wall_table`` ``(S, F)``, with the mixing rule applied only in
-:meth:`jaxdamp.contact.Law.mix`. Grains are stored species after species
+:meth:`jaxdamp.physics.contact.Law.mix`. Grains are stored species after species
 (:meth:`Model.species_index`); per contact both engines only look the row up and form the
-radius- and mass-dependent part (:meth:`jaxdamp.contact.Law.pair_jax`).
+radius- and mass-dependent part (:meth:`jaxdamp.physics.contact.Law.pair_jax`).
 """
 
 from __future__ import annotations
@@ -24,8 +24,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .config import Config
-from .contact import LAWS, Law
+from jaxdamp.config import Config
+from jaxdamp.physics.contact import LAWS, Law
 
 #: Names of the cumulative work channels, in order (all in J).
 #:   input:       work done on the system by the base through spring and damper (S1) or by the
@@ -52,7 +52,7 @@ class Model:
     Attributes:
       n: number of grains.
       system: ``"primary"`` (S1) or ``"driven"`` (S2).
-      law: the contact law's name (:data:`jaxdamp.contact.LAWS`).
+      law: the contact law's name (:data:`jaxdamp.physics.contact.LAWS`).
       cutoff: neighbour-list cutoff ``2 R_max + skin`` [m].
       skin: neighbour-list skin [m]; the list is rebuilt once a grain moved more than skin/2.
       species: grain count of each species, in order (grains are stored species after
@@ -84,7 +84,7 @@ class Params:
 
     Grain arrays have shape ``(N,)``; the contact tables ``pair_table`` ``(S, S, F)`` (species
     ``s`` against species ``t``) and ``wall_table`` ``(S, F)`` (species against the walls) hold
-    the law's mixed constants in the columns :attr:`jaxdamp.contact.Law.columns` (Hertz:
+    the law's mixed constants in the columns :attr:`jaxdamp.physics.contact.Law.columns` (Hertz:
     ``γ_s`` [kg s^-1 m^-1/2], ``μ`` [-], ``E*`` [Pa], ``γ_n`` [kg s^-1 m^-1/2], ``A`` [s]);
     all else is scalar (per system). ``omega`` = 2πf [rad/s]; ``U`` base amplitude (S1) [m]; ``amplitude`` box amplitude (S2) [m];
     ``z_offset`` box position about which it moves (S2) [m]; ``drag`` settling drag rate [1/s];
@@ -176,14 +176,14 @@ def grain_species(config: Config) -> np.ndarray:
 
 
 def contact_law(config: Config) -> Law:
-    """The configuration's contact law (:data:`jaxdamp.contact.LAWS`)."""
+    """The configuration's contact law (:data:`jaxdamp.physics.contact.LAWS`)."""
     return LAWS[config.contact_law]
 
 
 def contact_tables(config: Config) -> tuple[np.ndarray, np.ndarray]:
     """The contact constants of the configuration, computed once (the only place the mixing
     rule is applied): ``pair_table`` ``(S, S, F)`` and ``wall_table`` ``(S, F)`` in the
-    columns of the law (:attr:`jaxdamp.contact.Law.columns`). Each species' calibration uses
+    columns of the law (:attr:`jaxdamp.physics.contact.Law.columns`). Each species' calibration uses
     its own mean radius; the walls' uses the first species' (unless the materials fix a
     ``calibration_radius``)."""
     law = contact_law(config)
@@ -256,7 +256,7 @@ def impact_speed(config: Config) -> float:
 
 
 def collision_time_limit(config: Config, radii: np.ndarray) -> float:
-    """Collision time [s] of the contact law (:attr:`jaxdamp.contact.Law.collision_time`) of the
+    """Collision time [s] of the contact law (:attr:`jaxdamp.physics.contact.Law.collision_time`) of the
     stiffest, lightest contact at :func:`impact_speed`.
 
     Checks the smallest grain of every species against a like grain and against a wall

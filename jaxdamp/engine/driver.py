@@ -1,7 +1,7 @@
 """The simulation driver: the one place that runs the time loop of the DEM.
 
-Everything that advances grains — a single run (:mod:`jaxdamp.runner`), a sweep
-(:mod:`jaxdamp.sweep`), settling (:mod:`jaxdamp.packing`), the optimiser's problems
+Everything that advances grains — a single run (:mod:`jaxdamp.studies.runner`), a sweep
+(:mod:`jaxdamp.studies.sweep`), settling (:mod:`jaxdamp.engine.packing`), the optimiser's problems
 (:mod:`jaxdamp.optimize`), experiments and benchmarks — holds a :class:`Batch` and calls
 :func:`advance`. The driver owns:
 
@@ -17,12 +17,13 @@ Everything that advances grains — a single run (:mod:`jaxdamp.runner`), a swee
   where it is a grain's), and carrying the samples before it so that the caller can keep them.
 
 The jitted chunk itself (``lax.scan`` over steps, records every ``record_every`` steps) is
-:func:`jaxdamp.simulate.chunk_fn`; the physics step is :func:`jaxdamp.integrate.step`.
+:func:`jaxdamp.engine.simulate.chunk_fn`; the physics step is :func:`jaxdamp.physics.integrate.step`.
 
 Example::
 
-    from jaxdamp import driver, presets
-    from jaxdamp.model import build
+    from jaxdamp.engine import driver
+    from jaxdamp.cases import presets
+    from jaxdamp.physics.model import build
     model, params = build(presets.get("sanchez2012-optimal"))
     batch = driver.start(model, driver.batched(params), r[None], v[None], w[None], q[None],
                          z[None], zd[None])
@@ -39,10 +40,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import neighbors as nb
-from .integrate import box_frame
-from .model import Model, Params, State
-from .simulate import chunk_fn, init_states, resolve_engine
+from jaxdamp.engine import neighbors as nb
+from jaxdamp.engine.simulate import chunk_fn, init_states, resolve_engine
+from jaxdamp.physics.integrate import box_frame
+from jaxdamp.physics.model import Model, Params, State
 
 
 class SimulationDiverged(FloatingPointError):
@@ -63,17 +64,17 @@ class SimulationDiverged(FloatingPointError):
 
 @dataclass(frozen=True)
 class Batch:
-    """``B`` independent systems of one :class:`~jaxdamp.model.Model` in flight.
+    """``B`` independent systems of one :class:`~jaxdamp.physics.model.Model` in flight.
 
     Attributes:
       model: the static model (shapes and code paths).
-      params: batched :class:`~jaxdamp.model.Params` (leading axis ``B``).
-      states: batched :class:`~jaxdamp.model.State`.
-      nbrs: batched :class:`~jaxdamp.neighbors.Neighbors`.
+      params: batched :class:`~jaxdamp.physics.model.Params` (leading axis ``B``).
+      states: batched :class:`~jaxdamp.physics.model.State`.
+      nbrs: batched :class:`~jaxdamp.engine.neighbors.Neighbors`.
       engine: ``"jax"`` or ``"native"`` (resolved).
       multiplier: neighbour-list capacity multiplier.
       place: applied to states and lists after every (re-)allocation — e.g. padding and
-        sharding over devices (:mod:`jaxdamp.sweep`); identity by default.
+        sharding over devices (:mod:`jaxdamp.studies.sweep`); identity by default.
     """
 
     model: Model
@@ -151,8 +152,6 @@ def grow(batch: Batch) -> Batch:
 def restore(model: Model, params: Params, arrays: dict, *, engine: str = "auto",
             multiplier: float = 1.5, place: Callable | None = None) -> Batch:
     """A batch from :func:`checkpoint` arrays (bit-identical continuation)."""
-    from .io import arrays_to_state
-
     states, nbrs = arrays_to_state(arrays)
     if states.t.ndim == 0:  # a single system's checkpoint
         states, nbrs = batched(states), batched(nbrs)
@@ -161,12 +160,27 @@ def restore(model: Model, params: Params, arrays: dict, *, engine: str = "auto",
 
 def checkpoint(batch: Batch, systems: int | None = None) -> dict:
     """Exact host copies of the first ``systems`` states and neighbour lists (all by default),
-    as ``{"state/<field>", "nbrs/<field>"}`` arrays (:func:`jaxdamp.io.state_to_arrays`)."""
-    from .io import state_to_arrays
+    as ``{"state/<field>", "nbrs/<field>"}`` arrays (:func:`state_to_arrays`)."""
 
     n = batch.size if systems is None else systems
     host = lambda tree: jax.tree_util.tree_map(lambda x: np.asarray(x)[:n], tree)  # noqa: E731
     return state_to_arrays(host(batch.states), host(batch.nbrs))
+
+
+def state_to_arrays(state: State, nbrs: nb.Neighbors) -> dict:
+    """Checkpoint form of a (batch of) ``State`` and ``Neighbors``: ``{"state/<field>": array,
+    "nbrs/<field>": array}``, exact copies."""
+    out = {f"state/{f.name}": np.asarray(getattr(state, f.name))
+           for f in dataclasses.fields(state)}
+    out.update({f"nbrs/{k}": v for k, v in nb.to_numpy(nbrs).items()})
+    return out
+
+
+def arrays_to_state(arrays: dict) -> tuple[State, nb.Neighbors]:
+    """Inverse of :func:`state_to_arrays`: ``(State, Neighbors)`` as JAX arrays."""
+    st = {k.split("/", 1)[1]: jnp.asarray(v) for k, v in arrays.items() if k.startswith("state/")}
+    nbr = {k.split("/", 1)[1]: v for k, v in arrays.items() if k.startswith("nbrs/")}
+    return State(**st), nb.from_numpy(nbr)
 
 
 def _placed(batch: Batch) -> Batch:

@@ -1,7 +1,7 @@
 """What drives the system: the base motion of S1 and the prescribed box motion of S2 (SPEC §1).
 
-Each motion in its JAX form (of :class:`~jaxdamp.model.Params`) and, next to it, its numba
-scalar form for the native kernel (:mod:`jaxdamp.native`); ``Ω = 2πf`` [rad/s].
+Each motion in its JAX form (of :class:`~jaxdamp.physics.model.Params`) and, next to it, its numba
+scalar form for the native kernel (:mod:`jaxdamp.engine.native`); ``Ω = 2πf`` [rad/s].
 """
 
 from __future__ import annotations
@@ -10,8 +10,8 @@ import math
 
 import jax.numpy as jnp
 
-from .contact import scalar_form
-from .model import Params
+from jaxdamp.physics.contact import scalar_form
+from jaxdamp.physics.model import Params
 
 
 def base_motion(t, p: Params):

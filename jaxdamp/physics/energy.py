@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
-from .excitation import base_motion
-from .model import CH, Model, Params, State
+from jaxdamp.physics.excitation import base_motion
+from jaxdamp.physics.model import CH, Model, Params, State
 
 
 def grain_energies(st: State, p: Params):

@@ -71,9 +71,10 @@ import jax.numpy as jnp
 import numba
 import numpy as np
 
-from .analysis import analysis_start, first_harmonic
-from .config import Config, ConfigError
-from .model import pytree_dataclass
+from jaxdamp.analysis.response import analysis_start, first_harmonic
+from jaxdamp.config import Config, ConfigError
+from jaxdamp.physics.excitation import base_motion, base_motion_scalar
+from jaxdamp.physics.model import pytree_dataclass
 
 #: Work channels of S3 records, columns of ``work``.
 CHANNELS = ("input", "primary_damping", "impact")
@@ -382,8 +383,7 @@ def _integrate(ctx, mode, ta, tb, hq, K, C, U, gap, t_w, rec_dt, n_rec, rec, ri,
         for q in range(gl_x.shape[0]):
             s = mid + half * gl_x[q]
             z, zd, _, _ = _box(ctx, s)
-            u = U * math.cos(Om * s)
-            ud = -U * Om * math.sin(Om * s)
+            u, ud = base_motion_scalar(s, U, Om)
             f = K * (z - u) + C * (zd - ud)
             w_in += gl_w[q] * (-f * ud)
             w_c += gl_w[q] * C * (zd - ud) ** 2
@@ -414,7 +414,7 @@ def _integrate(ctx, mode, ta, tb, hq, K, C, U, gap, t_w, rec_dt, n_rec, rec, ri,
             rec[ri, 2] = zd
             rec[ri, 3] = y
             rec[ri, 4] = yd
-            rec[ri, 5] = U * math.cos(Om * t)
+            rec[ri, 5] = base_motion_scalar(t, U, Om)[0]
             rec[ri, 6] = work[0]
             rec[ri, 7] = work[1]
             rec[ri, 8] = work[2]
@@ -470,8 +470,7 @@ def _event_core(M, K, C, U, Om, m, e, gap, g, v_stick, h, rec_dt, n_rec, t_w, gl
             break
         t = t_ev
         z, zd, _, _ = _box(ctx, t)
-        u = U * math.cos(Om * t)
-        ud = -U * Om * math.sin(Om * t)
+        u, ud = base_motion_scalar(t, U, Om)
         if mode != _FREE:  # lift-off: the particle keeps the box's velocity and flies
             y = z + (gap if mode == _LID else 0.0)
             _start_segment(ctx, coef_free, t, z, zd, y, zd)
@@ -580,7 +579,7 @@ def _add_energy(config: Config, records: dict, contact_energy) -> None:
 def summarize(config: Config, records: dict, z_max: float, z_min: float, t_window: float,
               impact_times=None) -> tuple[dict, dict]:
     """Steady-state scalars over the analysis window (as the DEM's
-    :func:`jaxdamp.analysis.steady_state_summary`) and their units.
+    :func:`jaxdamp.analysis.response.steady_state_summary`) and their units.
 
     ``z_max``, ``z_min``: extremes of ``z`` over ``t ≥ t_window`` (exact for the event-driven
     model, every step for the smooth one). Energies per drive period ``1/f``; ``balance_error``
@@ -758,8 +757,7 @@ def _contact(d, dd, p: SmoothParams):
 
 def _forces(z, vz, y, vy, t, p: SmoothParams):
     """Accelerations of box and particle [m/s²] and the floor and lid contact forces [N]."""
-    u = p.U * jnp.cos(p.omega * t)
-    ud = -p.U * p.omega * jnp.sin(p.omega * t)
+    u, ud = base_motion(t, p)
     f_floor, _ = _contact(z - y, vz - vy, p)
     f_lid, _ = _contact(y - z - p.gap, vy - vz, p)
     spring = p.K * (z - u) + p.C * (vz - ud)
@@ -770,8 +768,7 @@ def _forces(z, vz, y, vy, t, p: SmoothParams):
 
 def _primary_power(z, vz, t, p: SmoothParams):
     """Power input by the base through spring and damper, and the power lost in C [W]."""
-    u = p.U * jnp.cos(p.omega * t)
-    ud = -p.U * p.omega * jnp.sin(p.omega * t)
+    u, ud = base_motion(t, p)
     spring = p.K * (z - u) + p.C * (vz - ud)
     return jnp.stack([-spring * ud, p.C * (vz - ud) ** 2])
 
@@ -821,8 +818,7 @@ def smooth_step(st: SmoothState, p: SmoothParams) -> SmoothState:
 
 def smooth_energy(st: SmoothState, p: SmoothParams):
     """Mechanical energy [J] including the penalty springs."""
-    t = st.i * p.dt
-    u = p.U * jnp.cos(p.omega * t)
+    u, _ = base_motion(st.i * p.dt, p)
     return (0.5 * p.M * st.vz**2 + 0.5 * p.m * st.vy**2 + 0.5 * p.K * (st.z - u) ** 2
             + p.m * p.g * st.y + _elastic(st.z, st.y, p))
 
@@ -830,7 +826,7 @@ def smooth_energy(st: SmoothState, p: SmoothParams):
 def _sample(st: SmoothState, p: SmoothParams) -> dict:
     t = st.i * p.dt
     return {"t": t, "z_box": st.z, "v_box": st.vz, "z_particle": st.y, "v_particle": st.vy,
-            "u": p.U * jnp.cos(p.omega * t), "work": st.work, "energy": smooth_energy(st, p)}
+            "u": base_motion(t, p)[0], "work": st.work, "energy": smooth_energy(st, p)}
 
 
 @functools.partial(jax.jit, static_argnames=("n_rec", "record_every", "records"))
@@ -914,17 +910,17 @@ def simulate(config: Config) -> ImpactRun:
 
 
 # ---------------------------------------------------------------------------------------------
-# sweeps (called by jaxdamp.sweep.sweep for S3 configurations)
+# sweeps (called by jaxdamp.studies.sweep.sweep for S3 configurations)
 
 
 def sweep(config: Config, axes: dict, out: str | None = None, progress: bool = True,
           echo=print):
-    """The S3 counterpart of :func:`jaxdamp.sweep.sweep`: same grid, same
-    :class:`~jaxdamp.grid.SweepResult`, same HDF5 layout (``/summary``, ``/axes``,
+    """The S3 counterpart of :func:`jaxdamp.studies.sweep.sweep`: same grid, same
+    :class:`~jaxdamp.studies.grid.SweepResult`, same HDF5 layout (``/summary``, ``/axes``,
     ``/records`` ``(P, T)``). ``"smooth"`` runs all points as one ``vmap`` batch; ``"event"``
     loops over them (numba; one core each)."""
-    from .grid import SweepResult, grid_configs
-    from .io.sweepfile import SweepFile
+    from jaxdamp.io.sweepfile import SweepFile
+    from jaxdamp.studies.grid import SweepResult, grid_configs
 
     for key in axes:
         if key.startswith(("box.", "grains")):

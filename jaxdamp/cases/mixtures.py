@@ -27,7 +27,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
-from .config import Config, ConfigError, Species
+from jaxdamp.config import Config, ConfigError, Species
 
 CLASSES = ("a", "b", "c")
 
@@ -87,21 +87,6 @@ def binary(reference: Config, klass: str, sigma: float) -> Config:
                f"mass - 1 = {err:.2e}; number {n_l + n_s} (reference {ref.count}). "
                + reference.notes),
     )
-
-
-def family(name: str, sigma: float | None = None, reference: Config | None = None) -> Config:
-    """The configuration of a paper family: ``varela2023-reference`` (σ ignored) or
-    ``varela2023-a|b|c`` at ``sigma`` (default 0.5)."""
-    from . import presets
-
-    if name not in FAMILIES:
-        raise ConfigError(f"preset {name!r} is not a binary-mixture family; known: "
-                          f"{', '.join(FAMILIES)}")
-    reference = reference or presets.get("varela2023-reference")
-    klass = FAMILIES[name]
-    if klass is None:
-        return reference
-    return binary(reference, klass, 0.5 if sigma is None else sigma)
 
 
 def sigma_hat(sigma: float) -> float:

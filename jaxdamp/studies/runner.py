@@ -1,7 +1,7 @@
 """Run one simulation end to end: validate, settle, drive in jitted chunks, write HDF5.
 
 This is the edge of the package where files, progress bars and messages live. The time loop
-is the driver's (:mod:`jaxdamp.driver`: neighbour lists, overflow, the non-finite policy);
+is the driver's (:mod:`jaxdamp.engine.driver`: neighbour lists, overflow, the non-finite policy);
 between its chunks the runner appends samples and a snapshot and writes a checkpoint from which
 ``resume=True`` continues bit-identically. A run that goes non-finite stops with the driver's
 message and keeps the samples before it (file status ``diverged``).
@@ -18,14 +18,15 @@ from dataclasses import dataclass
 import jax.numpy as jnp
 import numpy as np
 
-from . import driver, stats
-from .analysis import analysis_start, steady_state_summary
-from .config import Config, ConfigError
-from .driver import SimulationDiverged  # noqa: F401  (re-exported: runs raise it)
-from .io import RunFile, write_steady
-from .model import State, build, grain_species
-from .packing import SettledBed, settle
-from .validation import validate
+from jaxdamp.analysis import stats
+from jaxdamp.analysis.response import analysis_start, steady_state_summary
+from jaxdamp.config import Config, ConfigError
+from jaxdamp.engine import driver
+from jaxdamp.engine.driver import SimulationDiverged  # noqa: F401  (re-exported: runs raise it)
+from jaxdamp.engine.packing import SettledBed, settle
+from jaxdamp.io import RunFile, write_steady
+from jaxdamp.physics.model import State, build, grain_species
+from jaxdamp.validation import validate
 
 
 @dataclass(frozen=True)
@@ -71,7 +72,7 @@ class RunResult:
     """What :func:`run` returns: the output path (or ``None``), the summary scalars (fixed
     analysis window), the samples (dict of numpy arrays), the settled bed, the final state,
     and the steady-state estimates from the detected steady state (one replicate:
-    :func:`jaxdamp.stats.summarise`; the replicate error needs ``replicates > 1``, which runs
+    :func:`jaxdamp.analysis.stats.summarise`; the replicate error needs ``replicates > 1``, which runs
     as a sweep of one point)."""
 
     path: str | None
@@ -109,7 +110,7 @@ def run(
         raise ConfigError(
             "system = 'impact' (S3, the single-particle model) has no DEM run file: use "
             "`jaxdamp frf --preset sanchez2012-impact` (any number of frequencies, seconds) or "
-            "jaxdamp.impact.simulate(config) from Python")
+            "jaxdamp.s3.impact.simulate(config) from Python")
     model, params = build(config)
     sched = schedule(config, float(params.dt))
     t_window = analysis_start(config, sched.duration)

@@ -16,9 +16,9 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
-from . import driver
-from .config import Config, ConfigError
-from .model import Model, Params
+from jaxdamp.config import Config, ConfigError
+from jaxdamp.engine import driver
+from jaxdamp.physics.model import Model, Params
 
 #: Lattice spacing is (1 + _GAP) grain diameters; jitter is ± _GAP/2 radii per coordinate.
 _GAP = 0.05

@@ -29,9 +29,9 @@ from functools import partial
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jax_md import partition, space
+from jax_md import partition
 
-from .model import Model, pytree_dataclass
+from jaxdamp.physics.model import Model, pytree_dataclass
 
 #: Extra cutoff beyond 2 R_max + skin, as a fraction of the skin, covering the one step that
 #: moves grains between the rebuild check and the force evaluation.

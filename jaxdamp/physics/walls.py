@@ -13,7 +13,7 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
-from .contact import GAMMA_S, LAWS, MU, Vec, contact_force
+from jaxdamp.physics.contact import GAMMA_S, LAWS, MU, Vec, contact_force
 
 #: Inward unit normals of floor, lid, x=0, x=Lx, y=0, y=Ly (pointing from the wall to a grain).
 _NORMALS = np.array(
@@ -50,8 +50,8 @@ def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
     Args:
       r, v, w: positions [m], velocities [m/s], angular velocities [rad/s], ``(N, 3)``.
       z_box, zd_box: floor position [m] and box velocity [m/s] (scalars).
-      p: :class:`jaxdamp.model.Params`.
-      model: :class:`jaxdamp.model.Model` (the law and the grains' species).
+      p: :class:`jaxdamp.physics.model.Params`.
+      model: :class:`jaxdamp.physics.model.Model` (the law and the grains' species).
     """
     # Signed distance of each centre to each wall plane, (N, 6).
     x, y, z = r[:, 0], r[:, 1], r[:, 2]

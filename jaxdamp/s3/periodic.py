@@ -2,7 +2,7 @@
 differentiation of its periodic orbit.
 
 The steady state of the driven S3 system (``docs/physics.md`` §1, S3; the smooth model of
-:mod:`jaxdamp.impact`) is, when the motion is periodic, a *fixed point of the stroboscopic map*.
+:mod:`jaxdamp.s3.impact`) is, when the motion is periodic, a *fixed point of the stroboscopic map*.
 Differentiating a long transient run with ``jax.grad`` gives the derivative of a truncated,
 start-dependent quantity whose tangent dynamics grow without bound where the motion is
 irregular; the derivative of the *steady-state* objective (``docs/physics.md`` §7, objectives
@@ -12,9 +12,9 @@ module says so instead of returning a number.
 
 **The stroboscopic map.** The drive period ``T = 2π/Ω`` is split into ``N`` equal steps,
 ``N = ceil(refine · T / dt_max)`` (:func:`period_steps`; ``dt_max`` the smooth model's step
-limit of :func:`jaxdamp.impact.contact_constants`, so with ``refine = 1`` ``dt = T/N`` is just
-below it, as :func:`jaxdamp.impact.smooth_schedule` shrinks ``dt`` to fit the record interval).
-``P(x; θ)`` is ``N`` velocity-Verlet steps of :func:`jaxdamp.impact.smooth_step` from the
+limit of :func:`jaxdamp.s3.impact.contact_constants`, so with ``refine = 1`` ``dt = T/N`` is just
+below it, as :func:`jaxdamp.s3.impact.smooth_schedule` shrinks ``dt`` to fit the record interval).
+``P(x; θ)`` is ``N`` velocity-Verlet steps of :func:`jaxdamp.s3.impact.smooth_step` from the
 phase-0 state ``x`` (:func:`stroboscopic_map`). Because the step evaluates its
 velocity-dependent forces at the predicted velocities ``v + a dt``, the accelerations carried
 from one step to the next are part of the state of the discrete dynamics, so ``x`` has
@@ -23,12 +23,12 @@ from one step to the next are part of the state of the discrete dynamics, so ``x
     x = (z, z', y, y', z'', y'')          at t ≡ 0 (mod T)
 
 (box and particle positions [m], velocities [m/s] and the accelerations of the last step
-[m/s²]). The contact forces of :class:`~jaxdamp.impact.SmoothState` enter only the contact-loss
+[m/s²]). The contact forces of :class:`~jaxdamp.s3.impact.SmoothState` enter only the contact-loss
 bookkeeping, and only through ``F_floor - F_lid = m (y'' + g)``; the work accumulators restart
 at 0 and ``z_max, z_min`` are not used. Of the 6 Floquet multipliers, 4 belong to the physical
 dynamics and 2 to the predicted-velocity scheme (parasitic, |λ| < 1e-6; with ``e = 0`` the
 particle modes collapse as well, so ``det ∂P/∂x ≈ 0``). ``θ`` is any scalar field of
-:class:`~jaxdamp.impact.SmoothParams` except ``dt`` (default the gap); for ``omega`` the step
+:class:`~jaxdamp.s3.impact.SmoothParams` except ``dt`` (default the gap); for ``omega`` the step
 follows as ``dt = 2π/(Ω N)``, so that ``P`` stays one period. ``P^k`` is ``k N`` steps (time
 runs on; the drive is ``T``-periodic).
 
@@ -55,7 +55,7 @@ found.
   least-squares ``cos``/``sin``/constant fit of the optimiser, which is exactly this for
   uniform samples over whole periods);
 * ``dissipation`` ``E`` [J]: impact (contact) loss per drive period, ``W_impact(kT) / k`` (the
-  ``impact`` work channel of :func:`~jaxdamp.impact.smooth_step`);
+  ``impact`` work channel of :func:`~jaxdamp.s3.impact.smooth_step`);
 * ``damping`` ``C_eq = E / (π Ω Z²)`` [N s/m], the equivalent viscous damping (§7);
 * ``band`` (:func:`objective_and_gradient`): the smooth maximum of ``Z`` over several
   frequencies (:func:`jaxdamp.design.objectives.smooth_max`), one orbit per frequency.
@@ -98,7 +98,8 @@ state was from the orbit.)
 Example (optax style: the gradient drives a projected step)::
 
     import optax
-    from jaxdamp import presets, periodic
+    from jaxdamp.cases import presets
+    from jaxdamp.s3 import periodic
 
     cfg = presets.get("sanchez2012-impact")
     orb = periodic.orbit(cfg, gap=0.0835)          # k = 1, max |λ| = 0.69, 1 Newton step
@@ -131,8 +132,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import impact
-from .config import Config, ConfigError
+from jaxdamp.config import Config, ConfigError
+from jaxdamp.s3 import impact
 
 #: Components of the phase-0 state ``x`` of the stroboscopic map.
 STATE_FIELDS = ("z", "vz", "y", "vy", "az", "ay")
@@ -158,7 +159,7 @@ class Orbit:
     first; ``stable``, ``converged``; ``residual`` the scaled residual ``r(x*)``;
     ``iterations`` Newton iterations of the accepted ``k`` (summed over all ``k`` tried in
     ``total_iterations``); ``reason`` why it was not accepted ("" if stable);
-    ``params`` the :class:`~jaxdamp.impact.SmoothParams` (step ``dt = T/N``), ``n_steps`` ``N``
+    ``params`` the :class:`~jaxdamp.s3.impact.SmoothParams` (step ``dt = T/N``), ``n_steps`` ``N``
     per period; ``start`` the Newton start state and ``start_distance`` its scaled distance
     ``max_i |x*_i - start_i| / s_i`` from the orbit (small when the transient has settled on
     it: the orbit is the attractor the run reaches); ``sim_seconds`` the simulated
@@ -198,7 +199,7 @@ class Orbit:
 
 def period_steps(config: Config, frequency: float | None = None, refine: int = 1) -> int:
     """``N``: steps per drive period, ``ceil(refine T / dt_max)`` (``dt = T/N ≤ dt_max/refine``,
-    ``dt_max`` of :func:`jaxdamp.impact.contact_constants`)."""
+    ``dt_max`` of :func:`jaxdamp.s3.impact.contact_constants`)."""
     f = float(config.frequency if frequency is None else frequency)
     dt_max = impact.contact_constants(config)[2] / int(refine)
     return max(1, int(math.ceil(1.0 / (f * dt_max) - 1e-9)))
@@ -287,7 +288,7 @@ def stroboscopic_map(x, p: impact.SmoothParams, n: int, k: int = 1, param: str =
 @jax.jit
 def _transient(p: impact.SmoothParams, steps):
     """The phase-0 state after ``steps`` (a multiple of ``N``) steps from
-    :func:`jaxdamp.impact.smooth_initial` (the particle at rest on the floor)."""
+    :func:`jaxdamp.s3.impact.smooth_initial` (the particle at rest on the floor)."""
     st = jax.lax.fori_loop(0, steps, lambda _, s: impact.smooth_step(s, p),
                            impact.smooth_initial(p))
     return _from_state(st)
@@ -471,7 +472,7 @@ def orbit(config: Config, gap: float | None = None, frequency: float | None = No
 
 def orbit_averages(orb: Orbit, param: str = "gap") -> dict:
     """The objectives averaged over a stable orbit and their implicit derivatives w.r.t. the
-    field ``param`` of :class:`~jaxdamp.impact.SmoothParams` (module docstring):
+    field ``param`` of :class:`~jaxdamp.s3.impact.SmoothParams` (module docstring):
     ``{"amplitude": (Z, dZ/dθ), "dissipation": (E, dE/dθ), "damping": (C_eq, dC_eq/dθ),
     "dx": dx*/dθ (6,)}``; ``Z`` [m] the first-harmonic amplitude of ``z``, ``E`` [J] the impact
     loss per drive period, ``C_eq = E / (π Ω Z²)`` [N s/m] (``docs/physics.md`` §7). All NaN
@@ -562,7 +563,7 @@ def objective_and_gradient(config: Config, objective, frequency=None, gap: float
     ``sim_seconds`` include the ``k`` periods of the derivative run."""
     combine = None
     if isinstance(objective, str) and objective == "band":
-        from .design.objectives import Objective
+        from jaxdamp.design.objectives import Objective
 
         freqs = None if frequency is None else tuple(float(f) for f in np.atleast_1d(frequency))
         objective = Objective("band", band=freqs, **({} if p is None else {"p": p}))

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .config import Config
-from .energy import granular_loss
-from .model import CH, CHANNELS, State
+from jaxdamp.config import Config
+from jaxdamp.physics.energy import granular_loss
+from jaxdamp.physics.model import CH, CHANNELS, State
 
 
 def frf_amplitude(f, M, K, C, U):

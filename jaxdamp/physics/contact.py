@@ -2,8 +2,8 @@
 for both engines.
 
 Every law is written twice, side by side: a JAX form (shape-polymorphic, safe under
-``jax.grad``) used by :mod:`jaxdamp.pairs` / :mod:`jaxdamp.walls`, and a scalar form compiled
-by numba (:func:`scalar_form`) that the native kernel (:mod:`jaxdamp.native`) inlines. Laws
+``jax.grad``) used by :mod:`jaxdamp.physics.pairs` / :mod:`jaxdamp.physics.walls`, and a scalar form compiled
+by numba (:func:`scalar_form`) that the native kernel (:mod:`jaxdamp.engine.native`) inlines. Laws
 are registered by name in :data:`LAWS` and selected with ``Config.contact_law``.
 
 Conventions: ``n`` is the unit normal pointing from the partner ``j`` (grain or wall) to the
@@ -56,8 +56,8 @@ from typing import Callable, NamedTuple
 
 import jax.numpy as jnp
 
-from . import restitution as rst
-from .config import ConfigError, Material
+from jaxdamp.config import ConfigError, Material
+from jaxdamp.physics import restitution as rst
 
 try:
     from numba import njit
