@@ -36,7 +36,7 @@ import numpy as np
 
 import jaxdamp
 from jaxdamp.cases import presets
-from jaxdamp.cli import efficiency_figures  # noqa: F401  (same figure code as the CLI)
+from jaxdamp.cli.efficiency import efficiency_figures  # noqa: F401  (same figure code as the CLI)
 from jaxdamp.figures import figure, save, snapshot_grid_figure
 from jaxdamp.physics.model import grain_radii, grain_species
 from jaxdamp.studies import efficiency as ef

@@ -4,7 +4,7 @@ A :class:`Config` is a tree of frozen dataclasses holding plain Python numbers (
 what users write (presets, TOML files, ``--set key=value``), what every output file stores (as
 JSON), and what :mod:`jaxdamp.physics.model` turns into JAX arrays. Nothing here touches JAX.
 
-Two systems (SPEC §1):
+Two systems (docs/physics.md §1):
 
 * ``system = "primary"`` (S1): the box rides on a 1-DOF primary ``M, K, C`` whose base moves as
   ``u(t) = U cos(2π f t)``.
@@ -134,7 +134,7 @@ class Drive:
 
 @dataclass(frozen=True)
 class Impactor:
-    """The single particle of S3 (SPEC §1 S3; thesis §2.1.3, §5.3.2), see :mod:`jaxdamp.s3.impact`.
+    """The single particle of S3 (docs/physics.md §1 S3; thesis §2.1.3, §5.3.2), see :mod:`jaxdamp.s3.impact`.
 
     Attributes:
       mass: particle mass ``m`` [kg] (the bed's total mass ``m_p`` when it stands for a bed).
@@ -169,7 +169,7 @@ class Numerics:
     Attributes:
       dt: time step [s]; ``None`` chooses ``t_c / dt_per_collision`` from the Hertz collision
         time of the smallest grains at ``v_impact``.
-      dt_per_collision: the minimum number of steps per collision (SPEC §3: 50).
+      dt_per_collision: the minimum number of steps per collision (docs/physics.md §3: 50).
       v_impact: largest expected impact speed [m/s] used for the collision time; for a driven
         box (S2) the walls' relative speed ``2 A_d ω`` is used when larger.
       duration: simulated time after settling [s].
@@ -227,7 +227,7 @@ class Config:
       mixing: how per-species constants combine for a pair: ``"arithmetic"``, ``"harmonic"``
         or ``"geometric"`` mean (the 2023 paper: arithmetic).
       contact_law: the normal contact law by name, one of :data:`jaxdamp.physics.contact.LAWS`:
-        ``"hertz"`` (Hertz + viscoelastic, SPEC §2) or ``"linear"`` (linear spring–dashpot
+        ``"hertz"`` (Hertz + viscoelastic, docs/physics.md §2) or ``"linear"`` (linear spring–dashpot
         with a speed-independent restitution; needs ``Material.linear_stiffness``).
       name: preset or user label.
       notes: free text, e.g. deviations from a source.

@@ -14,7 +14,7 @@ from jaxdamp import cli
 from jaxdamp.analysis.response import frf_amplitude
 from jaxdamp.cases import presets
 from jaxdamp.config import ConfigError, apply_overrides
-from jaxdamp.s3 import impact
+from jaxdamp.s3 import common, event, smooth
 from jaxdamp.studies.sweep import sweep
 from jaxdamp.validation import validate
 
@@ -32,17 +32,17 @@ def test_collision_law_conserves_momentum_and_loses_delta_t():
     v_p, v_z = rng.normal(size=1000), rng.normal(size=1000)
     m, M = 0.227, 2.37
     for e in (0.0, 0.3, 0.8, 1.0):
-        vp1, vz1 = impact.collide(v_p, v_z, m, M, e)
+        vp1, vz1 = common.collide(v_p, v_z, m, M, e)
         p0, p1 = m * v_p + M * v_z, m * vp1 + M * vz1
         assert np.max(np.abs(p1 - p0)) < 1e-12
         np.testing.assert_allclose(vp1 - vz1, -e * (v_p - v_z), rtol=1e-12, atol=1e-14)
         lost = 0.5 * m * (v_p**2 - vp1**2) + 0.5 * M * (v_z**2 - vz1**2)
-        np.testing.assert_allclose(lost, impact.impact_loss(v_p, v_z, m, M, e), rtol=1e-10,
+        np.testing.assert_allclose(lost, common.impact_loss(v_p, v_z, m, M, e), rtol=1e-10,
                                    atol=1e-14)
-    vp1, vz1 = impact.collide(v_p, v_z, m, M, 1.0)
+    vp1, vz1 = common.collide(v_p, v_z, m, M, 1.0)
     ke0 = 0.5 * m * v_p**2 + 0.5 * M * v_z**2
     np.testing.assert_allclose(0.5 * m * vp1**2 + 0.5 * M * vz1**2, ke0, rtol=1e-13)
-    vp1, vz1 = impact.collide(v_p, v_z, m, M, 0.0)  # e = 0: a common velocity
+    vp1, vz1 = common.collide(v_p, v_z, m, M, 0.0)  # e = 0: a common velocity
     assert np.max(np.abs(vp1 - vz1)) < 1e-15
 
 
@@ -54,7 +54,7 @@ def test_event_without_lift_off_is_the_analytic_frf_of_m_plus_m(f):
     cfg = _cfg(f, duration=3.0, window=0.1, primary__C=60.0)
     p, m = cfg.primary, cfg.impactor.mass
     assert p.U * cfg.omega**2 < cfg.gravity
-    run = impact.simulate_event(cfg)
+    run = event.simulate_event(cfg)
     s = run.summary
     Z = frf_amplitude(f, p.M + m, p.K, p.C, p.U)
     assert s["amplitude"] == pytest.approx(Z, rel=1e-9)
@@ -74,7 +74,7 @@ def test_event_with_a_negligible_particle_is_the_analytic_frf_of_m():
     closed form then gives the analytic FRF of mass M (to ~1e-9)."""
     cfg = _cfg(15.0, duration=3.0, window=0.1, primary__C=60.0, impactor__mass=2.37e-9)
     p = cfg.primary
-    s = impact.simulate_event(cfg).summary
+    s = event.simulate_event(cfg).summary
     assert s["impacts_per_cycle"] > 0
     assert s["amplitude"] == pytest.approx(frf_amplitude(15.0, p.M, p.K, p.C, p.U), rel=1e-7)
 
@@ -85,7 +85,7 @@ def test_event_energy_balance_closes_and_impacts_lose_delta_t(e):
     with chattering at e = 0.8; every impact loses at least ΔT of eq. 5.3.1 and exactly ΔT
     unless it ended a chatter (then the remaining relative energy, still ≤ the e = 0 loss)."""
     cfg = _cfg(15.5, duration=2.0, impactor__restitution=e)
-    run = impact.simulate_event(cfg)
+    run = event.simulate_event(cfg)
     s = run.summary
     assert s["balance_error"] < 1e-11
     assert s["granular_loss_per_cycle"] > 1.0 and s["impacts_per_cycle"] > 1.5
@@ -108,9 +108,9 @@ def test_smooth_matches_event_driven_frf_near_resonance():
     -0.9 %, +0.1 %, impact loss per cycle +0.4 %, -0.5 %, +0.2 % at 14.5, 15.5, 16.5 Hz
     (contact_time 3e-4 s, 20 steps per contact, smooth_width 3e-5 m). Tolerance 2 %."""
     cfgs = [_cfg(f, impactor__method="smooth") for f in (14.5, 15.5, 16.5)]
-    smooth = impact.simulate_smooth(cfgs)
-    for c, sm in zip(cfgs, smooth):
-        ev = impact.simulate_event(dataclasses.replace(
+    runs = smooth.simulate_smooth(cfgs)
+    for c, sm in zip(cfgs, runs):
+        ev = event.simulate_event(dataclasses.replace(
             c, impactor=dataclasses.replace(c.impactor, method="event")))
         for key in ("amplitude", "granular_loss_per_cycle", "input_per_cycle"):
             assert sm.summary[key] == pytest.approx(ev.summary[key], rel=0.02), (c.frequency, key)
@@ -123,12 +123,12 @@ def test_smooth_gradient_wrt_gap_matches_finite_differences():
     """d(impact loss per cycle)/d(gap) at 15.5 Hz by jax.grad through the scan against central
     differences (h = 3e-5 m). Measured: 41.79 J/m, FD 41.80–41.93 J/m for h = 1e-5..1e-3 m."""
     cfg = _cfg(15.5, duration=1.0, window=0.5, impactor__method="smooth")
-    dt, every, n_rec = impact.smooth_schedule([cfg])
-    p = impact.smooth_params(cfg, dt, n_rec * every * dt)
+    dt, every, n_rec = smooth.smooth_schedule([cfg])
+    p = smooth.smooth_params(cfg, dt, n_rec * every * dt)
 
     @jax.jit
     def loss(gap):
-        return impact.smooth_window_loss(dataclasses.replace(p, gap=gap), n_rec, every)
+        return smooth.smooth_window_loss(dataclasses.replace(p, gap=gap), n_rec, every)
 
     grad = float(jax.grad(loss)(p.gap))
     h = 3e-5
@@ -146,7 +146,7 @@ def test_sweep_dispatches_s3_and_writes_the_sweep_file(tmp_path):
     assert res.records["z_box"].shape == res.records["t"].shape == (2, 4001)
     for i, c in enumerate(res.configs):
         assert c.impactor.gap == axes["impactor.gap"][i]
-        direct = impact.simulate_event(c).summary
+        direct = event.simulate_event(c).summary
         assert res.summary["amplitude"][i] == direct["amplitude"]
     assert res.summary["amplitude"][0] != res.summary["amplitude"][1]
     with h5py.File(out) as h:

@@ -17,7 +17,7 @@ import pytest
 
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
-from jaxdamp.s3 import impact, periodic
+from jaxdamp.s3 import periodic, smooth
 
 F = 15.16  # Hz, the preset's frequency
 
@@ -95,12 +95,12 @@ def test_implicit_derivative_matches_finite_differences_of_resolved_orbits(gap, 
 
 @functools.partial(jax.jit, static_argnames=("n_rec", "record_every"))
 def _long_loss(p, n_rec, record_every):
-    return impact.smooth_window_loss(p, n_rec, record_every)
+    return smooth.smooth_window_loss(p, n_rec, record_every)
 
 
 def test_implicit_derivative_matches_finite_differences_of_long_time_averages():
     """The impact loss per period averaged over 30 s of the smooth model after a 5 s
-    transient (:func:`jaxdamp.s3.impact.smooth_window_loss`, same step dt = T/N) at gap ± h:
+    transient (:func:`jaxdamp.s3.smooth.smooth_window_loss`, same step dt = T/N) at gap ± h:
     its value is the orbit's, its central difference the implicit derivative (1e-4)."""
     gap, h = 0.0835, 1e-6
     orb = _orbit(gap)
@@ -122,7 +122,7 @@ def test_irregular_response_is_reported_not_a_number():
     gradient are NaN."""
     gap = 0.15
     p, n = periodic.orbit_params(_cfg(), gap=gap)
-    _, rec = impact.smooth_run(p, 200, n)  # 13.2 s, one record per period
+    _, rec = smooth.smooth_run(p, 200, n)  # 13.2 s, one record per period
     per_period = np.diff(np.asarray(rec["work"])[:, 2])[66:]  # after 4.4 s
     assert np.std(per_period) / np.mean(per_period) > 0.1
     J, dJ, orb = periodic.objective_and_gradient(_cfg(), "dissipation", gap=gap, k_max=3)

@@ -1,4 +1,4 @@
-"""Nonlinear-dynamics analysis of a scalar time series (thesis ch. 4, SPEC §6).
+"""Nonlinear-dynamics analysis of a scalar time series (thesis ch. 4, docs/physics.md §6).
 
 For a uniformly sampled scalar series such as the bed's centre of mass ``z_cm(t)``:
 

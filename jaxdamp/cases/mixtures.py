@@ -1,4 +1,4 @@
-"""Binary mixtures of the 2023 paper (SPEC §5; Varela-Rosales et al., table 1).
+"""Binary mixtures of the 2023 paper (docs/physics.md §5; Varela-Rosales et al., table 1).
 
 Every class is built from a monodisperse reference (``N_ref`` grains of radius ``R_ref``, mass
 ``M_ref``) and a size ratio ``σ ∈ (0, 1]``:

@@ -1,4 +1,4 @@
-"""Named reference cases of the two source studies (SPEC §5).
+"""Named reference cases of the two source studies (docs/physics.md §5).
 
 ``jaxdamp presets`` lists them. Deviations from the sources are stated in each preset's
 ``notes`` (stored in every output file with the rest of the configuration).
@@ -68,7 +68,7 @@ def sanchez2012_sec31(n: int) -> Config:
         notes=(
             "Thesis §3.1 (reduced modulus E = 2.06e8 as in the thesis). The stated 0.02 × 0.02 m "
             "base cannot hold the stated ~0.05 m bed; 0.09 × 0.09 m reproduces it (a choice, "
-            f"SPEC §5). Radii uniform in [{lo}, {hi}] m."
+            f"docs/physics.md §5). Radii uniform in [{lo}, {hi}] m."
         ),
     )
 

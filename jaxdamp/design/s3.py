@@ -59,7 +59,7 @@ class S3Problem:
 
     def __init__(self, config: Config, objective: Objective, duration: float | None = None,
                  h_bed: float | None = None, gradient: str = "orbit", refine: int = 2):
-        from jaxdamp.s3 import impact
+        from jaxdamp.s3 import smooth
 
         if config.system != "impact":
             raise ConfigError("S3Problem needs an S3 configuration (system = 'impact')")
@@ -74,10 +74,10 @@ class S3Problem:
         self.refine = int(refine)
         self.h_bed = float(config.box.Lz - config.impactor.gap) if h_bed is None else h_bed
         self.freqs = objective.frequencies(config)
-        self.dt, self.record_every, self.n_rec = impact.smooth_schedule([config])
+        self.dt, self.record_every, self.n_rec = smooth.smooth_schedule([config])
         self.duration = self.n_rec * self.record_every * self.dt
         self.sim_seconds = 0.0
-        p = impact.smooth_params(config, self.dt, self.duration)
+        p = smooth.smooth_params(config, self.dt, self.duration)
         self.params = jax.tree_util.tree_map(lambda x: jnp.full((len(self.freqs),), x), p)
         self.params = dataclasses.replace(
             self.params, omega=jnp.asarray([2 * math.pi * f for f in self.freqs]))
@@ -88,9 +88,9 @@ class S3Problem:
     def _per_frequency(self, p):
         """Amplitude ``Z`` [m] (first harmonic) and impact loss per period ``E`` [J] over the
         analysis window of one run."""
-        from jaxdamp.s3 import impact
+        from jaxdamp.s3 import smooth
 
-        _, rec = impact.smooth_run(p, self.n_rec, self.record_every)
+        _, rec = smooth.smooth_run(p, self.n_rec, self.record_every)
         w = (rec["t"] >= p.t_window).astype(rec["t"].dtype)
         Z = _first_harmonic_amplitude(rec["t"], rec["z_box"], p.omega, w)
         i0 = jnp.argmax(rec["t"] >= p.t_window)

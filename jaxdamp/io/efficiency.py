@@ -16,7 +16,7 @@ def write(path: str, result, transient: int, samples_per_period: int, summary_un
         if "efficiency" in h5:
             del h5["efficiency"]
         g = h5.create_group("efficiency")
-        g.attrs["E_max"] = "4 m A_d^2 omega^2 (Sack et al. 2013 read literally; SPEC §4)"
+        g.attrs["E_max"] = "4 m A_d^2 omega^2 (Sack et al. 2013 read literally; docs/physics.md §4)"
         g.attrs["energies"] = "J per drive period (the paper's eqs. 4-5 times T)"
         g.attrs["E_d_fit"] = ("linear fit to E_d(t) (one-period integrals from every sample t "
                               "in the window), read at the window's middle")

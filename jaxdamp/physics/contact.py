@@ -1,4 +1,4 @@
-"""The contact laws between spheres and between a sphere and a flat wall (SPEC §2), in one place
+"""The contact laws between spheres and between a sphere and a flat wall (docs/physics.md §2), in one place
 for both engines.
 
 Every law is written twice, side by side: a JAX form (shape-polymorphic, safe under
@@ -232,7 +232,7 @@ def hertz_normal_scalar(xi, sqrt_xi, xi_dot, k, g):
 
 
 def hertz_collision_time(row, m_eff: float, r_eff: float, v: float) -> float:
-    """Elastic Hertz collision time [s] at impact speed ``v`` (SPEC §3,
+    """Elastic Hertz collision time [s] at impact speed ``v`` (docs/physics.md §3,
     :func:`restitution.collision_time`; damping lengthens the overlap by 1–11 %)."""
     return rst.collision_time(m_eff, r_eff, float(row[_H_E]), v)
 
@@ -355,7 +355,7 @@ class Law(NamedTuple):
       pair_jax, pair_scalar: ``(row, R*, m*) -> (k, g)`` the per-contact stiffness and damping.
       normal_jax, normal_scalar: ``(ξ ≥ 0, sqrt ξ, ξ', k, g) -> (F_elastic, F_damping,
         elastic energy)``; the force is ``max(0, F_elastic + F_damping)`` while ``ξ > 0``.
-      collision_time: ``(row, m*, R*, v) -> t_c`` [s] that sets the time step (SPEC §3).
+      collision_time: ``(row, m*, R*, v) -> t_c`` [s] that sets the time step (docs/physics.md §3).
       check: ``(Material, name) -> None``, raises :class:`ConfigError` for bad inputs.
     """
 
@@ -436,7 +436,7 @@ class ContactForce(NamedTuple):
 
 def contact_force(law: Law, xi, n: Vec, v_rel: Vec, spin: Vec, radius_i, k, g, gamma_s,
                   mu) -> ContactForce:
-    """Force, torque and losses of a sphere contact (SPEC §2), JAX form.
+    """Force, torque and losses of a sphere contact (docs/physics.md §2), JAX form.
 
     Args:
       law: the normal law (:data:`LAWS`).

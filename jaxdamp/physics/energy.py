@@ -1,4 +1,4 @@
-"""Energies, the energy balance and the per-sample records of a run (SPEC §4).
+"""Energies, the energy balance and the per-sample records of a run (docs/physics.md §4).
 
 Mechanical energy of one system::
 

@@ -1,4 +1,4 @@
-"""What drives the system: the base motion of S1 and the prescribed box motion of S2 (SPEC §1).
+"""What drives the system: the base motion of S1 and the prescribed box motion of S2 (docs/physics.md §1).
 
 Each motion in its JAX form (of :class:`~jaxdamp.physics.model.Params`) and, next to it, its numba
 scalar form for the native kernel (:mod:`jaxdamp.engine.native`); ``Ω = 2πf`` [rad/s].

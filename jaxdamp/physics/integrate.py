@@ -1,4 +1,4 @@
-"""The time step: velocity Verlet for grains (translation, rotation) and the box (SPEC §3).
+"""The time step: velocity Verlet for grains (translation, rotation) and the box (docs/physics.md §3).
 
 One step from ``t`` to ``t + dt``::
 

@@ -260,7 +260,7 @@ def collision_time_limit(config: Config, radii: np.ndarray) -> float:
     stiffest, lightest contact at :func:`impact_speed`.
 
     Checks the smallest grain of every species against a like grain and against a wall
-    (SPEC §3); the shortest wins. (A small grain against a larger one collides longer than
+    (docs/physics.md §3); the shortest wins. (A small grain against a larger one collides longer than
     against a like grain, so unlike pairs never set the limit.)
     """
     if len(radii) == 0:

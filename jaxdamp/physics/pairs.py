@@ -1,4 +1,4 @@
-"""Grain–grain contacts over a dense neighbour block (SPEC §2).
+"""Grain–grain contacts over a dense neighbour block (docs/physics.md §2).
 
 Each grain ``i`` sees its neighbours ``idx[i, :]`` (jax-md ``Dense`` format, padded with ``N``).
 Every pair is evaluated from both sides and forces are summed per row: no scatter, and

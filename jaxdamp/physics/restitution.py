@@ -174,7 +174,7 @@ def _gamma(k, A, gamma_n):
 
 
 def collision(m_star, R_star, E_star, v, A=None, gamma_n=None) -> Collision:
-    """Integrate one head-on collision of the contact law (SPEC §2).
+    """Integrate one head-on collision of the contact law (docs/physics.md §2).
 
     Force ``F_n = max(0, k_n ξ^{3/2} + γ_n sqrt(ξ) ξ')`` from ``ξ = 0``, ``ξ' = v``.
 

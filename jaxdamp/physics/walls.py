@@ -1,4 +1,4 @@
-"""Sphere–wall contacts with the six flat walls of the box (SPEC §2).
+"""Sphere–wall contacts with the six flat walls of the box (docs/physics.md §2).
 
 The box spans ``x ∈ [0, Lx]``, ``y ∈ [0, Ly]`` and ``z ∈ [z_box, z_box + Lz]``: it moves rigidly
 along ``z`` only, with velocity ``zd_box``. Walls use the same contact law as grain pairs with

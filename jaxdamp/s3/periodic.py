@@ -12,9 +12,9 @@ module says so instead of returning a number.
 
 **The stroboscopic map.** The drive period ``T = 2π/Ω`` is split into ``N`` equal steps,
 ``N = ceil(refine · T / dt_max)`` (:func:`period_steps`; ``dt_max`` the smooth model's step
-limit of :func:`jaxdamp.s3.impact.contact_constants`, so with ``refine = 1`` ``dt = T/N`` is just
-below it, as :func:`jaxdamp.s3.impact.smooth_schedule` shrinks ``dt`` to fit the record interval).
-``P(x; θ)`` is ``N`` velocity-Verlet steps of :func:`jaxdamp.s3.impact.smooth_step` from the
+limit of :func:`jaxdamp.s3.smooth.contact_constants`, so with ``refine = 1`` ``dt = T/N`` is just
+below it, as :func:`jaxdamp.s3.smooth.smooth_schedule` shrinks ``dt`` to fit the record interval).
+``P(x; θ)`` is ``N`` velocity-Verlet steps of :func:`jaxdamp.s3.smooth.smooth_step` from the
 phase-0 state ``x`` (:func:`stroboscopic_map`). Because the step evaluates its
 velocity-dependent forces at the predicted velocities ``v + a dt``, the accelerations carried
 from one step to the next are part of the state of the discrete dynamics, so ``x`` has
@@ -23,12 +23,12 @@ from one step to the next are part of the state of the discrete dynamics, so ``x
     x = (z, z', y, y', z'', y'')          at t ≡ 0 (mod T)
 
 (box and particle positions [m], velocities [m/s] and the accelerations of the last step
-[m/s²]). The contact forces of :class:`~jaxdamp.s3.impact.SmoothState` enter only the contact-loss
+[m/s²]). The contact forces of :class:`~jaxdamp.s3.smooth.SmoothState` enter only the contact-loss
 bookkeeping, and only through ``F_floor - F_lid = m (y'' + g)``; the work accumulators restart
 at 0 and ``z_max, z_min`` are not used. Of the 6 Floquet multipliers, 4 belong to the physical
 dynamics and 2 to the predicted-velocity scheme (parasitic, |λ| < 1e-6; with ``e = 0`` the
 particle modes collapse as well, so ``det ∂P/∂x ≈ 0``). ``θ`` is any scalar field of
-:class:`~jaxdamp.s3.impact.SmoothParams` except ``dt`` (default the gap); for ``omega`` the step
+:class:`~jaxdamp.s3.smooth.SmoothParams` except ``dt`` (default the gap); for ``omega`` the step
 follows as ``dt = 2π/(Ω N)``, so that ``P`` stays one period. ``P^k`` is ``k N`` steps (time
 runs on; the drive is ``T``-periodic).
 
@@ -55,7 +55,7 @@ found.
   least-squares ``cos``/``sin``/constant fit of the optimiser, which is exactly this for
   uniform samples over whole periods);
 * ``dissipation`` ``E`` [J]: impact (contact) loss per drive period, ``W_impact(kT) / k`` (the
-  ``impact`` work channel of :func:`~jaxdamp.s3.impact.smooth_step`);
+  ``impact`` work channel of :func:`~jaxdamp.s3.smooth.smooth_step`);
 * ``damping`` ``C_eq = E / (π Ω Z²)`` [N s/m], the equivalent viscous damping (§7);
 * ``band`` (:func:`objective_and_gradient`): the smooth maximum of ``Z`` over several
   frequencies (:func:`jaxdamp.design.objectives.smooth_max`), one orbit per frequency.
@@ -133,7 +133,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxdamp.config import Config, ConfigError
-from jaxdamp.s3 import impact
+from jaxdamp.s3 import smooth
 
 #: Components of the phase-0 state ``x`` of the stroboscopic map.
 STATE_FIELDS = ("z", "vz", "y", "vy", "az", "ay")
@@ -159,7 +159,7 @@ class Orbit:
     first; ``stable``, ``converged``; ``residual`` the scaled residual ``r(x*)``;
     ``iterations`` Newton iterations of the accepted ``k`` (summed over all ``k`` tried in
     ``total_iterations``); ``reason`` why it was not accepted ("" if stable);
-    ``params`` the :class:`~jaxdamp.s3.impact.SmoothParams` (step ``dt = T/N``), ``n_steps`` ``N``
+    ``params`` the :class:`~jaxdamp.s3.smooth.SmoothParams` (step ``dt = T/N``), ``n_steps`` ``N``
     per period; ``start`` the Newton start state and ``start_distance`` its scaled distance
     ``max_i |x*_i - start_i| / s_i`` from the orbit (small when the transient has settled on
     it: the orbit is the attractor the run reaches); ``sim_seconds`` the simulated
@@ -174,7 +174,7 @@ class Orbit:
     residual: float
     iterations: int
     reason: str
-    params: impact.SmoothParams
+    params: smooth.SmoothParams
     n_steps: int
     start: np.ndarray
     start_distance: float = math.nan
@@ -199,21 +199,21 @@ class Orbit:
 
 def period_steps(config: Config, frequency: float | None = None, refine: int = 1) -> int:
     """``N``: steps per drive period, ``ceil(refine T / dt_max)`` (``dt = T/N ≤ dt_max/refine``,
-    ``dt_max`` of :func:`jaxdamp.s3.impact.contact_constants`)."""
+    ``dt_max`` of :func:`jaxdamp.s3.smooth.contact_constants`)."""
     f = float(config.frequency if frequency is None else frequency)
-    dt_max = impact.contact_constants(config)[2] / int(refine)
+    dt_max = smooth.contact_constants(config)[2] / int(refine)
     return max(1, int(math.ceil(1.0 / (f * dt_max) - 1e-9)))
 
 
 def orbit_params(config: Config, frequency: float | None = None, gap: float | None = None,
                  n_steps: int | None = None,
-                 refine: int = 1) -> tuple[impact.SmoothParams, int]:
+                 refine: int = 1) -> tuple[smooth.SmoothParams, int]:
     """``(SmoothParams, N)`` of ``config`` at ``frequency`` [Hz] and ``gap`` [m] (defaults:
     the config's), with ``dt = T/N`` (``N = n_steps``, default :func:`period_steps` with
     ``refine``); ``t_window = 0`` (unused)."""
     f = float(config.frequency if frequency is None else frequency)
     n = period_steps(config, f, refine) if n_steps is None else int(n_steps)
-    p = impact.smooth_params(config, 1.0 / (f * n), 0.0)
+    p = smooth.smooth_params(config, 1.0 / (f * n), 0.0)
     p = dataclasses.replace(p, omega=jnp.asarray(2 * math.pi * f), t_window=jnp.asarray(0.0))
     p = dataclasses.replace(p, dt=2 * jnp.pi / (p.omega * n))  # as _with: the same rounding
     if gap is not None:
@@ -221,44 +221,44 @@ def orbit_params(config: Config, frequency: float | None = None, gap: float | No
     return p, n
 
 
-def state_scale(p: impact.SmoothParams):
+def state_scale(p: smooth.SmoothParams):
     """Scales ``s`` of the state components: ``L, LΩ, L, LΩ, LΩ², LΩ²``, ``L = gap + U``."""
     L = p.gap + jnp.abs(p.U)
     w = p.omega
     return jnp.stack([L, L * w, L, L * w, L * w * w, L * w * w])
 
 
-def _with(p: impact.SmoothParams, name: str, value, n):
+def _with(p: smooth.SmoothParams, name: str, value, n):
     """``p`` with field ``name`` set to ``value`` and ``dt = 2π/(Ω n)``."""
     if name == "dt":
         raise ValueError("the step dt is fixed by the period (dt = T/N); differentiate omega")
-    if name not in impact.SmoothParams.__dataclass_fields__:
+    if name not in smooth.SmoothParams.__dataclass_fields__:
         raise ValueError(f"{name!r} is not a field of SmoothParams")
     p = dataclasses.replace(p, **{name: value})
     return dataclasses.replace(p, dt=2 * jnp.pi / (p.omega * n))
 
 
-def _to_state(x, p: impact.SmoothParams) -> impact.SmoothState:
+def _to_state(x, p: smooth.SmoothParams) -> smooth.SmoothState:
     z, vz, y, vy, az, ay = (x[i] for i in range(STATE_SIZE))
     zero = jnp.zeros_like(z)
-    return impact.SmoothState(
+    return smooth.SmoothState(
         i=jnp.zeros((), jnp.int64), z=z, vz=vz, az=az, y=y, vy=vy, ay=ay,
-        f_floor=p.m * (ay + p.g), f_lid=zero, power=impact._primary_power(z, vz, zero, p),
+        f_floor=p.m * (ay + p.g), f_lid=zero, power=smooth._primary_power(z, vz, zero, p),
         work=jnp.zeros(3, x.dtype), z_max=zero, z_min=zero)
 
 
-def _from_state(st: impact.SmoothState):
+def _from_state(st: smooth.SmoothState):
     return jnp.stack([st.z, st.vz, st.y, st.vy, st.az, st.ay])
 
 
-def _orbit_run(x, p: impact.SmoothParams, steps):
+def _orbit_run(x, p: smooth.SmoothParams, steps):
     """``steps`` steps from the phase-0 state ``x``: ``(x_end, impact work, Σ z cos Ωt,
     Σ z sin Ωt)`` (sums over the steps' end states). ``steps`` may be traced."""
     st0 = _to_state(x, p)
 
     def body(_, carry):
         st, c, s = carry
-        st = impact.smooth_step(st, p)
+        st = smooth.smooth_step(st, p)
         ph = p.omega * st.i * p.dt
         return st, c + st.z * jnp.cos(ph), s + st.z * jnp.sin(ph)
 
@@ -267,7 +267,7 @@ def _orbit_run(x, p: impact.SmoothParams, steps):
     return _from_state(st), st.work[2], c, s
 
 
-def _averages(x_end, work, c, s, steps, k, p: impact.SmoothParams):
+def _averages(x_end, work, c, s, steps, k, p: smooth.SmoothParams):
     """``(Z, E, C_eq)`` of an orbit run: first-harmonic amplitude [m], impact loss per period
     [J], equivalent viscous damping ``E / (π Ω Z²)`` [N s/m]."""
     Z = 2.0 / steps * jnp.sqrt(c * c + s * s)
@@ -275,7 +275,7 @@ def _averages(x_end, work, c, s, steps, k, p: impact.SmoothParams):
     return jnp.stack([Z, E, E / (jnp.pi * p.omega * Z * Z)])
 
 
-def stroboscopic_map(x, p: impact.SmoothParams, n: int, k: int = 1, param: str = "gap",
+def stroboscopic_map(x, p: smooth.SmoothParams, n: int, k: int = 1, param: str = "gap",
                      theta=None):
     """``P^k(x; θ)``: ``k n`` smooth steps from the phase-0 state ``x`` ``(6,)``; ``θ`` (if
     given) replaces field ``param`` of ``p``. Pure, jittable, forward-differentiable."""
@@ -286,16 +286,16 @@ def stroboscopic_map(x, p: impact.SmoothParams, n: int, k: int = 1, param: str =
 
 
 @jax.jit
-def _transient(p: impact.SmoothParams, steps):
+def _transient(p: smooth.SmoothParams, steps):
     """The phase-0 state after ``steps`` (a multiple of ``N``) steps from
-    :func:`jaxdamp.s3.impact.smooth_initial` (the particle at rest on the floor)."""
-    st = jax.lax.fori_loop(0, steps, lambda _, s: impact.smooth_step(s, p),
-                           impact.smooth_initial(p))
+    :func:`jaxdamp.s3.smooth.smooth_initial` (the particle at rest on the floor)."""
+    st = jax.lax.fori_loop(0, steps, lambda _, s: smooth.smooth_step(s, p),
+                           smooth.smooth_initial(p))
     return _from_state(st)
 
 
 @jax.jit
-def _residual_and_jacobian(x, p: impact.SmoothParams, steps):
+def _residual_and_jacobian(x, p: smooth.SmoothParams, steps):
     """``G(x) = P^k(x) - x`` and ``∂P^k/∂x`` (jacfwd, 6 tangents)."""
     def f(x):
         y = _orbit_run(x, p, steps)[0]
@@ -306,12 +306,12 @@ def _residual_and_jacobian(x, p: impact.SmoothParams, steps):
 
 
 @jax.jit
-def _residual(x, p: impact.SmoothParams, steps):
+def _residual(x, p: smooth.SmoothParams, steps):
     return _orbit_run(x, p, steps)[0] - x
 
 
 @functools.partial(jax.jit, static_argnames=("param",))
-def _map_and_averages_jacobian(x, theta, p: impact.SmoothParams, n, k, param: str):
+def _map_and_averages_jacobian(x, theta, p: smooth.SmoothParams, n, k, param: str):
     """Values ``(P^k, Z, E, C_eq)`` ``(9,)`` and their ``9 × 7`` Jacobian w.r.t. ``(x, θ)``
     (one jacfwd, 7 tangents through ``k n`` steps)."""
     def f(xt):
@@ -329,7 +329,7 @@ def _scaled(G, scale) -> float:
     return float(r) if np.isfinite(r) else math.inf
 
 
-def newton(x0, p: impact.SmoothParams, n: int, k: int = 1, tol: float = TOL,
+def newton(x0, p: smooth.SmoothParams, n: int, k: int = 1, tol: float = TOL,
            max_iter: int = 30, min_step: float = 1.0 / 64) -> dict:
     """Newton's method on ``G(x) = P^k(x) - x`` from ``x0`` with backtracking (``α = 1, ½,
     ...,`` ``min_step``; accept when ``r`` decreases by the factor ``1 - 1e-4 α``).
@@ -472,7 +472,7 @@ def orbit(config: Config, gap: float | None = None, frequency: float | None = No
 
 def orbit_averages(orb: Orbit, param: str = "gap") -> dict:
     """The objectives averaged over a stable orbit and their implicit derivatives w.r.t. the
-    field ``param`` of :class:`~jaxdamp.s3.impact.SmoothParams` (module docstring):
+    field ``param`` of :class:`~jaxdamp.s3.smooth.SmoothParams` (module docstring):
     ``{"amplitude": (Z, dZ/dθ), "dissipation": (E, dE/dθ), "damping": (C_eq, dC_eq/dθ),
     "dx": dx*/dθ (6,)}``; ``Z`` [m] the first-harmonic amplitude of ``z``, ``E`` [J] the impact
     loss per drive period, ``C_eq = E / (π Ω Z²)`` [N s/m] (``docs/physics.md`` §7). All NaN
@@ -481,7 +481,7 @@ def orbit_averages(orb: Orbit, param: str = "gap") -> dict:
         nan = (math.nan, math.nan)
         return {"amplitude": nan, "dissipation": nan, "damping": nan,
                 "dx": np.full(STATE_SIZE, np.nan)}
-    if param == "dt" or param not in impact.SmoothParams.__dataclass_fields__:
+    if param == "dt" or param not in smooth.SmoothParams.__dataclass_fields__:
         _with(orb.params, param, 0.0, orb.n_steps)  # raises ValueError with the reason
     theta = jnp.asarray(getattr(orb.params, param), dtype=jnp.float64)
     val, jac = _map_and_averages_jacobian(jnp.asarray(orb.state), theta, orb.params,

@@ -1,4 +1,4 @@
-"""Dissipation efficiency of a driven box (S2; SPEC §4; Varela-Rosales et al. 2023, eqs. 3–5).
+"""Dissipation efficiency of a driven box (S2; docs/physics.md §4; Varela-Rosales et al. 2023, eqs. 3–5).
 
 Per drive period ``T = 1/f`` (energies in J per period, not the paper's ``1/T`` powers):
 

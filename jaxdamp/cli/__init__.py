@@ -1,0 +1,40 @@
+"""The ``jaxdamp`` command line: one module per subcommand (``run``, ``frf``, ``optimize``,
+``efficiency``) and one for the file commands (``presets``, ``info``, ``plot``, ``export``).
+Side effects (files, printing) live here and in the studies; heavy imports (JAX, jax-md) happen
+inside the commands, so ``--help`` and configuration errors answer at once."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from jaxdamp.cli import efficiency, files, frf, optimize, run
+from jaxdamp.config import ConfigError
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="jaxdamp",
+        description="Simulate granular (particle) dampers with a JAX discrete-element model.",
+        epilog="Run `jaxdamp COMMAND --help` for each command's options and examples.",
+    )
+    sub = p.add_subparsers(dest="command", required=True)
+    for command in (run, frf, optimize, efficiency, files):
+        command.register(sub)
+    return p
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except ConfigError as err:
+        print(f"jaxdamp: error: {err}", file=sys.stderr)
+        return 2
+    except FloatingPointError as err:
+        print(f"jaxdamp: {err}", file=sys.stderr)
+        return 3
+
+
+if __name__ == "__main__":
+    sys.exit(main())

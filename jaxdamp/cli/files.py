@@ -1,0 +1,158 @@
+"""``jaxdamp presets``, ``info``, ``plot``, ``export``: the reference cases and output files."""
+
+from __future__ import annotations
+
+import argparse
+import textwrap
+
+from jaxdamp.cli.common import to_toml
+from jaxdamp.config import ConfigError
+
+
+def cmd_presets(args) -> int:
+    from jaxdamp.cases import presets
+
+    if args.show:
+        cfg = presets.get(args.show)
+        print(to_toml(cfg.to_dict()))
+        return 0
+    for name, line in presets.describe():
+        print(f"{name:28s} {line}")
+    return 0
+
+
+def cmd_info(args) -> int:
+    from jaxdamp.io import describe
+
+    print(describe(args.file))
+    return 0
+
+
+PLOT_KINDS = {
+    "band": "run file: floor and lid of the box, the band between the lowest and highest grain "
+            "centre, the centre of mass, and the force of the grains on the box, versus time "
+            "(default window: the last few drive periods)",
+    "energy": "run file: cumulative work channels (input, primary damper, the four granular "
+              "losses) and the energy-balance residual, versus time",
+    "frf": "sweep file (jaxdamp frf): amplitude ratio Z/U versus frequency per Lz, with the "
+           "analytic FRFs and the fitted M_ef, C_ef",
+    "snapshot": "run file: 3-D view of the grains at one snapshot (--frame), box wireframe",
+    "poincare": "run file: stroboscopic section (z_cm, vz_cm) of the bed's centre of mass once "
+                "per drive period",
+}
+
+
+def cmd_plot(args) -> int:
+    import os
+
+    from jaxdamp import figures
+
+    stem = os.path.splitext(os.fspath(args.file))[0]
+    out = args.out or f"{stem}_{args.kind}.png"
+    if args.kind == "frf":
+        if args.t0 is not None or args.t1 is not None:
+            raise ConfigError("--t0/--t1 do not apply to --kind frf (a sweep's FRF has no time axis)")
+        fig = figures.frf_from_file(args.file)
+    elif args.kind == "band":
+        fig = figures.band_from_file(args.file, args.t0, args.t1)
+    elif args.kind == "energy":
+        fig = figures.energy_from_file(args.file, args.t0, args.t1)
+    elif args.kind == "snapshot":
+        fig = figures.snapshot_from_file(args.file, args.frame, args.color)
+    else:
+        fig = figures.poincare_from_file(args.file, args.t0, args.t1, args.phase)
+    figures.save(fig, out)
+    print(f"wrote {out}")
+    return 0
+
+
+def cmd_export(args) -> int:
+    import os
+
+    from jaxdamp.io.export import export
+
+    if args.format in ("gif", "mp4"):
+        from jaxdamp.figures import animate
+
+        out = args.out or os.path.splitext(os.fspath(args.file))[0] + "." + args.format
+        if os.path.splitext(out)[1].lower() != "." + args.format:
+            raise ConfigError(f"--out {out}: --format {args.format} writes a .{args.format} file")
+        animate(args.file, out, every=args.every, fps=args.fps, color=args.color)
+        print(f"wrote {out}")
+        return 0
+    paths = export(args.file, args.format, args.out, args.every)
+    if args.format == "vtk":
+        print(f"wrote {paths[0]} indexing {len(paths) - 1} frames ({paths[1]} …)")
+    else:
+        print(f"wrote {paths[0]}")
+    return 0
+
+
+def register(sub) -> None:
+    """Add the subcommand(s) to the ``jaxdamp`` parser."""
+    pr = sub.add_parser("presets", help="list the reference cases (or --show one as TOML)")
+    pr.add_argument("--show", metavar="NAME", help="print the full configuration of a preset")
+    pr.set_defaults(func=cmd_presets)
+
+    i = sub.add_parser("info", help="summarise a run file")
+    i.add_argument("file")
+    i.set_defaults(func=cmd_info)
+
+    pl = sub.add_parser(
+        "plot", help="figures from a run or sweep file (band, energy, frf, snapshot, poincare)",
+        description="Draw one figure from an HDF5 output file and write it as PNG.",
+        epilog="kinds:\n" + "\n".join(
+            textwrap.fill(f"{k}: {v}", 92, initial_indent="  ", subsequent_indent="      ")
+            for k, v in PLOT_KINDS.items()) + textwrap.dedent("""
+
+            examples:
+              jaxdamp plot run.h5 --kind band                 (writes run_band.png)
+              jaxdamp plot run.h5 --kind band --t0 0.5 --t1 0.7 --out bed.png
+              jaxdamp plot run.h5 --kind snapshot --frame 0 --color height
+              jaxdamp plot frf.h5 --kind frf --out frf.png
+            Run files come from `jaxdamp run --out`, sweep files from `jaxdamp frf --out`
+            (`jaxdamp info FILE` tells which); times are in seconds from the start of the drive."""),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    pl.add_argument("file", metavar="FILE.h5", help="run file or sweep file")
+    pl.add_argument("--kind", required=True, choices=list(PLOT_KINDS), help="which figure")
+    pl.add_argument("--out", metavar="FILE.png", help="output image (default: FILE_<kind>.png)")
+    pl.add_argument("--t0", type=float, metavar="S", help="start of the time window [s] "
+                    "(band: default the last few drive periods; energy, poincare: the whole run)")
+    pl.add_argument("--t1", type=float, metavar="S", help="end of the time window [s]")
+    pl.add_argument("--frame", type=int, default=-1, metavar="K",
+                    help="snapshot index for --kind snapshot (default -1, the last)")
+    pl.add_argument("--color", choices=["species", "height"], default="species",
+                    help="grain colour for snapshot: species, or height above the floor")
+    pl.add_argument("--phase", type=float, default=0.0, metavar="RAD",
+                    help="poincare: section phase within the drive period (0 = drive maximum)")
+    pl.set_defaults(func=cmd_plot)
+
+    ex = sub.add_parser(
+        "export", help="trajectories of a run file for OVITO / ParaView, or an animation",
+        description="Write the grain snapshots of a run file (/snapshots, one after every "
+        "chunk) for external viewers.",
+        epilog=textwrap.dedent("""\
+            formats:
+              xyz  one extended-XYZ file, one frame per snapshot (OVITO, ASE): species, position,
+                   radius, orientation quaternion (x, y, z, w); the box as Lattice + Origin.
+              vtk  one legacy-VTK polydata file per snapshot (FILE_0000.vtk, ...) with radius,
+                   species and orientation point data, a ParaView .pvd collection indexing them
+                   by time, and a .vtk.series file (ParaView >= 5.5) with the same times.
+              gif  animation through Pillow;  mp4  animation through ffmpeg (needs it on PATH).
+            examples:
+              jaxdamp export run.h5 --format xyz                 (writes run.xyz)
+              jaxdamp export run.h5 --format vtk --out vtk/run.pvd --every 2
+              jaxdamp export run.h5 --format gif --fps 8
+            Positions are in metres in the lab frame (the box moves: its floor is z_box)."""),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    ex.add_argument("file", metavar="FILE.h5", help="run file (jaxdamp run --out)")
+    ex.add_argument("--format", required=True, choices=["xyz", "vtk", "gif", "mp4"])
+    ex.add_argument("--out", metavar="PATH", help="output file (.xyz, .pvd, .gif, .mp4; "
+                    "default: next to FILE)")
+    ex.add_argument("--every", type=int, default=1, metavar="K", help="every K-th snapshot")
+    ex.add_argument("--fps", type=int, default=10, help="frames per second (gif, mp4)")
+    ex.add_argument("--color", choices=["species", "height"], default="species",
+                    help="grain colour in animations")
+    ex.set_defaults(func=cmd_export)
