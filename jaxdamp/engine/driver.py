@@ -2,7 +2,7 @@
 
 Everything that advances grains — a single run (:mod:`jaxdamp.studies.runner`), a sweep
 (:mod:`jaxdamp.studies.sweep`), settling (:mod:`jaxdamp.engine.packing`), the optimiser's problems
-(:mod:`jaxdamp.optimize`), experiments and benchmarks — holds a :class:`Batch` and calls
+(:mod:`jaxdamp.design`), experiments and benchmarks — holds a :class:`Batch` and calls
 :func:`advance`. The driver owns:
 
 * the start of a batch from positions and velocities (:func:`start`: forces evaluated once,
