@@ -91,8 +91,9 @@ class SteadyProblem:
     def measure(self, lzs) -> dict:
         """Replicated steady-state objective at every height of ``lzs`` (one batch).
 
-        Returns ``{"lz": (L,), "J": (L, R), "Z": (F, L, R), "E": (F, L, R),
-        "not_stationary": int, "sim_seconds": float, "wall": float}``."""
+        Returns ``{"lz": (L,), "J": (L, R), "Z": (F, L, R), "E": (F, L, R), "start": (F, R)
+        (the common window's start per bed [s]), "not_stationary": int (runs),
+        "sim_seconds": float, "wall": float}``."""
         from jaxdamp.analysis import stats
         from jaxdamp.studies.sweep import sweep
 
@@ -105,7 +106,7 @@ class SteadyProblem:
         res = sweep(self.config, {"frequency": list(self.freqs), "box.Lz": lzs},
                     replicates=self.R, beds=self.beds, progress=self.progress, echo=None)
         F, L, R = len(self.freqs), len(lzs), self.R
-        Z, E = np.empty((F, L, R)), np.empty((F, L, R))
+        Z, E, start = np.empty((F, L, R)), np.empty((F, L, R)), np.empty((F, R))
         not_stationary = 0
         for f, freq in enumerate(self.freqs):
             for r in range(R):  # one bed at every height: one common window (module doc)
@@ -113,13 +114,15 @@ class SteadyProblem:
                                             for k in ("t", "z_box", "work")}, freq)
                           for li in range(L)]
                 w = stats.shared_window(series)
+                start[f, r] = series[0]["t_start"][w["start"]] if len(series[0]["t_start"]) else np.nan
                 Z[f, :, r] = w["amplitude"]
                 E[f, :, r] = w["granular_loss_per_cycle"]
                 not_stationary += 0 if w["stationary"] else L
         J = np.asarray(self.objective.combine(Z, E, self.freqs), float)  # (L, R)
         cost = len(self.freqs) * len(lzs) * self.R * self.duration
         self.sim_seconds += cost
-        out = {"lz": np.asarray(lzs), "J": J, "Z": Z, "E": E, "not_stationary": not_stationary,
+        out = {"lz": np.asarray(lzs), "J": J, "Z": Z, "E": E, "start": start,
+               "not_stationary": not_stationary,
                "sim_seconds": cost, "wall": time.perf_counter() - t0}
         self.evaluations.append(out)
         return out
