@@ -54,15 +54,16 @@ def settings(quick: bool) -> dict:
         return dict(overrides={"grains.0.count": 24, "box.Lx": 0.02, "box.Ly": 0.02,
                                "primary.M": 0.3, "primary.K": 2720.0, "primary.C": 1.0,
                                "numerics.settle_time": 0.15},
-                    ref_lz=(0.03, 0.04), R_ref=4, ref_duration=0.5, R=2, duration=0.4,
-                    reps=2, h=0.003, lo=0.03, hi=0.15, coarse=4, fine=2, trust_seeds=(100,),
-                    fd_starts=(0.03,), fd_budget=8.0, radius=0.005, min_radius=0.002,
-                    tol=0.004, seed_stride=1000)
+                    ref_lz=(0.03, 0.04), R_ref=3, ref_duration=0.4, R=2, duration=0.3,
+                    reps=2, h=0.003, lo=0.03, hi=0.15, coarse=3, fine=1, trust_seeds=(100,),
+                    fd_starts=(0.03,), fd_budget=3.0, radius=0.005, min_radius=0.002,
+                    tol=0.004, seed_stride=1000, max_rounds=2, s3_gaps=11, s3_duration=1.5)
     return dict(overrides={"numerics.settle_time": 0.3},
                 ref_lz=(0.09, 0.11, 0.14), R_ref=8, ref_duration=5.0, R=4, duration=3.0,
                 reps=6, h=0.005, lo=None, hi=0.30, coarse=11, fine=4,
                 trust_seeds=(100, 200, 300), fd_starts=(0.07, 0.25), fd_budget=150.0,
-                radius=0.01, min_radius=0.0025, tol=0.003, seed_stride=1000)
+                radius=0.01, min_radius=0.0025, tol=0.003, seed_stride=1000, max_rounds=6,
+                s3_gaps=41, s3_duration=3.0)
 
 
 def _problem(base, s, seed, R, duration):
@@ -125,9 +126,10 @@ def run(s: dict, log) -> dict:
     trust = []
     for seed in s["trust_seeds"]:
         prob = _problem(base, s, seed * s["seed_stride"], s["R"], s["duration"])
-        p = propose(prob.config, prob.objective, prob.bed_height, lo, hi)
+        p = propose(prob.config, prob.objective, prob.bed_height, lo, hi, n=s["s3_gaps"],
+                    duration=s["s3_duration"])
         r = trust_region(prob, p["lz"], lo, hi, radius=s["radius"], min_radius=s["min_radius"],
-                         tol=s["tol"], echo=log)
+                         tol=s["tol"], max_rounds=s["max_rounds"], echo=log)
         trust.append(dict(seed=seed, proposal=p["lz"], s3_sim=p["sim_seconds"], result=r))
         log(f"trust region (seed set {seed}): S3 proposes {p['lz']:.5g} m; optimum "
             f"{r.optimum.x:.5g} m [{r.optimum.lo:.5g}, {r.optimum.hi:.5g}], "
