@@ -80,3 +80,18 @@ def trajectory(model, pb, st, nbrs, n_steps, every=1):
         s0 = driver.take(st, 0)
         out.append({k: np.asarray(getattr(s0, k)) for k in ("r", "v", "w", "t", "e_elastic")})
     return st, out
+
+
+EXPERIMENTS = __import__("pathlib").Path(__file__).parent.parent / "experiments"
+
+
+def load_experiment(name):
+    """The module ``experiments/<name>.py`` (experiments are scripts, not a package)."""
+    import importlib.util
+    import sys
+
+    spec = importlib.util.spec_from_file_location(name, EXPERIMENTS / f"{name}.py")
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = mod  # dataclasses look their module up
+    spec.loader.exec_module(mod)
+    return mod

@@ -1,19 +1,11 @@
 """Experiments run in their --quick mode and reproduce what their summaries claim."""
 
-import importlib.util
-import pathlib
 
 import numpy as np
 import pytest
+from helpers import load_experiment
 
-EXPERIMENTS = pathlib.Path(__file__).parent.parent / "experiments"
-
-
-def _load(name):
-    spec = importlib.util.spec_from_file_location(name, EXPERIMENTS / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+_load = load_experiment
 
 
 def test_restitution_curve_quick(tmp_path):

@@ -7,22 +7,16 @@ experiments' own summaries: restitution curve ~10 s (plus compilation), stiffnes
 universal response ~5 min, bed dynamics ~11 min, gap scan ~40 min.
 """
 
-import importlib.util
-import pathlib
 
 import numpy as np
 import pytest
+from helpers import load_experiment
 
 pytestmark = pytest.mark.slow
 
-EXPERIMENTS = pathlib.Path(__file__).parent.parent / "experiments"
 
 
-def _load(name):
-    spec = importlib.util.spec_from_file_location(name, EXPERIMENTS / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+_load = load_experiment
 
 
 def test_restitution_curve_full(tmp_path):
