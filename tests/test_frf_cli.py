@@ -7,15 +7,23 @@ from jaxdamp import cli
 
 
 def test_frf_cli_small(tmp_path, capsys):
+    """3 frequencies × 2 heights × 2 independent beds in one batch: amplitudes per replicate,
+    steady-state estimates, fits per replicate with both residual weightings."""
     out = tmp_path / "frf.h5"
     args = ["frf", "--preset", "sanchez2012-optimal", "--frequencies", "10,15,20",
-            "--lz", "0.05,0.08", "--out", str(out), "--no-progress",
+            "--lz", "0.05,0.08", "--out", str(out), "--no-progress", "--replicates", "2",
             "--set", "grains.0.count=20", "--set", "numerics.duration=0.1",
             "--set", "numerics.chunk=0.05", "--set", "numerics.settle_time=0.05"]
     assert cli.main(args) == 0
     text = capsys.readouterr().out
-    assert "Lz = 0.05 m: peak Z/U" in text and "fit M_ef" in text
+    assert "Lz = 0.05 m: peak Z/U" in text and "relative fit M_ef" in text
+    assert "SE over R = 2" in text and "absolute fit" in text
     with h5py.File(out) as h:
+        assert h.attrs["replicates"] == 2
+        assert h["replicate_summary/amplitude"].shape == (3, 2, 2)
+        assert h["steady/amplitude/values"].shape == (3, 2, 2)
+        assert h["fit"].attrs["residuals"] == "relative"
+        assert np.isfinite(h["fit/se_M_ef"][()]).all() and "fit/absolute/M_ef" in h
         assert h["summary/amplitude"].shape == (3, 2)
         assert h["summary/amplitude"].attrs["units"] == "m"
         assert np.all(h["summary/amplitude"][()] > 0)
