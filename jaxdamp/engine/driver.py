@@ -216,6 +216,42 @@ def advance(batch: Batch, n_records: int, record_every: int, *, systems: int | N
     return batch.replace(states=states, nbrs=new_nbrs), recs
 
 
+def run_chunks(batch: Batch, chunks: range, records_per_chunk: int, record_every: int, *,
+               systems: int | None = None, on_chunk=None, on_diverged=None, on_realloc=None,
+               progress: str | None = None, total: int | None = None) -> Batch:
+    """The chunk loop of every long run: for each index of ``chunks``, :func:`advance` and
+    hand ``(index, batch, records)`` to ``on_chunk`` (append samples, checkpoint, snapshot).
+
+    A non-finite chunk calls ``on_diverged(error)`` (keep what was written, mark the file)
+    and re-raises :class:`SimulationDiverged`. ``progress``: the description of a tqdm bar
+    over ``total`` chunks (starting at ``chunks.start``), or ``None`` for none. Returns the
+    batch after the last chunk."""
+    bar = None
+    if progress is not None:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=total if total is not None else len(chunks), initial=chunks.start,
+                   unit="chunk", desc=progress, leave=True)
+    try:
+        for k in chunks:
+            try:
+                batch, recs = advance(batch, records_per_chunk, record_every, systems=systems,
+                                      on_realloc=on_realloc)
+            except SimulationDiverged as e:
+                if on_diverged is not None:
+                    on_diverged(e)
+                raise
+            if on_chunk is not None:
+                on_chunk(k, batch, recs)
+            if bar is not None:
+                bar.update(1)
+                bar.set_postfix(t=f"{float(np.asarray(batch.states.t)[0]):.3f}s")
+    finally:
+        if bar is not None:
+            bar.close()
+    return batch
+
+
 def run_for(batch: Batch, seconds: float, pieces: int = 1, check: bool = True) -> Batch:
     """Advance by ``seconds`` (rounded to whole steps, at least one) in about ``pieces``
     chunks, discarding the samples (burn-in, transients)."""

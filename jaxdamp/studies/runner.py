@@ -167,12 +167,6 @@ def run(
             rf = RunFile.create(out, config, radii, masses, grain_species(config), bed,
                                 extra_attrs={"dt": sched.dt, "duration": sched.duration})
 
-    bar = None
-    if progress:
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=sched.n_chunks, initial=start_chunk, unit="chunk",
-                   desc=f"{config.name} f={config.frequency:g} Hz", leave=True)
     all_recs: list[dict] = []
     if rf is not None and start_chunk > 0:
         all_recs.append({k: rf.h5["series"][k][()] for k in rf.h5["series"]})
@@ -180,38 +174,32 @@ def run(
     def realloc(old, new):
         say(f"neighbour list overflow: capacity {old} -> {new}, chunk redone")
 
+    def keep(chunk, batch, recs):
+        recs = {k: v[0] for k, v in recs.items()}
+        all_recs.append(recs)
+        if rf is not None:
+            rf.append_records(recs)
+            if snapshots:
+                rf.append_snapshot(float(batch.states.t[0]), batch.states.r[0],
+                                   batch.states.q[0])
+            rf.write_checkpoint(
+                {k: v[0] for k, v in driver.checkpoint(batch, 1).items()},  # one system
+                {"chunk": chunk + 1, "n_records": rf.n_records(),
+                 "n_snapshots": rf.h5["snapshots"]["t"].shape[0] if snapshots else 0},
+            )
+
+    def diverged(e):
+        if rf is not None:
+            rf.append_records({k: v[0] for k, v in e.records.items()}, e.index)
+            rf.set_status("diverged", str(e))
+
     wall0 = time.perf_counter()
-    steps_done = 0
-    try:
-        stop = sched.n_chunks if max_chunks is None else min(sched.n_chunks, start_chunk + max_chunks)
-        for chunk in range(start_chunk, stop):
-            try:
-                batch, recs = driver.advance(batch, sched.records_per_chunk, sched.record_every,
-                                             on_realloc=realloc)
-            except driver.SimulationDiverged as e:
-                if rf is not None:
-                    rf.append_records({k: v[0] for k, v in e.records.items()}, e.index)
-                    rf.set_status("diverged", str(e))
-                raise
-            recs = {k: v[0] for k, v in recs.items()}
-            steps_done += sched.chunk_steps
-            all_recs.append(recs)
-            if rf is not None:
-                rf.append_records(recs)
-                if snapshots:
-                    rf.append_snapshot(float(batch.states.t[0]), batch.states.r[0],
-                                       batch.states.q[0])
-                rf.write_checkpoint(
-                    {k: v[0] for k, v in driver.checkpoint(batch, 1).items()},  # one system
-                    {"chunk": chunk + 1, "n_records": rf.n_records(),
-                     "n_snapshots": rf.h5["snapshots"]["t"].shape[0] if snapshots else 0},
-                )
-            if bar is not None:
-                bar.update(1)
-                bar.set_postfix(t=f"{float(batch.states.t[0]):.3f}s")
-    finally:
-        if bar is not None:
-            bar.close()
+    stop = sched.n_chunks if max_chunks is None else min(sched.n_chunks, start_chunk + max_chunks)
+    batch = driver.run_chunks(
+        batch, range(start_chunk, stop), sched.records_per_chunk, sched.record_every,
+        on_chunk=keep, on_diverged=diverged, on_realloc=realloc, total=sched.n_chunks,
+        progress=f"{config.name} f={config.frequency:g} Hz" if progress else None)
+    steps_done = (stop - start_chunk) * sched.chunk_steps
     wall = time.perf_counter() - wall0
 
     records = {k: np.concatenate([r[k] for r in all_recs]) for k in all_recs[0]} if all_recs else {}

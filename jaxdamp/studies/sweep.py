@@ -160,25 +160,11 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
             sf = SweepFile.create(out, config, axes, configs, dt, sched.duration, engine, R,
                                   devices=len(jax.devices()))
 
-    bar = None
-    if progress:
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=sched.n_chunks, initial=start_chunk, unit="chunk",
-                   desc=f"sweep of {P} points")
     wall0 = time.perf_counter()
     mem: dict = {}
     snaps: dict = {}
-    stop = sched.n_chunks if max_chunks is None else min(sched.n_chunks, start_chunk + max_chunks)
-    for chunk in range(start_chunk, stop):
-        try:
-            batch, recs = driver.advance(batch, sched.records_per_chunk, sched.record_every,
-                                         systems=P)
-        except driver.SimulationDiverged as e:
-            if sf is not None:  # the file keeps every finished chunk and its checkpoint
-                sf.set_status("diverged", str(e))
-                sf.close()
-            raise
+
+    def keep(chunk, batch, recs):
         if sf is not None:
             sf.append_records(recs)
             sf.write_checkpoint(driver.checkpoint(batch, P), chunk + 1,
@@ -187,10 +173,17 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
             _keep_snapshot(sf, snaps, batch.states, P)
         for k, v in recs.items():
             mem.setdefault(k, []).append(v)
-        if bar is not None:
-            bar.update(1)
-    if bar is not None:
-        bar.close()
+
+    def diverged(e):
+        if sf is not None:  # the file keeps every finished chunk and its checkpoint
+            sf.set_status("diverged", str(e))
+            sf.close()
+
+    stop = sched.n_chunks if max_chunks is None else min(sched.n_chunks, start_chunk + max_chunks)
+    batch = driver.run_chunks(
+        batch, range(start_chunk, stop), sched.records_per_chunk, sched.record_every, systems=P,
+        on_chunk=keep, on_diverged=diverged, total=sched.n_chunks,
+        progress=f"sweep of {P} systems" if progress else None)
     if stop < sched.n_chunks:
         if sf is not None:
             sf.set_status("partial")
