@@ -52,6 +52,13 @@ def cmd_frf(args) -> int:
     if res.steady is not None:
         Zr, fallback = steady_or_window(res, "amplitude")
         Zr = Zr.reshape(len(freqs), L, R)
+        starts = np.asarray(res.steady["amplitude"]["start"], float)
+        ok = np.asarray(res.steady["amplitude"]["stationary"], bool)
+        if ok.any():
+            print(f"steady state detected from the data (MSER on per-period amplitude and "
+                  f"dissipation) in {int(ok.sum())} of {ok.size} runs, starting at "
+                  f"t = {np.nanmin(starts[ok]):.3g}–{np.nanmax(starts[ok]):.3g} s; R = {R} "
+                  "replicate(s) per point")
         if fallback:
             print(f"warning: {fallback} of {Zr.size} runs did not become stationary (MSER on "
                   "per-period amplitude and dissipation); their fixed-window amplitude is used "
