@@ -25,6 +25,12 @@ def cmd_optimize(args) -> int:
     band = tuple(float_list(args.band)) if args.band else None
     objective = Objective(args.objective, frequency=args.frequency, band=band)
     impact = cfg.system == "impact"
+    names = tuple(v.strip() for v in (args.vars or "Lz").split(",") if v.strip())
+    if names != ("Lz",) or args.method in ("spsa", "random"):
+        return _cmd_design(args, cfg, objective, names)
+    if args.bounds:
+        raise ConfigError("--bounds applies to several design variables (--vars); for Lz "
+                          "alone use --lo/--hi")
     method = args.method or ("gradient" if impact else "trust")
     if impact and method == "trust":
         raise ConfigError("--method trust is the DEM's multi-fidelity search (S3 proposes, "
@@ -132,6 +138,97 @@ def cmd_optimize(args) -> int:
     return 0
 
 
+def _cmd_design(args, cfg, objective, names) -> int:
+    """Several design variables (``--vars Lz,base,friction``): SPSA or Latin-hypercube search
+    on the DEM, then a confirmation on fresh beds of the found design next to the start."""
+    import numpy as np
+
+    from jaxdamp.design import DEFAULTS
+    from jaxdamp.design.space import DesignProblem, DesignSpace, parse_bounds
+    from jaxdamp.design.spsa import random_search, spsa
+    from jaxdamp.io import optimisation as optimisation_file
+
+    if cfg.system != "primary":
+        raise ConfigError("--vars: several design variables need a DEM preset with a primary "
+                          "(S1, e.g. sanchez2012-optimal)")
+    method = args.method or "spsa"
+    if method not in ("spsa", "random"):
+        raise ConfigError(f"--method {method}: with several design variables use spsa "
+                          "(default) or random")
+    for flag, val in (("--lo", args.lo), ("--hi", args.hi), ("--gap0", args.gap0),
+                      ("--h", args.h), ("--lr", args.lr)):
+        if val is not None:
+            raise ConfigError(f"{flag} applies to Lz alone; with --vars use --bounds "
+                              "NAME=LO:HI and --x0")
+    if args.estimator != "steady":
+        raise ConfigError("--estimator windows applies to Lz alone")
+    s = dict(DEFAULTS["design-quick" if args.quick else "design"])
+    for key, val in (("replicates", args.replicates), ("duration", args.duration),
+                     ("max_iter", args.max_iter)):
+        if val is not None:
+            if val <= 0:
+                raise ConfigError(f"--{key.replace('_', '-')} {val}: must be > 0")
+            s[key] = val
+    if args.budget is not None and args.budget <= 0:
+        raise ConfigError(f"--budget {args.budget}: must be > 0 simulated system-seconds")
+    cfg = apply_overrides(cfg, {"numerics.settle_time": s["settle_time"]})
+    bounds = parse_bounds(args.bounds)
+    space = DesignSpace.of(cfg, names, bounds)  # refuse bad input before any compute
+    if args.x0:
+        x0 = np.asarray(float_list(args.x0), float)
+        if len(x0) != space.dim:
+            raise ConfigError(f"--x0: {len(x0)} values for {space.dim} variables "
+                              f"({','.join(names)})")
+        for n, v, a, b in zip(names, x0, space.lo, space.hi):
+            if not a <= v <= b:
+                raise ConfigError(f"--x0 {n} = {v:.5g}: outside its bounds [{a:.5g}, {b:.5g}]")
+    else:  # the preset's design, moved into the bounds if they exclude it
+        x0 = np.clip(space.value(), space.lo, space.hi)
+    prob = DesignProblem(cfg, objective, names, bounds=bounds, duration=s["duration"],
+                         seed=cfg.numerics.seed, progress=False)
+    space = prob.space
+    what = "maximise" if objective.maximise else "minimise"
+    print(f"{what} {objective.kind} [{objective.unit}] at "
+          + ", ".join(f"{f:.4g}" for f in prob.freqs) + " Hz over "
+          + ", ".join(f"{n} in [{a:.4g}, {b:.4g}]" for n, a, b in zip(names, space.lo, space.hi))
+          + f" by {method}; {s['replicates']} beds per point, {s['duration']:g} s runs")
+    per_iter = 2 * s["directions"] * s["replicates"] * prob.cost_per_system()
+    budget = args.budget
+    if method == "spsa":
+        res = spsa(prob, x0, directions=s["directions"], replicates=s["replicates"],
+                   c=s["c"], lr=s["lr"], decay=s["decay"], max_iter=s["max_iter"],
+                   budget=budget, seed=cfg.numerics.seed, progress=not args.no_progress)
+        design, found = res.x_average, "average of the last iterates"
+        print(f"{len(res.history['u'])} iterates ({res.reason})")
+    else:
+        budget = budget or s["max_iter"] * per_iter
+        res = random_search(prob, budget, replicates=s["replicates"], seed=cfg.numerics.seed)
+        design, found = np.asarray(res.best["x"]), "best of the Latin hypercube"
+        print(f"{len(res.X)} designs × {s['replicates']} beds in one batch")
+    search_cost = prob.sim_seconds
+    R = s["confirm"]
+    conf = prob.evaluate(np.stack([design, x0]), R)  # fresh beds: no winner's curse
+    conf.update(X=np.stack([design, x0]), labels=["found", "start"])
+    fmt = lambda x: ", ".join(f"{n} = {v:.5g}{(' ' + u) if u else ''}"  # noqa: E731
+                              for n, v, u in zip(names, x, [v.unit for v in space.variables]))
+    print(f"design ({found}): {fmt(design)}")
+    print(f"confirmed on {R} fresh beds (95 %): {objective.kind} = {conf['mean'][0]:.5g} ± "
+          f"{conf['ci95'][0]:.2g} {objective.unit}; at the start ({fmt(x0)}): "
+          f"{conf['mean'][1]:.5g} ± {conf['ci95'][1]:.2g}")
+    edge = [n for n, v, a, b in zip(names, space.to_u(design), space.lo, space.hi)
+            if v < 0.02 or v > 0.98]
+    if edge:
+        print(f"note: {', '.join(edge)} at (or next to) a bound of its range: the objective "
+              "still improves that way; widen --bounds if that is feasible")
+    print(f"cost: {search_cost:.4g} simulated DEM system-seconds for the search (runs and "
+          f"settling), {prob.sim_seconds - search_cost:.4g} for the confirmation")
+    if args.out:
+        optimisation_file.write_design(args.out, cfg, objective, prob, method, res, conf,
+                                       dict(s, budget=budget, x0=list(map(float, x0))))
+        print(f"wrote {args.out}")
+    return 0
+
+
 def register(sub) -> None:
     """Add the subcommand(s) to the ``jaxdamp`` parser."""
     op = sub.add_parser(
@@ -155,6 +252,10 @@ def register(sub) -> None:
               jaxdamp optimize --preset sanchez2012-optimal --method scan --replicates 4
               jaxdamp optimize --preset sanchez2012-impact --quick --out s3_opt.h5
               jaxdamp optimize --preset sanchez2012-impact --objective band --band 14,15.16,16
+              jaxdamp optimize --preset sanchez2012-optimal --vars Lz,base,friction \\
+                  --replicates 2 --budget 400 --out design.h5
+                  three variables: SPSA gradients (all perturbations and beds in one batch)
+                  fed to Adam, then the design confirmed on fresh beds next to the preset's
 
             objectives:
               damping      (default) equivalent viscous damping added by the grains at
@@ -180,13 +281,23 @@ def register(sub) -> None:
     op.add_argument("--frequency", type=float, metavar="HZ",
                     help="frequency of damping/amplitude/dissipation (default: the primary's f0)")
     op.add_argument("--band", metavar="F1,F2,...", help="frequencies of the band objective [Hz]")
-    op.add_argument("--method", choices=["trust", "scan", "gradient"],
-                    help="search (DEM default trust, S3 default gradient)")
+    op.add_argument("--method", choices=["trust", "scan", "gradient", "spsa", "random"],
+                    help="search (Lz: DEM default trust, S3 default gradient; several --vars: "
+                         "spsa (default) or random, a Latin hypercube of equal cost)")
+    op.add_argument("--vars", metavar="NAMES", default="Lz",
+                    help="design variables, comma separated: Lz (box height [m]), base (side "
+                         "of the square base Lx = Ly [m]), friction (grains' Coulomb "
+                         "coefficient); default Lz")
+    op.add_argument("--bounds", metavar="NAME=LO:HI,...",
+                    help="ranges of the --vars (default Lz 0.07:0.25, base 0.8-1.25x the "
+                         "preset's, friction 0.05:0.8)")
+    op.add_argument("--x0", metavar="V1,V2,...",
+                    help="--vars: start design in the order of --vars (default the preset's)")
     op.add_argument("--replicates", type=int, metavar="R",
                     help="DEM: independent beds per evaluation (default 4; quick 2)")
     op.add_argument("--budget", type=float, metavar="SECONDS",
-                    help="gradient method: stop before exceeding this many simulated "
-                         "system-seconds")
+                    help="gradient and spsa: stop before exceeding this many simulated "
+                         "system-seconds; random: what the Latin hypercube may spend")
     op.add_argument("--lz0", type=float,
                     help="starting box height [m] (trust: default the S3 proposal; gradient: 0.07)")
     op.add_argument("--gap0", type=float, help="S3: starting gap [m] (default lz0 - h_bed)")

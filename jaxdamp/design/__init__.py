@@ -13,6 +13,10 @@
   the surrogate's proposal :func:`~jaxdamp.design.surrogate.propose`: multi-fidelity),
   all reporting an optimum with an interval (:mod:`~jaxdamp.design.surface`) and the simulated
   system-seconds they spent.
+* Several variables — :mod:`~jaxdamp.design.space` (``Lz``, ``base``, ``friction``: the
+  design space with projection, and :class:`~jaxdamp.design.space.DesignProblem`, one bed
+  per design) and :mod:`~jaxdamp.design.spsa` (replicated SPSA gradients fed to optax Adam;
+  the equal-budget Latin-hypercube baseline).
 
 :func:`make_problem` builds the problem of a configuration with the settings of
 :data:`DEFAULTS`; ``jaxdamp optimize`` is its command line.
@@ -37,7 +41,9 @@ __all__ = ["DEFAULT", "OBJECTIVES", "DEFAULTS", "DEMProblem", "Estimate", "Objec
 #: Settings of ``jaxdamp optimize`` (full and ``--quick``) per problem. S3: run length [s],
 #: learning rate and decay, iterations; steady (DEM): difference half-step, replicates,
 #: duration per evaluation [s], settling; windows (DEM, pathwise): window [s], ensemble,
-#: burn-ins [s].
+#: burn-ins [s]; design (several variables, SPSA): directions and replicates per iterate,
+#: duration [s], Adam's rate and decay and the perturbation ``c`` (normalised coordinates),
+#: iterations, beds of the confirmation run, settling.
 DEFAULTS = {
     "s3": dict(duration=3.0, analysis_window=0.5, lr=0.015, decay=0.88, max_iter=40, xtol=5e-5),
     "s3-quick": dict(duration=3.0, analysis_window=0.5, lr=0.015, decay=0.88, max_iter=25,
@@ -46,6 +52,10 @@ DEFAULTS = {
                    xtol=5e-4, settle_time=0.3),
     "steady-quick": dict(h=0.005, replicates=2, duration=0.6, lr=0.01, decay=0.85,
                          max_iter=2, xtol=5e-4, settle_time=0.2),
+    "design": dict(directions=2, replicates=2, duration=3.0, lr=0.08, decay=0.92, c=0.08,
+                   max_iter=10, confirm=4, settle_time=0.3),
+    "design-quick": dict(directions=1, replicates=2, duration=0.5, lr=0.08, decay=0.92,
+                         c=0.08, max_iter=2, confirm=2, settle_time=0.2),
     "windows": dict(window=0.002, n_windows=8, burn_in=1.0, warm_burn_in=0.4, lr=0.02,
                     decay=0.85, max_iter=12, xtol=5e-4, settle_time=0.3),
     "windows-quick": dict(window=0.001, n_windows=4, burn_in=0.3, warm_burn_in=0.1, lr=0.02,

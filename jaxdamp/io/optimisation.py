@@ -2,7 +2,8 @@
 
 ``jaxdamp-optimize/1``: one row per iterate of the gradient optimiser, appended and flushed as
 it runs (:func:`open_log`, :func:`log`); ``jaxdamp-optimize/2``: a scan or trust-region search
-with every evaluated point (:func:`write_search`).
+with every evaluated point (:func:`write_search`); ``jaxdamp-optimize/3``: a search over
+several design variables (:func:`write_design`).
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ import json
 import time
 
 import h5py
+import numpy as np
 
 from jaxdamp.io.common import stamp
 
@@ -75,3 +77,37 @@ def write_search(path, cfg, objective, prob, sr, method, sim) -> None:
         h.attrs["sim_seconds"] = sim
 
 
+
+
+def write_design(path, cfg, objective, problem, method, result, confirm, settings) -> None:
+    """HDF5 log of a search over several design variables (``jaxdamp-optimize/3``,
+    ``docs/output.md``): every evaluated system, the iterates (SPSA) and the confirmation."""
+    names = list(problem.space.names)
+    units = [v.unit for v in problem.space.variables]
+    with h5py.File(path, "w") as h:
+        stamp(h, "jaxdamp-optimize/3")
+        h.attrs["config"] = cfg.to_json()
+        h.attrs["objective"] = objective.to_json(cfg)
+        h.attrs["variables"] = json.dumps(names)
+        h.attrs["units"] = json.dumps(units)
+        h.attrs["method"] = method
+        h.attrs["problem"] = json.dumps(problem.describe())
+        h.attrs["settings"] = json.dumps(settings)
+        h.attrs["status"] = "finished"
+        h.attrs["sim_seconds"] = problem.sim_seconds
+        ev = h.create_group("evaluations")  # every system the search ran
+        X = np.concatenate([e["X"] for e in problem.history])
+        for name, data, unit in (
+                ("X", X, json.dumps(units)),
+                ("seed", np.concatenate([e["seeds"] for e in problem.history]), ""),
+                ("J", np.concatenate([e["J"] for e in problem.history]), objective.unit)):
+            ev.create_dataset(name, data=data).attrs["units"] = unit
+        if getattr(result, "history", None) is not None:
+            it = h.create_group("iterations")
+            for k, v in result.history.items():
+                it.create_dataset(k, data=v)
+        c = h.create_group("confirmation")
+        for k in ("X", "mean", "ci95", "J"):
+            c.create_dataset(k, data=np.asarray(confirm[k], float)).attrs["units"] = (
+                json.dumps(units) if k == "X" else objective.unit)
+        c.attrs["labels"] = json.dumps(confirm["labels"])

@@ -32,8 +32,11 @@ SNAPSHOT_UNITS = {"r": "m", "v": "m/s", "z_box": "m"}
 
 
 def axes_json(axes: dict, replicates: int = 1) -> str:
-    """The ``axes`` attribute: ``{key: values}`` (plus ``replicates`` when > 1)."""
+    """The ``axes`` attribute: ``{key: values}`` (plus ``replicates`` when > 1, and
+    ``"layout": "points"`` for zipped axes, :class:`jaxdamp.studies.grid.Points`)."""
     d = {k: list(map(float, v)) for k, v in axes.items()}
+    if getattr(axes, "layout", "grid") == "points":
+        d["layout"] = "points"
     if replicates > 1:
         d["replicates"] = int(replicates)
     return json.dumps(d)

@@ -86,7 +86,7 @@ def sweep(config: Config, axes: dict, out: str | None = None, progress: bool = T
     ``/records`` ``(P, T)``). ``"smooth"`` runs all points as one ``vmap`` batch; ``"event"``
     loops over them (numba; one core each)."""
     from jaxdamp.io.sweepfile import SweepFile
-    from jaxdamp.studies.grid import SweepResult, grid_configs
+    from jaxdamp.studies.grid import SweepResult, grid_configs, grid_shape
 
     for key in axes:
         if key.startswith(("box.", "grains")):
@@ -116,7 +116,7 @@ def sweep(config: Config, axes: dict, out: str | None = None, progress: bool = T
             bar.close()
         dt = 0.0
     wall = time.perf_counter() - wall0
-    shape = tuple(len(v) for v in axes.values())
+    shape = grid_shape(axes)
     summary = {k: np.array([r.summary[k] for r in runs]).reshape(shape) for k in runs[0].summary}
     summary["wall_time"] = wall
     records = {k: np.stack([r.records[k] for r in runs]) for k in runs[0].records}

@@ -49,15 +49,48 @@ class SweepResult:
         return index * self.replicates + replicate
 
 
+class Points(dict):
+    """Sweep axes **zipped into points** instead of crossed into a grid:
+    ``Points({"box.Lz": [0.1, 0.12], "box.Lx": [0.03, 0.04]})`` runs point ``i`` at
+    ``{key: values[i]}``. Any number of keys, all of one length; a key may be
+    ``numerics.seed`` (integers), so that every point has its own bed. Used for designs of
+    several variables (:mod:`jaxdamp.design.space`), where the points are scattered, not a
+    grid. The sweep's arrays then have shape ``(points,)``."""
+
+    layout = "points"
+
+    def __init__(self, axes: dict):
+        super().__init__({k: list(v) for k, v in axes.items()})
+        lengths = {len(v) for v in self.values()}
+        if len(lengths) > 1:
+            raise ConfigError(f"Points: every key needs the same number of values, got "
+                              f"{ {k: len(v) for k, v in self.items()} }")
+
+
+def grid_shape(axes: dict) -> tuple:
+    """Shape of a sweep's per-point arrays: one axis per key for a grid, ``(points,)`` for
+    :class:`Points`."""
+    if isinstance(axes, Points):
+        return (len(next(iter(axes.values()))),)
+    return tuple(len(v) for v in axes.values())
+
+
+def _value(key: str, v):
+    return int(v) if key == "numerics.seed" else float(v)
+
+
 def grid_configs(config: Config, axes: dict) -> list[Config]:
-    """One configuration per grid point (``itertools.product`` order), each validated."""
+    """One configuration per grid point (``itertools.product`` order) — or per point of
+    :class:`Points` — each validated."""
     keys = list(axes)
-    if len(keys) > 2:
-        raise ConfigError(f"a sweep takes at most two axes, got {keys}")
-    out = []
-    for values in itertools.product(*(axes[k] for k in keys)):
-        out.append(validate(apply_overrides(config, dict(zip(keys, map(float, values))))))
-    return out
+    if isinstance(axes, Points):
+        rows = zip(*(axes[k] for k in keys))
+    else:
+        if len(keys) > 2:
+            raise ConfigError(f"a sweep takes at most two axes (or Points), got {keys}")
+        rows = itertools.product(*(axes[k] for k in keys))
+    return [validate(apply_overrides(config, {k: _value(k, v) for k, v in zip(keys, values)}))
+            for values in rows]
 
 
 def geometry_key(cfg: Config) -> str:

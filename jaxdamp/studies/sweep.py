@@ -33,7 +33,8 @@ from jaxdamp.engine.packing import settle_many
 from jaxdamp.engine.simulate import resolve_engine
 from jaxdamp.io.sweepfile import SweepFile, holds
 from jaxdamp.physics.model import build, config_dt, grain_radii
-from jaxdamp.studies.grid import SweepResult, geometry_key, grid_configs, replicate_configs
+from jaxdamp.studies.grid import (SweepResult, geometry_key, grid_configs, grid_shape,
+                                  replicate_configs)
 from jaxdamp.studies.runner import initial_box_position, schedule
 
 
@@ -203,7 +204,7 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
         s, units = steady_state_summary(c, rec_i, driver.take(final, i), t_windows[i], sched.duration)
         summaries.append(s)
         series.append(stats.per_period(rec_i, c.frequency, channels=stats.CHANNELS))
-    shape = tuple(len(v) for v in axes.values())
+    shape = grid_shape(axes)
     per_rep = {k: np.array([s[k] for s in summaries]).reshape(shape + (R,)) for k in summaries[0]}
     summary = {k: v.mean(axis=-1) for k, v in per_rep.items()}
     summary["wall_time"] = wall

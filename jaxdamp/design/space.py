@@ -1,0 +1,319 @@
+"""Designs of several variables: the design space and its replicated DEM objective.
+
+A designer sets more than the box height. :data:`VARIABLES` names the continuous knobs of an
+S1 damper that keep the grains (hence one static ``Model``) and so run together in one batch:
+
+* ``Lz`` — the box height [m];
+* ``base`` — the side of the square base, ``Lx = Ly`` [m] (the same grains in a wider box
+  make a flatter bed);
+* ``friction`` — the grains' Coulomb coefficient ``μ`` (every species; grain–grain and, for
+  walls without their own material, grain–wall), a coating a designer chooses.
+
+:class:`DesignSpace` is the box ``[lo, hi]`` of the chosen variables with normalised
+coordinates ``u ∈ [0, 1]^d`` (every optimiser step is taken there, so that metres and a
+friction coefficient are comparable) and **projection** onto the feasible set: the box, and
+the bed must fit, ``Lz ≥ h_bed(base) + margin`` with ``h_bed(b) = h_ref (b_ref / b)²`` (the
+bed's volume is kept; ``h_ref`` measured on settled beds at the reference base).
+
+:class:`DesignProblem` evaluates the steady objective at scattered designs: every system is
+one design with its **own settled bed** (its own seed, :class:`jaxdamp.studies.grid.Points`),
+all in one batch through :func:`jaxdamp.studies.sweep.sweep`; seeds are handed out fresh for
+every evaluation (independent realisations), and are shared only where the caller asks for
+common random numbers (the two members of a difference pair). The steady mean of each system
+(or of each pair, over one common window: :func:`jaxdamp.analysis.stats.shared_window`) is
+taken after the start detected by MSER. The cost counts simulated system-seconds of the runs
+**and of the settling** (every design point needs its own bed here).
+
+Example::
+
+    >>> from jaxdamp.cases import presets
+    >>> from jaxdamp.design.space import DesignSpace
+    >>> s = DesignSpace.of(presets.get("sanchez2012-optimal"), ("Lz", "base"))
+    >>> [round(float(v), 4) for v in s.to_x(s.to_u([0.12, 0.04]))]
+    [0.12, 0.04]
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from jaxdamp.config import Config, ConfigError, apply_overrides
+
+
+@dataclass(frozen=True)
+class Variable:
+    """A design variable: ``name``, ``unit``, what it means, and how it is read from and
+    written to a configuration."""
+
+    name: str
+    unit: str
+    description: str
+
+    def keys(self, config: Config) -> tuple:
+        if self.name == "Lz":
+            return ("box.Lz",)
+        if self.name == "base":
+            return ("box.Lx", "box.Ly")
+        return tuple(f"grains.{i}.material.mu" for i in range(len(config.grains)))
+
+    def value(self, config: Config) -> float:
+        if self.name == "Lz":
+            return config.box.Lz
+        if self.name == "base":
+            return config.box.Lx
+        return config.grains[0].material.mu
+
+    def default_range(self, config: Config) -> tuple:
+        """Range searched unless told: ``Lz`` 0.07–0.25 m, ``base`` ±25 % of the preset's
+        ``Lx`` (at most 0.8–1.25×), ``friction`` 0.05–0.8."""
+        if self.name == "Lz":
+            return 0.07, 0.25
+        if self.name == "base":
+            return 0.8 * config.box.Lx, 1.25 * config.box.Lx
+        return 0.05, 0.8
+
+
+VARIABLES = {v.name: v for v in (
+    Variable("Lz", "m", "box height"),
+    Variable("base", "m", "side of the square base, Lx = Ly"),
+    Variable("friction", "", "grains' Coulomb friction coefficient (all species)"),
+)}
+
+
+def parse_bounds(text: str | None) -> dict:
+    """``"Lz=0.08:0.2,base=0.03:0.045"`` → ``{"Lz": (0.08, 0.2), "base": (0.03, 0.045)}``."""
+    out = {}
+    for item in (text or "").split(","):
+        if not item.strip():
+            continue
+        try:
+            name, rng = item.split("=")
+            lo, hi = (float(v) for v in rng.split(":"))
+        except ValueError:
+            raise ConfigError(f"--bounds {item!r}: expected NAME=LO:HI, e.g. Lz=0.08:0.2") from None
+        out[name.strip()] = (lo, hi)
+    return out
+
+
+class DesignSpace:
+    """The box ``[lo, hi]`` of named variables, normalised coordinates, projection (module
+    doc). ``h_ref`` [m]: settled bed height at ``base_ref``; ``margin`` [m]: least free height
+    above the bed."""
+
+    def __init__(self, config: Config, names, lo, hi, h_ref: float = 0.0,
+                 base_ref: float | None = None, margin: float = 0.01):
+        self.config = config
+        self.names = tuple(names)
+        self.variables = [VARIABLES[n] for n in self.names]
+        self.lo = np.asarray(lo, float)
+        self.hi = np.asarray(hi, float)
+        self.h_ref = float(h_ref)
+        self.base_ref = float(base_ref or config.box.Lx)
+        self.margin = float(margin)
+
+    @classmethod
+    def of(cls, config: Config, names, bounds: dict | None = None, **kw) -> "DesignSpace":
+        """The space of ``names`` with ``bounds`` (``{name: (lo, hi)}``) or the variables'
+        default ranges; refuses unknown names, empty ranges and values a variable cannot
+        take, naming the variable and its limit."""
+        names = tuple(names)
+        bounds = dict(bounds or {})
+        unknown = [n for n in list(names) + list(bounds) if n not in VARIABLES]
+        if unknown:
+            raise ConfigError(f"design variable(s) {', '.join(unknown)}: expected some of "
+                              f"{', '.join(VARIABLES)}")
+        if len(set(names)) != len(names) or not names:
+            raise ConfigError(f"--vars {','.join(names)}: name each design variable once")
+        stray = [n for n in bounds if n not in names]
+        if stray:
+            raise ConfigError(f"--bounds {', '.join(stray)}: not among --vars {','.join(names)}")
+        lo, hi = [], []
+        for n in names:
+            a, b = bounds.get(n, VARIABLES[n].default_range(config))
+            if not (a < b):
+                raise ConfigError(f"bounds of {n}: lower {a:g} must be below upper {b:g}")
+            if a <= 0:
+                raise ConfigError(f"bounds of {n}: lower {a:g} must be > 0")
+            if n == "friction" and b > 2.0:
+                raise ConfigError(f"bounds of friction: upper {b:g} above 2 (a Coulomb "
+                                  "coefficient of grains is 0.05–1)")
+            lo.append(a)
+            hi.append(b)
+        return cls(config, names, lo, hi, **kw)
+
+    @property
+    def dim(self) -> int:
+        return len(self.names)
+
+    def to_x(self, u) -> np.ndarray:
+        return self.lo + np.asarray(u, float) * (self.hi - self.lo)
+
+    def to_u(self, x) -> np.ndarray:
+        return (np.asarray(x, float) - self.lo) / (self.hi - self.lo)
+
+    def value(self, config: Config | None = None) -> np.ndarray:
+        """The design of ``config`` (default: the base configuration) in physical units."""
+        c = config or self.config
+        return np.array([v.value(c) for v in self.variables])
+
+    def bed_height(self, x) -> float:
+        """``h_bed`` of design ``x`` [m] (module doc)."""
+        x = np.asarray(x, float)
+        b = x[self.names.index("base")] if "base" in self.names else self.base_ref
+        return self.h_ref * (self.base_ref / b) ** 2
+
+    def project(self, u, shrink: float = 0.0) -> np.ndarray:
+        """Nearest feasible ``u``: inside ``[shrink, 1 − shrink]`` (room for perturbations of
+        size ``shrink``) with the bed fitting at every point within ``shrink``."""
+        u = np.clip(np.asarray(u, float), shrink, 1.0 - shrink)
+        x = self.to_x(u)
+        if "Lz" in self.names and self.h_ref > 0:
+            i = self.names.index("Lz")
+            xb = x.copy()
+            if "base" in self.names:  # the narrowest base within the perturbation
+                j = self.names.index("base")
+                xb[j] = self.to_x(np.maximum(u - shrink, 0.0))[j]
+            need = self.bed_height(xb) + self.margin + shrink * (self.hi[i] - self.lo[i])
+            if x[i] < need:
+                x[i] = need
+                if need > self.hi[i] - shrink * (self.hi[i] - self.lo[i]):
+                    raise ConfigError(f"no feasible design: the bed ({self.bed_height(xb):.4g} "
+                                      f"m) plus margin does not fit below Lz = {self.hi[i]:.4g} m")
+            u = self.to_u(x)
+        return u
+
+    def overrides(self, x) -> dict:
+        out = {}
+        for v, val in zip(self.variables, np.asarray(x, float)):
+            out.update({k: float(val) for k in v.keys(self.config)})
+        return out
+
+    def describe(self) -> dict:
+        return {"variables": list(self.names), "units": [v.unit for v in self.variables],
+                "lo": self.lo.tolist(), "hi": self.hi.tolist(), "h_ref": self.h_ref,
+                "base_ref": self.base_ref, "margin": self.margin}
+
+
+class DesignProblem:
+    """Replicated steady-state objective of an S1 damper at scattered designs (module doc).
+
+    Args:
+      config: an S1 configuration, e.g. ``sanchez2012-optimal``.
+      objective: :class:`~jaxdamp.design.objectives.Objective`.
+      names: design variables (keys of :data:`VARIABLES`).
+      bounds: ``{name: (lo, hi)}`` (default: the variables' default ranges).
+      duration: simulated time per system [s] (transient + steady part).
+      seed: first seed handed out; every evaluation takes fresh ones after it.
+      margin: least free height above the bed [m].
+    """
+
+    def __init__(self, config: Config, objective, names=("Lz", "base", "friction"),
+                 bounds: dict | None = None, duration: float = 3.0, seed: int = 0,
+                 margin: float = 0.01, progress: bool = False):
+        from jaxdamp.engine.packing import settle_many
+        from jaxdamp.physics.model import build
+        from jaxdamp.validation import validate
+
+        if config.system != "primary":
+            raise ConfigError("a design of several variables needs an S1 configuration "
+                              "(system = 'primary')")
+        if not duration > 0:
+            raise ConfigError(f"duration = {duration}: must be > 0 s")
+        self.config = validate(apply_overrides(config, {"numerics.duration": float(duration)}))
+        self.objective = objective
+        self.freqs = objective.frequencies(self.config)
+        self.duration = float(duration)
+        self.progress = progress
+        self.settle_time = self.config.numerics.settle_time
+        self._seed = int(seed)
+        self.sim_seconds = 0.0
+        self.history: list[dict] = []
+        t0 = time.perf_counter()
+        model, p = build(self.config)
+        ref = settle_many([self.config], model, [p])[0]  # the reference bed: h_ref
+        self.sim_seconds += self.settle_time
+        self.settle_wall = time.perf_counter() - t0
+        self.space = DesignSpace.of(self.config, names, bounds, h_ref=ref.height,
+                                    base_ref=self.config.box.Lx, margin=margin)
+
+    variable = "design"
+
+    def seeds(self, n: int) -> np.ndarray:
+        """``n`` fresh seeds (never handed out before by this problem)."""
+        s = np.arange(self._seed, self._seed + n)
+        self._seed += n
+        return s
+
+    def measure(self, X, seeds, pairs: bool = False) -> dict:
+        """Objective of every design ``X`` ``(n, d)`` [physical units] with its own bed
+        ``seeds`` ``(n,)``, one batch. ``pairs``: rows ``2k`` and ``2k+1`` share a seed and
+        one common steady window (a difference pair). Returns ``{"J": (n,), "Z", "E":
+        (F, n), "stationary": (n,) bool, "sim_seconds", "wall"}``."""
+        from jaxdamp.analysis import stats
+        from jaxdamp.studies.grid import Points
+        from jaxdamp.studies.sweep import sweep
+
+        X = np.atleast_2d(np.asarray(X, float))
+        n, F = len(X), len(self.freqs)
+        seeds = [int(s) for s in seeds]
+        cols: dict = {"frequency": [], "numerics.seed": []}
+        for f in self.freqs:
+            for x, s in zip(X, seeds):
+                for k, v in self.space.overrides(x).items():
+                    cols.setdefault(k, []).append(v)
+                cols["frequency"].append(float(f))
+                cols["numerics.seed"].append(s)
+        t0 = time.perf_counter()
+        res = sweep(self.config, Points(cols), progress=self.progress, echo=None)
+        Z, E = np.empty((F, n)), np.empty((F, n))
+        ok = np.ones(n, bool)
+        groups = [[2 * k, 2 * k + 1] for k in range(n // 2)] if pairs else [[i] for i in range(n)]
+        for fi, freq in enumerate(self.freqs):
+            for g in groups:
+                series = [stats.per_period({k: res.records[k][fi * n + i]
+                                            for k in ("t", "z_box", "work")}, freq) for i in g]
+                w = stats.shared_window(series)
+                Z[fi, g] = w["amplitude"]
+                E[fi, g] = w["granular_loss_per_cycle"]
+                ok[g] &= w["stationary"]
+        J = np.asarray(self.objective.combine(Z, E, self.freqs), float)
+        geo = [i for i, nm in enumerate(self.space.names) if nm != "Lz"]  # Lz keeps the bed
+        beds = len({(s, tuple(np.round(x[geo], 12))) for x, s in zip(X, seeds)})
+        cost = F * n * self.duration + beds * self.settle_time
+        self.sim_seconds += cost
+        out = {"X": X, "seeds": np.asarray(seeds), "J": J, "Z": Z, "E": E, "stationary": ok,
+               "sim_seconds": cost, "wall": time.perf_counter() - t0}
+        self.history.append(out)
+        return out
+
+    def cost_per_system(self) -> float:
+        """Simulated system-seconds of one design evaluated once (run + its bed)."""
+        return len(self.freqs) * self.duration + self.settle_time
+
+    def evaluate(self, X, replicates: int) -> dict:
+        """Every design of ``X`` ``(n, d)`` on ``replicates`` fresh independent beds, one
+        batch: ``{"mean", "se", "ci95" (n,), "J" (n, R), "stationary" (n, R), "sim_seconds"}``
+        (95 % Student-t intervals across the beds)."""
+        from jaxdamp.analysis.stats import t_quantile
+
+        X = np.atleast_2d(np.asarray(X, float))
+        R = int(replicates)
+        if R < 1:
+            raise ConfigError(f"replicates = {R}: need at least 1")
+        rows = np.repeat(X, R, axis=0)
+        m = self.measure(rows, self.seeds(len(rows)))
+        J = m["J"].reshape(len(X), R)
+        se = J.std(axis=1, ddof=1) / math.sqrt(R) if R > 1 else np.full(len(X), np.nan)
+        half = t_quantile(0.975, R - 1) * se if R > 1 else se
+        return {"mean": J.mean(axis=1), "se": se, "ci95": half, "J": J,
+                "stationary": m["stationary"].reshape(len(X), R), "sim_seconds": m["sim_seconds"]}
+
+    def describe(self) -> dict:
+        return {"model": "DEM", "estimator": "replicated steady states, one bed per design",
+                "duration": self.duration, "settle_time": self.settle_time,
+                "frequencies": list(self.freqs), "space": self.space.describe(),
+                "detection": "MSER on per-period amplitude and dissipation"}
