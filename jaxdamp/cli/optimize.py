@@ -18,7 +18,7 @@ def cmd_optimize(args) -> int:
     import h5py
 
     from jaxdamp.design import Objective, adaptive_scan, make_problem, optimize, trust_region
-    from jaxdamp.design.surrogate import propose
+    from jaxdamp.design.surrogate import descend, propose
     from jaxdamp.io import optimisation as optimisation_file
 
     cfg = apply_overrides(base_config(args), list(args.set or []))
@@ -91,6 +91,14 @@ def cmd_optimize(args) -> int:
             x0 = float(p["lz"])
             print(f"S3 surrogate proposes Lz = {x0:.5g} m ({sim_extra:.3g} simulated s of the "
                   "single-particle model)" + (" — on the bound" if p["at_bound"] else ""))
+        elif method == "trust":  # from the user's start: exact-gradient descent on S3
+            p = descend(prob.config, objective, prob.bed_height, x0, lo, hi)
+            sim_extra = p["sim_seconds"]
+            print(f"S3 surrogate from Lz0 = {x0:.5g} m: optimum Lz = {p['lz']:.5g} m after "
+                  f"{p['iterates']} exact-gradient iterates ({p['fallbacks']} without a stable "
+                  f"orbit, central differences of long averages there; {p['reason']}; "
+                  f"{sim_extra:.3g} simulated s of the single-particle model)")
+            x0 = p["lz"]
         echo = print if progress else None
         if method == "trust":
             sr = trust_region(prob, x0, lo, hi, echo=echo)
@@ -299,7 +307,8 @@ def register(sub) -> None:
                     help="gradient and spsa: stop before exceeding this many simulated "
                          "system-seconds; random: what the Latin hypercube may spend")
     op.add_argument("--lz0", type=float,
-                    help="starting box height [m] (trust: default the S3 proposal; gradient: 0.07)")
+                    help="starting box height [m] (trust: the S3 surrogate descends from here, default "
+                         "its dense-scan optimum; gradient: default 0.07)")
     op.add_argument("--gap0", type=float, help="S3: starting gap [m] (default lz0 - h_bed)")
     op.add_argument("--lo", type=float, metavar="LZ", help="lowest Lz [m] (default bed + 5 mm)")
     op.add_argument("--hi", type=float, metavar="LZ", help="highest Lz [m] (default 0.4 DEM)")

@@ -8,7 +8,10 @@
   orbit by implicit differentiation of the stroboscopic map (:mod:`jaxdamp.s3.periodic`): no
   transient, no horizon. Where the motion has no stable periodic orbit (irregular responses,
   bifurcations) it returns NaN and says why (``Estimate.extra["reason"]``): the optimiser
-  then stops or falls back instead of using a meaningless number.
+  then stops — or, with ``fallback=True``, takes the central difference of long averages
+  (``fallback_duration`` runs, the last ``fallback_window`` seconds averaged, ``gap ± h``)
+  and flags it (``extra["method"] = "fd-long-average"``): a number whose error is not known,
+  good enough to step out of an irregular region towards the regular one.
 * ``gradient="transient"`` — ``jax.grad`` through a whole run from rest, windowed objective;
   honest where the run has converged to a periodic orbit, meaningless where it has not (at a
   gap of 0.15 m it returned 8356 where finite differences scatter between −303 and +367).
@@ -58,7 +61,9 @@ class S3Problem:
     variable = "gap"
 
     def __init__(self, config: Config, objective: Objective, duration: float | None = None,
-                 h_bed: float | None = None, gradient: str = "orbit", refine: int = 2):
+                 h_bed: float | None = None, gradient: str = "orbit", refine: int = 2,
+                 fallback: bool = False, h: float = 0.005, fallback_duration: float = 30.0,
+                 fallback_window: float = 25.0):
         from jaxdamp.s3 import smooth
 
         if config.system != "impact":
@@ -72,6 +77,10 @@ class S3Problem:
         self.objective = objective
         self.gradient = gradient
         self.refine = int(refine)
+        self.fallback, self.h = bool(fallback), float(h)
+        self._long = None
+        self.fallbacks = 0  # evaluations that fell back to long averages
+        self._long_settings = (float(fallback_duration), float(fallback_window))
         self.h_bed = float(config.box.Lz - config.impactor.gap) if h_bed is None else h_bed
         self.freqs = objective.frequencies(config)
         self.dt, self.record_every, self.n_rec = smooth.smooth_schedule([config])
@@ -124,14 +133,30 @@ class S3Problem:
                 self.config, self.objective, gap=float(gap), refine=self.refine,
                 start=state if self._warm(state) else None)
             state = orbit
-            extra = {"reason": getattr(orbit, "reason", ""), "orbit": orbit}
+            extra = {"reason": getattr(orbit, "reason", ""), "orbit": orbit, "method": "orbit"}
             cost = getattr(orbit, "sim_seconds", 0.0)
+            if self.fallback and not (np.isfinite(v) and np.isfinite(g)):
+                v, g, c = self._long_difference(float(gap))
+                extra.update(method="fd-long-average")
+                self.fallbacks += 1
+                cost += c
         else:
             v, g = self._value_and_grad(jnp.asarray(float(gap)))
             extra, cost = {}, self.duration * len(self.freqs)
         self.sim_seconds += cost
         return Estimate(float(v), 0.0, float(g), 0.0, cost, time.perf_counter() - t0,
                         extra=extra), state
+
+    def _long_difference(self, gap: float):
+        """Value and central difference ``± h`` of long averages (the fallback)."""
+        if self._long is None:
+            duration, window = self._long_settings
+            cfg = apply_overrides(self.config, {"numerics.analysis_window": window})
+            self._long = S3Problem(cfg, self.objective, duration=duration, h_bed=self.h_bed,
+                                   gradient="transient")
+        before = self._long.sim_seconds
+        vm, v0, vp = self._long.scan([gap - self.h, gap, gap + self.h])
+        return float(v0), float((vp - vm) / (2 * self.h)), self._long.sim_seconds - before
 
     def _warm(self, state) -> bool:
         """Warm-start Newton from the previous iterate's orbit (one frequency, stable)."""
@@ -150,4 +175,4 @@ class S3Problem:
     def describe(self) -> dict:
         return {"model": "S3 smooth", "duration": self.duration, "dt": self.dt,
                 "h_bed": self.h_bed, "frequencies": list(self.freqs),
-                "gradient": self.gradient, "refine": self.refine}
+                "gradient": self.gradient, "refine": self.refine, "fallback": self.fallback}

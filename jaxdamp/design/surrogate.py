@@ -6,6 +6,10 @@ bed's height). :func:`s3_config` builds that S3 configuration from a DEM configu
 :func:`propose` scans the surrogate's objective densely over the gap (one ``vmap`` batch of the
 smooth model: seconds) and returns the box height of its optimum — a starting point for the
 DEM search (:func:`jaxdamp.design.search.trust_region`), which corrects it with the DEM.
+:func:`descend` gets there from a given start instead: optax Adam on the exact orbit
+gradients, falling back to central differences of long averages where the surrogate's motion
+has no stable periodic orbit (large gaps), so that a start in the irregular region still
+walks out of it.
 """
 
 from __future__ import annotations
@@ -48,3 +52,28 @@ def propose(config: Config, objective: Objective, h_bed: float, lo: float, hi: f
         best = quadratic_optimum(lz[k - 1:k + 2], v[k - 1:k + 2], objective.maximise).x
     return {"lz": best, "lz_grid": lz, "values": v, "sim_seconds": prob.sim_seconds,
             "at_bound": k in (0, n - 1)}
+
+
+def descend(config: Config, objective: Objective, h_bed: float, lz0: float, lo: float,
+            hi: float, settings: dict | None = None) -> dict:
+    """The surrogate's optimum ``Lz`` found from ``lz0`` by the exact-gradient optimiser
+    (:func:`jaxdamp.design.optimizer.optimize` on :class:`~jaxdamp.design.s3.S3Problem` with
+    ``gradient="orbit", fallback=True``), within ``[lo, hi]`` [m].
+
+    Returns ``{"lz", "iterates", "fallbacks" (iterates without a stable orbit), "reason",
+    "sim_seconds"}``."""
+    from jaxdamp.config import apply_overrides
+    from jaxdamp.design import DEFAULTS
+    from jaxdamp.design.optimizer import optimize
+    from jaxdamp.design.s3 import S3Problem
+
+    # a slower decay than the S3 optimiser's default: the start may be ~0.2 m from the optimum
+    s = {**DEFAULTS["s3"], "max_iter": 80, "decay": 0.95, **(settings or {})}
+    cfg = apply_overrides(s3_config(config, h_bed),
+                          {"numerics.analysis_window": s["analysis_window"]})
+    prob = S3Problem(cfg, objective, duration=s["duration"], h_bed=h_bed, fallback=True)
+    res = optimize(prob, lz0 - h_bed, lr=s["lr"], decay=s["decay"], max_iter=s["max_iter"],
+                   xtol=s["xtol"], lo=lo - h_bed, hi=hi - h_bed, progress=False)
+    return {"lz": float(res.x_average + h_bed), "iterates": len(res.history["x"]),
+            "fallbacks": prob.fallbacks, "reason": res.reason,
+            "sim_seconds": prob.sim_seconds}
