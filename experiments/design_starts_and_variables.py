@@ -57,14 +57,14 @@ def settings(quick: bool) -> dict:
                     starts=(0.03, 0.12), seeds=(1,), R=2, duration=0.3, h=0.003, lo=0.025,
                     hi=0.15, radius=0.005, min_radius=0.002, tol=0.004, max_rounds=2,
                     own_scan=True, coarse=3, fine=1, s3=dict(max_iter=6, duration=1.5),
-                    bounds={"Lz": (0.03, 0.1)}, spsa=dict(directions=1, replicates=2,
-                                                          max_iter=2, duration=0.3),
+                    bounds={"Lz": (0.03, 0.1)}, spsa=dict(pairs=2, replicates=2, max_iter=2,
+                                                          duration=0.3),
                     confirm=2)
     return dict(overrides={"numerics.settle_time": 0.3},
                 starts=(0.07, 0.25), seeds=(400, 500, 600, 700, 800), R=4, duration=3.0,
                 h=0.005, lo=None, hi=0.30, radius=0.01, min_radius=0.0025, tol=0.003,
                 max_rounds=6, own_scan=False, coarse=11, fine=4, s3={},
-                bounds=None, spsa=dict(directions=2, replicates=2, max_iter=10, duration=3.0),
+                bounds=None, spsa=dict(pairs=4, replicates=2, max_iter=10, duration=3.0),
                 confirm=8)
 
 
@@ -126,8 +126,8 @@ def part_b(base, s, log) -> dict:
     prob = DesignProblem(base, Objective("damping"), VARS, bounds=s["bounds"],
                          duration=sp["duration"], seed=900_000)
     x_thesis = np.clip(prob.space.value(), prob.space.lo, prob.space.hi)
-    res = spsa(prob, x_thesis, directions=sp["directions"], replicates=sp["replicates"],
-               max_iter=sp["max_iter"], progress=False, seed=1, echo=log)
+    res = spsa(prob, x_thesis, pairs=sp["pairs"], max_iter=sp["max_iter"], progress=False,
+               seed=1, echo=log)
     spsa_cost = res.sim_seconds
     log(f"SPSA: {res.x_average} after {len(res.history['u'])} iterates, {spsa_cost:.4g} DEM s")
     before = prob.sim_seconds
@@ -294,8 +294,8 @@ def _summary(a, b, v, path, prov):
           f"Ranges: " + ", ".join(f"{n} [{lo:.4g}, {hi:.4g}]" for n, lo, hi in zip(
               names, b["space"]["lo"], b["space"]["hi"]))
           + f"; projection keeps Lz ≥ h_bed(base) + {b['space']['margin']} m. SPSA: "
-          f"{b['spsa'].settings['directions']} directions × {b['spsa'].settings['replicates']} "
-          f"beds per iterate, c = {b['spsa'].settings['c']}, Adam lr "
+          f"{b['spsa'].settings['pairs']} (direction, bed) pairs per iterate, "
+          f"c = {b['spsa'].settings['c']}, Adam lr "
           f"{b['spsa'].settings['lr']} (normalised coordinates); {len(b['spsa'].history['u'])} "
           f"iterates ({b['spsa'].reason}). Random search: {len(b['random'].X)} Latin-hypercube "
           f"designs × {b['random'].J.shape[1]} beds. Costs include settling (every design has "

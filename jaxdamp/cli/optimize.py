@@ -200,11 +200,10 @@ def _cmd_design(args, cfg, objective, names) -> int:
           + ", ".join(f"{f:.4g}" for f in prob.freqs) + " Hz over "
           + ", ".join(f"{n} in [{a:.4g}, {b:.4g}]" for n, a, b in zip(names, space.lo, space.hi))
           + f" by {method}; {s['replicates']} beds per point, {s['duration']:g} s runs")
-    per_iter = 2 * s["directions"] * s["replicates"] * prob.cost_per_system()
+    per_iter = 2 * s["pairs"] * prob.cost_per_system()
     budget = args.budget
     if method == "spsa":
-        res = spsa(prob, x0, directions=s["directions"], replicates=s["replicates"],
-                   c=s["c"], lr=s["lr"], decay=s["decay"], max_iter=s["max_iter"],
+        res = spsa(prob, x0, pairs=s["pairs"], c=s["c"], lr=s["lr"], decay=s["decay"], max_iter=s["max_iter"],
                    budget=budget, seed=cfg.numerics.seed, progress=not args.no_progress)
         design, found = res.x_average, "average of the last iterates"
         print(f"{len(res.history['u'])} iterates ({res.reason})")

@@ -41,7 +41,8 @@ __all__ = ["DEFAULT", "OBJECTIVES", "DEFAULTS", "DEMProblem", "Estimate", "Objec
 #: Settings of ``jaxdamp optimize`` (full and ``--quick``) per problem. S3: run length [s],
 #: learning rate and decay, iterations; steady (DEM): difference half-step, replicates,
 #: duration per evaluation [s], settling; windows (DEM, pathwise): window [s], ensemble,
-#: burn-ins [s]; design (several variables, SPSA): directions and replicates per iterate,
+#: burn-ins [s]; design (several variables): SPSA pairs per iterate, beds per design of the
+#: random search,
 #: duration [s], Adam's rate and decay and the perturbation ``c`` (normalised coordinates),
 #: iterations, beds of the confirmation run, settling.
 DEFAULTS = {
@@ -52,9 +53,9 @@ DEFAULTS = {
                    xtol=5e-4, settle_time=0.3),
     "steady-quick": dict(h=0.005, replicates=2, duration=0.6, lr=0.01, decay=0.85,
                          max_iter=2, xtol=5e-4, settle_time=0.2),
-    "design": dict(directions=2, replicates=2, duration=3.0, lr=0.08, decay=0.92, c=0.08,
+    "design": dict(pairs=4, replicates=2, duration=3.0, lr=0.08, decay=0.92, c=0.08,
                    max_iter=10, confirm=4, settle_time=0.3),
-    "design-quick": dict(directions=1, replicates=2, duration=0.5, lr=0.08, decay=0.92,
+    "design-quick": dict(pairs=2, replicates=2, duration=0.5, lr=0.08, decay=0.92,
                          c=0.08, max_iter=2, confirm=2, settle_time=0.2),
     "windows": dict(window=0.002, n_windows=8, burn_in=1.0, warm_burn_in=0.4, lr=0.02,
                     decay=0.85, max_iter=12, xtol=5e-4, settle_time=0.3),

@@ -2,17 +2,20 @@
 
 **The gradient** (simultaneous perturbation, Spall 1992) of the replicated steady objective
 ``J(u)`` in the normalised coordinates ``u ∈ [0, 1]^d`` of a
-:class:`~jaxdamp.design.space.DesignSpace`: for ``K`` random Rademacher directions
-``Δ_k ∈ {−1, +1}^d`` and ``R`` beds per direction,
+:class:`~jaxdamp.design.space.DesignSpace`: for ``n`` pairs, each with its own random
+Rademacher direction ``Δ_k ∈ {−1, +1}^d`` and its own bed,
 
-    ĝ = 1/(K R) Σ_{k,r} (J(u + cΔ_k; bed_kr) − J(u − cΔ_k; bed_kr)) / (2c) · Δ_k ,
+    ĝ = 1/n Σ_k (J(u + cΔ_k; bed_k) − J(u − cΔ_k; bed_k)) / (2c) · Δ_k ,
 
 unbiased for ``∇J`` up to ``O(c²)`` because ``E[Δ Δᵀ] = I``. Both members of a pair start from
 beds of one seed (common random numbers: the difference is not swamped by the bed's
-realisation); every pair ``(k, r)`` has its own seed, so the ``K R`` pair terms are independent
-and the standard error of each component is their spread ``/ √(K R)``. All ``2 K R`` systems
-run in one batch, whatever ``d`` is: this is why a gradient pays off with many variables. The
-objective at ``u`` is the mean of the pair averages, with its standard error across pairs.
+realisation). Every pair has its own direction *and* its own seed, so the ``n`` terms are
+independent and the standard error of each component is their spread ``/ √n``. (Sharing a
+direction between several beds would not do: the direction's own scatter, ``(gᵀΔ)Δ − g``, is
+then common to those terms, and their spread underestimates the error — by 3× in the test
+with 2 directions × 4 beds.) All ``2n`` systems run in one batch, whatever ``d`` is: this is
+why a gradient pays off with many variables. The objective at ``u`` is the mean of the pair
+averages, with its standard error across pairs.
 
 **The optimiser** :func:`spsa` — Adam (optax, decaying learning rate) on ``ĝ`` in ``u``, each
 iterate projected onto the feasible set shrunk by ``c`` (every perturbation stays feasible);
@@ -64,32 +67,27 @@ from jaxdamp.design.objectives import Estimate
 HISTORY = ("u", "x", "value", "value_se", "grad", "grad_se", "sim_seconds", "wall")
 
 
-def spsa_gradient(problem, u, directions: int, replicates: int, c: float, rng) -> Estimate:
-    """The replicated SPSA estimate at ``u`` (module doc): ``value``/``value_se`` the
-    objective and its SE, ``grad``/``grad_se`` ``(d,)`` arrays in objective units per unit of
-    ``u``; ``extra``: ``plus``, ``minus`` ``(K, R)``, ``delta`` ``(K, d)``."""
+def spsa_gradient(problem, u, pairs: int, c: float, rng) -> Estimate:
+    """The replicated SPSA estimate at ``u`` from ``pairs`` independent (direction, bed) pairs
+    (module doc): ``value``/``value_se`` the objective and its SE, ``grad``/``grad_se``
+    ``(d,)`` arrays in objective units per unit of ``u``; ``extra``: ``plus``, ``minus``
+    ``(n,)``, ``delta`` ``(n, d)``."""
     space = problem.space
-    K, R, d = int(directions), int(replicates), space.dim
-    delta = rng.choice([-1.0, 1.0], size=(K, d))
-    X, seeds = [], []
-    pair_seeds = problem.seeds(K * R)
-    for k in range(K):
-        up, um = u + c * delta[k], u - c * delta[k]
-        for r in range(R):
-            X += [space.to_x(up), space.to_x(um)]
-            seeds += [pair_seeds[k * R + r]] * 2
-    m = problem.measure(np.array(X), np.array(seeds), pairs=True)
-    J = np.asarray(m["J"], float).reshape(K, R, 2)
-    plus, minus = J[..., 0], J[..., 1]
-    g = ((plus - minus) / (2 * c))[..., None] * delta[:, None, :]  # (K, R, d)
-    g = g.reshape(K * R, d)
-    v = (0.5 * (plus + minus)).ravel()
-    n = K * R
-    se = (lambda a: a.std(axis=0, ddof=1) / math.sqrt(n)) if n > 1 else (
-        lambda a: np.full(a.shape[1:], np.nan))
-    return Estimate(float(v.mean()), float(se(v[:, None])[0]), g.mean(axis=0), se(g),
-                    m["sim_seconds"], m.get("wall", 0.0),
-                    extra={"plus": plus, "minus": minus, "delta": delta})
+    n, d = int(pairs), space.dim
+    delta = rng.choice([-1.0, 1.0], size=(n, d))
+    X = np.concatenate([[space.to_x(u + c * dk), space.to_x(u - c * dk)] for dk in delta])
+    seeds = np.repeat(problem.seeds(n), 2)
+    m = problem.measure(X, seeds, pairs=True)
+    J = np.asarray(m["J"], float).reshape(n, 2)
+    plus, minus = J[:, 0], J[:, 1]
+    g = ((plus - minus) / (2 * c))[:, None] * delta  # (n, d)
+    v = 0.5 * (plus + minus)
+    if n > 1:
+        g_se, v_se = g.std(axis=0, ddof=1) / math.sqrt(n), float(v.std(ddof=1) / math.sqrt(n))
+    else:
+        g_se, v_se = np.full(d, np.nan), math.nan
+    return Estimate(float(v.mean()), v_se, g.mean(axis=0), g_se, m["sim_seconds"],
+                    m.get("wall", 0.0), extra={"plus": plus, "minus": minus, "delta": delta})
 
 
 @dataclass
@@ -110,7 +108,7 @@ class SPSAResult:
     settings: dict = field(default_factory=dict)
 
 
-def spsa(problem, x0, directions: int = 2, replicates: int = 2, c: float = 0.08,
+def spsa(problem, x0, pairs: int = 4, c: float = 0.08,
          lr: float = 0.08, decay: float = 0.92, max_iter: int = 10, budget: float | None = None,
          average: int = 3, seed: int = 0, b1: float = 0.7, b2: float = 0.9,
          progress: bool = True, echo=None) -> SPSAResult:
@@ -120,7 +118,7 @@ def spsa(problem, x0, directions: int = 2, replicates: int = 2, c: float = 0.08,
       problem: a :class:`~jaxdamp.design.space.DesignProblem` (or anything with ``space``,
         ``objective``, ``seeds``, ``measure``, ``cost_per_system``).
       x0: start design [physical units, ``problem.space.names`` order].
-      directions, replicates: ``K`` directions × ``R`` beds per iterate (``2KR`` systems).
+      pairs: independent (direction, bed) pairs per iterate (``2 × pairs`` systems).
       c: perturbation half-size in normalised coordinates.
       lr, decay: Adam's learning rate in normalised coordinates, decayed by ``decay`` per step.
       max_iter: most iterates; budget: simulated system-seconds not to exceed.
@@ -134,12 +132,11 @@ def spsa(problem, x0, directions: int = 2, replicates: int = 2, c: float = 0.08,
     from jaxdamp.analysis.stats import t_quantile
     from jaxdamp.config import ConfigError
 
-    for name, val, ok in (("directions", directions, directions >= 1),
-                          ("replicates", replicates, replicates >= 1),
-                          ("c", c, 0 < c < 0.5), ("max_iter", max_iter, max_iter >= 1)):
+    for name, val, ok in (("pairs", pairs, pairs >= 1), ("c", c, 0 < c < 0.5),
+                          ("max_iter", max_iter, max_iter >= 1)):
         if not ok:
-            raise ConfigError(f"spsa: {name} = {val} out of range (directions, replicates, "
-                              "max_iter ≥ 1; 0 < c < 0.5)")
+            raise ConfigError(f"spsa: {name} = {val} out of range (pairs, max_iter ≥ 1; "
+                              "0 < c < 0.5)")
     space = problem.space
     rng = np.random.default_rng(seed)
     u = space.project(space.to_u(np.asarray(x0, float)), shrink=c)
@@ -148,9 +145,9 @@ def spsa(problem, x0, directions: int = 2, replicates: int = 2, c: float = 0.08,
     opt = optax.adam(sched, b1=b1, b2=b2)
     state = opt.init(jnp.zeros(space.dim))
     hist = {k: [] for k in HISTORY}
-    per_iter = 2 * directions * replicates * problem.cost_per_system()
+    per_iter = 2 * pairs * problem.cost_per_system()
     spent, reason, best = 0.0, f"max_iter = {max_iter} reached", None
-    tq = 0.0 if directions * replicates < 2 else t_quantile(0.975, directions * replicates - 1)
+    tq = math.nan if pairs < 2 else t_quantile(0.975, pairs - 1)
     bar = None
     if progress:
         from tqdm.auto import tqdm
@@ -162,7 +159,7 @@ def spsa(problem, x0, directions: int = 2, replicates: int = 2, c: float = 0.08,
             if budget is not None and spent + per_iter > budget:
                 reason = f"budget of {budget:g} simulated system-seconds reached"
                 break
-            est = spsa_gradient(problem, u, directions, replicates, c, rng)
+            est = spsa_gradient(problem, u, pairs, c, rng)
             spent += est.sim_seconds
             if not (np.isfinite(est.value) and np.all(np.isfinite(est.grad))):
                 reason = f"non-finite objective or gradient at {space.to_x(u)}"
@@ -195,7 +192,7 @@ def spsa(problem, x0, directions: int = 2, replicates: int = 2, c: float = 0.08,
     u_avg = space.project(hist["u"][-average:].mean(axis=0), shrink=c)
     return SPSAResult(space.names, space.to_x(u_avg), u_avg, hist, best, spent, reason,
                       time.perf_counter() - t0,
-                      dict(directions=directions, replicates=replicates, c=c, lr=lr,
+                      dict(pairs=pairs, c=c, lr=lr,
                            decay=decay, max_iter=max_iter, budget=budget, average=average,
                            seed=seed, b1=b1, b2=b2))
 
