@@ -181,7 +181,7 @@ def write(a, b, v, path, command, elapsed):
     prov = {"command": command, "jaxdamp_version": jaxdamp.__version__, "git": _git(),
             "machine": f"{platform.machine()}, {os.cpu_count()} cores, Python "
                        f"{platform.python_version()}", "elapsed_s": elapsed}
-    enc = lambda x: json.dumps(x, default=lambda y: y.tolist() if hasattr(y, "tolist")  # noqa: E731
+    enc = lambda x: json.dumps(x, default=lambda y: y.tolist() if hasattr(y, "tolist")
                                else bool(y) if isinstance(y, np.bool_) else str(y))
     with h5py.File(os.path.join(path, "data.h5"), "w") as h:
         h.attrs.update({k: enc(x) if not isinstance(x, str) else x for k, x in prov.items()})
@@ -291,7 +291,7 @@ def _summary(a, b, v, path, prov):
     c = b["confirm"]
     names = b["space"]["variables"]
     L += ["", "## B. Three design variables: " + ", ".join(names), "",
-          f"Ranges: " + ", ".join(f"{n} [{lo:.4g}, {hi:.4g}]" for n, lo, hi in zip(
+          "Ranges: " + ", ".join(f"{n} [{lo:.4g}, {hi:.4g}]" for n, lo, hi in zip(
               names, b["space"]["lo"], b["space"]["hi"]))
           + f"; projection keeps Lz ≥ h_bed(base) + {b['space']['margin']} m. SPSA: "
           f"{b['spsa'].settings['pairs']} (direction, bed) pairs per iterate, "

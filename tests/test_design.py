@@ -1,5 +1,6 @@
 """Design optimisation: objectives, the S3 problem, the DEM estimators, searches, the CLI."""
 
+import json
 import math
 
 import h5py
@@ -211,3 +212,43 @@ def test_s3_orbit_gradient_refuses_irregular_motion():
     assert np.isnan(est.grad) and "not a stable periodic orbit" in est.extra["reason"]
     res = optimize(prob, 0.15, max_iter=3, progress=False)
     assert "not a stable periodic orbit" in res.reason
+
+
+def test_s3_descent_walks_out_of_the_irregular_region():
+    """From Lz0 = 0.25 m (gap 0.21 m: no stable periodic orbit at f0) the surrogate's
+    exact-gradient descent falls back to central differences of long averages, walks into the
+    regular region and ends within 2 % of the dense orbit-scan optimum of the gap (as the
+    S3 optimiser does from a regular start)."""
+    from jaxdamp.design.surrogate import descend
+    from jaxdamp.s3 import periodic
+
+    h_bed = 0.0379
+    d = descend(presets.get("sanchez2012-optimal"), Objective("damping"), h_bed, 0.25,
+                0.05, 0.395)
+    assert d["fallbacks"] >= 1 and np.isfinite(d["lz"])
+    cfg = presets.get("sanchez2012-impact")
+    gaps = np.linspace(0.075, 0.095, 11)
+    vals = [periodic.objective_and_gradient(cfg, Objective("damping"), gap=g, refine=2)[0]
+            for g in gaps]
+    best = scan_optimum(gaps, vals, True)
+    assert abs(d["lz"] - h_bed - best) / best < 0.02, (d, best)
+
+
+def test_cli_optimize_default_objective_does_not_run_to_a_bound(tmp_path, capsys):
+    """`jaxdamp optimize` on a DEM damper with no objective flag (C_eq at f0, trust region
+    from the S3 proposal; small bed, --quick) ends at an interior optimum well inside the
+    feasible range [bed + 5 mm, 0.395 m] and prints no bound warning."""
+    out = tmp_path / "opt.h5"
+    args = ["optimize", "--preset", "sanchez2012-optimal", "--quick", "--no-progress",
+            "--out", str(out)]
+    for k, v in {"grains.0.count": 24, "box.Lx": 0.02, "box.Ly": 0.02,
+                 "numerics.settle_time": 0.15, "primary.M": 0.3, "primary.K": 2720.0,
+                 "primary.C": 1.0}.items():
+        args += ["--set", f"{k}={v}"]
+    assert main(args) == 0
+    text = capsys.readouterr().out
+    assert "maximise damping" in text and "warning: no interior optimum" not in text
+    with h5py.File(out) as h:
+        opt = json.loads(h.attrs["optimum"])
+        assert h.attrs["format"] == "jaxdamp-optimize/2" and opt["interior"]
+    assert 0.05 < opt["lz"] < 0.3, opt

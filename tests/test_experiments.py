@@ -146,6 +146,28 @@ def test_design_optimisation_quick(tmp_path):
     assert "## 3–5. Searches" in (tmp_path / "summary.md").read_text()
 
 
+@pytest.mark.slow
+def test_design_starts_and_variables_quick(tmp_path):
+    """Both parts on tiny settings (~1 min; slow-marked to keep the default suite under its
+    budget): the multi-fidelity optimiser from both starts reports optima with intervals and
+    DEM seconds; SPSA, the equal-budget random search and the confirmation give finite
+    values; data, figure and summary are written with the command inside."""
+    import h5py
+
+    res = _load("design_starts_and_variables").main(["--quick", "--out", str(tmp_path),
+                                                      "--no-progress"])
+    a, b, v = res["a"], res["b"], res["verdicts"]
+    assert len(a["runs"]) == 2 and all(r["sim"] > 0 and r["lo"] <= r["x"] <= r["hi"]
+                                       for r in a["runs"])
+    assert set(v["starts"]) == {"0.03", "0.12"}
+    assert np.isfinite(b["confirm"]["mean"]).all() and b["random_cost"] <= b["spsa_cost"]
+    with h5py.File(tmp_path / "data.h5") as h:
+        assert "design_starts_and_variables.py --quick" in h.attrs["command"]
+        assert h["three_variables/confirmation/J"].shape == (3, 2)
+    assert (tmp_path / "figure.png").stat().st_size > 10_000
+    assert "## B. Three design variables" in (tmp_path / "summary.md").read_text()
+
+
 def test_binary_mixtures_quick(tmp_path):
     """The 2023 paper's families at test size (σ = 0.5, 2 amplitudes, 1 + 2 periods): every
     family runs, the class builders' conserved quantities hold in the runs, the energy balance

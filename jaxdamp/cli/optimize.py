@@ -13,9 +13,8 @@ def cmd_optimize(args) -> int:
     import json
     import math
 
-    import numpy as np
-
     import h5py
+    import numpy as np
 
     from jaxdamp.design import Objective, adaptive_scan, make_problem, optimize, trust_region
     from jaxdamp.design.surrogate import descend, propose
@@ -199,11 +198,14 @@ def _cmd_design(args, cfg, objective, names) -> int:
     print(f"{what} {objective.kind} [{objective.unit}] at "
           + ", ".join(f"{f:.4g}" for f in prob.freqs) + " Hz over "
           + ", ".join(f"{n} in [{a:.4g}, {b:.4g}]" for n, a, b in zip(names, space.lo, space.hi))
-          + f" by {method}; {s['replicates']} beds per point, {s['duration']:g} s runs")
+          + f" by {method}; " + (f"{s['pairs']} pairs (own direction and bed) per iterate"
+                                 if method == "spsa" else f"{s['replicates']} beds per design")
+          + f", {s['duration']:g} s runs")
     per_iter = 2 * s["pairs"] * prob.cost_per_system()
     budget = args.budget
     if method == "spsa":
-        res = spsa(prob, x0, pairs=s["pairs"], c=s["c"], lr=s["lr"], decay=s["decay"], max_iter=s["max_iter"],
+        res = spsa(prob, x0, pairs=s["pairs"], c=s["c"], lr=s["lr"], decay=s["decay"],
+                   max_iter=s["max_iter"],
                    budget=budget, seed=cfg.numerics.seed, progress=not args.no_progress)
         design, found = res.x_average, "average of the last iterates"
         print(f"{len(res.history['u'])} iterates ({res.reason})")
@@ -216,7 +218,7 @@ def _cmd_design(args, cfg, objective, names) -> int:
     R = s["confirm"]
     conf = prob.evaluate(np.stack([design, x0]), R)  # fresh beds: no winner's curse
     conf.update(X=np.stack([design, x0]), labels=["found", "start"])
-    fmt = lambda x: ", ".join(f"{n} = {v:.5g}{(' ' + u) if u else ''}"  # noqa: E731
+    fmt = lambda x: ", ".join(f"{n} = {v:.5g}{(' ' + u) if u else ''}"
                               for n, v, u in zip(names, x, [v.unit for v in space.variables]))
     print(f"design ({found}): {fmt(design)}")
     print(f"confirmed on {R} fresh beds (95 %): {objective.kind} = {conf['mean'][0]:.5g} ± "
@@ -306,8 +308,8 @@ def register(sub) -> None:
                     help="gradient and spsa: stop before exceeding this many simulated "
                          "system-seconds; random: what the Latin hypercube may spend")
     op.add_argument("--lz0", type=float,
-                    help="starting box height [m] (trust: the S3 surrogate descends from here, default "
-                         "its dense-scan optimum; gradient: default 0.07)")
+                    help="starting box height [m] (trust: the S3 surrogate descends from "
+                         "here, default its dense-scan optimum; gradient: default 0.07)")
     op.add_argument("--gap0", type=float, help="S3: starting gap [m] (default lz0 - h_bed)")
     op.add_argument("--lo", type=float, metavar="LZ", help="lowest Lz [m] (default bed + 5 mm)")
     op.add_argument("--hi", type=float, metavar="LZ", help="highest Lz [m] (default 0.4 DEM)")
