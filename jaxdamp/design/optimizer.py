@@ -93,6 +93,7 @@ def optimize(problem, x0: float, lr: float = 0.01, decay: float = 0.9, max_iter:
     state, sim_total, reason = None, 0.0, f"max_iter = {max_iter} reached"
     last_cost = 0.0
     small_steps = noisy = 0
+    best = None  # (x, value, se) of the best iterate so far, for the progress bar
     try:
         for k in range(max_iter):
             if budget is not None and k > 0 and sim_total + last_cost > budget:
@@ -111,9 +112,13 @@ def optimize(problem, x0: float, lr: float = 0.01, decay: float = 0.9, max_iter:
             x_new = float(np.clip(x + float(updates), lo, hi))
             step = x_new - x
             optimisation_file.log(h5, hist, x, problem, est, step, float(sched(k)), t_start, sim_total)
+            if best is None or (est.value > best[1]) == problem.objective.maximise:
+                best = (x, est.value, est.value_se)
             if bar is not None:
                 bar.update(1)
-                bar.set_postfix({problem.variable: f"{x:.5f}", "obj": f"{est.value:.4g}",
+                ci = f"±{1.96 * best[2]:.2g}" if np.isfinite(best[2]) and best[2] > 0 else ""
+                bar.set_postfix({problem.variable: f"{x:.5f}",
+                                 "best": f"{best[1]:.4g}{ci} at {best[0]:.5f}",
                                  "grad": f"{est.grad:.3g}±{est.grad_se:.2g}"})
             if echo:
                 echo(f"{k:3d} {problem.variable} = {x:.6f} m  objective = {est.value:.6g} "
