@@ -226,6 +226,12 @@ class Config:
       gravity: ``g`` [m/s^2] along ``-z``.
       mixing: how per-species constants combine for a pair: ``"arithmetic"``, ``"harmonic"``
         or ``"geometric"`` mean (the 2023 paper: arithmetic).
+      wall_damping: how grain–wall contacts are damped (docs/physics.md §7, "Grain–wall damping
+        convention"): ``"mixed"`` (default; the wall material's constant mixed with each
+        grain's by ``mixing``) or ``"calibrated"`` (every species' grain–wall contact gets the
+        damping for which a grain of that species hitting the wall at ``v_ref`` has the
+        restitution of the wall material, or of the species where the wall gives none; Hertz
+        law, restitution-form materials).
       contact_law: the normal contact law by name, one of :data:`jaxdamp.physics.contact.LAWS`:
         ``"hertz"`` (Hertz + viscoelastic, docs/physics.md §2) or ``"linear"`` (linear spring–dashpot
         with a speed-independent restitution; needs ``Material.linear_stiffness``).
@@ -243,6 +249,7 @@ class Config:
     numerics: Numerics = field(default_factory=Numerics)
     gravity: float = 9.8
     mixing: str = "arithmetic"
+    wall_damping: str = "mixed"
     contact_law: str = "hertz"
     name: str = "custom"
     notes: str = ""

@@ -33,6 +33,10 @@ def _material(mat: Material, name: str, grain: bool, law: str) -> None:
     LAWS[law].check(mat, name)  # the law's own inputs (damping, restitution, ...)
 
 
+#: Grain–wall damping conventions (``Config.wall_damping``).
+WALL_DAMPING = ("mixed", "calibrated")
+
+
 def validate(config: Config) -> Config:
     """Raise :class:`ConfigError` for any invalid value; return the config unchanged."""
     if config.system not in SYSTEMS:
@@ -42,6 +46,19 @@ def validate(config: Config) -> Config:
     if config.contact_law not in LAWS:
         raise ConfigError(
             f"contact_law = {config.contact_law!r}: expected one of {tuple(LAWS)}")
+    if config.wall_damping not in WALL_DAMPING:
+        raise ConfigError(f"wall_damping = {config.wall_damping!r}: expected one of "
+                          f"{WALL_DAMPING}")
+    if config.wall_damping == "calibrated":
+        if config.contact_law != "hertz":
+            raise ConfigError("wall_damping = 'calibrated' applies to the Hertz law (the "
+                              "linear law's restitution does not depend on the pair's size)")
+        wall_e = config.box.wall.restitution if config.box.wall is not None else None
+        for i, sp in enumerate(config.grains):
+            if wall_e is None and sp.material.restitution is None:
+                raise ConfigError(f"wall_damping = 'calibrated': grains.{i}.material has no "
+                                  "restitution (thesis form gamma_n) and box.wall gives none; "
+                                  "set a restitution or use wall_damping = 'mixed'")
     _positive(config.frequency, "frequency")
     _positive(config.gravity, "gravity", allow_zero=True)
     box = config.box

@@ -146,6 +146,24 @@ def test_design_optimisation_quick(tmp_path):
     assert "## 3–5. Searches" in (tmp_path / "summary.md").read_text()
 
 
+def test_wall_damping_quick(tmp_path):
+    """Both grain–wall conventions on the reference box and class a (test-sized): under
+    'calibrated' every species bounces off the wall with ε = 0.75 at 1 m/s, under 'mixed' the
+    2.5 mm grains with ≈ 0.78 and the 1.25 mm ones with ≈ 0.69; ⟨E_d⟩ is finite for every
+    stationary bed; data, figure and summary are written."""
+    res = _load("wall_damping").main(["--quick", "--out", str(tmp_path), "--no-progress"])
+    for r in res["rows"]:
+        if r["convention"] == "calibrated":
+            assert np.allclose(r["eps_wall"], 0.75, atol=1e-6), r["eps_wall"]
+        else:
+            assert r["eps_wall"][0] == pytest.approx(0.777, abs=0.005)
+        ok = np.asarray(r["stationary"], bool)
+        assert ok.any() and np.isfinite(r["values"][ok]).all()
+    assert len(res["verdicts"]) == 2
+    assert (tmp_path / "figure.png").stat().st_size > 10_000
+    assert "Relative change" in (tmp_path / "summary.md").read_text()
+
+
 @pytest.mark.slow
 def test_design_starts_and_variables_quick(tmp_path):
     """Both parts on tiny settings (~1 min; slow-marked to keep the default suite under its

@@ -55,6 +55,7 @@ import math
 from typing import Callable, NamedTuple
 
 import jax.numpy as jnp
+import numpy as np
 
 from jaxdamp.config import ConfigError, Material
 from jaxdamp.physics import restitution as rst
@@ -201,6 +202,19 @@ def hertz_mix(a: dict, b: dict, rule: str) -> tuple[float, ...]:
     return (mix(a["gamma_s"], b["gamma_s"], rule), mix(a["mu"], b["mu"], rule),
             1.0 / (a["compliance"] + b["compliance"]), mix(a["gamma_n"], b["gamma_n"], rule),
             mix(a["A"], b["A"], rule))
+
+
+def calibrate_wall_row(law, row, restitution: float, v: float, m: float, r: float):
+    """A grain–wall table row of the Hertz ``law`` with its damping replaced so that a grain of
+    mass ``m`` [kg] and radius ``r`` [m] hitting the (immovable, flat) wall at ``v`` [m/s] has
+    ``restitution`` (``Config.wall_damping = "calibrated"``): ``A`` from
+    :func:`restitution.dissipative_constant` with ``m* = m``, ``R* = r`` and the row's ``E*``;
+    thesis-form ``γ_n`` set to 0."""
+    row = np.array(row, float)
+    row[law.column("A")] = rst.dissipative_constant(restitution, v, m, r,
+                                                    row[law.column("E_star")])
+    row[law.column("gamma_n")] = 0.0
+    return row
 
 
 def hertz_pair_jax(row, r_eff, m_eff):

@@ -25,7 +25,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxdamp.config import Config
-from jaxdamp.physics.contact import LAWS, Law
+from jaxdamp.physics.contact import LAWS, Law, calibrate_wall_row
 
 #: Names of the cumulative work channels, in order (all in J).
 #:   input:       work done on the system by the base through spring and damper (S1) or by the
@@ -185,7 +185,9 @@ def contact_tables(config: Config) -> tuple[np.ndarray, np.ndarray]:
     rule is applied): ``pair_table`` ``(S, S, F)`` and ``wall_table`` ``(S, F)`` in the
     columns of the law (:attr:`jaxdamp.physics.contact.Law.columns`). Each species' calibration uses
     its own mean radius; the walls' uses the first species' (unless the materials fix a
-    ``calibration_radius``)."""
+    ``calibration_radius``). With ``wall_damping = "calibrated"`` every species' wall row is
+    re-damped to its own grain–wall restitution at ``v_ref``
+    (:func:`jaxdamp.physics.contact.calibrate_wall_row`)."""
     law = contact_law(config)
     lam = config.numerics.stiffness_scale
     bodies = [law.material(sp.material, sp.radius, lam) for sp in config.grains]
@@ -197,6 +199,13 @@ def contact_tables(config: Config) -> tuple[np.ndarray, np.ndarray]:
             wall[s] = law.mix(bodies[s], walls, config.mixing)
             for t in range(S):
                 pair[s, t] = law.mix(bodies[s], bodies[t], config.mixing)
+        if config.wall_damping == "calibrated":  # each species against the wall, at v_ref
+            w = config.box.wall
+            for s, sp in enumerate(config.grains):
+                src = w if w is not None and w.restitution is not None else sp.material
+                m = sp.material.density * 4.0 / 3.0 * np.pi * sp.radius**3
+                wall[s] = calibrate_wall_row(law, wall[s], src.restitution, src.v_ref, m,
+                                             sp.radius)
     return pair, wall
 
 
