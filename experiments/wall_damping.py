@@ -33,8 +33,8 @@ import jaxdamp
 from jaxdamp.analysis.stats import t_quantile
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
-from jaxdamp.physics.model import build, contact_law
 from jaxdamp.physics import restitution as rst
+from jaxdamp.physics.model import build, contact_law
 from jaxdamp.studies import efficiency as ef
 
 HERE = os.path.dirname(os.path.abspath(__file__))
