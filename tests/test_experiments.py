@@ -7,6 +7,9 @@ from helpers import load_experiment
 
 _load = load_experiment
 
+#: Minutes in total: run by ``pytest -m examples`` (CI's second step), not the default suite.
+pytestmark = pytest.mark.examples
+
 
 def test_restitution_curve_quick(tmp_path):
     cases = _load("restitution_curve").main(["--quick", "--out", str(tmp_path)])
@@ -164,10 +167,8 @@ def test_wall_damping_quick(tmp_path):
     assert "Relative change" in (tmp_path / "summary.md").read_text()
 
 
-@pytest.mark.slow
 def test_design_starts_and_variables_quick(tmp_path):
-    """Both parts on tiny settings (~1 min; slow-marked to keep the default suite under its
-    budget): the multi-fidelity optimiser from both starts reports optima with intervals and
+    """Both parts on tiny settings (~1 min): the multi-fidelity optimiser from both starts reports optima with intervals and
     DEM seconds; SPSA, the equal-budget random search and the confirmation give finite
     values; data, figure and summary are written with the command inside."""
     import h5py

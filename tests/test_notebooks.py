@@ -8,6 +8,7 @@ import nbformat
 import pytest
 from nbclient import NotebookClient
 
+
 NOTEBOOK_DIR = pathlib.Path(__file__).parent.parent / "notebooks"
 NOTEBOOKS = sorted(NOTEBOOK_DIR.glob("*.ipynb"))
 #: the tutorials the README links to; each must exist (the glob above would silently skip one)
@@ -19,6 +20,7 @@ def test_expected_notebooks_present():
     assert set(EXPECTED) <= {p.name for p in NOTEBOOKS}
 
 
+@pytest.mark.examples  # minutes in total: `pytest -m examples` (CI's second step)
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.name for p in NOTEBOOKS])
 def test_notebook_executes(path, tmp_path):
     work = tmp_path / path.name
