@@ -319,6 +319,18 @@ def shared_window(series_list: list[dict], keys=DETECT_ON, **mser_kwargs) -> dic
     return out
 
 
+def rows_window(records: dict, rows, frequency: float, keys=DETECT_ON) -> dict:
+    """:func:`shared_window` of the sweep rows ``rows`` of ``records`` (``t``, ``z_box``,
+    ``work`` of shape ``(P, T, ...)``; one bed at several designs, say), cut into periods of
+    the drive at ``frequency`` [Hz]; adds ``t_start`` [s], the common window's start."""
+    series = [per_period({k: records[k][i] for k in ("t", "z_box", "work")}, frequency)
+              for i in rows]
+    w = shared_window(series, keys)
+    t0 = series[0]["t_start"]
+    w["t_start"] = float(t0[w["start"]]) if len(t0) > w["start"] else float("nan")
+    return w
+
+
 def to_arrays(estimates: list[dict], shape: tuple) -> dict:
     """Grid of estimates (a list of ``{key: Estimate}``, grid order) as arrays for files and
     plots: ``{key: {"mean", "se", "ci95", "n"  (shape), "values", "batch_se", "start",

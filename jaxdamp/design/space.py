@@ -274,9 +274,7 @@ class DesignProblem:
         groups = [[2 * k, 2 * k + 1] for k in range(n // 2)] if pairs else [[i] for i in range(n)]
         for fi, freq in enumerate(self.freqs):
             for g in groups:
-                series = [stats.per_period({k: res.records[k][fi * n + i]
-                                            for k in ("t", "z_box", "work")}, freq) for i in g]
-                w = stats.shared_window(series)
+                w = stats.rows_window(res.records, [fi * n + i for i in g], freq)
                 Z[fi, g] = w["amplitude"]
                 E[fi, g] = w["granular_loss_per_cycle"]
                 ok[g] &= w["stationary"]

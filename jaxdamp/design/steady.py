@@ -110,11 +110,9 @@ class SteadyProblem:
         not_stationary = 0
         for f, freq in enumerate(self.freqs):
             for r in range(R):  # one bed at every height: one common window (module doc)
-                series = [stats.per_period({k: res.records[k][res.point(f * L + li, r)]
-                                            for k in ("t", "z_box", "work")}, freq)
-                          for li in range(L)]
-                w = stats.shared_window(series)
-                start[f, r] = series[0]["t_start"][w["start"]] if len(series[0]["t_start"]) else np.nan
+                w = stats.rows_window(res.records,
+                                      [res.point(f * L + li, r) for li in range(L)], freq)
+                start[f, r] = w["t_start"]
                 Z[f, :, r] = w["amplitude"]
                 E[f, :, r] = w["granular_loss_per_cycle"]
                 not_stationary += 0 if w["stationary"] else L
