@@ -27,18 +27,15 @@ system-seconds against the scan's. Writes ``data.h5``, ``figure.png``, ``summary
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
-import platform
-import subprocess
 import sys
 import time
 
 import h5py
 import numpy as np
+import scaffold
 
-import jaxdamp
 from jaxdamp.analysis.stats import t_quantile
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
@@ -69,14 +66,6 @@ def settings(quick: bool) -> dict:
 def _problem(base, s, seed, R, duration):
     cfg = apply_overrides(base, {"numerics.seed": seed})
     return SteadyProblem(cfg, Objective("damping"), h=s["h"], replicates=R, duration=duration)
-
-
-def _git():
-    try:
-        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
-                              text=True, cwd=HERE, check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
 
 
 def run(s: dict, log) -> dict:
@@ -191,13 +180,9 @@ def verdicts(out: dict) -> dict:
     return v
 
 
-def write(out: dict, v: dict, path: str, command: str, elapsed: float) -> None:
-    os.makedirs(path, exist_ok=True)
-    prov = {"command": command, "jaxdamp_version": jaxdamp.__version__, "git": _git(),
-            "machine": f"{platform.machine()}, {os.cpu_count()} cores, Python "
-                       f"{platform.python_version()}", "elapsed_s": elapsed}
+def write(out: dict, v: dict, path: str, prov: dict) -> None:
     with h5py.File(os.path.join(path, "data.h5"), "w") as h:
-        h.attrs.update({k: json.dumps(x) if not isinstance(x, str) else x for k, x in prov.items()})
+        scaffold.stamp(h, prov)
         h.attrs["settings"] = json.dumps(out["settings"])
         h.attrs["objective"] = "C_eq = E/(pi Omega Z^2) at f0 [N s/m], maximised"
         g = h.create_group("reference")
@@ -282,8 +267,7 @@ def _figure(out, v, path):
 def _summary(out, v, path, prov):
     s = out["settings"]
     L = ["# Design optimisation that beats the scan (issue 12)", "",
-         f"Command: `{prov['command']}` — jaxdamp {prov['jaxdamp_version']} ({prov['git']}), "
-         f"{prov['machine']}; {prov['elapsed_s'] / 60:.1f} min wall.", "",
+         scaffold.provenance_line(prov), "",
          "Objective: the grains' equivalent viscous damping at f0, C_eq = E/(π Ω Z²) [N s/m], "
          "maximised. Every DEM value is a mean over independent replicates (independently seeded "
          "settled beds) of steady means after each run's MSER-detected start; derivatives are "
@@ -340,21 +324,13 @@ def _summary(out, v, path, prov):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--quick", action="store_true", help="tiny settings (minutes)")
-    ap.add_argument("--out", default=os.path.join(HERE, "design_optimisation"))
-    ap.add_argument("--no-progress", action="store_true")
-    args = ap.parse_args(argv)
-    s = settings(args.quick)
-    t0 = time.perf_counter()
-    log = (lambda m: print(m, flush=True)) if not args.no_progress else (lambda m: None)
-    out = run(s, log)
-    v = verdicts(out)
-    command = "python experiments/design_optimisation.py" + (" --quick" if args.quick else "")
-    write(out, v, args.out, command, time.perf_counter() - t0)
-    return {"out": out, "verdicts": v}
+    def compute(quick, log):
+        s = settings(quick)
+        out = run(s, log)
+        v = verdicts(out)
+        return {"out": out, "verdicts": v}, lambda path, prov: write(out, v, path, prov)
 
+    return scaffold.main(__doc__, "design_optimisation", argv, compute)
 
 if __name__ == "__main__":
     sys.exit(0 if main() else 1)

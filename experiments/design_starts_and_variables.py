@@ -23,19 +23,16 @@ Writes ``data.h5``, ``figure.png``, ``summary.md``.
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import os
-import platform
-import subprocess
 import sys
 import time
 
 import h5py
 import numpy as np
+import scaffold
 
-import jaxdamp
 from jaxdamp.analysis.stats import t_quantile
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
@@ -66,14 +63,6 @@ def settings(quick: bool) -> dict:
                 max_rounds=6, own_scan=False, coarse=11, fine=4, s3={},
                 bounds=None, spsa=dict(pairs=4, replicates=2, max_iter=10, duration=3.0),
                 confirm=8)
-
-
-def _git():
-    try:
-        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
-                              text=True, cwd=HERE, check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
 
 
 def _steady(base, s, seed):
@@ -176,11 +165,7 @@ def verdicts(a: dict, b: dict) -> dict:
     return v
 
 
-def write(a, b, v, path, command, elapsed):
-    os.makedirs(path, exist_ok=True)
-    prov = {"command": command, "jaxdamp_version": jaxdamp.__version__, "git": _git(),
-            "machine": f"{platform.machine()}, {os.cpu_count()} cores, Python "
-                       f"{platform.python_version()}", "elapsed_s": elapsed}
+def write(a, b, v, path, prov):
     enc = lambda x: json.dumps(x, default=lambda y: y.tolist() if hasattr(y, "tolist")
                                else bool(y) if isinstance(y, np.bool_) else str(y))
     with h5py.File(os.path.join(path, "data.h5"), "w") as h:
@@ -263,8 +248,7 @@ def _figure(a, b, v, path):
 def _summary(a, b, v, path, prov):
     sc = a["scan"]
     L = ["# Design optimisation from two starts, and with three design variables (issue 12)", "",
-         f"Command: `{prov['command']}` — jaxdamp {prov['jaxdamp_version']} ({prov['git']}), "
-         f"{prov['machine']}; {prov['elapsed_s'] / 60:.1f} min wall.", "",
+         scaffold.provenance_line(prov), "",
          "Objective: C_eq = E/(π Ω Z²) at f0 [N s/m], maximised; steady means after the "
          "MSER-detected start; intervals Student-t 95 % across independent beds (optimum "
          "intervals: jackknife-t over replicates of the quadratic response surface, weights "
@@ -325,24 +309,15 @@ def _summary(a, b, v, path, prov):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--quick", action="store_true", help="tiny settings (minutes)")
-    ap.add_argument("--out", default=os.path.join(HERE, "design_starts_and_variables"))
-    ap.add_argument("--no-progress", action="store_true")
-    args = ap.parse_args(argv)
-    s = settings(args.quick)
-    t0 = time.perf_counter()
-    log = (lambda m: print(m, flush=True)) if not args.no_progress else (lambda m: None)
-    base = apply_overrides(presets.get("sanchez2012-optimal"), s["overrides"])
-    a = part_a(base, s, log)
-    b = part_b(base, s, log)
-    v = verdicts(a, b)
-    command = "python experiments/design_starts_and_variables.py" + (
-        " --quick" if args.quick else "")
-    write(a, b, v, args.out, command, time.perf_counter() - t0)
-    return {"a": a, "b": b, "verdicts": v}
+    def compute(quick, log):
+        s = settings(quick)
+        base = apply_overrides(presets.get("sanchez2012-optimal"), s["overrides"])
+        a = part_a(base, s, log)
+        b = part_b(base, s, log)
+        v = verdicts(a, b)
+        return {"a": a, "b": b, "verdicts": v}, lambda path, prov: write(a, b, v, path, prov)
 
+    return scaffold.main(__doc__, "design_starts_and_variables", argv, compute)
 
 if __name__ == "__main__":
     sys.exit(0 if main() else 1)

@@ -17,19 +17,16 @@ interval. Writes ``data.h5``, ``figure.png``, ``summary.md``.
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import os
-import platform
-import subprocess
 import sys
 import time
 
 import h5py
 import numpy as np
+import scaffold
 
-import jaxdamp
 from jaxdamp.analysis.stats import t_quantile
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
@@ -47,14 +44,6 @@ def settings(quick: bool) -> dict:
                     amps=[0.03], periods=7, transient=1, R=2, settle=0.05)
     return dict(families=(("varela2023-reference", None), ("varela2023-a", 0.5)),
                 amps=[0.02, 0.03, 0.04], periods=50, transient=10, R=4, settle=None)
-
-
-def _git():
-    try:
-        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
-                              text=True, cwd=HERE, check=True).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
 
 
 def wall_restitution(cfg) -> list:
@@ -116,13 +105,9 @@ def verdicts(rows: list, amps) -> list:
     return out
 
 
-def write(rows, v, s, path, command, elapsed):
-    os.makedirs(path, exist_ok=True)
-    prov = {"command": command, "jaxdamp_version": jaxdamp.__version__, "git": _git(),
-            "machine": f"{platform.machine()}, {os.cpu_count()} cores, Python "
-                       f"{platform.python_version()}", "elapsed_s": elapsed}
+def write(rows, v, s, path, prov):
     with h5py.File(os.path.join(path, "data.h5"), "w") as h:
-        h.attrs.update({k: json.dumps(x) if not isinstance(x, str) else x for k, x in prov.items()})
+        scaffold.stamp(h, prov)
         h.attrs["settings"] = json.dumps(s)
         h.attrs["verdicts"] = json.dumps(v)
         for r in rows:
@@ -162,8 +147,7 @@ def _figure(rows, s, path):
 
 def _summary(rows, v, s, path, prov):
     L = ["# Grain–wall damping convention: mixed vs calibrated (issue 13, item 5)", "",
-         f"Command: `{prov['command']}` — jaxdamp {prov['jaxdamp_version']} ({prov['git']}), "
-         f"{prov['machine']}; {prov['elapsed_s'] / 60:.1f} min wall.", "",
+         scaffold.provenance_line(prov), "",
          f"Protocol: {s['transient']} transient + {s['periods']} analysed periods at 70 Hz, "
          f"{s['R']} independent beds per point; ⟨E_d⟩ = steady mean of the per-period "
          "dissipation after the MSER-detected start; intervals Student-t 95 % across beds, "
@@ -193,21 +177,13 @@ def _summary(rows, v, s, path, prov):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--quick", action="store_true", help="test-sized settings")
-    ap.add_argument("--out", default=os.path.join(HERE, "wall_damping"))
-    ap.add_argument("--no-progress", action="store_true")
-    args = ap.parse_args(argv)
-    s = settings(args.quick)
-    t0 = time.perf_counter()
-    log = (lambda m: print(m, flush=True)) if not args.no_progress else (lambda m: None)
-    rows = run(s, log)
-    v = verdicts(rows, s["amps"])
-    command = "python experiments/wall_damping.py" + (" --quick" if args.quick else "")
-    write(rows, v, s, args.out, command, time.perf_counter() - t0)
-    return {"rows": rows, "verdicts": v}
+    def compute(quick, log):
+        s = settings(quick)
+        rows = run(s, log)
+        v = verdicts(rows, s["amps"])
+        return {"rows": rows, "verdicts": v}, lambda path, prov: write(rows, v, s, path, prov)
 
+    return scaffold.main(__doc__, "wall_damping", argv, compute)
 
 if __name__ == "__main__":
     sys.exit(0 if main() else 1)

@@ -90,6 +90,8 @@ def load_experiment(name):
     import importlib.util
     import sys
 
+    if str(EXPERIMENTS) not in sys.path:  # the scripts import experiments/scaffold.py
+        sys.path.insert(0, str(EXPERIMENTS))
     spec = importlib.util.spec_from_file_location(name, EXPERIMENTS / f"{name}.py")
     mod = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = mod  # dataclasses look their module up

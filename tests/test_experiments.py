@@ -179,7 +179,7 @@ def test_design_starts_and_variables_quick(tmp_path):
     assert len(a["runs"]) == 2 and all(r["sim"] > 0 and r["lo"] <= r["x"] <= r["hi"]
                                        for r in a["runs"])
     assert set(v["starts"]) == {"0.03", "0.12"}
-    assert np.isfinite(b["confirm"]["mean"]).all() and b["random_cost"] <= b["spsa_cost"]
+    assert np.isfinite(b["confirm"]["mean"]).all() and b["random_cost"] <= b["spsa_cost"] + 1e-9
     with h5py.File(tmp_path / "data.h5") as h:
         assert "design_starts_and_variables.py --quick" in h.attrs["command"]
         assert h["three_variables/confirmation/J"].shape == (3, 2)
