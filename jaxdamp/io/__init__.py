@@ -9,9 +9,11 @@
 * :mod:`~jaxdamp.io.efficiency` — the ``/efficiency`` analysis inside a sweep file.
 * :mod:`~jaxdamp.io.optimisation` — optimiser and search logs (``jaxdamp optimize``).
 * :mod:`~jaxdamp.io.export` — reading any output file for figures, and XYZ/VTK/GIF export.
+* :mod:`~jaxdamp.io.describe` — ``jaxdamp info``: any file above, by its ``format``.
 """
 
 from jaxdamp.io.common import put, stamp, write_steady
-from jaxdamp.io.runfile import RunFile, describe, read_config
+from jaxdamp.io.describe import describe
+from jaxdamp.io.runfile import RunFile, read_config
 
 __all__ = ["RunFile", "describe", "put", "read_config", "stamp", "write_steady"]

@@ -111,3 +111,37 @@ def write_design(path, cfg, objective, problem, method, result, confirm, setting
             c.create_dataset(k, data=np.asarray(confirm[k], float)).attrs["units"] = (
                 json.dumps(units) if k == "X" else objective.unit)
         c.attrs["labels"] = json.dumps(confirm["labels"])
+
+
+def describe_lines(h, path: str) -> list[str]:
+    """Human-readable overview of an open optimiser or search log (``jaxdamp info``)."""
+    fmt = h.attrs.get("format", "?")
+    obj = json.loads(h.attrs.get("objective", "{}"))
+    what = "maximise" if obj.get("maximise") else "minimise"
+    var = h.attrs.get("variables", h.attrs.get("variable", "?"))
+    lines = [f"{path}: {fmt} (optimiser log), jaxdamp {h.attrs.get('jaxdamp_version', '?')}",
+             f"  {what} {obj.get('kind')} [{obj.get('unit')}] at "
+             + ", ".join(f"{f:.4g}" for f in obj.get("frequencies", [])) + f" Hz over {var}"
+             + (f" by {h.attrs['method']}" if "method" in h.attrs else " by gradient (optax)")
+             + f"; status {h.attrs.get('status')}"]
+    if "reason" in h.attrs:
+        lines.append(f"  stopped: {h.attrs['reason']}")
+    for key in ("optimum", "result"):
+        if key in h.attrs:
+            lines.append(f"  {key}: " + ", ".join(
+                f"{k} = {v:.6g}" if isinstance(v, float) else f"{k} = {v}"
+                for k, v in json.loads(h.attrs[key]).items()))
+    if "sim_seconds" in h.attrs:
+        lines.append(f"  simulated system-seconds: {float(h.attrs['sim_seconds']):.5g}")
+    if "iterations" in h:
+        k = next(iter(h["iterations"]))
+        lines.append(f"  {h['iterations'][k].shape[0]} iterates: "
+                     + ", ".join(sorted(h["iterations"])))
+    if "points" in h:
+        lines.append(f"  {h['points/x'].shape[0]} evaluated points")
+    if "confirmation" in h:
+        c = h["confirmation"]
+        labels = json.loads(c.attrs.get("labels", "[]"))
+        for lab, x, m, ci in zip(labels, c["X"][()], c["mean"][()], c["ci95"][()]):
+            lines.append(f"  {lab}: {', '.join(f'{v:.5g}' for v in x)} -> {m:.5g} ± {ci:.2g}")
+    return lines

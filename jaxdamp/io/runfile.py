@@ -139,33 +139,31 @@ def read_config(path: str) -> Config:
         return from_json(h.attrs["config"])
 
 
-def describe(path: str) -> str:
-    """Human-readable overview of a run file (``jaxdamp info``)."""
+def describe_lines(h, path: str) -> list[str]:
+    """Human-readable overview of an open run file (``jaxdamp info``)."""
     lines = []
-    with h5py.File(path, "r") as h:
-        cfg = json.loads(h.attrs["config"])
-        lines.append(f"{path}: {h.attrs.get('format', '?')}, jaxdamp {h.attrs.get('jaxdamp_version', '?')}")
-        lines.append(f"  preset {h.attrs.get('preset')}, system {h.attrs.get('system')}, "
-                     f"status {h.attrs.get('status')} {h.attrs.get('message', '')}".rstrip())
-        lines.append(f"  frequency {cfg['frequency']} Hz, box {cfg['box']['Lx']} × "
-                     f"{cfg['box']['Ly']} × {cfg['box']['Lz']} m, "
-                     f"{sum(s['count'] for s in cfg['grains'])} grains")
-        if "settle" in h:
-            lines.append(f"  settled bed height {h['settle'].attrs['bed_height']:.5g} m "
-                         f"after {h['settle'].attrs['time']:.4g} s")
-        if "series" in h and "t" in h["series"]:
-            t = h["series/t"]
-            if t.shape[0]:
-                lines.append(f"  {t.shape[0]} samples, t = {t[0]:.5g} … {t[-1]:.5g} s; series: "
-                             + ", ".join(sorted(h["series"])))
-        if "snapshots" in h and "t" in h["snapshots"]:
-            lines.append(f"  {h['snapshots/t'].shape[0]} snapshots")
-        if "summary" in h and len(h["summary"].attrs):
-            units = json.loads(h["summary"].attrs.get("units", "{}"))
-            lines.append("  summary:")
-            for k, v in h["summary"].attrs.items():
-                if k != "units":
-                    lines.append(f"    {k} = {v} {units.get(k, '')}".rstrip())
-    return "\n".join(lines)
-
-
+    cfg = json.loads(h.attrs["config"])
+    lines.append(f"{path}: {h.attrs.get('format', '?')} (run file), jaxdamp "
+                 f"{h.attrs.get('jaxdamp_version', '?')}")
+    lines.append(f"  preset {h.attrs.get('preset')}, system {h.attrs.get('system')}, "
+                 f"status {h.attrs.get('status')} {h.attrs.get('message', '')}".rstrip())
+    lines.append(f"  frequency {cfg['frequency']} Hz, box {cfg['box']['Lx']} × "
+                 f"{cfg['box']['Ly']} × {cfg['box']['Lz']} m, "
+                 f"{sum(s['count'] for s in cfg['grains'])} grains")
+    if "settle" in h:
+        lines.append(f"  settled bed height {h['settle'].attrs['bed_height']:.5g} m "
+                     f"after {h['settle'].attrs['time']:.4g} s")
+    if "series" in h and "t" in h["series"]:
+        t = h["series/t"]
+        if t.shape[0]:
+            lines.append(f"  {t.shape[0]} samples, t = {t[0]:.5g} … {t[-1]:.5g} s; series: "
+                         + ", ".join(sorted(h["series"])))
+    if "snapshots" in h and "t" in h["snapshots"]:
+        lines.append(f"  {h['snapshots/t'].shape[0]} snapshots")
+    if "summary" in h and len(h["summary"].attrs):
+        units = json.loads(h["summary"].attrs.get("units", "{}"))
+        lines.append("  summary:")
+        for k, v in h["summary"].attrs.items():
+            if k != "units":
+                lines.append(f"    {k} = {v} {units.get(k, '')}".rstrip())
+    return lines

@@ -210,3 +210,35 @@ def write_fit(h5, fits: dict, used: str) -> None:
     fill(g, fits[used])
     for w, fl in fits.items():
         fill(g.create_group(w), fl)
+
+
+def describe_lines(h, path: str) -> list[str]:
+    """Human-readable overview of an open sweep file (``jaxdamp info``)."""
+    cfg = json.loads(h.attrs["base_config"])
+    axes = json.loads(h.attrs.get("axes", "{}"))
+    R = int(h.attrs.get("replicates", 1))
+    layout = axes.pop("layout", "grid")
+    axes.pop("replicates", None)
+    n = len(json.loads(h.attrs.get("configs", "[]")))
+    lines = [f"{path}: {h.attrs.get('format', '?')} (sweep file), jaxdamp "
+             f"{h.attrs.get('jaxdamp_version', '?')}",
+             f"  {cfg.get('name')} ({cfg.get('system')}), engine {h.attrs.get('engine')}, "
+             f"status {h.attrs.get('status')} {h.attrs.get('message', '')}".rstrip(),
+             f"  {n} systems = {layout} of "
+             + (" × " if layout == "grid" else ", ").join(
+                 f"{k} ({len(v)}: {min(v):.5g} … {max(v):.5g})" for k, v in axes.items())
+             + (f" × {R} replicates" if R > 1 else "")
+             + f"; {float(h.attrs.get('duration', 0)):.4g} s each, dt {float(h.attrs.get('dt', 0)):.3g} s"]
+    if "checkpoint" in h and h.attrs.get("status") != "finished":
+        lines.append(f"  checkpoint after chunk {int(h['checkpoint'].attrs.get('chunk', 0))}"
+                     " (resumable with --resume)")
+    parts = [g for g in ("summary", "replicate_summary", "steady", "fit", "efficiency",
+                         "snapshots", "impacts") if g in h]
+    if parts:
+        lines.append("  groups: " + ", ".join(f"/{g}" for g in parts))
+    if "summary" in h:
+        keys = sorted(k for k in h["summary"] if k != "wall_time")
+        lines.append("  summary: " + ", ".join(keys))
+    if "fit" in h:
+        lines.append("  FRF fit: " + ", ".join(sorted(h["fit"])))
+    return lines

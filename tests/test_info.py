@@ -1,0 +1,57 @@
+"""``jaxdamp info`` on every file kind the program writes, and one-line errors for files it
+cannot read."""
+
+import h5py
+import numpy as np
+
+from jaxdamp.cases import presets
+from jaxdamp.cli import main
+from jaxdamp.config import apply_overrides
+
+
+def _small(**extra):
+    return apply_overrides(presets.get("sanchez2012-optimal"), dict({
+        "grains.0.count": 8, "box.Lx": 0.02, "box.Ly": 0.02, "numerics.settle_time": 0.05,
+        "primary.M": 0.3, "primary.K": 2720.0, "primary.C": 1.0, "numerics.duration": 0.05},
+        **extra))
+
+
+def test_info_describes_sweep_run_and_optimiser_files(tmp_path, capsys):
+    from jaxdamp.design import Objective, S3Problem, optimize
+    from jaxdamp.studies.sweep import sweep
+
+    sw = tmp_path / "sweep.h5"
+    sweep(_small(), {"frequency": [14.0, 15.0]}, out=str(sw), progress=False, echo=None,
+          replicates=2)
+    s3 = S3Problem(apply_overrides(presets.get("sanchez2012-impact"),
+                                   {"numerics.analysis_window": 0.5}),
+                   Objective("damping"), duration=1.0)
+    opt = tmp_path / "opt.h5"
+    optimize(s3, 0.05, max_iter=1, out=str(opt), progress=False)
+    run = tmp_path / "run.h5"
+    assert main(["run", "--preset", "sanchez2012-optimal", "--set", "grains.0.count=8",
+                 "--set", "numerics.duration=0.05", "--set", "numerics.settle_time=0.05",
+                 "--out", str(run), "--no-progress"]) == 0
+    capsys.readouterr()
+    for path, expect in ((sw, "(sweep file)"), (opt, "(optimiser log)"), (run, "(run file)")):
+        assert main(["info", str(path)]) == 0
+        out = capsys.readouterr().out
+        assert expect in out, out
+    assert "grid of frequency (2: 14 … 15) × 2 replicates" in (
+        main(["info", str(sw)]), capsys.readouterr().out)[1]
+
+
+def test_info_refuses_unreadable_files_in_one_line(tmp_path, capsys):
+    text = tmp_path / "notes.txt"
+    text.write_text("hello")
+    foreign = tmp_path / "other.h5"
+    with h5py.File(foreign, "w") as h:
+        h["x"] = np.arange(3)
+    truncated = tmp_path / "cut.h5"
+    with h5py.File(truncated, "w") as h:
+        h.attrs["format"] = "jaxdamp-sweep/1"
+    for path, msg in ((tmp_path / "missing.h5", "no such file"), (text, "not an HDF5 file"),
+                      (foreign, "not a jaxdamp file"), (truncated, "without its")):
+        assert main(["info", str(path)]) == 2
+        err = capsys.readouterr().err.strip()
+        assert msg in err and "Traceback" not in err and len(err.splitlines()) == 1, err
