@@ -55,3 +55,25 @@ def test_info_refuses_unreadable_files_in_one_line(tmp_path, capsys):
         assert main(["info", str(path)]) == 2
         err = capsys.readouterr().err.strip()
         assert msg in err and "Traceback" not in err and len(err.splitlines()) == 1, err
+
+
+def test_zero_or_negative_counts_are_errors_not_defaults(capsys):
+    """`frf --n 0`, `efficiency --periods 0`, a negative budget, a NaN duration, a word for a
+    count: each a one-line usage error (exit 2) before any compute, never a silent default."""
+    from jaxdamp.cli import main
+
+    for argv, msg in ((["frf", "--preset", "sanchez2012-optimal", "--n", "0"],
+                       "--n: 0: must be > 0"),
+                      (["efficiency", "--preset", "varela2023-reference", "--periods", "0"],
+                       "--periods: 0: must be > 0"),
+                      (["optimize", "--preset", "sanchez2012-optimal", "--budget", "-3"],
+                       "--budget: -3: must be > 0"),
+                      (["run", "--preset", "sanchez2012-optimal", "--duration", "nan"],
+                       "--duration: nan: must be > 0"),
+                      (["frf", "--preset", "sanchez2012-optimal", "--n", "two"], "not an integer"),
+                      (["efficiency", "--preset", "varela2023-reference", "--transient", "-1"],
+                       "must be ≥ 0")):
+        assert main(argv) == 2
+        err = capsys.readouterr().err.strip()
+        assert msg in err and len(err.splitlines()) == 1 and "Traceback" not in err, err
+    assert main(["--help"]) == 0

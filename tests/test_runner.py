@@ -129,4 +129,4 @@ def test_cli_run_with_replicates_reports_mean_se_and_detected_start(tmp_path, ca
         assert h["steady/amplitude/start"].shape == (2,)
         assert h["steady"].attrs["replicates"] == 2
     assert cli.main(args[:1] + ["--preset", "sanchez2012-optimal", "--replicates", "0"]) == 2
-    assert "--replicates 0" in capsys.readouterr().err
+    assert "--replicates: 0: must be > 0" in capsys.readouterr().err

@@ -12,8 +12,15 @@ from jaxdamp.cli import efficiency, files, frf, optimize, run
 from jaxdamp.config import ConfigError
 
 
+class _Parser(argparse.ArgumentParser):
+    """Usage errors in one line, with where to look (the subcommands inherit the class)."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see `{self.prog} --help`)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = _Parser(
         prog="jaxdamp",
         description="Simulate granular (particle) dampers with a JAX discrete-element model.",
         epilog="Run `jaxdamp COMMAND --help` for each command's options and examples.",
@@ -25,7 +32,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
-    args = build_parser().parse_args(argv)
+    try:
+        args = build_parser().parse_args(argv)
+    except SystemExit as done:  # --help (0) or a usage error (2, already printed)
+        return int(done.code or 0)
     try:
         return args.func(args)
     except ConfigError as err:

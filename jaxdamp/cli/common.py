@@ -3,7 +3,32 @@ lists, printing steady-state estimates, writing TOML."""
 
 from __future__ import annotations
 
+import argparse
+import math
+
 from jaxdamp.config import ConfigError, apply_overrides, load_toml
+
+
+def _number(kind, least, strict):
+    def parse(text: str):
+        try:
+            v = kind(text)
+        except ValueError:
+            what = "an integer" if kind is int else "a number"
+            raise argparse.ArgumentTypeError(f"{text!r} is not {what}") from None
+        if not math.isfinite(v) or (v <= least if strict else v < least):
+            raise argparse.ArgumentTypeError(
+                f"{text}: must be {'>' if strict else '≥'} {least:g}")
+        return v
+
+    parse.__name__ = f"{'positive' if strict else 'non-negative'} {kind.__name__}"
+    return parse
+
+
+#: argparse types that refuse zero or negative counts and durations (never a silent default).
+positive_int = _number(int, 0, True)
+nonnegative_int = _number(int, 0, False)
+positive_float = _number(float, 0.0, True)
 
 
 def base_config(args):

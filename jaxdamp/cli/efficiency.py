@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import textwrap
 
-from jaxdamp.cli.common import base_config, float_list, replicates
+from jaxdamp.cli.common import base_config, float_list, nonnegative_int, positive_int, replicates
 from jaxdamp.config import ConfigError, apply_overrides
 
 
@@ -74,7 +74,7 @@ def cmd_efficiency(args) -> int:
 
     amps = _amplitudes(args.amplitude) if args.amplitude else (
         [0.02, 0.03, 0.04] if args.quick else list(__import__("numpy").linspace(0.02, 0.04, 9)))
-    periods = args.periods or (3 if args.quick else 50)
+    periods = args.periods if args.periods is not None else (3 if args.quick else 50)
     transient = args.transient if args.transient is not None else (1 if args.quick else 10)
     sigmas = float_list(args.sigma) if args.sigma else [None]
     if args.preset in mixtures.FAMILIES and args.config is None:
@@ -164,12 +164,12 @@ def register(sub) -> None:
     ef.add_argument("--sigma", metavar="S1,S2,...", help="size ratio(s) of the mixture, in (0, 1]")
     ef.add_argument("--amplitude", metavar="A0:A1:N|A1,A2,...",
                     help="drive amplitudes [m] (default 0.02:0.04:9; quick 0.02,0.03,0.04)")
-    ef.add_argument("--periods", type=int, help="analysed drive periods (default 50; quick 3)")
-    ef.add_argument("--transient", type=int, help="periods dropped first (default 10; quick 1)")
+    ef.add_argument("--periods", type=positive_int, help="analysed drive periods (default 50; quick 3)")
+    ef.add_argument("--transient", type=nonnegative_int, help="periods dropped first (default 10; quick 1)")
     ef.add_argument("--out", metavar="FILE.h5", help="sweep file with the /efficiency analysis")
     ef.add_argument("--png", metavar="FILE.png", help="figure stem (default: next to --out)")
     ef.add_argument("--quick", action="store_true", help="3 amplitudes, 1 + 3 periods")
-    ef.add_argument("--replicates", type=int, metavar="R",
+    ef.add_argument("--replicates", type=positive_int, metavar="R",
                     help="independent beds per amplitude in the same batch (default 1): <E_d> "
                          "gets mean ± standard error over them")
     ef.add_argument("--no-progress", action="store_true")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import textwrap
 
-from jaxdamp.cli.common import to_toml
+from jaxdamp.cli.common import positive_int, to_toml
 from jaxdamp.config import ConfigError
 
 
@@ -151,8 +151,8 @@ def register(sub) -> None:
     ex.add_argument("--format", required=True, choices=["xyz", "vtk", "gif", "mp4"])
     ex.add_argument("--out", metavar="PATH", help="output file (.xyz, .pvd, .gif, .mp4; "
                     "default: next to FILE)")
-    ex.add_argument("--every", type=int, default=1, metavar="K", help="every K-th snapshot")
-    ex.add_argument("--fps", type=int, default=10, help="frames per second (gif, mp4)")
+    ex.add_argument("--every", type=positive_int, default=1, metavar="K", help="every K-th snapshot")
+    ex.add_argument("--fps", type=positive_int, default=10, help="frames per second (gif, mp4)")
     ex.add_argument("--color", choices=["species", "height"], default="species",
                     help="grain colour in animations")
     ex.set_defaults(func=cmd_export)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import textwrap
 
-from jaxdamp.cli.common import base_config, float_list, replicates
+from jaxdamp.cli.common import base_config, float_list, positive_float, positive_int, replicates
 from jaxdamp.config import ConfigError, apply_overrides
 
 
@@ -34,7 +34,7 @@ def cmd_frf(args) -> int:
     if args.frequencies:
         freqs = float_list(args.frequencies)
     else:
-        n = 6 if args.quick and args.n is None else (args.n or 30)
+        n = args.n if args.n is not None else (6 if args.quick else 30)
         if not 0 < args.fmin < args.fmax:
             raise ConfigError(f"--fmin {args.fmin} / --fmax {args.fmax}: need 0 < fmin < fmax")
         freqs = list(np.linspace(args.fmin, args.fmax, n))
@@ -124,17 +124,17 @@ def register(sub) -> None:
     fr.add_argument("--preset")
     fr.add_argument("--config", metavar="FILE")
     fr.add_argument("--set", action="append", metavar="KEY=VALUE")
-    fr.add_argument("--fmin", type=float, default=5.0, help="lowest frequency [Hz] (default 5)")
-    fr.add_argument("--fmax", type=float, default=25.0, help="highest frequency [Hz] (default 25)")
-    fr.add_argument("--n", type=int, help="number of frequencies (default 30; 6 with --quick)")
+    fr.add_argument("--fmin", type=positive_float, default=5.0, help="lowest frequency [Hz] (default 5)")
+    fr.add_argument("--fmax", type=positive_float, default=25.0, help="highest frequency [Hz] (default 25)")
+    fr.add_argument("--n", type=positive_int, help="number of frequencies (default 30; 6 with --quick)")
     fr.add_argument("--frequencies", metavar="F1,F2,...", help="explicit list of frequencies [Hz]")
     fr.add_argument("--lz", metavar="LZ1,LZ2,...", help="second axis: box heights [m]")
-    fr.add_argument("--duration", type=float, help="simulated time per point [s]")
+    fr.add_argument("--duration", type=positive_float, help="simulated time per point [s]")
     fr.add_argument("--out", metavar="FILE.h5")
     fr.add_argument("--png", metavar="FILE.png", help="figure (default: next to --out)")
     fr.add_argument("--quick", action="store_true", help="6 frequencies, 0.5 s each")
     fr.add_argument("--resume", action="store_true")
-    fr.add_argument("--replicates", type=int, metavar="R",
+    fr.add_argument("--replicates", type=positive_int, metavar="R",
                     help="independent beds per point, run in the same batch (default 1): "
                          "amplitudes and M_ef, C_ef get mean ± standard error over them")
     fr.add_argument("--residuals", choices=["relative", "absolute"], default="relative",

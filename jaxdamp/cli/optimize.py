@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import textwrap
 
-from jaxdamp.cli.common import base_config, float_list
+from jaxdamp.cli.common import base_config, float_list, positive_float, positive_int
 from jaxdamp.config import ConfigError, apply_overrides
 
 
@@ -287,7 +287,7 @@ def register(sub) -> None:
     op.add_argument("--set", action="append", metavar="KEY=VALUE")
     op.add_argument("--objective", choices=["damping", "amplitude", "band", "dissipation"],
                     default="damping", help="what to optimise (default damping, C_eq)")
-    op.add_argument("--frequency", type=float, metavar="HZ",
+    op.add_argument("--frequency", type=positive_float, metavar="HZ",
                     help="frequency of damping/amplitude/dissipation (default: the primary's f0)")
     op.add_argument("--band", metavar="F1,F2,...", help="frequencies of the band objective [Hz]")
     op.add_argument("--method", choices=["trust", "scan", "gradient", "spsa", "random"],
@@ -302,9 +302,9 @@ def register(sub) -> None:
                          "preset's, friction 0.05:0.8)")
     op.add_argument("--x0", metavar="V1,V2,...",
                     help="--vars: start design in the order of --vars (default the preset's)")
-    op.add_argument("--replicates", type=int, metavar="R",
+    op.add_argument("--replicates", type=positive_int, metavar="R",
                     help="DEM: independent beds per evaluation (default 4; quick 2)")
-    op.add_argument("--budget", type=float, metavar="SECONDS",
+    op.add_argument("--budget", type=positive_float, metavar="SECONDS",
                     help="gradient and spsa: stop before exceeding this many simulated "
                          "system-seconds; random: what the Latin hypercube may spend")
     op.add_argument("--lz0", type=float,
@@ -313,15 +313,15 @@ def register(sub) -> None:
     op.add_argument("--gap0", type=float, help="S3: starting gap [m] (default lz0 - h_bed)")
     op.add_argument("--lo", type=float, metavar="LZ", help="lowest Lz [m] (default bed + 5 mm)")
     op.add_argument("--hi", type=float, metavar="LZ", help="highest Lz [m] (default 0.4 DEM)")
-    op.add_argument("--lr", type=float, help="gradient: initial learning rate [m]")
-    op.add_argument("--max-iter", type=int, help="gradient: most iterates")
+    op.add_argument("--lr", type=positive_float, help="gradient: initial learning rate [m]")
+    op.add_argument("--max-iter", type=positive_int, help="gradient: most iterates")
     op.add_argument("--estimator", choices=["steady", "windows"], default="steady",
                     help="DEM gradient: replicated steady states (default) or pathwise "
                          "derivatives over short windows (biased on the chaotic bed; kept for "
                          "the experiment)")
-    op.add_argument("--h", type=float, metavar="M",
+    op.add_argument("--h", type=positive_float, metavar="M",
                     help="DEM: half-step of the central difference [m] (0.005)")
-    op.add_argument("--duration", type=float, metavar="S",
+    op.add_argument("--duration", type=positive_float, metavar="S",
                     help="simulated time per evaluation [s] (DEM 3, quick 0.6; S3 run 3)")
     op.add_argument("--out", metavar="FILE.h5", help="log (HDF5)")
     op.add_argument("--quick", action="store_true",

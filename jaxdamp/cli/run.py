@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import textwrap
 
-from jaxdamp.cli.common import print_steady, replicates, run_config
+from jaxdamp.cli.common import positive_float, positive_int, print_steady, replicates, run_config
 
 EPILOG_RUN = textwrap.dedent(
     """\
@@ -80,14 +80,14 @@ def register(sub) -> None:
     r.add_argument("--config", metavar="FILE", help="TOML configuration (overrides the preset)")
     r.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="override one value by dotted key (repeatable), e.g. box.Lz=0.1")
-    r.add_argument("--frequency", type=float, metavar="HZ", help="excitation frequency f [Hz]")
-    r.add_argument("--duration", type=float, metavar="S", help="simulated time after settling [s]")
+    r.add_argument("--frequency", type=positive_float, metavar="HZ", help="excitation frequency f [Hz]")
+    r.add_argument("--duration", type=positive_float, metavar="S", help="simulated time after settling [s]")
     r.add_argument("--seed", type=int, help="seed of radii and lattice jitter")
     r.add_argument("--out", metavar="FILE.h5", help="output HDF5 file (default: none)")
     r.add_argument("--quick", action="store_true",
                    help="short demo run (1 s driven after settling, under a minute on 2 cores)")
     r.add_argument("--resume", action="store_true", help="continue --out from its checkpoint")
-    r.add_argument("--replicates", type=int, metavar="R",
+    r.add_argument("--replicates", type=positive_int, metavar="R",
                    help="independent beds (seeds seed..seed+R-1) run in one batch (default 1); "
                         "steady-state numbers get mean ± standard error over them and the file "
                         "is a sweep file of one point")
