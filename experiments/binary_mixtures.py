@@ -283,7 +283,8 @@ def write_summary(args, s, runs, elapsed, replicas=(), drift=()):
       f"{platform.processor() or platform.machine()}, float64, native engine. Wall time "
       f"{elapsed:.0f} s this invocation; the sweeps' own compute time (kept across resumes) is "
       "listed per family below.\n")
-    P(f"Grain–wall damping: `wall_damping = \"{presets.get('varela2023-reference').wall_damping}\"` "
+    convention = presets.get("varela2023-reference").wall_damping
+    P(f"Grain–wall damping: `wall_damping = \"{convention}\"` "
       "(the wall's constant, calibrated on 2.5 mm grains, mixed with each grain's; the paper does "
       "not say). The alternative, every contact calibrated to ε = 0.75 at 1 m/s, changes ⟨E_d⟩ "
       "by −5 % at 2 cm and +0.5 to +1.5 % at 3–4 cm (experiments/wall_damping/summary.md).\n")
