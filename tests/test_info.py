@@ -77,3 +77,47 @@ def test_zero_or_negative_counts_are_errors_not_defaults(capsys):
         err = capsys.readouterr().err.strip()
         assert msg in err and len(err.splitlines()) == 1 and "Traceback" not in err, err
     assert main(["--help"]) == 0
+
+
+def test_ctrl_c_leaves_a_resumable_interrupted_file(tmp_path):
+    """SIGINT to a running `jaxdamp run --out`: exit 130, a one-line message with the exact
+    command that resumes it, no traceback, the file marked 'interrupted' with its checkpoint;
+    the printed command then finishes the run."""
+    import os
+    import shlex
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    out = tmp_path / "long.h5"
+    argv = ["run", "--preset", "sanchez2012-optimal", "--set", "grains.0.count=8",
+            "--set", "numerics.settle_time=0.05", "--set", "numerics.duration=0.6",
+            "--set", "numerics.chunk=0.01", "--out", str(out), "--no-progress"]
+    proc = subprocess.Popen([sys.executable, "-m", "jaxdamp", *argv], stderr=subprocess.PIPE,
+                            stdout=subprocess.DEVNULL, text=True)
+    deadline = time.time() + 240
+    while time.time() < deadline and proc.poll() is None:  # until a few chunks are kept
+        try:
+            with h5py.File(out, "r", locking=False) as h:
+                if "checkpoint" in h and int(h["checkpoint"].attrs.get("chunk", 0)) >= 3:
+                    break
+        except (OSError, KeyError):
+            pass
+        time.sleep(0.2)
+    assert proc.poll() is None, "the run ended before it could be interrupted"
+    proc.send_signal(signal.SIGINT)
+    err = proc.communicate(timeout=120)[1].strip()
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err and len(err.splitlines()) == 1, err
+    assert "interrupted" in err and "--resume" in err
+    with h5py.File(out, "r") as h:
+        assert h.attrs["status"] == "interrupted" and "checkpoint" in h
+    again = shlex.split(err.split("Continue with: ")[1])
+    assert again[0] == "jaxdamp" and again[-1] == "--resume"
+    env = dict(os.environ)
+    done = subprocess.run([sys.executable, "-m", "jaxdamp", *again[1:]], capture_output=True,
+                          text=True, env=env, timeout=600)
+    assert done.returncode == 0, done.stderr
+    with h5py.File(out, "r") as h:
+        assert h.attrs["status"] == "finished"

@@ -44,6 +44,18 @@ def main(argv=None) -> int:
     except FloatingPointError as err:
         print(f"jaxdamp: {err}", file=sys.stderr)
         return 3
+    except KeyboardInterrupt:
+        words = list(sys.argv[1:] if argv is None else argv)
+        out = getattr(args, "out", None)
+        if out and hasattr(args, "resume"):
+            import shlex
+
+            again = "jaxdamp " + shlex.join([w for w in words if w != "--resume"] + ["--resume"])
+            print(f"jaxdamp: interrupted; {out} keeps every finished chunk (status "
+                  f"'interrupted'). Continue with: {again}", file=sys.stderr)
+        else:
+            print("jaxdamp: interrupted", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

@@ -218,12 +218,15 @@ def advance(batch: Batch, n_records: int, record_every: int, *, systems: int | N
 
 def run_chunks(batch: Batch, chunks: range, records_per_chunk: int, record_every: int, *,
                systems: int | None = None, on_chunk=None, on_diverged=None, on_realloc=None,
-               progress: str | None = None, total: int | None = None) -> Batch:
+               on_interrupt=None, progress: str | None = None,
+               total: int | None = None) -> Batch:
     """The chunk loop of every long run: for each index of ``chunks``, :func:`advance` and
     hand ``(index, batch, records)`` to ``on_chunk`` (append samples, checkpoint, snapshot).
 
     A non-finite chunk calls ``on_diverged(error)`` (keep what was written, mark the file)
-    and re-raises :class:`SimulationDiverged`. ``progress``: the description of a tqdm bar
+    and re-raises :class:`SimulationDiverged`; Ctrl-C (``KeyboardInterrupt``) calls
+    ``on_interrupt()`` (the file keeps every finished chunk and its checkpoint: mark it
+    resumable) and re-raises. ``progress``: the description of a tqdm bar
     over ``total`` chunks (starting at ``chunks.start``), or ``None`` for none. Returns the
     batch after the last chunk."""
     bar = None
@@ -241,8 +244,17 @@ def run_chunks(batch: Batch, chunks: range, records_per_chunk: int, record_every
                 if on_diverged is not None:
                     on_diverged(e)
                 raise
+            except KeyboardInterrupt:
+                if on_interrupt is not None:
+                    on_interrupt()
+                raise
             if on_chunk is not None:
-                on_chunk(k, batch, recs)
+                try:
+                    on_chunk(k, batch, recs)
+                except KeyboardInterrupt:  # while writing: the chunk may be half kept
+                    if on_interrupt is not None:
+                        on_interrupt()
+                    raise
             if bar is not None:
                 bar.update(1)
                 bar.set_postfix(t=f"{float(np.asarray(batch.states.t)[0]):.3f}s")

@@ -3,7 +3,8 @@
 Schema of a run file (every dataset has a ``units`` attribute; see ``docs/output.md``)::
 
     /                       attrs: format, jaxdamp_version, created, config (JSON), system,
-                                   preset, status ('running' | 'finished' | 'diverged'), message
+                                   preset, status ('running' | 'finished' | 'diverged' |
+                                   'interrupted' | 'partial'), message
     /grains/radius (N,)     m        /grains/mass (N,) kg      /grains/species (N,)
     /settle                 attrs: bed_height [m], time [s], max_speed [m/s];
                             r0 (N,3) settled positions (box frame) [m]

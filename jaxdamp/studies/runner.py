@@ -193,11 +193,18 @@ def run(
             rf.append_records({k: v[0] for k, v in e.records.items()}, e.index)
             rf.set_status("diverged", str(e))
 
+    def interrupted():
+        if rf is not None:
+            rf.set_status("interrupted", "stopped by Ctrl-C; --resume continues from the "
+                          "last checkpoint")
+            rf.close()
+
     wall0 = time.perf_counter()
     stop = sched.n_chunks if max_chunks is None else min(sched.n_chunks, start_chunk + max_chunks)
     batch = driver.run_chunks(
         batch, range(start_chunk, stop), sched.records_per_chunk, sched.record_every,
-        on_chunk=keep, on_diverged=diverged, on_realloc=realloc, total=sched.n_chunks,
+        on_chunk=keep, on_diverged=diverged, on_realloc=realloc, on_interrupt=interrupted,
+        total=sched.n_chunks,
         progress=f"{config.name} f={config.frequency:g} Hz" if progress else None)
     steps_done = (stop - start_chunk) * sched.chunk_steps
     wall = time.perf_counter() - wall0

@@ -180,10 +180,16 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
             sf.set_status("diverged", str(e))
             sf.close()
 
+    def interrupted():
+        if sf is not None:  # every finished chunk and its checkpoint are in the file
+            sf.set_status("interrupted", "stopped by Ctrl-C; --resume continues from the "
+                          "last checkpoint")
+            sf.close()
+
     stop = sched.n_chunks if max_chunks is None else min(sched.n_chunks, start_chunk + max_chunks)
     batch = driver.run_chunks(
         batch, range(start_chunk, stop), sched.records_per_chunk, sched.record_every, systems=P,
-        on_chunk=keep, on_diverged=diverged, total=sched.n_chunks,
+        on_chunk=keep, on_diverged=diverged, on_interrupt=interrupted, total=sched.n_chunks,
         progress=f"sweep of {P} systems" if progress else None)
     if stop < sched.n_chunks:
         if sf is not None:
