@@ -33,8 +33,13 @@ from jaxdamp.engine.packing import settle_many
 from jaxdamp.engine.simulate import resolve_engine
 from jaxdamp.io.sweepfile import SweepFile, holds
 from jaxdamp.physics.model import build, config_dt, grain_radii
-from jaxdamp.studies.grid import (SweepResult, geometry_key, grid_configs, grid_shape,
-                                  replicate_configs)
+from jaxdamp.studies.grid import (
+    SweepResult,
+    geometry_key,
+    grid_configs,
+    grid_shape,
+    replicate_configs,
+)
 from jaxdamp.studies.runner import initial_box_position, schedule
 
 
