@@ -241,7 +241,8 @@ def _cmd_design(args, cfg, objective, names) -> int:
 def register(sub) -> None:
     """Add the subcommand(s) to the ``jaxdamp`` parser."""
     op = sub.add_parser(
-        "optimize", help="optimise the box height Lz (DEM) or the gap (S3), with an interval",
+        "optimize", help="optimise the box height Lz (DEM) or the gap (S3), or several design "
+                         "variables, with an interval",
         description="Find the box height that optimises a design objective, with a 95 %% "
         "confidence interval and the simulated system-seconds it cost. "
         "DEM presets (S1, e.g. sanchez2012-optimal): every evaluation runs R independent "
@@ -253,7 +254,12 @@ def register(sub) -> None:
         "(common random numbers inside each pair, independent pairs across replicates). "
         "S3 presets (one particle, smooth model): the gap = Lz - h_bed; 'gradient' (default) "
         "uses exact steady-state derivatives on the stable periodic orbit (implicit "
-        "differentiation of the one-period map) and stops with a message where there is none.",
+        "differentiation of the one-period map) and stops with a message where there is none. "
+        "Several design variables (--vars Lz,base,friction): 'spsa' (default) estimates the "
+        "gradient from random +-c perturbation pairs, each pair its own direction and bed, all "
+        "in one batch, and steps with optax Adam inside --bounds (the bed must fit under the "
+        "lid); 'random' is the Latin hypercube of equal cost; the design is then confirmed on "
+        "fresh beds next to the start.",
         epilog=textwrap.dedent("""\
             examples:
               jaxdamp optimize --preset sanchez2012-optimal --replicates 4 --out opt.h5
