@@ -243,7 +243,7 @@ def register(sub) -> None:
     op = sub.add_parser(
         "optimize", help="optimise the box height Lz (DEM) or the gap (S3), or several design "
                          "variables, with an interval",
-        description="Find the box height that optimises a design objective, with a 95 %% "
+        description="Find the box height that optimises a design objective, with a 95 % "
         "confidence interval and the simulated system-seconds it cost. "
         "DEM presets (S1, e.g. sanchez2012-optimal): every evaluation runs R independent "
         "beds (--replicates) in one batch; the start of the steady state is detected from the "
