@@ -226,7 +226,8 @@ def run_chunks(batch: Batch, chunks: range, records_per_chunk: int, record_every
     A non-finite chunk calls ``on_diverged(error)`` (keep what was written, mark the file)
     and re-raises :class:`SimulationDiverged`; Ctrl-C (``KeyboardInterrupt``) calls
     ``on_interrupt()`` (the file keeps every finished chunk and its checkpoint: mark it
-    resumable) and re-raises. ``progress``: the description of a tqdm bar
+    resumable) and re-raises; a Ctrl-C while a chunk is being written waits until it is
+    written. ``progress``: the description of a tqdm bar
     over ``total`` chunks (starting at ``chunks.start``), or ``None`` for none. Returns the
     batch after the last chunk."""
     bar = None
@@ -249,12 +250,12 @@ def run_chunks(batch: Batch, chunks: range, records_per_chunk: int, record_every
                     on_interrupt()
                 raise
             if on_chunk is not None:
-                try:
+                with _interrupt_deferred() as asked:  # never half a chunk in the file
                     on_chunk(k, batch, recs)
-                except KeyboardInterrupt:  # while writing: the chunk may be half kept
+                if asked():
                     if on_interrupt is not None:
                         on_interrupt()
-                    raise
+                    raise KeyboardInterrupt
             if bar is not None:
                 bar.update(1)
                 bar.set_postfix(t=f"{float(np.asarray(batch.states.t)[0]):.3f}s")
@@ -262,6 +263,31 @@ def run_chunks(batch: Batch, chunks: range, records_per_chunk: int, record_every
         if bar is not None:
             bar.close()
     return batch
+
+
+class _interrupt_deferred:
+    """Hold Ctrl-C while a chunk is written (samples, checkpoint): a SIGINT then only sets a
+    flag (``asked()``), acted on after the write. No-op outside the main thread."""
+
+    def __enter__(self):
+        import signal
+        import threading
+
+        self._flag = False
+        self._old = None
+        if threading.current_thread() is threading.main_thread():
+            self._old = signal.signal(signal.SIGINT, self._note)
+        return lambda: self._flag
+
+    def _note(self, signum, frame):
+        self._flag = True
+
+    def __exit__(self, *exc):
+        import signal
+
+        if self._old is not None:
+            signal.signal(signal.SIGINT, self._old)
+        return False
 
 
 def run_for(batch: Batch, seconds: float, pieces: int = 1, check: bool = True) -> Batch:
