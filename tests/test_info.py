@@ -96,8 +96,11 @@ def _interrupt_after(argv, path, chunks, timeout=300):
     import sys
     import time
 
+    # SIGINT as at a terminal, even when the tests themselves run as a background job (which
+    # starts with SIGINT ignored, and Python then installs no KeyboardInterrupt handler)
     proc = subprocess.Popen([sys.executable, "-m", "jaxdamp", *argv], stderr=subprocess.PIPE,
-                            stdout=subprocess.DEVNULL, text=True)
+                            stdout=subprocess.DEVNULL, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.time() + timeout
     while time.time() < deadline and proc.poll() is None and _chunk(path) < chunks:
         time.sleep(0.2)

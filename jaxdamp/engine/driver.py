@@ -267,7 +267,8 @@ def run_chunks(batch: Batch, chunks: range, records_per_chunk: int, record_every
 
 class _interrupt_deferred:
     """Hold Ctrl-C while a chunk is written (samples, checkpoint): a SIGINT then only sets a
-    flag (``asked()``), acted on after the write. No-op outside the main thread."""
+    flag (``asked()``), acted on after the write. No-op outside the main thread and where
+    SIGINT is ignored (a background job without job control)."""
 
     def __enter__(self):
         import signal
@@ -275,7 +276,8 @@ class _interrupt_deferred:
 
         self._flag = False
         self._old = None
-        if threading.current_thread() is threading.main_thread():
+        if (threading.current_thread() is threading.main_thread()
+                and signal.getsignal(signal.SIGINT) is not signal.SIG_IGN):  # respect nohup & co
             self._old = signal.signal(signal.SIGINT, self._note)
         return lambda: self._flag
 
