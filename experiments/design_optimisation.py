@@ -324,7 +324,7 @@ def _summary(out, v, path, prov):
 
 
 def main(argv=None):
-    def compute(quick, log):
+    def compute(quick, log, _ctx):
         s = settings(quick)
         out = run(s, log)
         v = verdicts(out)

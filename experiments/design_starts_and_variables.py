@@ -309,7 +309,7 @@ def _summary(a, b, v, path, prov):
 
 
 def main(argv=None):
-    def compute(quick, log):
+    def compute(quick, log, _ctx):
         s = settings(quick)
         base = apply_overrides(presets.get("sanchez2012-optimal"), s["overrides"])
         a = part_a(base, s, log)

@@ -8,7 +8,7 @@ from their own folder (``tests/helpers.load_experiment`` puts the folder on the 
     import scaffold
 
     def main(argv=None):
-        def compute(quick, log):
+        def compute(quick, log, ctx):         # ctx: Context (out folder, progress)
             result = ...                      # the experiment's numbers and verdicts
             return result, lambda path, prov: write(result, path, prov)
         return scaffold.main(__doc__, "my_experiment", argv, compute)
@@ -22,6 +22,7 @@ import os
 import platform
 import subprocess
 import time
+from dataclasses import dataclass
 
 import jaxdamp
 
@@ -56,10 +57,24 @@ def provenance_line(prov: dict) -> str:
             f"{prov['machine']}; {prov['elapsed_s'] / 60:.1f} min wall.")
 
 
+@dataclass(frozen=True)
+class Context:
+    """What ``compute`` may need besides ``quick``: the output folder ``out`` (for raw,
+    resumable files under ``out/raw``) and whether to show progress bars."""
+
+    out: str
+    progress: bool
+
+    def raw(self, name: str) -> str:
+        """``out/raw/name``, the folder created: files kept for resuming, not committed."""
+        os.makedirs(os.path.join(self.out, "raw"), exist_ok=True)
+        return os.path.join(self.out, "raw", name)
+
+
 def main(doc: str, name: str, argv, compute):
-    """Parse ``--quick``, ``--out``, ``--no-progress``; ``compute(quick, log)`` returns
-    ``(result, writer)``; ``writer(out_dir, provenance)`` writes the files. Returns
-    ``result``."""
+    """Parse ``--quick``, ``--out``, ``--no-progress``; ``compute(quick, log, ctx)``
+    (``ctx``: :class:`Context`) returns ``(result, writer)``; ``writer(out_dir, provenance)``
+    writes the files. Returns ``result``."""
     ap = argparse.ArgumentParser(description=doc,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="test-sized settings (minutes)")
@@ -68,7 +83,7 @@ def main(doc: str, name: str, argv, compute):
     args = ap.parse_args(argv)
     log = (lambda m: print(m, flush=True)) if not args.no_progress else (lambda m: None)
     t0 = time.perf_counter()
-    result, writer = compute(args.quick, log)
+    result, writer = compute(args.quick, log, Context(args.out, not args.no_progress))
     os.makedirs(args.out, exist_ok=True)
     writer(args.out, provenance(name, args.quick, time.perf_counter() - t0))
     return result

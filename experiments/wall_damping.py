@@ -177,7 +177,7 @@ def _summary(rows, v, s, path, prov):
 
 
 def main(argv=None):
-    def compute(quick, log):
+    def compute(quick, log, _ctx):
         s = settings(quick)
         rows = run(s, log)
         v = verdicts(rows, s["amps"])

@@ -99,23 +99,44 @@ def fit_frf_replicates(f, Z, U, K, M0, C0, residuals: str = "relative") -> dict:
             "residuals": residuals, "replicates": R}
 
 
-def resonance(f, Z):
-    """Resonance frequency [Hz] and peak amplitude of a sampled FRF ``Z(f)`` (``(F,)`` each).
+def parabolic_extremum(x, y, kind: str = "max") -> tuple[float, float, int]:
+    """The extremum of sampled ``y(x)`` refined between samples.
 
-    A parabola through the largest sample and its two neighbours (in ``f``, ``log Z``) refines
-    the peak between samples; at either end of the range the largest sample is returned."""
-    f = np.asarray(f, float)
-    Z = np.asarray(Z, float)
-    order = np.argsort(f)
-    f, Z = f[order], Z[order]
-    k = int(np.argmax(Z))
-    if 0 < k < len(f) - 1:
-        c = np.polyfit(f[k - 1:k + 2], np.log(Z[k - 1:k + 2]), 2)
+    The parabola through the best sample ``k`` (largest for ``kind = "max"``, smallest for
+    ``"min"``) and its two neighbours in ``x`` has its vertex at ``x*``; when that vertex is an
+    extremum of the right kind and lies between the neighbours, ``(x*, y(x*), k)`` is returned,
+    otherwise (best sample at either end of the range, or a parabola of the wrong curvature)
+    the sample itself ``(x_k, y_k, k)``. ``k`` indexes the arrays as given (``x`` need not be
+    sorted).
+
+    >>> import numpy as np
+    >>> x = np.array([0.0, 1.0, 2.0, 3.0])
+    >>> round(parabolic_extremum(x, -(x - 1.3) ** 2)[0], 6)
+    1.3
+    """
+    if kind not in ("max", "min"):
+        raise ValueError(f"kind = {kind!r}: expected 'max' or 'min'")
+    x = np.asarray(x, float)
+    y = np.asarray(y, float)
+    order = np.argsort(x)
+    xs, ys = x[order], (y[order] if kind == "max" else -y[order])
+    k = int(np.nanargmax(ys))
+    if 0 < k < len(xs) - 1 and np.all(np.isfinite(ys[k - 1:k + 2])):
+        c = np.polyfit(xs[k - 1:k + 2], ys[k - 1:k + 2], 2)
         if c[0] < 0:
-            fp = -c[1] / (2 * c[0])
-            if f[k - 1] <= fp <= f[k + 1]:
-                return float(fp), float(np.exp(np.polyval(c, fp)))
-    return float(f[k]), float(Z[k])
+            xv = -c[1] / (2 * c[0])
+            if xs[k - 1] <= xv <= xs[k + 1]:
+                yv = float(np.polyval(c, xv))
+                return float(xv), yv if kind == "max" else -yv, int(order[k])
+    return float(xs[k]), float(y[order][k]), int(order[k])
+
+
+def resonance(f, Z):
+    """Resonance frequency [Hz] and peak amplitude of a sampled FRF ``Z(f)`` (``(F,)`` each):
+    :func:`parabolic_extremum` of ``log Z`` versus ``f`` (the largest sample at either end of
+    the range)."""
+    fp, logz, _ = parabolic_extremum(f, np.log(np.asarray(Z, float)), "max")
+    return fp, float(np.exp(logz))
 
 
 def crossings(x, y, level):
