@@ -27,7 +27,7 @@ import h5py
 import numpy as np
 import scaffold
 
-from jaxdamp.analysis.stats import t_quantile
+from jaxdamp.analysis.stats import welch
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.physics import restitution as rst
@@ -96,10 +96,7 @@ def verdicts(rows: list, amps) -> list:
             if min(len(x), len(y)) < 2:
                 out.append(dict(row, rel=math.nan, rel_ci=math.nan, significant=None))
                 continue
-            va, vb = x.var(ddof=1) / len(x), y.var(ddof=1) / len(y)
-            d = x.mean() - y.mean()
-            dof = (va + vb) ** 2 / max(va ** 2 / (len(x) - 1) + vb ** 2 / (len(y) - 1), 1e-300)
-            half = t_quantile(0.975, dof) * math.sqrt(va + vb)
+            d, half = welch(x, y)
             out.append(dict(row, rel=float(d / y.mean()), rel_ci=float(half / y.mean()),
                             significant=bool(abs(d) > half)))
     return out

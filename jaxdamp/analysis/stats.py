@@ -32,7 +32,7 @@ per-period values. This module turns recorded samples into estimates with error 
 Example::
 
     >>> import numpy as np
-    >>> from jaxdamp import stats
+    >>> from jaxdamp.analysis import stats
     >>> rng = np.random.default_rng(0)
     >>> x = np.r_[np.linspace(2.0, 1.0, 10), 1.0 + 0.01 * rng.standard_normal(90)]
     >>> d = stats.mser(x)
@@ -130,6 +130,25 @@ def t_quantile(p: float, dof: int) -> float:
     from scipy.stats import t
 
     return float(t.ppf(p, dof))
+
+
+def welch(x, y) -> tuple[float, float]:
+    """Difference of means ``x̄ − ȳ`` of two independent samples (NaN dropped) and the
+    half-width of its Welch 95 % interval,
+    ``t_{0.975, ν} sqrt(s_x²/n_x + s_y²/n_y)`` with the Welch–Satterthwaite ``ν``.
+    NaN half-width with fewer than two values on either side.
+
+    >>> d, h = welch([1.0, 1.2, 1.1], [0.5, 0.6, 0.7])
+    >>> round(d, 6), h > 0
+    (0.5, True)
+    """
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    x, y = x[np.isfinite(x)], y[np.isfinite(y)]
+    if min(len(x), len(y)) < 2:
+        return (float(x.mean() - y.mean()) if len(x) and len(y) else math.nan), math.nan
+    va, vb = x.var(ddof=1) / len(x), y.var(ddof=1) / len(y)
+    dof = (va + vb) ** 2 / max(va ** 2 / (len(x) - 1) + vb ** 2 / (len(y) - 1), 1e-300)
+    return float(x.mean() - y.mean()), t_quantile(0.975, dof) * math.sqrt(va + vb)
 
 
 @dataclass(frozen=True)
