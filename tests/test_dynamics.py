@@ -286,3 +286,65 @@ def test_figures_write_files(tmp_path, logistic):
     # the return map has one point fewer than the section
     assert len(figures.poincare_figure(sec, kind="return").axes[0].collections[0].get_offsets()) \
         == len(sec.t) - 1
+
+
+# --------------------------------------------------------------------------- periodicity levels
+
+
+def test_strobe_spread_is_the_noise_level_of_a_period2_orbit():
+    """A period-2 stroboscopic orbit ±1 with Gaussian noise σ: spread_2 = σ/scale within 10 %
+    (400 points), spread_1 ≈ the orbit itself (≈ 1/scale), so period 2 is found at any
+    tolerance between σ and 1."""
+    rng = np.random.default_rng(3)
+    sigma = 0.01
+    x = np.tile([1.0, -1.0], 200) + sigma * rng.standard_normal(400)
+    sec = dyn.PoincareSection(np.arange(400.0), x, np.zeros(400), 1.0, 0.0)
+    sp = dyn.strobe_spread(sec, scale=1.0, max_period=4)
+    assert sp[1] == pytest.approx(sigma, rel=0.1)
+    assert sp[0] == pytest.approx(1.0, rel=0.02)
+    assert sp[3] == pytest.approx(sigma, rel=0.15)  # period 4 contains period 2
+
+
+def test_harmonic_fraction_tells_period1_from_period2_and_noise():
+    f = 10.0
+    t = np.arange(0, 20.0, 1e-3)
+    x1 = np.cos(2 * np.pi * f * t) + 0.3 * np.cos(4 * np.pi * f * t)
+    x2 = x1 + 0.5 * np.cos(np.pi * f * t)  # a subharmonic f/2: period 2
+    noise = np.random.default_rng(0).standard_normal(t.size)
+    h = lambda x, k: dyn.harmonic_fraction(dyn.power_spectrum(t, x, f, method="periodogram"), f, k)  # noqa: E731
+    assert h(x1, 1) > 0.999
+    assert h(x2, 1) < 0.85 and h(x2, 2) > 0.999
+    assert h(noise, 1) < 0.05
+
+
+def test_divergence_exponent_recovers_the_growth_rate_and_stops_at_saturation():
+    """d(t) = 1e-9 e^{λt} |cos(2π f t)| capped at the orbit size 1e-3: the fitted exponent is λ
+    within 3 %, the fit stops where d reaches a tenth of the size, over more than one period;
+    a constant distance gives a zero exponent and no saturation."""
+    f, lam = 10.0, 15.0
+    t = np.arange(0, 3.0, 1e-3)
+    d = np.minimum(1e-9 * np.exp(lam * t), 1e-3) * np.abs(np.cos(2 * np.pi * f * t)) + 1e-15
+    r = dyn.divergence_exponent(t, d, f, saturation=1e-3)
+    assert r["exponent"] == pytest.approx(lam, rel=0.03)
+    assert r["saturated"] and r["periods_fitted"] >= 2
+    assert r["t_sat"] == pytest.approx(np.log(1e-4 / 1e-9) / lam, abs=0.1)
+    flat = dyn.divergence_exponent(t, np.full(t.size, 1e-9), f, saturation=1e-3)
+    assert abs(flat["exponent"]) < 1e-6 and not flat["saturated"]
+
+
+def test_classify_fits_the_kantz_slope_over_more_than_one_drive_period():
+    """On a chaotic flow sampled at 20 samples per drive period the automatic Kantz fit range
+    of the classifier spans more than one drive period."""
+    from scipy.integrate import solve_ivp
+
+    def lorenz(_, u):
+        return [10 * (u[1] - u[0]), u[0] * (28 - u[2]) - u[1], u[0] * u[1] - 8 / 3 * u[2]]
+
+    dt = 0.01
+    t = np.arange(0, 60, dt)
+    x = solve_ivp(lorenz, (0, 60), [1, 1, 1], t_eval=t, rtol=1e-9, atol=1e-9).y[0]
+    f = 1 / (20 * dt)  # a notional drive of 20 samples per period
+    c = dyn.classify(t[1000:], x[1000:], f)
+    assert c.lyapunov is not None
+    i0, i1 = c.lyapunov.fit_range
+    assert (i1 - i0) * dt > 1 / f
