@@ -124,8 +124,12 @@ def start(model: Model, params: Params, r, v, w, q, z, zd, t: float = 0.0, *,
     position/velocity ``(B,)`` (ignored for a driven box, which follows its drive): forces and
     accelerations evaluated there, neighbour lists allocated. ``e_start`` ``(B,)`` sets the
     reference energy of the balance (default: the energy of this state)."""
-    states = init_states(model, params, jnp.asarray(r), jnp.asarray(v), jnp.asarray(w),
-                         jnp.asarray(q), jnp.asarray(z), jnp.asarray(zd), t)
+    r = jnp.asarray(r)
+    # the initial forces over the pairs listed at these positions (host cell lists, linear in
+    # N; listed pairs are a superset of the touching ones), never over all N² pairs
+    touching = nb.allocate(model, r, 1.0, radius=params.radius).idx
+    states = init_states(model, params, r, jnp.asarray(v), jnp.asarray(w),
+                         jnp.asarray(q), jnp.asarray(z), jnp.asarray(zd), t, idx=touching)
     if e_start is not None:
         states = dataclasses.replace(states, e_start=jnp.asarray(e_start, jnp.float64))
     nbrs = _allocate(model, states, params, multiplier)

@@ -18,18 +18,25 @@ metric on positions carrying the radius as a fourth coordinate,
 ``max(0, |r_i - r_j| - R_i - R_j + 2 R_max)``, compared with ``2 R_max + skin``; for equal radii
 this is the plain distance. Overflow (a grain with more neighbours than the capacity) is
 flagged, sticky, in :attr:`Neighbors.overflow`; the runner re-allocates and redoes the chunk.
+
+Allocation (the capacity and the first lists, :func:`allocate`) runs on the host, on a cell
+grid of side ``2 R_max + skin`` (:func:`host_pairs`): time and memory linear in ``N``, so a
+50 000-grain bed starts in seconds and a few hundred MB. The same lists as jax-md's, entry for
+entry (``tests/test_neighbors.py``). What jax-md is used for: only the rebuild *inside* the
+jitted JAX engine (:func:`update`), jax-md's dense all-pairs neighbour list — ``O(N²)`` memory
+per rebuild, fine for the differentiable runs of small beds the JAX engine is for, and
+imported only when that engine runs (it takes seconds to import). The compiled CPU engine
+(:mod:`jaxdamp.engine.native`) builds its own cell lists and never needs jax-md.
 """
 
 from __future__ import annotations
 
 import math
 import warnings
-from functools import partial
 
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jax_md import partition
 
 from jaxdamp.physics.model import Model, pytree_dataclass
 
@@ -71,6 +78,8 @@ def _with_radius(model: Model, positions, radius):
 
 
 def _jaxmd_fns(model: Model):
+    from jax_md import partition  # seconds to import: only the JAX engine's rebuilds need it
+
     return partition.neighbor_list(
         _gap_metric(model),
         box=1.0,  # unused: cell lists are off (all-pairs candidates, rebuilt rarely)
@@ -82,22 +91,95 @@ def _jaxmd_fns(model: Model):
     )
 
 
-@partial(jax.jit, static_argnums=(0,))
-def _occupancy(model: Model, points):
-    """Largest number of listed neighbours of any grain in the batch (``points`` ``(B, N, 4)``)."""
+def host_pairs(points: np.ndarray, cutoff: float, shift: float):
+    """Every ordered pair ``(i, j)``, ``i != j``, of one system listed by the gap metric
+    (:func:`_gap_metric`: ``max(0, |r_i - r_j| - R_i - R_j + shift)``, squared, below
+    ``cutoff²``, as jax-md compares it), sorted by ``i`` then ``j``.
+
+    ``points``: ``(N, 4)`` host array ``(x, y, z, R)``. Candidates come from a cell grid of side
+    ``cutoff`` (the metric is at least the centre distance minus ``2 R_max - shift = 0``, so a
+    listed pair is never more than one cell apart): time and memory ``O(N)`` for a bed, never an
+    ``N × N`` array. Grains at non-finite positions have no pairs. Returns ``(i, j)`` int64."""
+    points = np.asarray(points, np.float64)
+    x, R = points[:, :3], points[:, 3]
+    good = np.isfinite(points).all(axis=1)
+    ids = np.flatnonzero(good)
+    if len(ids) < 2:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    xg = x[ids]
+    cell = np.floor((xg - xg.min(axis=0)) / cutoff).astype(np.int64)
+    dims = cell.max(axis=0) + 1
+    key = (cell[:, 0] * dims[1] + cell[:, 1]) * dims[2] + cell[:, 2]
+    order = np.argsort(key, kind="stable")
+    sorted_key = key[order]
+    cutoff_sq = cutoff * cutoff
+    out_i, out_j = [], []
+    for dx in (-1, 0, 1):
+        for dy in (-1, 0, 1):
+            for dz in (-1, 0, 1):
+                other = cell + np.array([dx, dy, dz])
+                ok = ((other >= 0) & (other < dims)).all(axis=1)
+                okey = (other[:, 0] * dims[1] + other[:, 1]) * dims[2] + other[:, 2]
+                lo = np.searchsorted(sorted_key, okey, "left")
+                hi = np.searchsorted(sorted_key, okey, "right")
+                count = np.where(ok, hi - lo, 0)
+                total = int(count.sum())
+                if total == 0:
+                    continue
+                a = np.repeat(np.arange(len(ids)), count)
+                first = np.repeat(lo - (np.cumsum(count) - count), count)
+                b = order[first + np.arange(total)]
+                keep = a != b
+                a, b = a[keep], b[keep]
+                d = xg[a] - xg[b]
+                gap = np.maximum(np.sqrt((d * d).sum(axis=1)) - R[ids[a]] - R[ids[b]] + shift,
+                                 0.0)
+                close = gap * gap < cutoff_sq
+                out_i.append(ids[a[close]])
+                out_j.append(ids[b[close]])
+    if not out_i:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    i, j = np.concatenate(out_i), np.concatenate(out_j)
+    rank = np.lexsort((j, i))
+    return i[rank], j[rank]
+
+
+def _host_lists(model: Model, points) -> list[tuple[np.ndarray, np.ndarray]]:
+    """:func:`host_pairs` of every system of a batch of points ``(B, N, 4)``."""
     cutoff = model.cutoff + _MARGIN * model.skin
-    metric = _gap_metric(model)
+    shift = model.cutoff - model.skin  # 2 R_max
+    return [host_pairs(p, cutoff, shift) for p in np.asarray(points)]
 
-    def one(p):
-        d = metric(p[:, None, :], p[None, :, :])
-        close = (d < cutoff) & ~jnp.eye(p.shape[0], dtype=bool)
-        return close.sum(axis=1).max()
 
-    return jax.vmap(one)(points).max()
+def _occupancy(model: Model, points) -> int:
+    """Largest number of listed neighbours of any grain in the batch (``points`` ``(B, N, 4)``),
+    from host cell lists (linear in ``N``)."""
+    return max((int(np.bincount(i, minlength=model.n).max()) if len(i) else 0)
+               for i, _ in _host_lists(model, points))
+
+
+def _dense(model: Model, capacity: int, points) -> tuple[np.ndarray, np.ndarray]:
+    """Dense neighbour blocks ``(B, N, capacity)`` (padding ``N``, each row's neighbours in
+    increasing order, as jax-md's dense format) and the overflow flags ``(B,)``."""
+    n = model.n
+    lists = _host_lists(model, points)
+    idx = np.full((len(lists), n, capacity), n, np.int32)
+    overflow = np.zeros(len(lists), bool)
+    for b, (i, j) in enumerate(lists):
+        if not len(i):
+            continue
+        counts = np.bincount(i, minlength=n)
+        slot = np.arange(len(i)) - np.repeat(np.cumsum(counts) - counts, counts)
+        fits = slot < capacity
+        overflow[b] = not fits.all()
+        idx[b, i[fits], slot[fits]] = j[fits]
+    return idx, overflow
 
 
 def _template(model: Model, capacity: int):
     """jax-md functions and an empty list of the given capacity (no compute: traceable)."""
+    from jax_md import partition
+
     fns = _jaxmd_fns(model)
     template = partition.NeighborList(
         idx=jnp.full((model.n, capacity), model.n, jnp.int32),
@@ -125,7 +207,7 @@ def capacity_for(model: Model, positions, multiplier: float, at_least: int = 0,
     ``at_least``, at most ``N - 1``)."""
     if model.n < 2:
         return 0
-    occ = int(_occupancy(model, _with_radius(model, positions, radius)))
+    occ = _occupancy(model, _with_radius(model, positions, radius))
     cap = max(int(math.ceil(occ * multiplier)), at_least, MIN_CAPACITY)
     return min(cap, model.n - 1)
 
@@ -145,7 +227,8 @@ def allocate(model: Model, positions, multiplier: float, at_least: int = 0,
             overflow=jnp.zeros((b,), bool),
         )
     cap = capacity_for(model, positions, multiplier, at_least, radius)
-    return _build(model, cap, positions, _radius_array(model, positions, radius))
+    idx, overflow = _dense(model, cap, _with_radius(model, positions, radius))
+    return Neighbors(idx=jnp.asarray(idx), reference=positions, overflow=jnp.asarray(overflow))
 
 
 def capacity(nbrs: Neighbors) -> int:
