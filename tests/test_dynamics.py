@@ -326,10 +326,11 @@ def test_divergence_exponent_recovers_the_growth_rate_and_stops_at_saturation():
     d = np.minimum(1e-9 * np.exp(lam * t), 1e-3) * np.abs(np.cos(2 * np.pi * f * t)) + 1e-15
     r = dyn.divergence_exponent(t, d, f, saturation=1e-3)
     assert r["exponent"] == pytest.approx(lam, rel=0.03)
-    assert r["saturated"] and r["periods_fitted"] >= 2
+    assert r["saturated"] and r["grew"] and r["periods_fitted"] >= 2
+    assert r["plateau"] == pytest.approx(1e-3, rel=0.05)
     assert r["t_sat"] == pytest.approx(np.log(1e-4 / 1e-9) / lam, abs=0.1)
     flat = dyn.divergence_exponent(t, np.full(t.size, 1e-9), f, saturation=1e-3)
-    assert abs(flat["exponent"]) < 1e-6 and not flat["saturated"]
+    assert abs(flat["exponent"]) < 1e-6 and not flat["saturated"] and not flat["grew"]
 
 
 def test_classify_fits_the_kantz_slope_over_more_than_one_drive_period():

@@ -228,3 +228,23 @@ def test_binary_mixtures_quick(tmp_path):
 
     with h5py.File(tmp_path / "data.h5") as h:
         assert h["varela2023-b/sigma_0.5/phase/vz_cm_species"].shape == (2, 100, 2)
+
+
+def test_bed_dynamics_long_quick(tmp_path):
+    """Twin pairs at 14.5 and 21 Hz, 1.2 s: the pair is bit-identical until the perturbation;
+    every frequency and signal gets periodicity levels in [0, 1] and a twin exponent; the
+    chaotic-zone frequency (21 Hz) separates its twins by orders of magnitude, faster than the
+    periodic window (14.5 Hz)."""
+    out = _load("bed_dynamics_long").main(["--quick", "--out", str(tmp_path), "--no-progress"])
+    rows = out["rows"]
+    assert set(rows) == {14.5, 21.0}
+    for f, r in rows.items():
+        assert r["identical_before"] == 0.0, f
+        for name in ("z_box", "z_cm"):
+            d = r[name]
+            assert 0 <= d["harm1"] <= 1 and d["spread1"] >= 0 and np.isfinite(d["div_exponent"])
+    assert rows[21.0]["z_box"]["div_grew"]
+    assert rows[21.0]["z_box"]["div_exponent"] > rows[14.5]["z_box"]["div_exponent"]
+    assert np.all(out["balance"] < 1e-3)
+    assert (tmp_path / "figure.png").stat().st_size > 10_000
+    assert "twin" in (tmp_path / "summary.md").read_text()

@@ -527,19 +527,22 @@ def harmonic_fraction(spec: Spectrum, frequency, k=1, half_width=3):
     return float(p[harmonic_mask(spec.f, frequency / k, half_width)].sum() / total)
 
 
-def divergence_exponent(t, d, frequency, saturation, t_start=None):
+def divergence_exponent(t, d, frequency, saturation=None, t_start=None):
     """Exponent of the growth of the distance ``d(t)`` between two trajectories started a tiny
     perturbation apart (a *twin* run), per second and per drive period.
 
     ``d`` is reduced to its per-period maximum ``D_k`` (the distance of two driven
-    trajectories oscillates within a period); ``ln D_k`` is fitted by a straight line over the
-    periods before ``D_k`` first reaches ``saturation/10`` (growth stops when the separation
-    reaches the attractor's size ``saturation``), at least two periods, so the fit always
-    spans more than one drive period. A slope ≤ 0 (the twins do not separate) is regular
-    motion.
+    trajectories oscillates within a period). Growth stops at a plateau — the attractor's
+    size, or less for an observable the divergence reaches only weakly — taken from the data
+    as the median of ``D`` over the last quarter of the periods (capped by ``saturation``
+    [units of d] when given). If ``D`` grew by more than a factor 100 to that plateau,
+    ``ln D_k`` is fitted by a straight line over the periods before ``D_k`` first reaches a
+    tenth of the plateau (at least two, so the fit always spans more than one drive period);
+    otherwise (the twins stay together: regular motion) over every period.
 
-    Returns ``{"exponent" [1/s], "per_period", "periods_fitted", "saturated" (bool: D reached
-    saturation/10), "t_sat" [s] or NaN, "D" (per-period maxima), "t_D" [s]}``.
+    Returns ``{"exponent" [1/s], "per_period", "periods_fitted", "grew" (bool),
+    "saturated" (bool: the plateau was reached before the end), "t_sat" [s] or NaN,
+    "plateau" [units of d], "D" (per-period maxima), "t_D" [s]}``.
     """
     t = np.asarray(t, float)
     d = np.abs(np.asarray(d, float))
@@ -547,17 +550,22 @@ def divergence_exponent(t, d, frequency, saturation, t_start=None):
         m = t >= t_start
         t, d = t[m], d[m]
     T = 1.0 / float(frequency)
-    k = np.floor((t - t[0]) / T).astype(int)
+    k = np.floor((t - t[0]) / T + 1e-9).astype(int)
     n = int(k.max())  # drop the last, partial period
-    D = np.array([d[k == i].max() for i in range(n)])
+    if n < 3:
+        raise ValueError(f"divergence_exponent: {n} whole drive periods, need at least 3")
+    D = np.maximum(np.array([d[k == i].max() for i in range(n)]), 1e-300)
     tD = t[0] + (np.arange(n) + 0.5) * T
-    D = np.maximum(D, 1e-300)
-    hit = np.nonzero(D >= saturation / 10)[0]
-    last = int(hit[0]) if hit.size else n
-    last = max(last, 2)
-    slope = float(np.polyfit(tD[:last], np.log(D[:last]), 1)[0]) if last >= 2 else float("nan")
+    plateau = float(np.median(D[-max(2, n // 4):]))
+    if saturation is not None:
+        plateau = min(plateau, float(saturation))
+    grew = plateau > 100.0 * D[0]
+    hit = np.nonzero(D >= plateau / 10)[0] if grew else np.array([], int)
+    last = max(int(hit[0]), 2) if hit.size else n
+    slope = float(np.polyfit(tD[:last], np.log(D[:last]), 1)[0])
     return {"exponent": slope, "per_period": slope * T, "periods_fitted": last,
-            "saturated": bool(hit.size), "t_sat": float(tD[hit[0]]) if hit.size else float("nan"),
+            "grew": bool(grew), "saturated": bool(hit.size and hit[0] < n - 1),
+            "t_sat": float(tD[hit[0]]) if hit.size else float("nan"), "plateau": plateau,
             "D": D, "t_D": tD}
 
 
@@ -682,7 +690,9 @@ def classify(t, x, frequency, t_start=None, period_tol=1e-2, max_period=8,
             dim, delay = embedding
         kw.setdefault("theiler", max(int(round(spp)), dim * delay))
         kw.setdefault("min_fit", int(np.ceil(spp)) + 1)  # the fit spans > one drive period
-        kw.setdefault("max_steps", max(20, 30 * int(delay), 3 * int(np.ceil(spp))))
+        room = (len(x) - (dim - 1) * delay - 2 * kw["theiler"] - 3) // 2  # a short series
+        kw.setdefault("max_steps", max(1, min(max(20, 30 * int(delay), 3 * int(np.ceil(spp))),
+                                              room)))
         lyap = lyapunov_kantz(x, dim, delay, dt=dt, **kw)
     else:
         xs = sec.x  # the series as a map: one value per drive period
