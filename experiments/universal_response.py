@@ -51,7 +51,7 @@ def settings(quick: bool) -> dict:
     if quick:
         return dict(freqs=(14.5, 15.25), duration=0.3, settle=0.15, cases=CASES[:2], R=2,
                     s3_duration=2.0)
-    return dict(freqs=F_FULL, duration=1.8, settle=0.3, cases=CASES, R=3, s3_duration=10.0)
+    return dict(freqs=F_FULL, duration=1.5, settle=0.3, cases=CASES, R=3, s3_duration=10.0)
 
 
 def run_dem(s: dict, out: str, progress: bool):
