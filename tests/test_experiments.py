@@ -248,3 +248,16 @@ def test_bed_dynamics_long_quick(tmp_path):
     assert np.all(out["balance"] < 1e-3)
     assert (tmp_path / "figure.png").stat().st_size > 10_000
     assert "twin" in (tmp_path / "summary.md").read_text()
+
+
+def test_inelastic_collapse(tmp_path):
+    """Thesis fig. 5.1: collapse below e_c = 3 − 2√2 (found by bisection to 1e-5), escape above;
+    the thesis' t∞ formula within 2 % at e ≤ 0.1; data, figure and summary written."""
+    out = _load("inelastic_collapse").main(["--quick", "--out", str(tmp_path), "--no-progress"])
+    assert out["e_c"] == pytest.approx(3 - 2 * np.sqrt(2), abs=1e-5)
+    for row in out["rows"]:
+        assert row["outcome"] == ("collapsed" if row["e"] < out["e_c"] else "escaped")
+        if row["e"] <= 0.1:
+            assert abs(row["formula_error"]) < 0.02
+    assert (tmp_path / "figure.png").stat().st_size > 10_000
+    assert "3 − 2√2" in (tmp_path / "summary.md").read_text()
