@@ -58,7 +58,7 @@ def settings(quick: bool) -> dict:
     if quick:
         return dict(freqs=(14.5, 21.0), duration=1.2, t_perturb=0.4, transient=0.4, settle=0.15,
                     chunk=0.1)
-    return dict(freqs=F_FULL, duration=16.0, t_perturb=6.0, transient=4.0, settle=1.0,
+    return dict(freqs=F_FULL, duration=12.0, t_perturb=5.0, transient=3.0, settle=1.0,
                 chunk=0.2)
 
 
