@@ -47,6 +47,7 @@ from jaxdamp.analysis.response import (
     RESIDUALS,
     crossings,
     fit_frf_replicates,
+    grain_force_coefficients,
     parabolic_extremum,
     resonance,
 )
@@ -72,6 +73,8 @@ F_NARROW = (8.0, 23.0)
 #: 1.6 h, so this round replicates C = 7.6 (the thesis' fig. 3.6 and its optimum) only.
 C_VALUES = (7.6,)
 FIG36_LZ = (0.057, 0.1225, 0.372)
+#: Heights of the thesis' fig. 3.9 on this grid (band plots and impact phase near resonance).
+FIG39_LZ = (0.042, 0.057, 0.087, 0.1095, 0.1225, 0.147, 0.162)
 THESIS_OPTIMUM = 0.1225  # [m]
 #: The weighting the thesis describes (largest amplitudes dominate), named in every verdict.
 THESIS_WEIGHTING = "absolute"
@@ -149,11 +152,32 @@ def analyse(res, cfg, s) -> dict:
             widen[w] = dict(dM=dM, dC=dC)
     stationary = np.asarray(res.steady["amplitude"]["stationary"], bool)
     starts = np.asarray(res.steady["amplitude"]["start"], float)
+    force = force_coefficients(res, starts, stationary, s)
     return dict(Zr=Zr, fallback=fallback, fits=fits, f_peak=f_peak, Z_peak=Z_peak,
-                optimum=optimum, tests=tests, widen=widen, m_p=m_p,
+                optimum=optimum, tests=tests, widen=widen, m_p=m_p, force=force,
                 stationary=int(stationary.sum()), runs=int(stationary.size),
                 start_range=(float(np.nanmin(starts)), float(np.nanmax(starts)))
                 if stationary.any() else (math.nan, math.nan))
+
+
+def force_coefficients(res, starts, stationary, s) -> dict:
+    """Per run, the grains' force on the box as added mass, damping and impact phase
+    (:func:`jaxdamp.analysis.response.grain_force_coefficients`) over its detected steady
+    state (the second half of the run where none was detected): arrays ``(F, L, R)``."""
+    f = np.asarray(res.axes["frequency"], float)
+    L, R = len(res.axes["box.Lz"]), s["R"]
+    out = {k: np.full((len(f), L, R), np.nan) for k in ("m_add", "c_add", "phase")}
+    rec = res.records
+    for i in range(len(f)):
+        for j in range(L):
+            for r in range(R):
+                row = res.point(i * L + j, r)
+                t0 = starts[i, j, r] if stationary[i, j, r] else s["duration"] / 2
+                c = grain_force_coefficients(rec["t"][row], rec["z_box"][row],
+                                             rec["force_box"][row], f[i], t_start=t0)
+                for k in out:
+                    out[k][i, j, r] = c[k]
+    return out
 
 
 def _optimum_row(vertices, grid_best) -> dict:
@@ -214,10 +238,16 @@ def write(results, s, out, prov):
                         g.create_dataset(f"fit_{w}/{q}",
                                          data=np.array([fi[q] for fi in r["fits"][w]])
                                          ).attrs["units"] = unit
+            for k, u in (("m_add", "kg"), ("c_add", "N s/m"), ("phase", "rad")):
+                g.create_dataset(f"force/{k}", data=r["force"][k]).attrs.update(
+                    units=u, dims="frequency, box.Lz, replicate",
+                    what="first harmonic of the grains' force on the box against the box "
+                         "motion over the steady state")
             for k, v in r["res"].summary.items():
                 if np.ndim(v):
                     g.create_dataset(f"summary/{k}", data=v)
     _figures(out, results, s)
+    _figure_3_9(out, results, s)
     _summary(out, results, s, prov)
 
 
@@ -273,6 +303,85 @@ def _figures(out, results, s):
         a.legend(fontsize=6)
     fig.tight_layout()
     fig.savefig(os.path.join(out, "fig3_7_3_8.png"), dpi=120)
+    plt.close(fig)
+
+
+def near_resonance(r, j) -> int:
+    """Index of the frequency sample nearest height ``j``'s mean resonance."""
+    f = np.asarray(r["res"].axes["frequency"], float)
+    return int(np.argmin(np.abs(f - np.mean(r["f_peak"][j]))))
+
+
+def _figure_3_9(out, results, s):
+    """Bed band and grain force against the box motion at the heights of the thesis' fig. 3.9
+    (the frequency nearest each height's resonance, bed 0, the last three periods), and the
+    impact phase and force-derived effective mass versus Lz."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    C0 = s["C"][0]
+    r = results[C0]
+    res = r["res"]
+    lz = list(s["lz"])
+    f = np.asarray(res.axes["frequency"], float)
+    show = [L for L in FIG39_LZ if L in lz]
+    fig = plt.figure(figsize=(2.3 * max(len(show), 4), 7.5))
+    gs = fig.add_gridspec(2, max(len(show), 4), height_ratios=[1.2, 1])
+    rec, mm = res.records, 1e3
+    for c, L in enumerate(show):
+        j = lz.index(L)
+        i = near_resonance(r, j)
+        row = res.point(i * len(lz) + j, 0)
+        t = rec["t"][row]
+        m = t >= t[-1] - 3 / f[i]
+        ax = fig.add_subplot(gs[0, c])
+        zb = rec["z_box"][row][m] * mm
+        ax.fill_between(t[m], rec["z_lowest"][row][m] * mm, rec["z_highest"][row][m] * mm,
+                        color="tab:orange", alpha=0.5, lw=0, label="grains")
+        ax.plot(t[m], zb, "k-", lw=1, label="floor")
+        ax.plot(t[m], zb + L * mm, "k--", lw=1, label="lid")
+        axf = ax.twinx()
+        axf.plot(t[m], rec["force_box"][row][m], "-", color="tab:blue", lw=0.7)
+        axf.tick_params(labelsize=6, colors="tab:blue")
+        ax.tick_params(labelsize=6)
+        ax.set_title(f"Lz = {L} m, {f[i]:g} Hz", fontsize=7)
+        ax.set_xlabel("time t [s]", fontsize=7)
+        if c == 0:
+            ax.set_ylabel("height z [mm] (lab frame)", fontsize=7)
+            ax.legend(fontsize=6, loc="upper left")
+        if c == len(show) - 1:
+            axf.set_ylabel("grains' force on the box [N] (blue)", fontsize=7, color="tab:blue")
+    fo = r["force"]
+    R = s["R"]
+    rows = [(lz[j], near_resonance(r, j)) for j in range(len(lz))]
+    ph = np.array([np.degrees(fo["phase"][i, lz.index(L)]) for L, i in rows])  # (L, R)
+    M_f = np.array([r["cfg"].primary.M + fo["m_add"][i, lz.index(L)] for L, i in rows])
+    a1 = fig.add_subplot(gs[1, : max(len(show), 4) // 2])
+    a2 = fig.add_subplot(gs[1, max(len(show), 4) // 2:])
+    se = lambda x: 2 * x.std(-1, ddof=1) / math.sqrt(R)  # noqa: E731
+    a1.errorbar(lz, ph.mean(-1), yerr=se(ph), fmt="o-", capsize=3)
+    a1.axhline(0, color="0.6", lw=0.6)
+    a1.axhline(-90, color="0.6", lw=0.6, ls=":")
+    a1.set_ylabel("impact phase arg(F̂/Ẑ) [deg]")
+    a1.set_title("phase of the grains' force against the box motion, near resonance "
+                 "(0°: mass, −90°: damper)", fontsize=8)
+    fa = r["fits"][THESIS_WEIGHTING]
+    a2.errorbar(lz, M_f.mean(-1), yerr=se(M_f), fmt="o-", capsize=3,
+                label="M + m_add from the force phase")
+    a2.errorbar(lz, [x["M_ef"] for x in fa], yerr=2 * np.array([x["se_M"] for x in fa]),
+                fmt="s--", capsize=3, label=f"M_ef from the FRF fit ({THESIS_WEIGHTING})")
+    a2.axhline(r["cfg"].primary.M, color="r", lw=0.8, ls="--", label="M")
+    a2.axhline(r["cfg"].primary.M + r["m_p"], color="r", lw=0.8, ls=":", label="M + m_p")
+    a2.set_ylabel("effective mass [kg]")
+    a2.legend(fontsize=7)
+    for a in (a1, a2):
+        a.set_xscale("log")
+        a.set_xlabel("box height Lz [m]")
+    fig.suptitle(f"thesis fig. 3.9: C = {C0} N s/m, mean of R = {R} beds ± 2 SE", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "fig3_9.png"), dpi=110)
     plt.close(fig)
 
 
@@ -343,6 +452,26 @@ def _summary(out, results, s, prov):
             cross = ", ".join(f"{x:.4f}" for x in t["crossings"]) or "none"
             lines.append(f"- {w} residuals: M_ef significantly below M at Lz = {below}; above "
                          f"M + m_p at Lz = {above}; the mean M_ef(Lz) crosses M at {cross} m.")
+        fo, p = r["force"], r["cfg"].primary
+        lines += ["", "**Mechanism (thesis fig. 3.9, `fig3_9.png`).** The grains' force on the box "
+                  "against the box motion, first harmonics over the steady state, at the "
+                  "frequency nearest each height's resonance: impact phase φ = arg(F̂/Ẑ) "
+                  "(0°: the grains act as a mass, −90°: as a damper), and the effective mass "
+                  "M + m_add and damping C + c_add measured without a fit (mean ± SE over the "
+                  f"beds), beside the {THESIS_WEIGHTING}-residual fit:", "",
+                  "| Lz [m] | f [Hz] | φ [deg] | M + m_add [kg] | M_ef fit [kg] | C + c_add "
+                  "[N s/m] | C_ef fit [N s/m] |", "| --- | --- | --- | --- | --- | --- | --- |"]
+        fa = r["fits"][THESIS_WEIGHTING]
+        fq = np.asarray(r["res"].axes["frequency"], float)
+        for j, L in enumerate(s["lz"]):
+            i = near_resonance(r, j)
+            ph = _t_interval(np.degrees(fo["phase"][i, j]))
+            mf = _t_interval(p.M + fo["m_add"][i, j])
+            cf = _t_interval(p.C + fo["c_add"][i, j])
+            lines.append(f"| {L} | {fq[i]:g} | {ph[0]:.0f} ± {ph[1]:.0f} | {mf[0]:.3f} ± "
+                         f"{mf[1]:.3f} | {fa[j]['M_ef']:.3f} ± {fa[j]['se_M']:.3f} | "
+                         f"{cf[0]:.1f} ± {cf[1]:.1f} | {fa[j]['C_ef']:.1f} ± "
+                         f"{fa[j]['se_C']:.1f} |")
         if r["widen"]:
             lines += ["", f"**Widened range.** Refitting on {F_NARROW[0]:g}–{F_NARROW[1]:g} Hz "
                       "only "

@@ -35,6 +35,41 @@ def first_harmonic(t, x, f):
     return float(np.hypot(c, s)), float(np.arctan2(-s, c))
 
 
+def grain_force_coefficients(t, z_box, force, f, t_start=None) -> dict:
+    """The grains' force on the box as an added mass and damper, from its phase.
+
+    With the box at ``z = Re(Ẑ e^{iΩt})`` and the grains' vertical force on it
+    ``F = Re(F̂ e^{iΩt}) + …`` (first harmonics by :func:`first_harmonic`), a force
+    ``F = −m_add z̈ − c_add ż`` has ``F̂ = (m_add Ω² − i Ω c_add) Ẑ``, so
+
+        m_add = Re(F̂/Ẑ) / Ω²,   c_add = −Im(F̂/Ẑ) / Ω,   φ = arg(F̂/Ẑ).
+
+    ``M + m_add`` and ``C + c_add`` are the effective mass and damping of one run at one
+    frequency, measured without any FRF fit; ``φ`` is the impact phase (0: the grains push
+    the box along its displacement — a mass; −90°: against its velocity — a damper; 180°: a
+    negative mass). A bed locked to the box gives ``m_add = m_p``, ``c_add = 0``.
+
+    Args: t [s], z_box [m], force [N] (positive upwards), f [Hz]; t_start [s]: first sample
+    used (the steady state). Returns ``{"m_add" [kg], "c_add" [N s/m], "phase" [rad]}``.
+
+    >>> import numpy as np
+    >>> t = np.linspace(0, 2, 4001); w = 2 * np.pi * 10
+    >>> z = 1e-3 * np.cos(w * t); F = -0.5 * (-w**2 * z) - 3.0 * (-1e-3 * w * np.sin(w * t))
+    >>> r = grain_force_coefficients(t, z, F, 10.0)
+    >>> round(r["m_add"], 6), round(r["c_add"], 6)
+    (0.5, 3.0)
+    """
+    t = np.asarray(t, float)
+    keep = slice(None) if t_start is None else t >= t_start
+    t, z, F = t[keep], np.asarray(z_box, float)[keep], np.asarray(force, float)[keep]
+    az, pz = first_harmonic(t, z, f)
+    aF, pF = first_harmonic(t, F, f)
+    ratio = aF / az * np.exp(1j * (pF - pz))
+    Om = 2 * np.pi * f
+    return {"m_add": float(ratio.real / Om**2), "c_add": float(-ratio.imag / Om),
+            "phase": float(np.angle(ratio))}
+
+
 #: Residual weightings of the FRF fit: ``relative`` (``Z_model/Z − 1``, every frequency
 #: counts alike; the default) and ``absolute`` (``(Z_model − Z)/U``, dominated by the largest
 #: amplitudes, as the thesis describes its fit).
