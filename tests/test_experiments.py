@@ -268,3 +268,17 @@ def test_inelastic_collapse(tmp_path):
             assert abs(row["formula_error"]) < 0.02
     assert (tmp_path / "figure.png").stat().st_size > 10_000
     assert "3 − 2√2" in (tmp_path / "summary.md").read_text()
+
+
+def test_universality_limits_quick(tmp_path):
+    """γ_n, γ_s at 0 and 1e4, steel and lead, 50 grains, 2 beds, 0.3 s: switching a damping
+    constant off removes its loss channel (collisional share 0 with γ_n = 0, 1 with γ_s = 0);
+    every comparison has a finite Welch interval; data, figure, summary written."""
+    out = _load("universality_limits").main(["--quick", "--out", str(tmp_path), "--no-progress"])
+    g = {(x["scan"], x["gamma"]): x for x in out["gammas"]}
+    assert np.all(g[("gamma_n", 0.0)]["coll_share"] < 1e-3)
+    assert np.all(g[("gamma_s", 0.0)]["coll_share"] > 1 - 1e-3)
+    assert all(np.all(x["E"] > 0) for x in out["gammas"])
+    assert np.isfinite(out["materials"][1]["d_peak_ci"]) and np.isfinite(out["few"][0]["d_peak_ci"])
+    assert (tmp_path / "figure.png").stat().st_size > 10_000
+    assert "fig. 5.4" in (tmp_path / "summary.md").read_text()
