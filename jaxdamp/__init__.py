@@ -1,7 +1,8 @@
 """jaxdamp: a JAX-accelerated, differentiable DEM simulator of granular (particle) dampers.
 
-Float64 is switched on at import (energy accounting over millions of steps needs it); set
-``JAXDAMP_X64=0`` in the environment before importing to keep JAX's float32 default.
+Float64 is switched on at import (energy accounting over millions of steps needs it; JAX
+itself is imported only where it is used); set ``JAXDAMP_X64=0`` in the environment before
+importing to keep JAX's float32 default.
 
 The physics is in ``docs/physics.md``; file schemas in ``docs/output.md``. Subpackages, from
 the bottom layer up (a module imports only from its own layer or below):
@@ -27,10 +28,19 @@ the bottom layer up (a module imports only from its own layer or below):
 """
 
 import os as _os
+import sys as _sys
 
-import jax as _jax
-
+# JAX is not imported here (it takes seconds; `jaxdamp --help` and bad input answer before it):
+# JAX reads JAX_ENABLE_X64 when it is first imported; if it already is, it is told directly.
 if _os.environ.get("JAXDAMP_X64", "1") != "0":
-    _jax.config.update("jax_enable_x64", True)
+    if "jax" in _sys.modules:
+        _sys.modules["jax"].config.update("jax_enable_x64", True)
+    elif _os.environ.get("JAX_ENABLE_X64") is None:
+        _os.environ["JAX_ENABLE_X64"] = "1"
+        _os.environ["_JAXDAMP_SET_X64"] = "1"  # ours: a child with JAXDAMP_X64=0 undoes it
+    else:
+        _os.environ["JAX_ENABLE_X64"] = "1"
+elif _os.environ.pop("_JAXDAMP_SET_X64", None):
+    _os.environ.pop("JAX_ENABLE_X64", None)
 
 __version__ = "0.1.0"

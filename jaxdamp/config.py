@@ -349,9 +349,25 @@ def from_json(text: str) -> Config:
 
 
 def load_toml(path: str, base: Config | None = None) -> Config:
-    """Read a TOML file. With ``base``, the file's keys override ``base`` (partial files OK)."""
-    with open(path, "rb") as fh:
-        data = tomllib.load(fh)
+    """Read a TOML file. With ``base``, the file's keys override ``base`` (partial files OK).
+
+    A file that is missing, unreadable, not UTF-8 text or not valid TOML raises
+    :class:`ConfigError` naming the file (and the line and column of a syntax error)."""
+    try:
+        with open(path, "rb") as fh:
+            data = tomllib.load(fh)
+    except FileNotFoundError:
+        raise ConfigError(f"configuration file {path}: no such file") from None
+    except IsADirectoryError:
+        raise ConfigError(f"configuration file {path}: is a folder, not a TOML file") from None
+    except OSError as err:
+        raise ConfigError(f"configuration file {path}: cannot be read "
+                          f"({err.strerror or err})") from None
+    except UnicodeDecodeError as err:
+        raise ConfigError(f"configuration file {path}: not a UTF-8 text file (byte "
+                          f"{err.start}); a configuration is TOML text") from None
+    except tomllib.TOMLDecodeError as err:
+        raise ConfigError(f"configuration file {path}: TOML syntax error: {err}") from None
     if base is None:
         return from_dict(data)
     return from_dict(_deep_merge(base.to_dict(), data))

@@ -1,10 +1,12 @@
 """What the commands share: building a configuration from --preset/--config/--set, parsing
-lists, printing steady-state estimates, writing TOML."""
+lists, the checks of every output file before any compute (:func:`check_outputs`), printing
+steady-state estimates, writing TOML."""
 
 from __future__ import annotations
 
 import argparse
 import math
+import os
 
 from jaxdamp.config import ConfigError, apply_overrides, load_toml
 
@@ -29,6 +31,85 @@ def _number(kind, least, strict):
 positive_int = _number(int, 0, True)
 nonnegative_int = _number(int, 0, False)
 positive_float = _number(float, 0.0, True)
+
+
+class OutputError(ConfigError):
+    """An output file cannot be written, or would replace an existing file."""
+
+
+def add_overwrite(parser, resume: bool = False) -> None:
+    """The ``--overwrite`` flag of a command that writes files (with ``resume``: the command
+    also has ``--resume``, which keeps its checkpoint file instead)."""
+    parser.add_argument(
+        "--overwrite", action="store_true",
+        help="replace output files that already exist (default: refuse, leaving them untouched"
+             + ("; --resume continues a checkpoint instead)" if resume else ")"))
+
+
+def check_outputs(paths, overwrite: bool = False, keep=(), resumable=(),
+                  new_folders: bool = False) -> None:
+    """Refuse, before any compute, to write any of ``paths`` (``None`` entries are skipped):
+
+    * its folder must exist, be a folder and accept a new file (tried, not guessed from the
+      permission bits: root may write where the bits say no, a read-only mount refuses all);
+      with ``new_folders`` (``export``, whose VTK frames fill a folder of their own) a missing
+      folder is fine when its nearest existing parent is a folder that accepts one (the
+      writer creates it);
+    * the path must not be a folder;
+    * an existing file is replaced only with ``overwrite`` (the ``--overwrite`` flag) or when
+      it is in ``keep`` (a checkpoint the command continues, e.g. ``--resume``), and must then
+      be writable; for a file in ``resumable`` the message also suggests ``--resume``.
+
+    Raises :class:`OutputError` naming the file and the flag; nothing is created or changed."""
+    import tempfile
+
+    keep = {os.path.abspath(os.fspath(k)) for k in keep if k is not None}
+    resumable = {os.path.abspath(os.fspath(k)) for k in resumable if k is not None}
+    seen = set()
+    for path in paths:
+        if path is None:
+            continue
+        path = os.fspath(path)
+        full = os.path.abspath(path)
+        if full in seen:
+            continue
+        seen.add(full)
+        folder = os.path.dirname(full)
+        shown = os.path.dirname(path) or "."
+        if new_folders:
+            while not os.path.exists(folder) and os.path.dirname(folder) != folder:
+                folder = os.path.dirname(folder)
+            shown = folder
+        if not os.path.exists(folder):
+            raise OutputError(f"{path}: the folder {shown}/ does not exist (create it first)")
+        if not os.path.isdir(folder):
+            raise OutputError(f"{path}: {shown} is not a folder")
+        if os.path.isdir(full):
+            raise OutputError(f"{path} is a folder; name a file to write")
+        try:
+            with tempfile.TemporaryFile(dir=folder):
+                pass
+        except OSError as err:
+            raise OutputError(f"{path}: cannot write into the folder {shown}/ "
+                              f"({err.strerror or err})") from None
+        if os.path.lexists(full):
+            if full not in keep and not overwrite:
+                raise OutputError(
+                    f"{path} already exists; give --overwrite to replace it"
+                    + (" or --resume to continue its checkpoint" if full in resumable else "")
+                    + " (it was left untouched)")
+            if not os.access(full, os.W_OK):
+                raise OutputError(f"{path} exists and is not writable")
+
+
+def resume_or_overwrite(args) -> list:
+    """The outputs a ``--resume`` may continue (``[args.out]``, or none); ``--resume`` with
+    ``--overwrite`` is a contradiction (continue the file, or replace it)."""
+    if getattr(args, "resume", False) and getattr(args, "overwrite", False):
+        raise ConfigError("--resume continues the file and --overwrite replaces it: give one")
+    if getattr(args, "resume", False) and not args.out:
+        raise ConfigError("--resume needs --out FILE.h5 (the file to continue)")
+    return [args.out] if getattr(args, "resume", False) else []
 
 
 def base_config(args):

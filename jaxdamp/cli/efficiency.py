@@ -5,7 +5,15 @@ from __future__ import annotations
 import argparse
 import textwrap
 
-from jaxdamp.cli.common import base_config, float_list, nonnegative_int, positive_int, replicates
+from jaxdamp.cli.common import (
+    add_overwrite,
+    base_config,
+    check_outputs,
+    float_list,
+    nonnegative_int,
+    positive_int,
+    replicates,
+)
 from jaxdamp.config import ConfigError, apply_overrides
 
 
@@ -66,14 +74,19 @@ def efficiency_figures(results, stem, title):
     return paths
 
 
+def _png_paths(stem: str) -> list[str]:
+    """The PNGs :func:`efficiency_figures` writes for ``stem`` (a driven box always has
+    snapshots)."""
+    return [f"{stem}{suffix}.png" for suffix in ("", "_phase", "_snapshots")]
+
+
 def cmd_efficiency(args) -> int:
     import numpy as np
 
     from jaxdamp.cases import mixtures, presets
-    from jaxdamp.studies import efficiency as ef
 
     amps = _amplitudes(args.amplitude) if args.amplitude else (
-        [0.02, 0.03, 0.04] if args.quick else list(__import__("numpy").linspace(0.02, 0.04, 9)))
+        [0.02, 0.03, 0.04] if args.quick else list(np.linspace(0.02, 0.04, 9)))
     periods = args.periods if args.periods is not None else (3 if args.quick else 50)
     transient = args.transient if args.transient is not None else (1 if args.quick else 10)
     sigmas = float_list(args.sigma) if args.sigma else [None]
@@ -89,16 +102,24 @@ def cmd_efficiency(args) -> int:
         bases = [(None, base_config(args))]
     out = args.out
     stem = (args.png or out or "efficiency.png").rsplit(".", 1)[0]
-    results = []
+    R = replicates(args)
+    plan = []  # (sigma, configuration, sweep file or None)
     for sigma, cfg in bases:
         cfg = apply_overrides(cfg, list(args.set or []))
         path = out
         if out and len(bases) > 1:
             path = f"{out.rsplit('.', 1)[0]}_sigma{sigma:g}.h5"
+        plan.append((sigma, cfg, path))
+    paths = [path for _, _, path in plan] + (_png_paths(stem) if out or args.png else [])
+    check_outputs(paths, args.overwrite, keep=_same_sweeps(plan, amps, periods, transient, R))
+
+    from jaxdamp.studies import efficiency as ef
+
+    results = []
+    for sigma, cfg, path in plan:
         label = cfg.name + (f", σ = {sigma:g}" if sigma is not None else "")
         print(f"{label}: {cfg.n_grains} grains, {len(amps)} amplitudes, "
               f"{transient} + {periods} periods at {cfg.frequency:g} Hz")
-        R = replicates(args)
         r = ef.measure(cfg, amps, periods=periods, transient=transient, out=path,
                        progress=not args.no_progress, replicates=R)
         s = r.summary
@@ -130,6 +151,23 @@ def cmd_efficiency(args) -> int:
     return 0
 
 
+def _same_sweeps(plan, amps, periods, transient, R) -> list[str]:
+    """The sweep files of ``plan`` that already hold this very measurement: re-running
+    continues or reuses them (:func:`jaxdamp.studies.sweep.reuse_or_run`), which loses
+    nothing, so they need no ``--overwrite``."""
+    import os
+
+    existing = [(cfg, path) for _, cfg, path in plan if path and os.path.exists(path)]
+    if not existing:
+        return []
+    from jaxdamp.io.sweepfile import holds
+    from jaxdamp.studies.efficiency import protocol
+
+    axes = {"drive.amplitude": [float(a) for a in amps]}
+    return [path for cfg, path in existing
+            if holds(path, protocol(cfg, periods, transient, amplitudes=amps), axes, R)]
+
+
 def register(sub) -> None:
     """Add the subcommand(s) to the ``jaxdamp`` parser."""
     ef = sub.add_parser(
@@ -153,7 +191,8 @@ def register(sub) -> None:
             cost: the time step follows the smallest grains (dt ~ sigma) and the largest
             amplitude (dt ~ A^-1/5); the reference takes about 15k steps per period, sigma = 0.1
             ten times more. Output: the sweep file (records, snapshots of the last period's
-            quarter points, checkpoint; an interrupted run resumes when re-run) with an
+            quarter points, checkpoint; an interrupted run resumes when re-run with the same
+            options, and any other existing file is kept unless --overwrite) with an
             /efficiency group (summary, per_period, phase; units in attributes), and PNGs:
             <out>.png (<E_d>/m vs A_d), <out>_phase.png, <out>_snapshots.png."""),
         formatter_class=argparse.RawDescriptionHelpFormatter,
@@ -169,6 +208,7 @@ def register(sub) -> None:
     ef.add_argument("--out", metavar="FILE.h5", help="sweep file with the /efficiency analysis")
     ef.add_argument("--png", metavar="FILE.png", help="figure stem (default: next to --out)")
     ef.add_argument("--quick", action="store_true", help="3 amplitudes, 1 + 3 periods")
+    add_overwrite(ef)
     ef.add_argument("--replicates", type=positive_int, metavar="R",
                     help="independent beds per amplitude in the same batch (default 1): <E_d> "
                          "gets mean ± standard error over them")

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import textwrap
 
-from jaxdamp.cli.common import positive_int, to_toml
+from jaxdamp.cli.common import add_overwrite, check_outputs, positive_int, to_toml
 from jaxdamp.config import ConfigError
 
 
@@ -45,13 +45,18 @@ PLOT_KINDS = {
 def cmd_plot(args) -> int:
     import os
 
-    from jaxdamp import figures
-
     stem = os.path.splitext(os.fspath(args.file))[0]
     out = args.out or f"{stem}_{args.kind}.png"
+    if args.kind == "frf" and (args.t0 is not None or args.t1 is not None):
+        raise ConfigError("--t0/--t1 do not apply to --kind frf (a sweep's FRF has no time axis)")
+    from jaxdamp.io.export import open_output
+
+    with open_output(args.file):  # a missing or non-HDF5 input is named first
+        pass
+    check_outputs([out], args.overwrite)
+    from jaxdamp import figures
+
     if args.kind == "frf":
-        if args.t0 is not None or args.t1 is not None:
-            raise ConfigError("--t0/--t1 do not apply to --kind frf (a sweep's FRF has no time axis)")
         fig = figures.frf_from_file(args.file)
     elif args.kind == "band":
         fig = figures.band_from_file(args.file, args.t0, args.t1)
@@ -69,14 +74,17 @@ def cmd_plot(args) -> int:
 def cmd_export(args) -> int:
     import os
 
-    from jaxdamp.io.export import export
+    from jaxdamp.io.export import export, planned_outputs
 
     if args.format in ("gif", "mp4"):
-        from jaxdamp.figures import animate
-
         out = args.out or os.path.splitext(os.fspath(args.file))[0] + "." + args.format
         if os.path.splitext(out)[1].lower() != "." + args.format:
             raise ConfigError(f"--out {out}: --format {args.format} writes a .{args.format} file")
+    check_outputs(planned_outputs(args.file, args.format, args.out, args.every), args.overwrite,
+                  new_folders=True)
+    if args.format in ("gif", "mp4"):
+        from jaxdamp.figures import animate
+
         animate(args.file, out, every=args.every, fps=args.fps, color=args.color)
         print(f"wrote {out}")
         return 0
@@ -126,6 +134,7 @@ def register(sub) -> None:
                     help="grain colour for snapshot: species, or height above the floor")
     pl.add_argument("--phase", type=float, default=0.0, metavar="RAD",
                     help="poincare: section phase within the drive period (0 = drive maximum)")
+    add_overwrite(pl)
     pl.set_defaults(func=cmd_plot)
 
     ex = sub.add_parser(
@@ -142,9 +151,10 @@ def register(sub) -> None:
               gif  animation through Pillow;  mp4  animation through ffmpeg (needs it on PATH).
             examples:
               jaxdamp export run.h5 --format xyz                 (writes run.xyz)
-              jaxdamp export run.h5 --format vtk --out vtk/run.pvd --every 2
+              jaxdamp export run.h5 --format vtk --out vtk/run.pvd --every 2   (creates vtk/)
               jaxdamp export run.h5 --format gif --fps 8
-            Positions are in metres in the lab frame (the box moves: its floor is z_box)."""),
+            Positions are in metres in the lab frame (the box moves: its floor is z_box).
+            Existing files are never replaced without --overwrite."""),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     ex.add_argument("file", metavar="FILE.h5", help="run file (jaxdamp run --out)")
@@ -155,4 +165,5 @@ def register(sub) -> None:
     ex.add_argument("--fps", type=positive_int, default=10, help="frames per second (gif, mp4)")
     ex.add_argument("--color", choices=["species", "height"], default="species",
                     help="grain colour in animations")
+    add_overwrite(ex)
     ex.set_defaults(func=cmd_export)

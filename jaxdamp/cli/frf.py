@@ -5,20 +5,21 @@ from __future__ import annotations
 import argparse
 import textwrap
 
-from jaxdamp.cli.common import base_config, float_list, positive_float, positive_int, replicates
+from jaxdamp.cli.common import (
+    add_overwrite,
+    base_config,
+    check_outputs,
+    float_list,
+    positive_float,
+    positive_int,
+    replicates,
+    resume_or_overwrite,
+)
 from jaxdamp.config import ConfigError, apply_overrides
 
 
 def cmd_frf(args) -> int:
-    import h5py
     import numpy as np
-
-    from jaxdamp.analysis.response import RESIDUALS, fit_frf_replicates
-    from jaxdamp.figures import frf_figure, save
-    from jaxdamp.io.sweepfile import write_fit
-    from jaxdamp.physics.model import grain_mass
-    from jaxdamp.studies.grid import steady_or_window
-    from jaxdamp.studies.sweep import sweep
 
     cfg = base_config(args)
     overrides = list(args.set or [])
@@ -45,6 +46,19 @@ def cmd_frf(args) -> int:
     if lz:
         axes["box.Lz"] = lz
     R = replicates(args)
+    png = args.png or (args.out.rsplit(".", 1)[0] + ".png" if args.out else None)
+    check_outputs([args.out, png], args.overwrite, keep=resume_or_overwrite(args),
+                  resumable=[args.out])
+
+    import h5py
+
+    from jaxdamp.analysis.response import RESIDUALS, fit_frf_replicates
+    from jaxdamp.figures import frf_figure, save
+    from jaxdamp.io.sweepfile import fit_failure, write_fit
+    from jaxdamp.physics.model import grain_mass
+    from jaxdamp.studies.grid import steady_or_window
+    from jaxdamp.studies.sweep import sweep
+
     res = sweep(cfg, axes, out=args.out, resume=args.resume, progress=not args.no_progress,
                 replicates=R)
     L = len(lz) if lz else 1
@@ -67,14 +81,16 @@ def cmd_frf(args) -> int:
         Zr = res.summary["amplitude"].reshape(len(freqs), L, 1)
     Z = Zr.mean(axis=-1)
     Z_se = Zr.std(axis=-1, ddof=1) / np.sqrt(R) if R >= 2 else None
-    fits, lines, fit_all = [], [], {w: [] for w in RESIDUALS}
+    fits, failures, lines, fit_all = [], [], [], {w: [] for w in RESIDUALS}
     for j in range(L):
         for w in RESIDUALS:
             fit_all[w].append(fit_frf_replicates(freqs, Zr[:, j], p.U, p.K, M0=p.M,
                                                  C0=max(p.C, 1.0), residuals=w))
         fr = fit_all[args.residuals][j]
-        other = fit_all[[w for w in RESIDUALS if w != args.residuals][0]][j]
-        fits.append((fr["M_ef"], fr["C_ef"]))
+        other = fit_all[next(w for w in RESIDUALS if w != args.residuals)][j]
+        why, why_other = fit_failure(fr), fit_failure(other)
+        fits.append(None if why else (fr["M_ef"], fr["C_ef"]))
+        failures.append(why)
         label = (f"Lz = {lz[j]:g} m" if lz else f"gap = {cfg.impactor.gap:g} m" if impact
                  else f"Lz = {cfg.box.Lz:g} m")
         k = int(np.argmax(Z[:, j]))
@@ -82,25 +98,36 @@ def cmd_frf(args) -> int:
                (lambda e: f"± {e:.2g} (fit error, R = 1)"))
         eM = fr["se_M"] if R >= 2 else fr["fit_se_M"]
         eC = fr["se_C"] if R >= 2 else fr["fit_se_C"]
-        lines.append(f"{label}: peak Z/U = {Z[k, j] / p.U:.4g} at {freqs[k]:.4g} Hz; "
-                     f"{args.residuals} fit M_ef = {fr['M_ef']:.4g} {err(eM)} kg, "
-                     f"C_ef = {fr['C_ef']:.4g} {err(eC)} N s/m (C_ef/C = {fr['C_ef'] / p.C:.3g}); "
-                     f"{other['residuals']} fit: M_ef = {other['M_ef']:.4g}, "
-                     f"C_ef = {other['C_ef']:.4g}")
+        head = f"{label}: peak Z/U = {Z[k, j] / p.U:.4g} at {freqs[k]:.4g} Hz; "
+        if why:
+            main = f"{args.residuals} fit FAILED ({why}): no M_ef, C_ef; "
+        else:
+            main = (f"{args.residuals} fit M_ef = {fr['M_ef']:.4g} {err(eM)} kg, "
+                    f"C_ef = {fr['C_ef']:.4g} {err(eC)} N s/m (C_ef/C = {fr['C_ef'] / p.C:.3g}); ")
+        second = (f"{other['residuals']} fit FAILED ({why_other})" if why_other else
+                  f"{other['residuals']} fit: M_ef = {other['M_ef']:.4g}, "
+                  f"C_ef = {other['C_ef']:.4g}")
+        lines.append(head + main + second)
     print("\n".join(lines))
+    if any(failures):
+        print(f"warning: the {args.residuals} FRF fit failed for {sum(map(bool, failures))} of "
+              f"{L} curve(s): not a result (flagged in /fit/ok, not drawn); more frequencies "
+              "around the resonance (--fmin/--fmax/--n) or replicates usually help")
     m_p = cfg.impactor.mass if impact else grain_mass(cfg)
     if args.out:
         with h5py.File(args.out, "a") as h:
             write_fit(h, fit_all, args.residuals)
-        png = args.png or args.out.rsplit(".", 1)[0] + ".png"
+    if png:
         save(frf_figure(np.asarray(freqs), Z, lz or [None], p, m_p, fits,
                    title=(f"{cfg.name}: one particle, m = {m_p:.4g} kg, e = "
                           f"{cfg.impactor.restitution:g}" if impact else
                           f"{cfg.name}: N = {cfg.n_grains}")
                    + f", {res.summary['wall_time']:.0f} s wall"
                    + (f", mean of R = {R} beds ± 2 SE" if R > 1 else ""),
-                   model="S3" if impact else "DEM", Z_se=Z_se), png)
-        print(f"wrote {args.out} and {png}")
+                   model="S3" if impact else "DEM", Z_se=Z_se, failures=failures), png)
+    written = [x for x in (args.out, png) if x]
+    if written:
+        print("wrote " + " and ".join(written))
     return 0
 
 
@@ -131,9 +158,11 @@ def register(sub) -> None:
     fr.add_argument("--lz", metavar="LZ1,LZ2,...", help="second axis: box heights [m]")
     fr.add_argument("--duration", type=positive_float, help="simulated time per point [s]")
     fr.add_argument("--out", metavar="FILE.h5")
-    fr.add_argument("--png", metavar="FILE.png", help="figure (default: next to --out)")
+    fr.add_argument("--png", metavar="FILE.png",
+                    help="figure (default: next to --out; written with or without --out)")
     fr.add_argument("--quick", action="store_true", help="6 frequencies, 0.5 s each")
-    fr.add_argument("--resume", action="store_true")
+    fr.add_argument("--resume", action="store_true", help="continue --out from its checkpoint")
+    add_overwrite(fr, resume=True)
     fr.add_argument("--replicates", type=positive_int, metavar="R",
                     help="independent beds per point, run in the same batch (default 1): "
                          "amplitudes and M_ef, C_ef get mean ± standard error over them")

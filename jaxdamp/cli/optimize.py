@@ -5,13 +5,23 @@ from __future__ import annotations
 import argparse
 import textwrap
 
-from jaxdamp.cli.common import base_config, float_list, positive_float, positive_int
+from jaxdamp.cli.common import (
+    add_overwrite,
+    base_config,
+    check_outputs,
+    float_list,
+    positive_float,
+    positive_int,
+)
 from jaxdamp.config import ConfigError, apply_overrides
 
 
 def cmd_optimize(args) -> int:
     import json
     import math
+
+    cfg = apply_overrides(base_config(args), list(args.set or []))
+    check_outputs([args.out], args.overwrite)
 
     import h5py
     import numpy as np
@@ -20,7 +30,6 @@ def cmd_optimize(args) -> int:
     from jaxdamp.design.surrogate import descend, propose
     from jaxdamp.io import optimisation as optimisation_file
 
-    cfg = apply_overrides(base_config(args), list(args.set or []))
     band = tuple(float_list(args.band)) if args.band else None
     objective = Objective(args.objective, frequency=args.frequency, band=band)
     impact = cfg.system == "impact"
@@ -62,10 +71,15 @@ def cmd_optimize(args) -> int:
         raise ConfigError("--gap0 applies to S3 (sanchez2012-impact); use --lz0 for the DEM")
     elif args.lz0 is not None:
         x0 = prob.from_lz(args.lz0)
-    for name, x in (("--lz0/--gap0", x0),):
-        if x is not None and not lo <= x <= hi:
-            raise ConfigError(f"{name} = {prob.to_lz(x):.5g} m (Lz): outside the feasible range "
-                              f"[{prob.to_lz(lo):.5g}, {prob.to_lz(hi):.5g}] m")
+    if x0 is not None and not lo <= x0 <= hi:  # refused, never moved to the bound
+        name, given = ("--gap0", args.gap0) if args.gap0 is not None else ("--lz0", args.lz0)
+        lz_range = f"Lz in [{prob.to_lz(lo):.5g}, {prob.to_lz(hi):.5g}] m"
+        raise ConfigError(
+            f"{name} = {given:.5g} m: outside the feasible range "
+            + (f"of the gap [{lo:.5g}, {hi:.5g}] m ({lz_range})" if var == "gap" else lz_range)
+            + (f"; the settled bed is {prob.bed_height:.5g} m high"
+               if getattr(prob, "bed_height", None) else "")
+            + " — nothing is clamped: give a start inside it")
     what = "maximise" if objective.maximise else "minimise"
     freqs = ", ".join(f"{f:.4g}" for f in objective.frequencies(cfg))
     R = getattr(prob, "R", 1)
@@ -330,6 +344,7 @@ def register(sub) -> None:
     op.add_argument("--duration", type=positive_float, metavar="S",
                     help="simulated time per evaluation [s] (DEM 3, quick 0.6; S3 run 3)")
     op.add_argument("--out", metavar="FILE.h5", help="log (HDF5)")
+    add_overwrite(op)
     op.add_argument("--quick", action="store_true",
                     help="small settings for a demo (S3 ~30 s; DEM 2 replicates, 0.6 s runs)")
     op.add_argument("--no-progress", action="store_true")

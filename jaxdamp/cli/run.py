@@ -5,7 +5,16 @@ from __future__ import annotations
 import argparse
 import textwrap
 
-from jaxdamp.cli.common import positive_float, positive_int, print_steady, replicates, run_config
+from jaxdamp.cli.common import (
+    add_overwrite,
+    check_outputs,
+    positive_float,
+    positive_int,
+    print_steady,
+    replicates,
+    resume_or_overwrite,
+    run_config,
+)
 
 EPILOG_RUN = textwrap.dedent(
     """\
@@ -34,11 +43,15 @@ EPILOG_RUN = textwrap.dedent(
 
 
 def cmd_run(args) -> int:
-    from jaxdamp.studies.runner import run
     from jaxdamp.validation import validate
 
-    cfg = validate(run_config(args))
+    cfg = run_config(args)
     R = replicates(args)
+    check_outputs([args.out], args.overwrite, keep=resume_or_overwrite(args),
+                  resumable=[args.out])
+    validate(cfg)
+    from jaxdamp.studies.runner import run
+
     if R > 1:  # R independent beds in one batch: a sweep of one point (sweep file layout)
         from jaxdamp.studies.sweep import sweep
 
@@ -87,6 +100,7 @@ def register(sub) -> None:
     r.add_argument("--quick", action="store_true",
                    help="short demo run (1 s driven after settling, under a minute on 2 cores)")
     r.add_argument("--resume", action="store_true", help="continue --out from its checkpoint")
+    add_overwrite(r, resume=True)
     r.add_argument("--replicates", type=positive_int, metavar="R",
                    help="independent beds (seeds seed..seed+R-1) run in one batch (default 1); "
                         "steady-state numbers get mean ± standard error over them and the file "

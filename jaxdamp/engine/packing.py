@@ -60,7 +60,9 @@ def fcc_lattice(radii: np.ndarray, Lx: float, Ly: float, seed: int) -> np.ndarra
 class SettledBed(NamedTuple):
     """A bed at rest. ``r``, ``v``, ``w``: ``(N, 3)``; ``q``: ``(N, 4)``; box-frame positions
     (floor at ``z = 0``). ``height`` [m] top of the highest grain above the floor;
-    ``time`` [s] simulated settling time; ``max_speed`` [m/s] at the end."""
+    ``time`` [s] simulated settling time; ``max_speed`` [m/s] at the end; ``settled``: every
+    grain came below ``numerics.settle_speed`` (false: ``numerics.settle_time`` ran out first,
+    the bed was still moving — or ``settle_time = 0``, the lattice itself)."""
 
     r: np.ndarray
     v: np.ndarray
@@ -69,10 +71,24 @@ class SettledBed(NamedTuple):
     height: float
     time: float
     max_speed: float
+    settled: bool = True
+
+    def unsettled_note(self, config: Config) -> str:
+        """``""`` for a settled bed, else one sentence saying that (and what to change)."""
+        if self.settled:
+            return ""
+        if self.time == 0.0:
+            return ("numerics.settle_time = 0: the grains start on their lattice, NOT a settled "
+                    "bed")
+        return (f"the bed did NOT settle: after numerics.settle_time = "
+                f"{config.numerics.settle_time:g} s its fastest grain still moves at "
+                f"{self.max_speed:.3g} m/s > numerics.settle_speed = "
+                f"{config.numerics.settle_speed:g} m/s (raise numerics.settle_time)")
 
 
 def settle(config: Config, model: Model, params: Params, progress=None) -> SettledBed:
-    """Drop the grains from the lattice into the (lid-less) box and let them come to rest."""
+    """Drop the grains from the lattice into the (lid-less) box and let them come to rest
+    (``progress`` as in :func:`settle_many`)."""
     return settle_many([config], model, [params], progress)[0]
 
 
@@ -82,8 +98,11 @@ def settle_many(configs: list[Config], model: Model, params: list[Params],
 
     Each bed is taken at the end of the first 20 ms chunk after which all its grains are
     slower than ``numerics.settle_speed`` (or at ``numerics.settle_time``), exactly as if it
-    had settled alone; the batch runs until the last one is done. ``progress(t, max_speed)``
-    is called after every chunk with the largest speed of the beds still settling."""
+    had settled alone; the batch runs until the last one is done. ``progress``: a string, the
+    description of a tqdm bar over the simulated settling time (up to ``settle_time``, the
+    largest speed of the beds still settling as its postfix; the same bars as the runs',
+    :func:`jaxdamp.engine.driver.run_chunks`), or a callable ``progress(t, max_speed)`` called
+    after every chunk, or ``None``."""
     n = model.n
     if n == 0:
         empty = np.zeros((0, 3))
@@ -123,7 +142,27 @@ def settle_many(configs: list[Config], model: Model, params: list[Params],
             rb = np.asarray(params[b].radius)
             done[b] = SettledBed(r=r0[b], v=zeros[b], w=zeros[b], q=q0[b],
                                  height=float((r0[b][:, 2] + rb).max()), time=0.0,
-                                 max_speed=math.inf)
+                                 max_speed=math.inf, settled=False)
+    bar = None
+    if isinstance(progress, str):
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=float(limit.max()), unit="s", desc=progress, leave=True,
+                   bar_format="{desc}: {percentage:3.0f}%|{bar}| {n:.3f}/{total:.3f} s "
+                              "simulated [{elapsed}<{remaining}{postfix}]")
+
+        def progress(t, vmax):
+            bar.update(min(t, bar.total) - bar.n)
+            bar.set_postfix(v_max=f"{vmax:.3g} m/s", target=f"{threshold.min():g}")
+    try:
+        return _settle_loop(batch, done, params, record_every, limit, threshold, progress)
+    finally:
+        if bar is not None:
+            bar.close()
+
+
+def _settle_loop(batch, done, params, record_every, limit, threshold, progress):
+    B = len(done)
     while any(d is None for d in done):
         try:
             batch, _ = driver.advance(batch, 4, record_every)
@@ -140,7 +179,8 @@ def settle_many(configs: list[Config], model: Model, params: list[Params],
                 done[b] = SettledBed(r=r[b], v=v[b], w=np.asarray(st.w)[b],
                                      q=np.asarray(st.q)[b],
                                      height=float((r[b, :, 2] + rb).max()), time=float(t[b]),
-                                     max_speed=float(speed[b]))
+                                     max_speed=float(speed[b]),
+                                     settled=bool(speed[b] < threshold[b]))
         if progress is not None:
             left = [speed[b] for b in range(B) if done[b] is None]
             progress(float(t[0]), float(max(left)) if left else float(speed.max()))

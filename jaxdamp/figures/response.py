@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import os
+import textwrap
 
 import numpy as np
 
@@ -32,14 +33,17 @@ ENERGY_PATHS = ("series/t", "series/work", "series/balance_residual")
 
 # -- FRF -----------------------------------------------------------------------------------------
 def frf_figure(f, Z, lz_values, primary, grain_mass, fits=None, title="", model="DEM",
-               Z_se=None):
+               Z_se=None, failures=None):
     """Amplitude ratio Z/U versus f for each Lz, with the analytic FRFs of the primary alone
     (mass M) and with the grains as a rigid mass (M + m_p).
 
     Args:
       f: frequencies [Hz], ``(F,)``; Z: amplitudes [m], ``(F, L)``; lz_values: ``(L,)`` [m] or
       ``[None]``; primary: :class:`jaxdamp.config.Primary`; grain_mass [kg];
-      fits: optional ``[(M_ef, C_ef), ...]`` per Lz, drawn dotted.
+      fits: optional ``[(M_ef, C_ef), ...]`` per Lz, drawn dotted (``None`` entries: none).
+      failures: optional reasons per Lz why its fit failed (``""``: it did not;
+        :func:`jaxdamp.io.sweepfile.fit_failure`): a failed fit is not drawn, the legend says
+        "fit failed" instead.
       model: legend label of the simulated points (``"DEM"``, ``"S3"``).
       Z_se: optional standard errors of ``Z`` across replicates [m], ``(F, L)``: error bars
         of ± 2 SE.
@@ -58,7 +62,11 @@ def frf_figure(f, Z, lz_values, primary, grain_mass, fits=None, title="", model=
         if Z_se is not None and np.isfinite(Z_se[:, j]).any():
             ax.errorbar(f, Z[:, j] / U, yerr=2 * np.nan_to_num(Z_se[:, j]) / U, fmt="none",
                         ecolor=line.get_color(), capsize=2, lw=0.8)
-        if fits is not None and fits[j] is not None:
+        failed = failures is not None and bool(failures[j])
+        if failed:
+            ax.plot([], [], ":", color=line.get_color(), label="fit failed (not a result): "
+                    + textwrap.shorten(str(failures[j]), 60))
+        elif fits is not None and fits[j] is not None:
             M, C = fits[j]
             ax.plot(ff, frf_amplitude(ff, M, primary.K, C, U) / U, ":", color=line.get_color(),
                     label=f"fit: M_ef = {M:.3g} kg, C_ef = {C:.3g} N s/m")
@@ -99,13 +107,16 @@ def frf_from_file(h5_or_path):
             raise OutputFileError(f"{h5.filename}: the FRF figure draws one curve per box.Lz; "
                                   f"this sweep's second axis is {other[0]!r}")
         lz = [float(x) for x in axes["box.Lz"]] if other else [None]
-        fits = None
+        fits = failures = None
         if "fit/M_ef" in h5 and "fit/C_ef" in h5:
             fits = list(zip(h5["fit/M_ef"][()], h5["fit/C_ef"][()]))
+            if "fit/failure" in h5:  # files before the flag: every fit drawn
+                failures = [w.decode() if isinstance(w, bytes) else str(w)
+                            for w in h5["fit/failure"][()]]
         order = np.argsort(f)
         title = f"{cfg.name}: {os.path.basename(h5.filename)}, N = {cfg.n_grains} grains"
         return frf_figure(f[order], Z[order], lz, cfg.primary, grain_mass(cfg), fits,
-                          title=title)
+                          title=title, failures=failures)
     finally:
         if close:
             h5.close()

@@ -227,6 +227,32 @@ def write_vtk(s: Snapshots, pvd) -> tuple[str, list[str]]:
     return pvd, [os.path.join(folder, n) for n in files]
 
 
+def _vtk_names(pvd: str, frames: int) -> list[str]:
+    """The files :func:`write_vtk` writes for ``frames`` frames: the ``.pvd``, the
+    ``.vtk.series`` and one ``<stem>_0000.vtk`` per frame."""
+    folder = os.path.dirname(os.path.abspath(pvd))
+    stem = os.path.splitext(os.path.basename(pvd))[0]
+    width = max(4, len(str(frames - 1)))
+    return [pvd, os.path.join(folder, f"{stem}.vtk.series")] + [
+        os.path.join(folder, f"{stem}_{k:0{width}d}.vtk") for k in range(frames)]
+
+
+def planned_outputs(path, fmt: str, out=None, every: int = 1) -> list[str]:
+    """Every file that exporting run file ``path`` as ``fmt`` (``xyz``, ``vtk``, ``gif``,
+    ``mp4``) into ``out`` (default: next to ``path``) will write, read from the file without
+    writing anything; raises :class:`OutputFileError` if the file cannot be exported."""
+    path = os.fspath(path)
+    stem = os.path.splitext(path)[0]
+    with open_output(path) as h5:
+        require(h5, f"export --format {fmt}", "run", SNAPSHOT_PATHS)
+        if every < 1:
+            raise OutputFileError(f"--every {every}: need a positive integer")
+        frames = len(range(0, h5["snapshots/t"].shape[0], every))
+    if fmt == "vtk":
+        return _vtk_names(os.fspath(out or stem + ".pvd"), frames)
+    return [os.fspath(out or f"{stem}.{fmt}")]
+
+
 def export(path, fmt: str, out=None, every: int = 1) -> list[str]:
     """Export the snapshots of run file ``path`` as ``fmt`` (``'xyz'`` or ``'vtk'``).
 

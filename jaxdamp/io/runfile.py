@@ -6,7 +6,8 @@ Schema of a run file (every dataset has a ``units`` attribute; see ``docs/output
                                    preset, status ('running' | 'finished' | 'diverged' |
                                    'interrupted' | 'partial'), message
     /grains/radius (N,)     m        /grains/mass (N,) kg      /grains/species (N,)
-    /settle                 attrs: bed_height [m], time [s], max_speed [m/s];
+    /settle                 attrs: bed_height [m], time [s], max_speed [m/s], settled (bool:
+                            every grain below numerics.settle_speed before settle_time ran out);
                             r0 (N,3) settled positions (box frame) [m]
     /series/<name> (T,)     sampled time series (see jaxdamp.physics.energy.RECORD_UNITS);
     /series/work (T, 7)     cumulative work channels, attr 'channels'
@@ -27,8 +28,6 @@ import numpy as np
 from jaxdamp.config import Config
 from jaxdamp.io.common import append as _append
 from jaxdamp.io.common import stamp
-from jaxdamp.physics.energy import RECORD_UNITS
-from jaxdamp.physics.model import CHANNELS
 
 FORMAT = "jaxdamp-run/1"
 
@@ -56,6 +55,7 @@ class RunFile:
         s.attrs["bed_height"] = bed.height
         s.attrs["time"] = bed.time
         s.attrs["max_speed"] = bed.max_speed
+        s.attrs["settled"] = bool(getattr(bed, "settled", True))
         s.attrs["units"] = json.dumps({"bed_height": "m", "time": "s", "max_speed": "m/s"})
         s.create_dataset("r0", data=bed.r).attrs["units"] = "m"
         h.create_group("series")
@@ -67,6 +67,9 @@ class RunFile:
     # -- appending -------------------------------------------------------------------------
     def append_records(self, recs: dict, n: int | None = None) -> None:
         """Append samples (dict of arrays with leading time axis); only the first ``n``."""
+        from jaxdamp.physics.energy import RECORD_UNITS  # JAX: imported when a run writes
+        from jaxdamp.physics.model import CHANNELS
+
         g = self.h5["series"]
         for name, values in recs.items():
             values = np.asarray(values)[:n] if n is not None else np.asarray(values)
@@ -153,7 +156,10 @@ def describe_lines(h, path: str) -> list[str]:
                  f"{sum(s['count'] for s in cfg['grains'])} grains")
     if "settle" in h:
         lines.append(f"  settled bed height {h['settle'].attrs['bed_height']:.5g} m "
-                     f"after {h['settle'].attrs['time']:.4g} s")
+                     f"after {h['settle'].attrs['time']:.4g} s"
+                     + ("" if h["settle"].attrs.get("settled", True) else
+                        f" — NOT settled (fastest grain still at "
+                        f"{h['settle'].attrs['max_speed']:.3g} m/s)"))
     if "series" in h and "t" in h["series"]:
         t = h["series/t"]
         if t.shape[0]:

@@ -12,7 +12,9 @@ Layout (``docs/output.md``, "Sweep file schema")::
     /summary/<name>         grid-shaped mean over replicates of each fixed-window scalar
     /replicate_summary/...  grid + (R,)
     /steady/<quantity>/...  steady-state estimates over replicates (:func:`write_steady`)
-    /fit/...                FRF fits (``jaxdamp frf``)
+    /settle/...             per system: settled (bool), time, max_speed, bed_height; attr
+                            unsettled (count of beds that did not settle)
+    /fit/...                FRF fits (``jaxdamp frf``; ok/failure flag failed fits)
     /impacts/<point>/...    S3 event-driven only
     /efficiency/...         ``jaxdamp efficiency`` only (:mod:`jaxdamp.io.efficiency`)
 """
@@ -75,6 +77,21 @@ class SweepFile:
         for k, v in axes.items():
             put(ag, k, np.asarray(v, float))
         return cls(h5)
+
+    def write_settle(self, beds, settle_speed) -> None:
+        """``/settle``: per system (point × replicate, in ``configs`` order) the settled bed's
+        ``settled`` flag (every grain below ``settle_speed`` before ``settle_time`` ran out),
+        ``time`` [s], ``max_speed`` [m/s] and ``bed_height`` [m]; the group's attribute
+        ``unsettled`` counts the systems whose bed did not settle."""
+        g = self.h5.require_group("settle")
+        flags = np.array([bool(b.settled) for b in beds])
+        put(g, "settled", flags, "1")
+        put(g, "time", np.array([b.time for b in beds]), "s")
+        put(g, "max_speed", np.array([b.max_speed for b in beds]), "m/s")
+        put(g, "bed_height", np.array([b.height for b in beds]), "m")
+        put(g, "settle_speed", np.asarray(settle_speed, float), "m/s")
+        g.attrs["unsettled"] = int((~flags).sum())
+        self.h5.flush()
 
     @classmethod
     def resume(cls, path: str, config, axes: dict, replicates: int, records_per_chunk: int):
@@ -189,11 +206,44 @@ class SweepFile:
         self.h5.close()
 
 
+#: Below these the FRF fit sits on its lower bound (M_ef, C_ef ≥ 0 are constrained): the
+#: optimiser stopped against the wall, not at a minimum (e.g. C_ef = 5.9e-10 N s/m).
+_AT_BOUND = {"M_ef": 1e-9, "C_ef": 1e-6}
+
+
+def fit_failure(fit: dict) -> str:
+    """Why an FRF fit (:func:`jaxdamp.analysis.response.fit_frf_replicates`) is not a result,
+    or ``""`` when it is one. A fit fails when a fitted value or its uncertainty (the standard
+    error over replicates for ``R ≥ 2``, the fit's own Jacobian error for ``R = 1``) is not
+    finite, or when a fit (of the mean or of any replicate) stopped on the bound 0 of ``M_ef``
+    or ``C_ef`` — it did not converge to an interior minimum."""
+    R = int(fit.get("replicates", 1))
+    err = ("se_M", "se_C") if R >= 2 else ("fit_se_M", "fit_se_C")
+    for key in ("M_ef", "C_ef"):
+        if not np.isfinite(fit[key]):
+            return f"{key} = {fit[key]} is not finite"
+    values = {"M_ef": np.append(np.atleast_1d(fit.get("M_reps", [])), fit["M_ef"]),
+              "C_ef": np.append(np.atleast_1d(fit.get("C_reps", [])), fit["C_ef"])}
+    for key, v in values.items():
+        if not np.all(np.isfinite(v)):
+            return f"a replicate's {key} is not finite"
+        if np.any(v < _AT_BOUND[key]):
+            return (f"{key} stopped on its bound 0 ({float(v.min()):.2g}): the fit did not "
+                    "converge")
+    for key, name in zip(err, ("M_ef", "C_ef")):
+        if not np.isfinite(fit[key]):
+            return f"the uncertainty of {name} is not finite ({fit[key]})"
+    return ""
+
+
 def write_fit(h5, fits: dict, used: str) -> None:
     """``/fit`` of an FRF sweep file: ``M_ef``, ``C_ef`` (the ``used`` weighting), their
-    standard errors across replicates ``se_M_ef``, ``se_C_ef``, the fit of the mean FRF, and
-    ``<weighting>/...`` for every weighting (:data:`jaxdamp.analysis.response.RESIDUALS`), one entry
-    per ``Lz``."""
+    standard errors across replicates ``se_M_ef``, ``se_C_ef``, the fit of the mean FRF,
+    ``ok`` (bool: the fit is a result, :func:`fit_failure`) and ``failure`` (why not, ``""``
+    when ok), and ``<weighting>/...`` for every weighting
+    (:data:`jaxdamp.analysis.response.RESIDUALS`), one entry per ``Lz``. The group's attribute
+    ``failed`` counts the failed fits of the ``used`` weighting; the values of a failed fit are
+    kept as computed, for diagnosis only."""
     if "fit" in h5:
         del h5["fit"]
     g = h5.create_group("fit")
@@ -206,6 +256,10 @@ def write_fit(h5, fits: dict, used: str) -> None:
                                 ("M_ef_of_mean", "M_mean_fit", "kg"),
                                 ("C_ef_of_mean", "C_mean_fit", "N s/m")):
             put(grp, name, np.array([f[key] for f in fl]), unit)
+        why = [fit_failure(f) for f in fl]
+        put(grp, "ok", np.array([not w for w in why]), "1")
+        put(grp, "failure", np.array(why, dtype=h5py.string_dtype()), "")
+        grp.attrs["failed"] = int(sum(bool(w) for w in why))
 
     fill(g, fits[used])
     for w, fl in fits.items():
@@ -239,6 +293,14 @@ def describe_lines(h, path: str) -> list[str]:
     if "summary" in h:
         keys = sorted(k for k in h["summary"] if k != "wall_time")
         lines.append("  summary: " + ", ".join(keys))
+    if "settle" in h and int(h["settle"].attrs.get("unsettled", 0)):
+        lines.append(f"  {int(h['settle'].attrs['unsettled'])} of {h['settle/settled'].shape[0]} "
+                     "beds did NOT settle (/settle/settled)")
     if "fit" in h:
         lines.append("  FRF fit: " + ", ".join(sorted(h["fit"])))
+        failed = int(h["fit"].attrs.get("failed", 0))
+        if failed:
+            lines.append(f"  FRF fit FAILED for {failed} curve(s): "
+                         + "; ".join(str(w, "utf-8") if isinstance(w, bytes) else str(w)
+                                     for w in h["fit/failure"][()] if w))
     return lines

@@ -144,16 +144,21 @@ def run(
         rf.truncate(int(attrs["n_records"]), int(attrs["n_snapshots"]))
         s = rf.h5["settle"]
         bed = SettledBed(s["r0"][()], None, None, None, float(s.attrs["bed_height"]),
-                  float(s.attrs["time"]), float(s.attrs["max_speed"]))
+                  float(s.attrs["time"]), float(s.attrs["max_speed"]),
+                  bool(s.attrs.get("settled", True)))
         say(f"resuming {out} at chunk {start_chunk}/{sched.n_chunks} "
             f"(t = {float(batch.states.t[0]):.6g} s)")
     else:
         t0 = time.perf_counter()
-        bed = settle(config, model, params)
+        bed = settle(config, model, params,
+                     progress=f"settling {model.n} grains" if progress and model.n else None)
         say(
             f"settled {model.n} grains in {bed.time:.3g} s simulated "
             f"({time.perf_counter() - t0:.1f} s wall): bed height {bed.height:.5g} m"
         )
+        if model.n and not bed.settled:
+            say("warning: " + bed.unsettled_note(config) + "; the run file says so "
+                "(/settle attribute 'settled' = false)")
         if model.n and bed.height >= config.box.Lz:
             raise ConfigError(
                 f"box.Lz = {config.box.Lz} m: the settled bed is {bed.height:.5g} m high and "

@@ -147,10 +147,17 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
         order = sorted(first.values())  # one new bed per geometry, all settled in one batch
         if order:
             settled = settle_many([configs[i] for i in order], model,
-                                  [built[i][1] for i in order])
+                                  [built[i][1] for i in order],
+                                  progress=(f"settling {len(order)} bed(s) of {model.n} grains"
+                                            if progress and model.n else None))
             beds.update({keys[i]: b for i, b in zip(order, settled)})
             say(f"settled {len(order)} bed(s) in one batch: heights "
                 + ", ".join(f"{b.height:.5g}" for b in settled) + " m")
+            moving = [(i, b) for i, b in zip(order, settled) if model.n and not b.settled]
+            if moving:
+                say(f"warning: {len(moving)} of {len(order)} bed(s): "
+                    + moving[0][1].unsettled_note(configs[moving[0][0]])
+                    + "; the sweep file says so (/settle/settled)")
         r0, v0, w0, q0, z0 = [], [], [], [], []
         for c, (m, p), key in zip(configs, built, keys):
             bed = beds[key]
@@ -165,6 +172,7 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
         if out:
             sf = SweepFile.create(out, config, axes, configs, dt, sched.duration, engine, R,
                                   devices=len(jax.devices()))
+            sf.write_settle([beds[k] for k in keys], [c.numerics.settle_speed for c in configs])
 
     wall0 = time.perf_counter()
     mem: dict = {}
