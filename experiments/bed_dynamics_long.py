@@ -178,9 +178,7 @@ def _figure(r, s, out):
     axs[2].set_ylabel("periodicity level of z_box [-] (dashed: 1 %, 5 % tolerances)")
     axs[2].set_title("distance from a period-1 / period-2 orbit", fontsize=9)
     axs[2].legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out, "figure.png"), dpi=120)
-    plt.close(fig)
+    scaffold.save_figure(fig, out, "figure.png")
 
 
 def _summary(r, s, out, prov):
@@ -228,8 +226,7 @@ def _summary(r, s, out, prov):
           "grains' forces do (its saturation level says how far). It cannot separate the "
           "physical chaos of the bed from the amplification of round-off: both are the same "
           "process in a chaotic flow."]
-    with open(os.path.join(out, "summary.md"), "w") as fh:
-        fh.write("\n".join(L) + "\n")
+    scaffold.write_summary(out, L)
 
 
 if __name__ == "__main__":

@@ -301,9 +301,7 @@ def _figures(out, results, s):
         a.set_xscale("log")
         a.axvline(THESIS_OPTIMUM, color="g", lw=0.6, ls="-.", label="thesis optimum, 0.1225 m")
         a.legend(fontsize=6)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out, "fig3_7_3_8.png"), dpi=120)
-    plt.close(fig)
+    scaffold.save_figure(fig, out, "fig3_7_3_8.png")
 
 
 def near_resonance(r, j) -> int:
@@ -380,9 +378,7 @@ def _figure_3_9(out, results, s):
         a.set_xscale("log")
         a.set_xlabel("box height Lz [m]")
     fig.suptitle(f"thesis fig. 3.9: C = {C0} N s/m, mean of R = {R} beds ± 2 SE", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out, "fig3_9.png"), dpi=110)
-    plt.close(fig)
+    scaffold.save_figure(fig, out, "fig3_9.png", dpi=110)
 
 
 def _fmt_opt(o) -> str:
@@ -485,8 +481,7 @@ def _summary(out, results, s, prov):
                     cells.append(f"{L:g}: ΔM {m:+.3f}{star(m, h)} kg, ΔC {c:+.2f}{star(c, hc)}")
                 lines.append(f"- {w}: " + "; ".join(cells) + ".")
         lines.append("")
-    with open(os.path.join(out, "summary.md"), "w") as fh:
-        fh.write("\n".join(lines) + "\n")
+    scaffold.write_summary(out, lines)
 
 
 if __name__ == "__main__":

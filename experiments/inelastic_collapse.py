@@ -38,7 +38,8 @@ def compute(quick: bool, log, _ctx):
         tw = s.wall_times
         formula = tw[1] / (1 - 4 * e * e) if len(tw) > 1 else np.nan
         rows.append(dict(e=e, outcome=s.outcome, events=len(s.t), t_end=s.t_end,
-                         ratio=s.ratio if s.outcome == "collapsed" else np.nan, exact_ratio=cycle_ratio(e), thesis_ratio=4 * e * e,
+                         ratio=s.ratio if s.outcome == "collapsed" else np.nan,
+                         exact_ratio=cycle_ratio(e), thesis_ratio=4 * e * e,
                          t_formula=formula,
                          formula_error=(formula / s.t_end - 1) if s.outcome == "collapsed"
                          else np.nan))
@@ -94,9 +95,7 @@ def _figure(r, out):
     a2.set_ylabel("far particle's distance from the wall x₂ [m]")
     a2.set_title("self-similar approach to the collapse (log–log)", fontsize=9)
     a2.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out, "figure.png"), dpi=120)
-    plt.close(fig)
+    scaffold.save_figure(fig, out, "figure.png")
 
 
 def _summary(r, out, prov):
@@ -125,8 +124,7 @@ def _summary(r, out, prov):
           f"{r['e_c']:.6f}; the cycle map's eigenvalues turn complex at 3 − 2√2 = "
           f"{E_CRITICAL:.6f}. Above it (e = 0.18, 0.3) the particles escape after a few "
           "collisions. The thesis states only that e_c exists and grows with N."]
-    with open(os.path.join(out, "summary.md"), "w") as fh:
-        fh.write("\n".join(L) + "\n")
+    scaffold.write_summary(out, L)
 
 
 if __name__ == "__main__":

@@ -51,6 +51,25 @@ def stamp(h5, prov: dict) -> None:
     h5.attrs.update({k: json.dumps(x) if not isinstance(x, str) else x for k, x in prov.items()})
 
 
+def save_figure(fig, out: str, name: str = "figure.png", dpi: int = 120) -> str:
+    """Lay out, write ``out/name`` and close a matplotlib figure; returns the path."""
+    import matplotlib.pyplot as plt
+
+    path = os.path.join(out, name)
+    fig.tight_layout()
+    fig.savefig(path, dpi=dpi)
+    plt.close(fig)
+    return path
+
+
+def write_summary(out: str, lines: list[str]) -> str:
+    """``out/summary.md`` from its lines; returns the path."""
+    path = os.path.join(out, "summary.md")
+    with open(path, "w") as fh:
+        fh.write("\n".join(lines) + "\n")
+    return path
+
+
 def provenance_line(prov: dict) -> str:
     """The summary's line saying what ran, where and how long."""
     return (f"Command: `{prov['command']}` — jaxdamp {prov['jaxdamp_version']} ({prov['git']}), "

@@ -136,9 +136,7 @@ def write(rows, s, k15, out, prov):
     a2.set_title("energy dissipated by the grains per period", fontsize=9)
     for a in (a1, a2):
         a.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out, "figure.png"), dpi=120)
-    plt.close(fig)
+    scaffold.save_figure(fig, out, "figure.png")
 
     def verdict(r, name):
         if r[f"{name}_changed"] is None:
@@ -169,8 +167,7 @@ def write(rows, s, k15, out, prov):
             f"{r['loss15'].mean():.3f} ± {r['loss15'].std(ddof=1) / math.sqrt(R):.3f} | "
             f"{verdict(r, 'loss')} | {r['stationary']} of {r['runs']} | "
             f"{float(np.max(r['balance'])):.1e} | {r['wall']:.0f} |")
-    with open(os.path.join(out, "summary.md"), "w") as fh:
-        fh.write("\n".join(lines) + "\n")
+    scaffold.write_summary(out, lines)
 
 
 if __name__ == "__main__":

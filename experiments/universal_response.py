@@ -209,9 +209,7 @@ def _figure(out, r, s):
     a2.set_title("(b) dissipation per cycle, collisional vs frictional (thesis fig. 5.2b)",
                  fontsize=9)
     a2.legend(fontsize=6, ncol=2)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out, "fig5_2.png"), dpi=120)
-    plt.close(fig)
+    scaffold.save_figure(fig, out, "fig5_2.png")
 
 
 def _summary(out, r, s, prov):
@@ -266,8 +264,7 @@ def _summary(out, r, s, prov):
               f"Hz, M + m_p → {np.sqrt(p.K / (p.M + m_p)) / 2 / np.pi:.2f} Hz. The reference "
               "and its variants share the beds (seeds 0…R−1); the Welch test treats them as "
               "independent, which is conservative when common beds correlate them."]
-    with open(os.path.join(out, "summary.md"), "w") as fh:
-        fh.write("\n".join(lines) + "\n")
+    scaffold.write_summary(out, lines)
 
 
 if __name__ == "__main__":

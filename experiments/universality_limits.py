@@ -222,9 +222,7 @@ def _figure(r, s, out):
     axs[2].set_ylabel("resonant amplitude ratio Z / U  [-]")
     axs[2].set_title("fig. 5.4: universality and the number of grains", fontsize=9)
     axs[2].legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out, "figure.png"), dpi=120)
-    plt.close(fig)
+    scaffold.save_figure(fig, out, "figure.png")
 
 
 def _summary(r, s, out, prov, wall):
@@ -266,8 +264,7 @@ def _summary(r, s, out, prov, wall):
         L.append(f"| {x['N']} | {1e3 * x['radius']:.2f} | {m(x['peak_on'])} | "
                  f"{m(x['peak_off'])} | {x['d_peak']:+.2f} ± {x['d_peak_ci']:.2f} — "
                  + ("**changed**" if x["changed"] else "not significant") + " |")
-    with open(os.path.join(out, "summary.md"), "w") as fh:
-        fh.write("\n".join(L) + "\n")
+    scaffold.write_summary(out, L)
 
 
 if __name__ == "__main__":
