@@ -80,8 +80,11 @@ zero = np.zeros((model.n, 3))
 b = driver.start(model, driver.batched(params), r[None], zero[None], zero[None], q[None],
                  np.zeros(1), np.zeros(1), engine="jax")
 f = np.asarray(b.states.a)[0]
-print(json.dumps([resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024**2,
-                  nb.capacity(b.nbrs), bool(np.isfinite(f).all())]))
+# the peak of this process's own memory: VmHWM (ru_maxrss would include the RSS of the
+# forking parent, the test process, which Linux carries over through exec)
+hwm = [int(line.split()[1]) for line in open("/proc/self/status") if line.startswith("VmHWM")]
+peak = hwm[0] * 1024 if hwm else resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+print(json.dumps([peak / 1024**3, nb.capacity(b.nbrs), bool(np.isfinite(f).all())]))
 """
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                        timeout=300, check=False)
