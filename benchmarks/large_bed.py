@@ -8,8 +8,9 @@ Each bed is the thesis' optimal damper (sanchez2012-optimal, 3 mm steel grains) 
 square base grows with N at the preset's grains per area (so the bed keeps its height), and
 the primary's M, K and C grow with it (the same f0 and mass ratio). Every N runs as its own
 child process, the real command line, under a fresh wrapper process: its peak resident memory
-is the wrapper's ``RUSAGE_CHILDREN`` ``ru_maxrss`` (that one child's), its wall time the
-child's. Settling is cut short
+is the wrapper's ``RUSAGE_CHILDREN`` ``ru_maxrss`` (that one child's; Linux carries the RSS
+of the forking process through exec into it, which is why the wrapper is a tiny process of
+~10 MB and not this one), its wall time the child's. Settling is cut short
 (``--settle`` simulated seconds: the bed is flagged as not settled, which is the point — it is
 the memory of the start-up that is measured, not a settled bed) and the drive is
 ``--duration`` simulated seconds in chunks of ``--chunk`` (a snapshot and a checkpoint after
