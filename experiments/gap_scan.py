@@ -133,6 +133,14 @@ def analyse(res, cfg, s) -> dict:
                                                 [lz[x[2]] for x in v])
     v = [parabolic_extremum(np.log(lz), np.log(Z_peak[:, r]), "min") for r in range(R)]
     optimum["min_peak"] = _optimum_row(np.exp([x[0] for x in v]), [lz[x[2]] for x in v])
+    # the same vertices with the parabola in Lz itself: how much the interpolation model moves
+    # them (a systematic error the replicates' interval does not contain)
+    C_abs = np.array([fi["C_reps"] for fi in fits[THESIS_WEIGHTING]])
+    optimum["model_check"] = {
+        f"max_C_ef_{THESIS_WEIGHTING}": float(np.mean(
+            [parabolic_extremum(lz, C_abs[:, r], "max")[0] for r in range(R)])),
+        "min_peak": float(np.mean([parabolic_extremum(lz, Z_peak[:, r], "min")[0]
+                                   for r in range(R)]))}
     tests = {}
     dof = R - 1
     for w in RESIDUALS:
@@ -153,7 +161,9 @@ def analyse(res, cfg, s) -> dict:
     stationary = np.asarray(res.steady["amplitude"]["stationary"], bool)
     starts = np.asarray(res.steady["amplitude"]["start"], float)
     force = force_coefficients(res, starts, stationary, s)
+    stationary_by_lz = stationary.sum(axis=(0, 2))  # (L,) of F x R runs each
     return dict(Zr=Zr, fallback=fallback, fits=fits, f_peak=f_peak, Z_peak=Z_peak,
+                stationary_by_lz=stationary_by_lz,
                 optimum=optimum, tests=tests, widen=widen, m_p=m_p, force=force,
                 stationary=int(stationary.sum()), runs=int(stationary.size),
                 start_range=(float(np.nanmin(starts)), float(np.nanmax(starts)))
@@ -420,7 +430,8 @@ def _summary(out, results, s, prov):
     for C, r in results.items():
         lines += [f"## C = {C} N s/m", "",
                   "| Lz [m] | M_ef abs. [kg] | C_ef/C abs. | M_ef rel. [kg] | C_ef/C rel. | "
-                  "resonance [Hz] | peak Z/U |", "| --- | --- | --- | --- | --- | --- | --- |"]
+                  "resonance [Hz] | peak Z/U | stationary runs |",
+                  "| --- | --- | --- | --- | --- | --- | --- | --- |"]
         fa, fr = r["fits"]["absolute"], r["fits"]["relative"]
         for j, L in enumerate(s["lz"]):
             fp = _t_interval(r["f_peak"][j])
@@ -430,7 +441,8 @@ def _summary(out, results, s, prov):
                 f"{fa[j]['C_ef'] / C:.2f} ± {fa[j]['se_C'] / C:.2f} | "
                 f"{fr[j]['M_ef']:.3f} ± {fr[j]['se_M']:.3f} | "
                 f"{fr[j]['C_ef'] / C:.2f} ± {fr[j]['se_C'] / C:.2f} | "
-                f"{fp[0]:.2f} ± {fp[1]:.2f} | {zp[0]:.2f} ± {zp[1]:.2f} |")
+                f"{fp[0]:.2f} ± {fp[1]:.2f} | {zp[0]:.2f} ± {zp[1]:.2f} | "
+                f"{int(r['stationary_by_lz'][j])} of {len(s['freqs']) * R} |")
         o = r["optimum"]
         lines += ["", "± = standard error over the replicates.", "",
                   "**The optimum (parabola in log Lz per replicate, mean ± SE, t-interval):**", ""]
@@ -439,6 +451,13 @@ def _summary(out, results, s, prov):
                          + (" (the thesis' fit)" if w == THESIS_WEIGHTING else "")
                          + f": {_fmt_opt(o[f'max_C_ef_{w}'])}.")
         lines.append(f"- smallest resonant amplitude (no fit): {_fmt_opt(o['min_peak'])}.")
+        mc = o["model_check"]
+        lines.append(f"- the interval is the beds' spread only. The interpolation is a model too: "
+                     f"the same parabolas in Lz instead of log Lz put the vertices at "
+                     f"{mc[f'max_C_ef_{THESIS_WEIGHTING}']:.4f} m (largest C_ef, "
+                     f"{THESIS_WEIGHTING}) and {mc['min_peak']:.4f} m (smallest peak); a "
+                     "difference of that size between the two is a systematic error of the "
+                     "grid, not covered by the interval.")
         lines += ["", "**Effective mass against M and M + m_p** (95 % t-test per height):", ""]
         for w in RESIDUALS:
             t = r["tests"][w]
