@@ -254,7 +254,8 @@ def _summary(out, r, s, prov):
         lines.append(f"| ({row['gamma_n']:g}, {row['gamma_s']:g}) | {row['peak']:.2f} ± "
                      f"{row['peak_se']:.2f} | {change} | "
                      + ("–" if c == 0 else f"{row['freqs_differing']} of {len(f)}")
-                     + f" | {coll / tot:.0%} | {float(np.max(a['balance'][c])):.1e} |")
+                     + f" | {f'{coll / tot:.0%}' if tot > 0 else '– (no loss)'} | "
+                     f"{float(np.max(a['balance'][c])):.1e} |")
     for m in ("event", "smooth"):
         d = v[f"s3_{m}"]
         lines.append(f"| S3 e = 0 ({m}) | {resonance(f, s3[m]['Z'])[1] / U:.2f} | largest "
