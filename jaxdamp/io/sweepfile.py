@@ -211,6 +211,23 @@ class SweepFile:
 _AT_BOUND = {"M_ef": 1e-9, "C_ef": 1e-6}
 
 
+def perturb_checkpoint(path: str, grain: int, delta: float, chunk: int, flag: str,
+                       note: str) -> None:
+    """Move grain ``grain`` of every second system (rows 1, 3, …) of the checkpoint in
+    ``path`` by ``delta`` [m] along x, and mark the file (root attribute ``flag`` = True,
+    ``"twin"`` = ``note``). Refuses a checkpoint not at ``chunk``. Used by twin runs
+    (:mod:`jaxdamp.studies.twin`)."""
+    with h5py.File(path, "a") as h:
+        at = int(h["checkpoint"].attrs["chunk"])
+        if at != int(chunk):
+            raise RuntimeError(f"{path}: checkpoint at chunk {at}, expected {chunk} "
+                               "(the file holds another run)")
+        r = h["checkpoint/state/r"]
+        r[1::2, grain, 0] = r[1::2, grain, 0] + delta
+        h.attrs[flag] = True
+        h.attrs["twin"] = note
+
+
 def fit_failure(fit: dict) -> str:
     """Why an FRF fit (:func:`jaxdamp.analysis.response.fit_frf_replicates`) is not a result,
     or ``""`` when it is one. A fit fails when a fitted value or its uncertainty (the standard

@@ -31,6 +31,7 @@ import os
 import h5py
 
 from jaxdamp.config import Config, ConfigError
+from jaxdamp.io.sweepfile import perturb_checkpoint
 from jaxdamp.studies.grid import Points, SweepResult
 from jaxdamp.studies.sweep import sweep
 
@@ -71,15 +72,8 @@ def twin_sweep(config: Config, frequencies, t_perturb: float, out: str, delta: f
     if not perturbed:
         sweep(config, axes, out=out, resume=os.path.exists(out), progress=progress,
               max_chunks=int(round(k)), echo=print if progress else None)
-        with h5py.File(out, "a") as h:
-            if int(h["checkpoint"].attrs["chunk"]) != int(round(k)):
-                raise RuntimeError(f"{out}: checkpoint at chunk {h['checkpoint'].attrs['chunk']}, "
-                                   f"expected {int(round(k))} (the file holds another run)")
-            r = h["checkpoint/state/r"]
-            pos = r[1::2, grain, 0]
-            r[1::2, grain, 0] = pos + delta
-            h.attrs[PERTURBED] = True
-            h.attrs["twin"] = (f"grain {grain} of rows 1, 3, ... moved by {delta:g} m along x "
-                               f"at t = {t_perturb:g} s")
+        perturb_checkpoint(out, grain, delta, int(round(k)), PERTURBED,
+                           f"grain {grain} of rows 1, 3, ... moved by {delta:g} m along x "
+                           f"at t = {t_perturb:g} s")
     return sweep(config, axes, out=out, resume=True, progress=progress,
                  echo=print if progress else None)
