@@ -162,3 +162,23 @@ def test_efficiency_cli_quick_writes_data_and_figures(tmp_path):
         p = subprocess.run([sys.executable, "-m", "jaxdamp", "efficiency", *args],
                            capture_output=True, text=True, timeout=120)
         assert p.returncode != 0 and match in p.stderr, p.stderr
+
+
+def test_per_period_heights_and_segregation_index_recover_planted_values():
+    """Per-period species heights above the floor are the period means of z_cm − z_box, and
+    the segregation index is 2 (h_L − h_S)/(h_L + h_S): planted per-period heights on a moving
+    floor come back to rounding; one species gives NaN."""
+    f, spp, n_per = 70.0, 20, 6
+    rec = _planted_records(f, spp, n_per, np.full(n_per, 10.0), np.full(n_per, 2.0))
+    h_large = np.array([0.01, 0.02, 0.03, 0.03, 0.04, 0.05])
+    h_small = np.array([0.01, 0.01, 0.02, 0.01, 0.04, 0.02])
+    k = (np.arange(1, n_per * spp + 1) - 1) // spp  # period of every sample
+    rec["z_cm_species"] = np.stack([h_large[k], h_small[k]], -1) + rec["z_box"][:, None]
+    out = ef.analyse(REF.replace(frequency=f), rec, periods=4, samples_per_period=spp)
+    pp = out["per_period"]
+    np.testing.assert_allclose(pp["h_cm_species"], np.stack([h_large, h_small], -1), atol=1e-15)
+    want = 2 * (h_large - h_small) / (h_large + h_small)
+    np.testing.assert_allclose(pp["segregation"], want, atol=1e-12)
+    assert out["summary"]["segregation"] == pytest.approx(want[2:].mean(), abs=1e-12)
+    assert np.isnan(ef.segregation_index(np.array([[0.02], [0.03]]))).all()
+    assert ef.segregation_index(np.array([0.02, 0.02])) == 0.0

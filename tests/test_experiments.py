@@ -212,8 +212,8 @@ def test_design_starts_and_variables_quick(tmp_path):
 
 
 def test_binary_mixtures_quick(tmp_path):
-    """The 2023 paper's families at test size (σ = 0.5, 2 amplitudes, 1 + 2 periods): every
-    family runs, the class builders' conserved quantities hold in the runs, the energy balance
+    """The 2023 paper's families at test size (σ = 0.5, 2 amplitudes, 1 + 2 periods, 2 beds):
+    every family runs, the class builders' conserved quantities hold in the runs, the energy balance
     closes, and data, figures and the claims section are written."""
     runs = _load("binary_mixtures").main(["--quick", "--out", str(tmp_path), "--no-progress"])
     names = [(r["name"], r["sigma"]) for r in runs]
@@ -228,8 +228,14 @@ def test_binary_mixtures_quick(tmp_path):
         assert np.all(s["balance_error"] < 2e-3), r["name"]
         assert np.all((s["E_d_mean"] > 0) & (s["E_d_mean"] < 1.5)), r["name"]
     text = (tmp_path / "summary.md").read_text()
-    assert "A_opt ≈ 2.8 cm" in text and "class c (σ = 0.5) below the reference" in text
-    for name in ("efficiency.png", "contacts_force.png", "phase_plots.png", "snapshots.png"):
+    assert "A_opt ≈ 2.8 cm" in text and "class c (σ = 0.5) vs the reference" in text
+    assert "Size segregation at 3 cm" in text and "Per damper (J dissipated per period)" in text
+    for r in runs:  # two beds per amplitude, each with its own per-period segregation index
+        seg = r["result"].replicate_per_period["segregation"]
+        assert seg.shape == (2, 2, 3)
+        assert np.isfinite(seg).all() == (r["sigma"] is not None), r["name"]
+    for name in ("efficiency.png", "contacts_force.png", "phase_plots.png", "snapshots.png",
+                 "segregation.png"):
         assert (tmp_path / name).stat().st_size > 10_000
     import h5py
 

@@ -9,9 +9,10 @@ from jaxdamp.io.common import write_steady
 
 
 def write(path: str, result, transient: int, samples_per_period: int, summary_units: dict,
-          phase_units: dict) -> None:
+          per_period_units: dict, phase_units: dict) -> None:
     """Store ``result`` (:class:`jaxdamp.studies.efficiency.EfficiencyResult`) in the ``/efficiency``
-    group of the sweep file ``path``; units of its summary and phase arrays as given."""
+    group of the sweep file ``path``; units of its summary, per-period and phase arrays as
+    given."""
     with h5py.File(path, "a") as h5:
         if "efficiency" in h5:
             del h5["efficiency"]
@@ -31,13 +32,13 @@ def write(path: str, result, transient: int, samples_per_period: int, summary_un
             rs = g.create_group("replicate_summary")
             for k, v in result.replicate_summary.items():
                 rs.create_dataset(k, data=v).attrs["units"] = summary_units.get(k, "")
-        for part, units in (("summary", summary_units), ("per_period", None),
-                            ("phase", phase_units)):
+        for part, units in (("summary", summary_units), ("per_period", per_period_units),
+                            ("phase", phase_units), ("replicate_per_period", per_period_units)):
+            if getattr(result, part) is None:
+                continue
             sub = g.create_group(part)
             for k, v in getattr(result, part).items():
-                u = units.get(k, "") if units else ("s" if k == "t_end" else
-                                                    "1" if k == "E_d" else "J")
-                sub.create_dataset(k, data=v).attrs["units"] = u
+                sub.create_dataset(k, data=v).attrs["units"] = units.get(k, "")
 
 
 def read(path: str) -> dict:
@@ -58,6 +59,9 @@ def read(path: str) -> dict:
         if "replicate_summary" in g:
             out["replicate_summary"] = {k: g["replicate_summary"][k][()]
                                         for k in g["replicate_summary"]}
+        if "replicate_per_period" in g:
+            out["replicate_per_period"] = {k: g["replicate_per_period"][k][()]
+                                           for k in g["replicate_per_period"]}
         if "steady" in g:
             out["steady"] = {q: {f: g["steady"][q][f][()] for f in g["steady"][q]}
                              for q in g["steady"]}

@@ -8,7 +8,10 @@ Per drive period ``T = 1/f`` (energies in J per period, not the paper's ``1/T`` 
   (Sack et al., PRL 111, 018001, 2013, read literally: every grain hits floor and lid once per
   period each at the walls' largest relative speed ``2 A_d ω`` and loses all of it,
   ``2 × ½ m (2 A_d ω)²``); the paper does not restate the formula, so this is our reading;
-* ``E_d = (E_pp + E_pw) / E_max``.
+* ``E_d = (E_pp + E_pw) / E_max``;
+* per period, the mean height of each species' centre of mass above the floor, ``h_s``, and
+  for two species the segregation index :func:`segregation_index` (large over small: ``> 0``
+  when the large grains ride higher, the Brazil-nut sense).
 
 The average ``⟨E_d⟩`` over the analysed periods (after a transient) is given two ways: the
 paper's "linear fit to E_d(t)" (``E_d(t)`` with the one-period integrals starting at every
@@ -39,7 +42,11 @@ SUMMARY_UNITS = {
     "E_d_std": "1", "E_d_sem": "1", "E_d_fit": "1", "E_d_trend": "1/period",
     "E_d_mean_per_mass": "1/kg", "E_d_fit_per_mass": "1/kg", "E_d_std_per_mass": "1/kg",
     "wall_fraction": "1", "contacts_mean": "1", "balance_error": "1", "periods": "1",
+    "segregation": "1",
 }
+#: Units of the per-period arrays of :func:`analyse`.
+PER_PERIOD_UNITS = {"E_pp": "J", "E_pw": "J", "E_input": "J", "E_d": "1", "t_end": "s",
+                    "h_cm_species": "m", "segregation": "1"}
 #: Units of the phase-resolved arrays of :func:`analyse`.
 PHASE_UNITS = {
     "phase": "1", "contacts": "1", "contacts_species": "1", "force_floor_lid": "N",
@@ -51,6 +58,26 @@ def e_max(mass: float, amplitude: float, frequency: float) -> float:
     """``4 m A_d² ω²`` [J]: the largest energy a granulate of ``mass`` [kg] can dissipate in
     one period of a box driven at ``amplitude`` [m] and ``frequency`` [Hz] (module doc)."""
     return 4.0 * mass * amplitude**2 * (2.0 * math.pi * frequency) ** 2
+
+
+def segregation_index(h_cm_species) -> np.ndarray:
+    """Segregation index of a binary bed from the heights ``h_cm_species`` ``(..., 2)`` [m] of
+    its two species' centres of mass above the floor (large first):
+
+    .. math:: S = 2\\,\\frac{h_\\text{large} - h_\\text{small}}{h_\\text{large} + h_\\text{small}}
+
+    ``S = 0`` when both species sit at the same mean height, ``S > 0`` when the large grains
+    ride higher (Brazil-nut sense), ``S < 0`` when they sink; ``|S| ≤ 2``. NaN for any other
+    number of species. In a well-mixed bed of unequal radii ``S`` is not exactly 0: a small
+    grain's centre can come ``R_large − R_small`` closer to the floor.
+
+    >>> float(segregation_index(np.array([0.03, 0.01])))
+    1.0
+    """
+    h = np.asarray(h_cm_species, dtype=float)
+    if h.shape[-1] != 2:
+        return np.full(h.shape[:-1], np.nan)
+    return 2.0 * (h[..., 0] - h[..., 1]) / (h[..., 0] + h[..., 1])
 
 
 def protocol(config: Config, periods: int = 50, transient: int = 10,
@@ -101,10 +128,12 @@ def analyse(config: Config, records: dict, periods: int, samples_per_period: int
     """Efficiency of one run from its records (arrays over samples, see
     :data:`jaxdamp.physics.energy.RECORD_UNITS`); the last ``periods`` whole periods are analysed.
 
-    Returns ``{"summary": {name: float}, "per_period": {name: (n,)}, "phase": {name: (spp,[S])}}``
-    where ``per_period`` covers every simulated period (``E_pp``, ``E_pw``, ``E_input``,
-    ``E_d`` [J, J, J, 1], ``t_end`` [s]) and ``phase`` the analysed ones (``phase`` bin starts in
-    units of ``T``). See the module doc for the definitions.
+    Returns ``{"summary": {name: float}, "per_period": {name: (n,[S])},
+    "phase": {name: (spp,[S])}}`` where ``per_period`` covers every simulated period (:data:`PER_PERIOD_UNITS`: ``E_pp``,
+    ``E_pw``, ``E_input``, ``E_d``, ``t_end``, the species' mean heights above the floor
+    ``h_cm_species`` ``(n, S)`` and the ``segregation`` index) and ``phase`` the analysed ones
+    (``phase`` bin starts in units of ``T``); ``summary["segregation"]`` is the index's mean over
+    the analysed periods. See the module doc for the definitions.
     """
     spp = samples_per_period
     f = config.frequency
@@ -181,8 +210,18 @@ def analyse(config: Config, records: dict, periods: int, samples_per_period: int
         z_box=fold(records["z_box"]),
         v_box=fold(records["v_box"]),
     )
+    # per-period mean height of each species above the floor (samples 1..spp of each period)
+    h = (np.asarray(records["z_cm_species"], dtype=float)
+         - np.asarray(records["z_box"], dtype=float)[:, None])
+    period_of = (s - 1) // spp
+    whole = period_of < n_total
+    h_pp = np.zeros((n_total, h.shape[1]))
+    np.add.at(h_pp, period_of[whole], h[whole])
+    h_pp /= np.bincount(period_of[whole], minlength=n_total)[:, None]
+    seg = segregation_index(h_pp)
+    summary["segregation"] = float(seg[sel].mean())
     per_period = dict(E_pp=E_pp, E_pw=E_pw, E_input=E_in, E_d=E_d,
-                      t_end=(np.arange(n_total) + 1) / f)
+                      t_end=(np.arange(n_total) + 1) / f, h_cm_species=h_pp, segregation=seg)
     return dict(summary=summary, per_period=per_period, phase=phase)
 
 
@@ -195,8 +234,8 @@ class EfficiencyResult:
     ``wall_time`` [s] of the sweep; ``path`` its file.
 
     With ``replicates = R`` independent beds per amplitude, ``summary``, ``per_period`` and
-    ``phase`` are means over the replicates, ``replicate_summary`` ``{name: (P, R)}`` holds
-    each replicate's values, and ``steady`` the estimates of ``E_d`` and ``E_d_per_mass`` over
+    ``phase`` are means over the replicates, ``replicate_summary`` ``{name: (P, R)}`` and
+    ``replicate_per_period`` ``{name: (P, R, n, ...)}`` hold each replicate's values, and ``steady`` the estimates of ``E_d`` and ``E_d_per_mass`` over
     replicates from each replicate's detected steady state (MSER on its per-period ``E_d``;
     :func:`jaxdamp.analysis.stats.to_arrays` layout: ``mean``, ``se``, ``ci95``, ``n`` ``(P,)``,
     ``values``, ``batch_se``, ``start``, ``stationary`` ``(P, R)``)."""
@@ -212,6 +251,7 @@ class EfficiencyResult:
     replicates: int = 1
     replicate_summary: dict | None = None
     steady: dict | None = None
+    replicate_per_period: dict | None = None
 
 
 def measure(config: Config, amplitudes, periods: int = 50, transient: int = 10,
@@ -253,12 +293,13 @@ def measure(config: Config, amplitudes, periods: int = 50, transient: int = 10,
                               snapshots=res.snapshots, config=cfg,
                               wall_time=float(res.summary["wall_time"]), path=out,
                               replicates=R, replicate_summary=stack("summary", reduce=False),
+                              replicate_per_period=stack("per_period", reduce=False),
                               steady=stats.to_arrays(steady, (len(amplitudes),)))
     if out:
         from jaxdamp.io import efficiency as efficiency_file
 
         efficiency_file.write(out, result, transient, samples_per_period, SUMMARY_UNITS,
-                              PHASE_UNITS)
+                              PER_PERIOD_UNITS, PHASE_UNITS)
     return result
 
 
