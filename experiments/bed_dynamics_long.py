@@ -183,8 +183,7 @@ def _figure(r, s, out):
 
 def _summary(r, s, out, prov):
     L = ["# Bed dynamics: long series, periodicity levels, twin runs (thesis ch. 4)", "",
-         scaffold.provenance_line(prov) + f" Of it {r['wall'] / 60:.1f} min in the sweep "
-         "(settling excluded).", "",
+         scaffold.provenance_line(prov, r["wall"]), "",
          f"`sanchez2012-optimal`, one twin pair per frequency, {s['duration']:g} s per run "
          f"(the thesis: ≈ 197 s), analysed after t = {s['transient']:g} s "
          f"({(s['duration'] - s['transient']):g} s = "

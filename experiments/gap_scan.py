@@ -406,8 +406,7 @@ def _summary(out, results, s, prov):
     lines = [
         "# Box-height scan with replicates: FRFs, effective mass and damping, the optimum "
         "(thesis figs. 3.6–3.8)", "",
-        scaffold.provenance_line(prov) + f" Of it {prov['sweep_wall_s'] / 60:.1f} min in the "
-        "sweeps (native engine; settling excluded). Data `data.h5`; figures `fig3_6.png`, "
+        scaffold.provenance_line(prov, prov["sweep_wall_s"]) + " Native engine. Data `data.h5`; figures `fig3_6.png`, "
         "`fig3_7_3_8.png`.", "",
         f"**Runs.** `sanchez2012-optimal` (N = 250, E = 2.03e9 via stiffness_scale 0.01), "
         f"{len(s['freqs'])} frequencies {min(s['freqs'])}–{max(s['freqs'])} Hz × {len(s['lz'])} "

@@ -70,10 +70,16 @@ def write_summary(out: str, lines: list[str]) -> str:
     return path
 
 
-def provenance_line(prov: dict) -> str:
-    """The summary's line saying what ran, where and how long."""
-    return (f"Command: `{prov['command']}` — jaxdamp {prov['jaxdamp_version']} ({prov['git']}), "
-            f"{prov['machine']}; {prov['elapsed_s'] / 60:.1f} min wall.")
+def provenance_line(prov: dict, sweep_wall: float | None = None) -> str:
+    """The summary's line saying what ran, where and how long: this invocation's wall time
+    and, with ``sweep_wall`` [s], the sweeps' own compute time as kept in their raw files
+    (settling excluded; it survives re-runs that only read finished sweeps back)."""
+    line = (f"Command: `{prov['command']}` — jaxdamp {prov['jaxdamp_version']} ({prov['git']}), "
+            f"{prov['machine']}; {prov['elapsed_s'] / 60:.1f} min wall this invocation.")
+    if sweep_wall is not None:
+        line += (f" The sweeps' own compute time: {sweep_wall / 60:.1f} min (kept in the raw "
+                 "files across re-runs; settling excluded).")
+    return line
 
 
 @dataclass(frozen=True)

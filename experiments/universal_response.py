@@ -219,8 +219,7 @@ def _summary(out, r, s, prov):
     s3 = r["s3"]
     lines = [
         "# Universal response at the optimal box, with replicates (thesis fig. 5.2)", "",
-        scaffold.provenance_line(prov) + f" Of it {r['wall'] / 60:.1f} min in the sweeps "
-        "(settling excluded). Data `data.h5`, figure `fig5_2.png`.", "",
+        scaffold.provenance_line(prov, r["wall"]) + " Data `data.h5`, figure `fig5_2.png`.", "",
         f"DEM: `sanchez2012-optimal` (N = 250, Lz = 0.1225 m, C = 7.6 N s/m, E = 2.03e9), "
         f"{len(s['cases'])} damping cases × {len(f)} frequencies × **R = {R} independently poured "
         f"beds** in one batch, {s['duration']} s per run after settling. Amplitude and loss per "

@@ -229,7 +229,7 @@ def _summary(r, s, out, prov, wall):
     R = s["R"]
     m = lambda x: f"{np.mean(x):.3g} ± {np.std(x, ddof=1) / math.sqrt(R):.2g}"  # noqa: E731
     L = ["# Limits of the universal response (thesis figs. 5.2c,d, 5.3, 5.4, 5.5)", "",
-         scaffold.provenance_line(prov) + f" Of it {wall / 60:.1f} min in the sweeps.", "",
+         scaffold.provenance_line(prov, wall), "",
          f"`sanchez2012-optimal`, R = {R} independently poured beds per point, {s['duration']} "
          "s per run; steady means after the MSER-detected start (collisional share: final "
          "10 % of each run); ± = standard error over the beds, comparisons Welch 95 %.", "",
