@@ -52,3 +52,19 @@ def test_optimal_gap_criteria_on_a_synthetic_scan():
     opt = optimal_gap(lz, np.array(fits)[:, 1], np.array(peaks), np.array(fits)[:, 0], 2.37)
     assert opt["max_C_ef"] == 0.1225 and opt["min_peak"] == 0.1225
     assert opt["M_ef_crosses_M"] == pytest.approx([0.1225], abs=1e-6)
+
+
+def test_secondary_maxima_counts_only_peaks_that_stand_out_of_the_error():
+    """A unimodal analytic FRF has no secondary maximum and roughness 1; a planted side peak
+    (height 0.5 on the steep flank: prominence ≈ 0.3) counts against an error of 0.05 (threshold 2·√2·0.05 ≈ 0.14) but not
+    against 0.2 (≈ 0.57); noise-free, every strict local maximum counts."""
+    from jaxdamp.analysis.response import frf_amplitude, secondary_maxima
+
+    f = np.linspace(5, 25, 81)
+    Z = frf_amplitude(f, 2.37, 21500.0, 7.6, 0.0045) / 0.0045
+    r = secondary_maxima(Z, 0.0)
+    assert r["secondary"] == 0 and r["roughness"] == pytest.approx(1.0)
+    bump = Z + 0.5 * np.exp(-0.5 * ((f - 21.0) / 0.3) ** 2)  # on the falling flank
+    assert secondary_maxima(bump, 0.05)["secondary"] == 1
+    assert secondary_maxima(bump, 0.2)["secondary"] == 0
+    assert secondary_maxima(bump, 0.0)["roughness"] > 1.0

@@ -289,3 +289,23 @@ def test_universality_limits_quick(tmp_path):
     assert np.isfinite(out["few"][0]["d_peak_ci"])
     assert (tmp_path / "figure.png").stat().st_size > 10_000
     assert "fig. 5.4" in (tmp_path / "summary.md").read_text()
+
+
+def test_single_grain_frf_quick(tmp_path):
+    """Thesis fig. 6.1 at test size (S3 at 7 frequencies, 2 s; DEM 2 frequencies × 2 beds,
+    0.2 s): the energy balance of the event-driven runs closes, e = 0 gives a single smooth
+    hump (roughness 1), the bed's amplitudes are finite with a spread across beds, and data,
+    figure and summary (with its verdict) are written."""
+    r = _load("single_grain_frf").main(["--quick", "--out", str(tmp_path), "--no-progress"])
+    e0, e8, dem = r["s3"][0.0], r["s3"][0.8], r["dem"]
+    assert e0["jag"]["secondary"] == 0 and e0["jag"]["roughness"] == pytest.approx(1.0)
+    assert np.all(np.isfinite(e8["Z"])) and np.all(e8["Z"] > 0)
+    assert e8["balance"] < 1e-6 and e0["balance"] < 1e-6
+    assert dem["Z"].shape == (2, 2) and np.all(np.isfinite(dem["se"]))
+    import h5py
+
+    with h5py.File(tmp_path / "data.h5") as h:
+        assert "single_grain_frf.py --quick" in h.attrs["command"]
+        assert h["dem/Z_over_U"].shape == (2, 2) and "config" in h["s3_e0.8"].attrs
+    assert (tmp_path / "figure.png").stat().st_size > 10_000
+    assert "Verdict:" in (tmp_path / "summary.md").read_text()

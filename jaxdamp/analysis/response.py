@@ -174,6 +174,49 @@ def resonance(f, Z):
     return fp, float(np.exp(logz))
 
 
+def secondary_maxima(Z, se, k: float = 2.0) -> dict:
+    """Local maxima of a sampled curve ``Z`` ``(F,)`` that stand out of its uncertainty.
+
+    A local maximum ``i`` has prominence ``p_i = Z_i − Z_b``, where ``Z_b`` is the higher of
+    the two lowest points between ``i`` and the nearest higher sample on either side (or the
+    end of the range) — the usual topographic prominence (:func:`scipy.signal.peak_prominences`).
+    It is *significant* when ``p_i > k sqrt(se_i² + se_b²)``: its drop to the base exceeds
+    ``k`` combined standard errors. The global maximum counts as the main peak; every other
+    significant maximum is a *secondary* one. ``se`` ``(F,)`` or a scalar (0 for an exact
+    curve: then every strict local maximum counts).
+
+    Returns ``{"peaks": indices of significant maxima, "prominence": their p_i,
+    "secondary": count of significant maxima other than the global one,
+    "roughness": total variation of Z over (2 max Z − Z_first − Z_last)}`` — the roughness is
+    1 for a curve that rises to one peak and falls, larger when it wiggles.
+
+    >>> r = secondary_maxima(np.array([1.0, 3.0, 2.0, 2.5, 1.0]), 0.1)
+    >>> [int(i) for i in r["peaks"]], r["secondary"], round(r["roughness"], 3)
+    ([1, 3], 1, 1.25)
+    """
+    from scipy.signal import find_peaks, peak_prominences
+
+    Z = np.asarray(Z, float)
+    se = np.broadcast_to(np.asarray(se, float), Z.shape)
+    idx, _ = find_peaks(Z)
+    if np.argmax(Z) in (0, len(Z) - 1):  # a maximum at an end is the main peak too
+        idx = np.sort(np.append(idx, np.argmax(Z)))
+    keep, prom = [], []
+    for i in idx:
+        if i in (0, len(Z) - 1):
+            keep.append(i), prom.append(float(Z[i] - Z.min()))
+            continue
+        p, lb, rb = (x[0] for x in peak_prominences(Z, [i]))
+        b = lb if Z[lb] >= Z[rb] else rb
+        if p > k * np.hypot(se[i], se[b]):
+            keep.append(i), prom.append(float(p))
+    span = 2 * Z.max() - Z[0] - Z[-1]
+    rough = float(np.abs(np.diff(Z)).sum() / span) if span > 0 else float("nan")
+    top = int(np.argmax(Z))
+    return {"peaks": np.asarray(keep, int), "prominence": np.asarray(prom),
+            "secondary": int(sum(1 for i in keep if i != top)), "roughness": rough}
+
+
 def crossings(x, y, level):
     """Every ``x`` where the piecewise-linear ``y(x)`` crosses ``level`` (``x`` sorted).
 
