@@ -124,6 +124,7 @@ def _small_bed(**extra):
         "primary.M": 0.3, "primary.K": 2720.0, "primary.C": 1.0}, **extra))
 
 
+@pytest.mark.long
 def test_dem_window_estimator_small_bed():
     """The pathwise window estimator: finite ensemble means with standard errors, and the
     derivative has the sign of central differences of the same averaged window objective
@@ -146,6 +147,7 @@ def test_dem_window_estimator_small_bed():
         assert top < lz + 0.2 * 0.003
 
 
+@pytest.mark.long
 def test_steady_estimator_common_random_numbers_and_calibrated_error():
     """The replicated steady-state estimator on the small bed.
 
@@ -214,6 +216,7 @@ def test_s3_orbit_gradient_refuses_irregular_motion():
     assert "not a stable periodic orbit" in res.reason
 
 
+@pytest.mark.long
 def test_s3_descent_walks_out_of_the_irregular_region():
     """From Lz0 = 0.25 m (gap 0.21 m: no stable periodic orbit at f0) the surrogate's
     exact-gradient descent falls back to central differences of long averages, walks into the

@@ -130,6 +130,7 @@ def test_spsa_reaches_the_optimum_of_a_noisy_bowl_and_beats_the_random_search():
     assert np.mean(lhs) < np.mean(ours), (lhs, ours)
 
 
+@pytest.mark.long
 def test_cli_optimize_three_variables_small_bed(tmp_path, capsys):
     """``jaxdamp optimize --vars Lz,base,friction --quick`` on the small bed: SPSA iterates,
     the design confirmed on fresh beds next to the start, a ``jaxdamp-optimize/3`` log with

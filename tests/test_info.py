@@ -110,6 +110,7 @@ def _interrupt_after(argv, path, chunks, timeout=300):
     return proc.returncode, err
 
 
+@pytest.mark.long
 def test_ctrl_c_leaves_a_resumable_interrupted_file(tmp_path):
     """SIGINT to a running `jaxdamp run --out` (~300 chunks; interrupted after 3): exit 130, a
     one-line message with the exact command that resumes it, no traceback, the file marked

@@ -1,5 +1,5 @@
 """Start-up of large beds in memory linear in N: the neighbour lists are allocated from host cell
-lists (the same lists as jax-md's, entry for entry) and the initial forces are evaluated over
+lists (the same lists as the JAX engine's all-pairs build, entry for entry) and the initial forces are evaluated over
 them, never over all N² pairs (which took 4.9 GB at 5000 grains and failed at 20 000)."""
 
 import json
@@ -27,8 +27,8 @@ def _bed(n, seed=0):
     return model, params, fcc_lattice(np.asarray(params.radius), side, side, seed)
 
 
-def test_host_lists_are_jax_mds_lists():
-    """The cell-list allocation lists exactly what jax-md's all-pairs build lists, in the same
+def test_host_lists_are_the_traced_all_pairs_lists():
+    """The cell-list allocation lists exactly what the JAX engine's all-pairs build lists, in the same
     order, for a mixture (size-aware cutoff) in two systems: a random gas and a dense one."""
     mix = presets.family("varela2023-b", 0.5)
     m, p = build(mix)
@@ -40,7 +40,7 @@ def test_host_lists_are_jax_mds_lists():
     np.testing.assert_array_equal(np.asarray(new.idx), np.asarray(ref.idx))
     assert not np.asarray(new.overflow).any() and not np.asarray(ref.overflow).any()
     assert (np.asarray(new.idx) < m.n).sum() > 300  # it lists pairs
-    # a capacity too small is flagged as overflow, as by jax-md
+    # a capacity too small is flagged as overflow, as by the traced build
     model, params, r = _bed(250)
     pts = nb._with_radius(model, jnp.asarray(r)[None], params.radius)
     _, overflow = nb._dense(model, 2, pts)

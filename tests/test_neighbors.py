@@ -81,3 +81,46 @@ def test_batch_rebuild_is_shared_and_lists_stay_complete():
         for i in range(n):
             close = set(np.nonzero((d[i] < model.cutoff) & (np.arange(n) != i))[0])
             assert close <= set(idx[i][idx[i] < n])
+
+
+def test_traced_build_lists_what_jax_md_lists():
+    """The JAX engine's in-loop build (plain JAX, all pairs) lists the same pairs in the same
+    order, with the same overflow flags, as jax-md's dense all-pairs list it replaced (cell
+    lists off, the gap metric on (x, y, z, R) points): a mixture in a gas and a dense state,
+    at a capacity that fits and one that overflows. Skipped where jax-md is not installed
+    (it is no longer a dependency)."""
+    partition = pytest.importorskip("jax_md.partition")
+    import warnings
+
+    import jax
+    import jax.numpy as jnp
+
+    from jaxdamp.cases import presets
+    from jaxdamp.physics.model import build
+
+    mix = presets.family("varela2023-b", 0.5)
+    m, p = build(mix)
+    rng = np.random.default_rng(3)
+    pos = jnp.asarray(rng.uniform(0, [mix.box.Lx, mix.box.Ly, 0.03], (2, m.n, 3))
+                      * np.array([[[1, 1, 1]], [[1, 1, 0.4]]]))
+    points = nb._with_radius(m, pos, p.radius)
+    fns = partition.neighbor_list(nb._gap_metric(m), box=1.0,
+                                  r_cutoff=m.cutoff + nb._MARGIN * m.skin, dr_threshold=0.0,
+                                  capacity_multiplier=1.0, disable_cell_list=True,
+                                  format=partition.Dense)
+    full = nb.capacity(nb.allocate(m, pos, 1.0, radius=p.radius))
+    for cap in (full, 3):
+        template = partition.NeighborList(
+            idx=jnp.full((m.n, cap), m.n, jnp.int32), reference_position=jnp.zeros((m.n, 4)),
+            error=partition.PartitionError(jnp.zeros((), jnp.uint8)), cell_list_capacity=None,
+            max_occupancy=cap, format=partition.Dense, cell_size=None, cell_list_fn=None,
+            update_fn=fns.update)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", FutureWarning)
+            ref = [fns.update(q, template) for q in points]
+        ours = nb._build(m, cap, pos, nb._radius_array(m, pos, p.radius))
+        for b, r in enumerate(ref):
+            np.testing.assert_array_equal(np.asarray(ours.idx[b]), np.asarray(r.idx))
+            assert bool(ours.overflow[b]) == bool(r.did_buffer_overflow > 0)
+        assert bool(np.asarray(ours.overflow).all()) == (cap == 3)
+    assert jax.numpy.sum(ours.idx < m.n) > 0

@@ -56,6 +56,7 @@ print("RESULT", json.dumps(out))
 """
 
 
+@pytest.mark.long
 def test_sharded_sweep_equals_unsharded():
     """4 forced host devices: the 6-point grid (padded to 8) sharded over them gives the same
     numbers as the unsharded batch."""

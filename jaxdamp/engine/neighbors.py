@@ -1,8 +1,8 @@
-"""Neighbour lists for grain–grain contacts, built by jax-md and rebuilt once per batch.
+"""Neighbour lists for grain–grain contacts, rebuilt once per batch.
 
-jax-md's ``NeighborList.update`` decides per system with ``lax.cond`` whether to rebuild; under
-``vmap`` that cond becomes a select, so every system would rebuild at every step. Here the
-decision is made once for the whole batch (``any`` over systems, one ``lax.cond``) and the
+A per-system rebuild decision (``lax.cond`` per system, as jax-md's ``NeighborList.update``
+takes it) becomes a select under ``vmap``, so every system would rebuild at every step. Here
+the decision is made once for the whole batch (``any`` over systems, one ``lax.cond``) and the
 capacity (neighbours per grain, a static shape) is allocated for the whole batch.
 
 Positions given to the list are in the box frame (``z`` measured from the floor): pair
@@ -13,26 +13,32 @@ A rebuild is needed once any grain moved more than ``skin / 2`` since the last b
 holds every pair whose surfaces are closer than ``skin`` (centres closer than ``R_i + R_j +
 skin``, plus a small margin for the one step that runs before the next check). The size-aware
 cutoff keeps mixtures cheap: with radii differing tenfold a uniform ``2 R_max + skin`` would list
-hundreds of small neighbours per small grain, where a few dozen can touch. It enters jax-md as a
-metric on positions carrying the radius as a fourth coordinate,
+hundreds of small neighbours per small grain, where a few dozen can touch. It is a metric on
+positions carrying the radius as a fourth coordinate,
 ``max(0, |r_i - r_j| - R_i - R_j + 2 R_max)``, compared with ``2 R_max + skin``; for equal radii
 this is the plain distance. Overflow (a grain with more neighbours than the capacity) is
 flagged, sticky, in :attr:`Neighbors.overflow`; the runner re-allocates and redoes the chunk.
+The format is dense: ``idx (N, K)``, each row's neighbours in increasing order, padded with
+``N`` (jax-md's ``Dense`` format, so that code written for it reads these lists).
 
-Allocation (the capacity and the first lists, :func:`allocate`) runs on the host, on a cell
-grid of side ``2 R_max + skin`` (:func:`host_pairs`): time and memory linear in ``N``, so a
-50 000-grain bed starts in seconds and a few hundred MB. The same lists as jax-md's, entry for
-entry (``tests/test_neighbors.py``). What jax-md is used for: only the rebuild *inside* the
-jitted JAX engine (:func:`update`), jax-md's dense all-pairs neighbour list — ``O(N²)`` memory
-per rebuild, fine for the differentiable runs of small beds the JAX engine is for, and
-imported only when that engine runs (it takes seconds to import). The compiled CPU engine
-(:mod:`jaxdamp.engine.native`) builds its own cell lists and never needs jax-md.
+Two builders list the same pairs, entry for entry (``tests/test_large_beds.py``):
+
+* allocation (the capacity and the first lists, :func:`allocate`) on the host, on a cell grid
+  of side ``2 R_max + skin`` (:func:`host_pairs`): time and memory linear in ``N``, so a
+  50 000-grain bed starts in seconds and a few hundred MB;
+* the rebuild *inside* the jitted JAX engine (:func:`update`): all pairs at once in plain JAX
+  (:func:`_build_traced`), ``O(N²)`` memory per rebuild — fine for the differentiable runs of
+  small beds the JAX engine is for. It replaced jax-md's dense all-pairs list (cell lists off),
+  the one part of jax-md the project used; that removed 51 packages and 432 MB from the
+  install and a 6–15 s import (``benchmarks/install_size.py``, ``benchmarks/RESULTS.md``).
+  With jax-md installed, ``tests/test_neighbors.py`` still compares the two.
+
+The compiled CPU engine (:mod:`jaxdamp.engine.native`) builds its own cell lists.
 """
 
 from __future__ import annotations
 
 import math
-import warnings
 
 import jax
 import jax.numpy as jnp
@@ -57,7 +63,7 @@ class Neighbors:
 
 
 def _gap_metric(model: Model):
-    """jax-md metric on ``(x, y, z, R)`` points: the surface gap shifted by ``2 R_max``."""
+    """Metric on ``(x, y, z, R)`` points: the surface gap shifted by ``2 R_max``."""
     shift = model.cutoff - model.skin  # 2 R_max
 
     def metric(a, b, **unused):
@@ -77,24 +83,10 @@ def _with_radius(model: Model, positions, radius):
     return jnp.concatenate([positions, radius[..., None]], axis=-1)
 
 
-def _jaxmd_fns(model: Model):
-    from jax_md import partition  # seconds to import: only the JAX engine's rebuilds need it
-
-    return partition.neighbor_list(
-        _gap_metric(model),
-        box=1.0,  # unused: cell lists are off (all-pairs candidates, rebuilt rarely)
-        r_cutoff=model.cutoff + _MARGIN * model.skin,
-        dr_threshold=0.0,  # jax-md then always rebuilds; the decision is ours (see module doc)
-        capacity_multiplier=1.0,
-        disable_cell_list=True,
-        format=partition.Dense,
-    )
-
-
 def host_pairs(points: np.ndarray, cutoff: float, shift: float):
     """Every ordered pair ``(i, j)``, ``i != j``, of one system listed by the gap metric
     (:func:`_gap_metric`: ``max(0, |r_i - r_j| - R_i - R_j + shift)``, squared, below
-    ``cutoff²``, as jax-md compares it), sorted by ``i`` then ``j``.
+    ``cutoff²``, as :func:`_build_traced` compares it), sorted by ``i`` then ``j``.
 
     ``points``: ``(N, 4)`` host array ``(x, y, z, R)``. Candidates come from a cell grid of side
     ``cutoff`` (the metric is at least the centre distance minus ``2 R_max - shift = 0``, so a
@@ -160,7 +152,7 @@ def _occupancy(model: Model, points) -> int:
 
 def _dense(model: Model, capacity: int, points) -> tuple[np.ndarray, np.ndarray]:
     """Dense neighbour blocks ``(B, N, capacity)`` (padding ``N``, each row's neighbours in
-    increasing order, as jax-md's dense format) and the overflow flags ``(B,)``."""
+    increasing order) and the overflow flags ``(B,)``."""
     n = model.n
     lists = _host_lists(model, points)
     idx = np.full((len(lists), n, capacity), n, np.int32)
@@ -174,25 +166,6 @@ def _dense(model: Model, capacity: int, points) -> tuple[np.ndarray, np.ndarray]
         overflow[b] = not fits.all()
         idx[b, i[fits], slot[fits]] = j[fits]
     return idx, overflow
-
-
-def _template(model: Model, capacity: int):
-    """jax-md functions and an empty list of the given capacity (no compute: traceable)."""
-    from jax_md import partition
-
-    fns = _jaxmd_fns(model)
-    template = partition.NeighborList(
-        idx=jnp.full((model.n, capacity), model.n, jnp.int32),
-        reference_position=jnp.zeros((model.n, 4)),
-        error=partition.PartitionError(jnp.zeros((), jnp.uint8)),
-        cell_list_capacity=None,
-        max_occupancy=capacity,
-        format=partition.Dense,
-        cell_size=None,
-        cell_list_fn=None,
-        update_fn=fns.update,
-    )
-    return fns, template
 
 
 #: Smallest capacity allocated: the kissing number of equal spheres, so that a gas-like start
@@ -259,17 +232,27 @@ def update(model: Model, nbrs: Neighbors, positions, radius=None) -> Neighbors:
 
 
 def _build_traced(model: Model, capacity: int, positions, radius=None) -> Neighbors:
-    fns, template = _template(model, capacity)
+    """Dense lists of a batch of box-frame positions ``(B, N, 3)`` from all pairs (traceable):
+    pair ``(i, j)``, ``i != j``, is listed when ``metric² < (cutoff + margin)²``; each row's
+    first ``capacity`` neighbours in increasing ``j``, padded with ``N``; ``overflow`` where a
+    grain has more."""
+    n = model.n
     points = _with_radius(model, positions, radius)
+    metric = _gap_metric(model)
+    cut = model.cutoff + _MARGIN * model.skin
+    j = jnp.arange(n)
 
     def one(p):
-        nb = fns.update(p, template)
-        return nb.idx, nb.did_buffer_overflow > 0
+        d = metric(p[:, None, :], p[None, :, :])  # (N, N)
+        listed = (d * d < cut * cut) & (j[:, None] != j[None, :])
+        slot = jnp.cumsum(listed, axis=1) - 1  # position of j in row i
+        keep = listed & (slot < capacity)
+        col = jnp.where(keep, slot, capacity)  # column `capacity` collects the rest, dropped
+        idx = jnp.full((n, capacity + 1), n, jnp.int32)
+        idx = idx.at[j[:, None], col].set(jnp.where(keep, j[None, :], n).astype(jnp.int32))
+        return idx[:, :capacity], jnp.any(listed.sum(axis=1) > capacity)
 
-    with warnings.catch_warnings():
-        # jax-md's dense pruning scatters int64 into int32 under x64; harmless, silenced here.
-        warnings.filterwarnings("ignore", "scatter inputs have incompatible types", FutureWarning)
-        idx, overflow = jax.vmap(one)(points)
+    idx, overflow = jax.vmap(one)(points)
     return Neighbors(idx=idx, reference=positions, overflow=overflow)
 
 

@@ -1,6 +1,6 @@
 """Grain–grain contacts over a dense neighbour block (docs/physics.md §2).
 
-Each grain ``i`` sees its neighbours ``idx[i, :]`` (jax-md ``Dense`` format, padded with ``N``).
+Each grain ``i`` sees its neighbours ``idx[i, :]`` (dense format, padded with ``N``; :mod:`jaxdamp.engine.neighbors`).
 Every pair is evaluated from both sides and forces are summed per row: no scatter, and
 Newton's third law holds to the last bit because the two sides run the same arithmetic on
 negated inputs. Pair sums of energies and losses are therefore halved.
