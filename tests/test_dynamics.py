@@ -349,3 +349,20 @@ def test_classify_fits_the_kantz_slope_over_more_than_one_drive_period():
     assert c.lyapunov is not None
     i0, i1 = c.lyapunov.fit_range
     assert (i1 - i0) * dt > 1 / f
+
+
+def test_divergence_exponent_from_the_perturbation_size_bounds_a_growth_within_one_period():
+    """Twins that separate from d0 = 1e-9 to their plateau within the first drive period:
+    judged from D_0 alone they 'did not grow'; with d0 they grew, saturated at once, and the
+    exponent is the lower bound ln(D_0/d0)/T, which the true rate exceeds."""
+    f, lam = 10.0, 400.0  # 1e-9 → 1e-3 in 35 ms, under one period (0.1 s)
+    t = np.arange(0, 3.0, 1e-3)
+    d = np.minimum(1e-9 * np.exp(lam * t), 1e-3) * (0.6 + 0.4 * np.abs(np.cos(2 * np.pi * f * t)))
+    blind = dyn.divergence_exponent(t, d, f)
+    assert not blind["grew"]
+    r = dyn.divergence_exponent(t, d, f, d0=1e-9)
+    assert r["grew"] and r["saturated"] and r["lower_bound"] and r["periods_fitted"] == 0
+    assert r["exponent"] == pytest.approx(np.log(1e-3 / 1e-9) / 0.1, rel=0.05)
+    assert r["exponent"] < lam
+    slow = dyn.divergence_exponent(t, np.minimum(1e-9 * np.exp(15.0 * t), 1e-3), f, d0=1e-9)
+    assert not slow["lower_bound"] and slow["exponent"] == pytest.approx(15.0, rel=0.03)

@@ -527,7 +527,7 @@ def harmonic_fraction(spec: Spectrum, frequency, k=1, half_width=3):
     return float(p[harmonic_mask(spec.f, frequency / k, half_width)].sum() / total)
 
 
-def divergence_exponent(t, d, frequency, saturation=None, t_start=None):
+def divergence_exponent(t, d, frequency, saturation=None, t_start=None, d0=None):
     """Exponent of the growth of the distance ``d(t)`` between two trajectories started a tiny
     perturbation apart (a *twin* run), per second and per drive period.
 
@@ -540,9 +540,15 @@ def divergence_exponent(t, d, frequency, saturation=None, t_start=None):
     tenth of the plateau (at least two, so the fit always spans more than one drive period);
     otherwise (the twins stay together: regular motion) over every period.
 
+    ``d0``: the size of the initial perturbation (in the units of ``d``, e.g. the displacement
+    of one grain [m]); the growth is then judged from it rather than from ``D_0``, which
+    already holds whatever grew during the first period. If ``D_0`` is itself within a factor
+    10 of the plateau, the divergence saturated within the first period and only a lower
+    bound is known, ``ln(D_0/d0) / T`` (returned as the exponent, with ``lower_bound``).
+
     Returns ``{"exponent" [1/s], "per_period", "periods_fitted", "grew" (bool),
     "saturated" (bool: the plateau was reached before the end), "t_sat" [s] or NaN,
-    "plateau" [units of d], "D" (per-period maxima), "t_D" [s]}``.
+    "plateau" [units of d], "lower_bound" (bool), "D" (per-period maxima), "t_D" [s]}``.
     """
     t = np.asarray(t, float)
     d = np.abs(np.asarray(d, float))
@@ -559,14 +565,20 @@ def divergence_exponent(t, d, frequency, saturation=None, t_start=None):
     plateau = float(np.median(D[-max(2, n // 4):]))
     if saturation is not None:
         plateau = min(plateau, float(saturation))
-    grew = plateau > 100.0 * D[0]
+    base = D[0] if d0 is None else float(d0)
+    grew = plateau > 100.0 * base
     hit = np.nonzero(D >= plateau / 10)[0] if grew else np.array([], int)
+    if grew and d0 is not None and hit.size and hit[0] == 0:  # saturated in the first period
+        slope = float(np.log(D[0] / base) / T)
+        return {"exponent": slope, "per_period": slope * T, "periods_fitted": 0, "grew": True,
+                "saturated": True, "t_sat": float(tD[0]), "plateau": plateau,
+                "lower_bound": True, "D": D, "t_D": tD}
     last = max(int(hit[0]), 2) if hit.size else n
     slope = float(np.polyfit(tD[:last], np.log(D[:last]), 1)[0])
     return {"exponent": slope, "per_period": slope * T, "periods_fitted": last,
             "grew": bool(grew), "saturated": bool(hit.size and hit[0] < n - 1),
             "t_sat": float(tD[hit[0]]) if hit.size else float("nan"), "plateau": plateau,
-            "D": D, "t_D": tD}
+            "lower_bound": False, "D": D, "t_D": tD}
 
 
 # --------------------------------------------------------------------------- classification
