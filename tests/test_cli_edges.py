@@ -173,7 +173,7 @@ def test_config_file_problems_are_one_line_errors(tmp_path, capsys):
 
 def test_file_errors_answer_before_jax_is_imported(tmp_path):
     """Bad files and bad values are refused before any compute: in a fresh interpreter, the
-    command returns 2 without having imported JAX or jax-md (which take seconds)."""
+    command returns 2 without having imported JAX or numba (which take seconds)."""
     old = tmp_path / "old.h5"
     old.write_bytes(b"x")
     bad = tmp_path / "bad.toml"
@@ -188,12 +188,12 @@ def test_file_errors_answer_before_jax_is_imported(tmp_path):
              ["efficiency", "--preset", "varela2023-reference", "--png", f"{tmp_path}/no/x"]]
     code = ("import json, sys\nfrom jaxdamp.cli import main\n"
             f"codes = [main(a) for a in {cases!r}]\n"
-            "print(json.dumps([codes, 'jax' in sys.modules, 'jax_md' in sys.modules]))")
+            "print(json.dumps([codes, 'jax' in sys.modules, 'numba' in sys.modules]))")
     p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
                        check=False)
-    codes, jax_loaded, jax_md_loaded = json.loads(p.stdout.strip().splitlines()[-1])
+    codes, jax_loaded, numba_loaded = json.loads(p.stdout.strip().splitlines()[-1])
     assert codes == [2] * len(cases), p.stderr
-    assert not jax_loaded and not jax_md_loaded
+    assert not jax_loaded and not numba_loaded
     assert len(p.stderr.strip().splitlines()) == len(cases) and "Traceback" not in p.stderr
     # --help too
     helped = ("import sys\nfrom jaxdamp.cli import main\n"
