@@ -245,9 +245,11 @@ def test_binary_mixtures_quick(tmp_path):
 
 def test_bed_dynamics_long_quick(tmp_path):
     """Twin pairs at 14.5 and 21 Hz, 1.2 s: the pair is bit-identical until the perturbation;
-    every frequency and signal gets periodicity levels in [0, 1] and a twin exponent; the
-    chaotic-zone frequency (21 Hz) separates its twins by orders of magnitude, faster than the
-    periodic window (14.5 Hz)."""
+    every frequency and signal gets periodicity levels in [0, 1] and a twin exponent; at both
+    frequencies the twins' box motion separates by orders of magnitude from the 1e-9 m
+    perturbation (the grains are chaotic in the periodic window too: the full run measures
+    twin exponents of >= 167 /s at 14.5 Hz and 46 /s at 21 Hz, so the quick run asserts no
+    ordering between them — on 0.8 s after the perturbation that ordering is not robust)."""
     out = _load("bed_dynamics_long").main(["--quick", "--out", str(tmp_path), "--no-progress"])
     rows = out["rows"]
     assert set(rows) == {14.5, 21.0}
@@ -256,8 +258,9 @@ def test_bed_dynamics_long_quick(tmp_path):
         for name in ("z_box", "z_cm"):
             d = r[name]
             assert 0 <= d["harm1"] <= 1 and d["spread1"] >= 0 and np.isfinite(d["div_exponent"])
-    assert rows[21.0]["z_box"]["div_grew"]
-    assert rows[21.0]["z_box"]["div_exponent"] > rows[14.5]["z_box"]["div_exponent"]
+    for f in rows:
+        assert rows[f]["z_box"]["div_grew"], f
+        assert rows[f]["z_box"]["div_exponent"] > 0, f
     assert np.all(out["balance"] < 1e-3)
     assert (tmp_path / "figure.png").stat().st_size > 10_000
     assert "twin" in (tmp_path / "summary.md").read_text()
