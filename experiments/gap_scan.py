@@ -329,6 +329,8 @@ def _figure_3_9(out, results, s):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from jaxdamp.figures import draw_band
+
     C0 = s["C"][0]
     r = results[C0]
     res = r["res"]
@@ -337,7 +339,7 @@ def _figure_3_9(out, results, s):
     show = [L for L in FIG39_LZ if L in lz]
     fig = plt.figure(figsize=(2.3 * max(len(show), 4), 7.5))
     gs = fig.add_gridspec(2, max(len(show), 4), height_ratios=[1.2, 1])
-    rec, mm = res.records, 1e3
+    rec = res.records
     for c, L in enumerate(show):
         j = lz.index(L)
         i = near_resonance(r, j)
@@ -345,20 +347,17 @@ def _figure_3_9(out, results, s):
         t = rec["t"][row]
         m = t >= t[-1] - 3 / f[i]
         ax = fig.add_subplot(gs[0, c])
-        zb = rec["z_box"][row][m] * mm
-        ax.fill_between(t[m], rec["z_lowest"][row][m] * mm, rec["z_highest"][row][m] * mm,
-                        color="tab:orange", alpha=0.5, lw=0, label="grains")
-        ax.plot(t[m], zb, "k-", lw=1, label="floor")
-        ax.plot(t[m], zb + L * mm, "k--", lw=1, label="lid")
+        draw_band(ax, t[m], rec["z_box"][row][m], rec["z_lowest"][row][m],
+                  rec["z_highest"][row][m], None, L, fontsize=7)
         axf = ax.twinx()
         axf.plot(t[m], rec["force_box"][row][m], "-", color="tab:blue", lw=0.7)
         axf.tick_params(labelsize=6, colors="tab:blue")
         ax.tick_params(labelsize=6)
         ax.set_title(f"Lz = {L} m, {f[i]:g} Hz", fontsize=7)
-        ax.set_xlabel("time t [s]", fontsize=7)
         if c == 0:
-            ax.set_ylabel("height z [mm] (lab frame)", fontsize=7)
             ax.legend(fontsize=6, loc="upper left")
+        else:
+            ax.set_ylabel("")
         if c == len(show) - 1:
             axf.set_ylabel("grains' force on the box [N] (blue)", fontsize=7, color="tab:blue")
     fo = r["force"]

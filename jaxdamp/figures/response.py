@@ -123,6 +123,25 @@ def frf_from_file(h5_or_path):
 
 
 # -- bed band ------------------------------------------------------------------------------------
+def draw_band(ax, t, z_box, z_lowest, z_highest, z_cm, Lz, *, fontsize=None):
+    """Draw the bed band into ``ax`` (heights in mm, lab frame, against time ``t`` [s]): the
+    floor ``z_box`` and the lid ``z_box + Lz`` [m], the band between the lowest and highest
+    grain centre filled, and the centre of mass ``z_cm`` (``None``: not drawn). The one
+    drawing of the band, used by :func:`band_figure` and by the experiments' panels."""
+    mm = 1e3
+    zb, zl, zh = (np.asarray(x) * mm for x in (z_box, z_lowest, z_highest))
+    ax.fill_between(t, zl, zh, color="tab:orange", alpha=0.45, lw=0,
+                    label="grains (lowest … highest centre)")
+    ax.plot(t, zb, "k-", lw=1.4, label="floor $z_{box}$")
+    ax.plot(t, zb + Lz * mm, "k--", lw=1.4, label=f"lid $z_{{box}} + L_z$ ($L_z$ = {Lz * mm:g} mm)")
+    if z_cm is not None:
+        ax.plot(t, np.asarray(z_cm) * mm, "-", color="tab:red", lw=1.0,
+                label="centre of mass $z_{cm}$")
+    ax.set_ylabel("height z [mm] (lab frame)", fontsize=fontsize)
+    ax.set_xlabel("time t [s]", fontsize=fontsize)
+    ax.grid(alpha=0.3)
+
+
 def band_figure(t, z_box, Lz, z_lowest, z_highest, z_cm, force_box, *, weight=None,
                 frequency=None, t0=None, t1=None, periods=BAND_PERIODS, title="", path=""):
     """The bed-band plot of the thesis versus time ``t`` [s].
@@ -136,19 +155,12 @@ def band_figure(t, z_box, Lz, z_lowest, z_highest, z_cm, force_box, *, weight=No
     """
     m = time_window(t, t0, t1, frequency, periods, "band plot", path)
     t = np.asarray(t)[m]
-    mm = 1e3
-    zb, zl, zh, zc = (np.asarray(x)[m] * mm for x in (z_box, z_lowest, z_highest, z_cm))
     F = np.asarray(force_box)[m]
     fig = figure(FIGSIZE["band"])
     ax, axf = fig.subplots(2, 1, sharex=True, gridspec_kw={"height_ratios": [2.2, 1]})
-    ax.fill_between(t, zl, zh, color="tab:orange", alpha=0.45, lw=0,
-                    label="grains (lowest … highest centre)")
-    ax.plot(t, zb, "k-", lw=1.4, label="floor $z_{box}$")
-    ax.plot(t, zb + Lz * mm, "k--", lw=1.4, label=f"lid $z_{{box}} + L_z$ ($L_z$ = {Lz * mm:g} mm)")
-    ax.plot(t, zc, "-", color="tab:red", lw=1.0, label="centre of mass $z_{cm}$")
-    ax.set_ylabel("height z [mm] (lab frame)")
+    draw_band(ax, t, *(np.asarray(x)[m] for x in (z_box, z_lowest, z_highest, z_cm)), Lz)
+    ax.set_xlabel("")  # the force panel below carries the time axis
     ax.legend(fontsize=8, loc="upper left", ncol=2, framealpha=0.85)
-    ax.grid(alpha=0.3)
     axf.plot(t, F, "-", color="tab:blue", lw=0.9, label="grains on box $F_{gz}$")
     if weight is not None:
         axf.axhline(-weight, color="0.4", ls=":", lw=1.0,
