@@ -110,8 +110,8 @@ def test_kernel_caches_are_keyed_on_the_physics_sources():
     from jaxdamp.physics import contact, excitation, integrate
 
     digest = native._source_hash()
-    kernels = [native._build_pairs, native._pairs, native._moved_too_far, native._wall_constants,
-               native._wall, native._forces, native._advance_one, native._advance]
+    kernels = [native._build_pairs, native._pairs, native._wall_constants, native._wall,
+               native._pair_forces, native._advance_one, native._advance]
     for k in kernels:
         key = k._cache._index_key((), k.targetctx.codegen())
         assert key[-1] == digest, k.py_func.__name__

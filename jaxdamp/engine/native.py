@@ -32,7 +32,6 @@ from __future__ import annotations
 import hashlib
 import math
 import os
-from enum import IntEnum
 
 import numpy as np
 
@@ -44,6 +43,11 @@ from jaxdamp.physics.integrate import (
     primary_powers_scalar,
     rotate_scalar,
 )
+
+# numba's OpenMP threads spin between parallel regions by default; a spinning thread took the
+# second core from the single system it was waiting beside (13.4 -> 9.4 µs per step of the
+# moving thesis bed with passive waiting, benchmarks/RESULTS.md). Set before numba loads OpenMP.
+os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 try:
     from numba import njit, prange
@@ -64,11 +68,6 @@ BOX_RECORD = np.dtype([(name, np.float64) for name in BOX])
 #: Diagnostics of the last force evaluation returned per system, a record.
 DIAG = ("e_elastic", "f_floor_lid", "f_box", "n_floor", "n_lid")
 DIAG_RECORD = np.dtype([(name, np.float64) for name in DIAG])
-#: Slots of the per-evaluation sums of :func:`_forces`.
-OUT = ("box_z", "floor_lid_z", "n_floor", "n_lid", "e_elastic", "pp_normal", "pp_friction",
-       "pw_normal", "pw_friction")
-Out = IntEnum("Out", {name: i for i, name in enumerate(OUT)})
-N_OUT = len(OUT)
 
 #: The scalar forms the kernels inline (with the forms they call, from the same modules): a
 #: change to their source files must recompile the cached kernels (numba's cache only watches
@@ -224,16 +223,6 @@ if AVAILABLE:
         return k, pi, pj, pc
 
     @_kernel()
-    def _moved_too_far(r, z_box, ref, half_skin2):
-        for i in range(r.shape[0]):
-            dx = r[i, 0] - ref[i, 0]
-            dy = r[i, 1] - ref[i, 1]
-            dz = r[i, 2] - z_box - ref[i, 2]
-            if dx * dx + dy * dy + dz * dz > half_skin2:
-                return True
-        return False
-
-    @_kernel()
     def _wall_constants(R, m, sid, wall_table, law):
         """Per grain, the constants of its contact with any wall: ``(N, 4)`` array of
         ``(k, g, γ_s, μ)`` from the row of its species in the wall table, ``R* = R_i``,
@@ -250,40 +239,20 @@ if AVAILABLE:
         return wk
 
     @_kernel(inline="always")
-    def _wall(law, i, xi, nx, ny, nz, v, w, R, zd_box, wk, F, T, out):
-        """Contact of grain ``i`` with a wall of inward normal ``n`` at overlap ``xi > 0``:
-        adds to ``F``, ``T`` and the energy channels; returns the force's z component."""
+    def _wall(law, xi, nx, ny, nz, vx, vy, vz, sx, sy, sz, Ri, wki):
+        """Contact of a grain with a wall of inward normal ``n`` at overlap ``xi > 0``
+        (velocity ``v`` relative to the box, spin ``s = R ω``, wall constants ``wki``):
+        ``(force, torque, elastic energy, normal loss, friction loss)``."""
         fx, fy, fz, tx, ty, tz, e, ln, lf = contact_scalar(
-            law, xi, nx, ny, nz, v[i, 0], v[i, 1], v[i, 2] - zd_box,
-            R[i] * w[i, 0], R[i] * w[i, 1], R[i] * w[i, 2],
-            wk[i, 0], wk[i, 1], wk[i, 2], wk[i, 3])
-        F[i, 0] += fx
-        F[i, 1] += fy
-        F[i, 2] += fz
-        T[i, 0] -= R[i] * (ny * tz - nz * ty)
-        T[i, 1] -= R[i] * (nz * tx - nx * tz)
-        T[i, 2] -= R[i] * (nx * ty - ny * tx)
-        out[Out.e_elastic] += e
-        out[Out.pw_normal] += ln
-        out[Out.pw_friction] += lf
-        return fz
+            law, xi, nx, ny, nz, vx, vy, vz, sx, sy, sz, wki[0], wki[1], wki[2], wki[3])
+        return (fx, fy, fz, -Ri * (ny * tz - nz * ty), -Ri * (nz * tx - nx * tz),
+                -Ri * (nx * ty - ny * tx), e, ln, lf)
 
     @_kernel()
-    def _forces(law, r, v, w, z_box, zd_box, R, m, wk, Lx, Ly, Lz, grav, drag,
-                pi, pj, pc, npairs, F, T, out):
-        """Forces (F, T filled in place) and the sums ``out`` (slots :class:`Out`).
-        ``wk``: the grains' wall constants (:func:`_wall_constants`)."""
-        n = r.shape[0]
-        for i in range(n):
-            F[i, 0], F[i, 1], F[i, 2] = body_force_scalar(m[i], v[i, 0], v[i, 1], v[i, 2],
-                                                          grav, drag)
-            T[i, 0] = 0.0
-            T[i, 1] = 0.0
-            T[i, 2] = 0.0
-        for k in range(out.shape[0]):
-            out[k] = 0.0
-        # energy sums in registers: F, T and out may alias as far as the compiler knows, so
-        # accumulating into out[...] would force a store and reload per contact
+    def _pair_forces(law, r, v, rw, R, pi, pj, pc, npairs, F, T):
+        """Adds the grain pairs' forces and torques to ``F``, ``T`` (half list: Newton's third
+        law); ``rw[i] = R_i ω_i``. Returns ``(elastic energy, normal loss, friction loss)``,
+        summed in registers."""
         e_sum = 0.0
         ln_sum = 0.0
         lf_sum = 0.0
@@ -301,12 +270,10 @@ if AVAILABLE:
             xi = rs - d
             inv = 1.0 / d
             nx, ny, nz = dx * inv, dy * inv, dz * inv
-            sx = R[i] * w[i, 0] + R[j] * w[j, 0]
-            sy = R[i] * w[i, 1] + R[j] * w[j, 1]
-            sz = R[i] * w[i, 2] + R[j] * w[j, 2]
             fx, fy, fz, tx, ty, tz, e, ln, lf = contact_scalar(
                 law, xi, nx, ny, nz, v[i, 0] - v[j, 0], v[i, 1] - v[j, 1], v[i, 2] - v[j, 2],
-                sx, sy, sz, pc[p, 1], pc[p, 2], pc[p, 3], pc[p, 4])
+                rw[i, 0] + rw[j, 0], rw[i, 1] + rw[j, 1], rw[i, 2] + rw[j, 2],
+                pc[p, 1], pc[p, 2], pc[p, 3], pc[p, 4])
             F[i, 0] += fx
             F[i, 1] += fy
             F[i, 2] += fz
@@ -326,37 +293,7 @@ if AVAILABLE:
             e_sum += e
             ln_sum += ln
             lf_sum += lf
-        out[Out.e_elastic] = e_sum
-        out[Out.pp_normal] = ln_sum
-        out[Out.pp_friction] = lf_sum
-        # walls: floor, lid, x = 0, x = Lx, y = 0, y = Ly (inward normals), unrolled: most
-        # grains touch none, so the common path is six compares
-        for i in range(n):
-            Ri = R[i]
-            floor = r[i, 2] - z_box
-            if floor < Ri:
-                fz = _wall(law, i, Ri - floor, 0.0, 0.0, 1.0, v, w, R, zd_box, wk, F, T, out)
-                out[Out.box_z] -= fz
-                out[Out.floor_lid_z] -= fz
-                out[Out.n_floor] += 1.0
-            if Lz - floor < Ri:
-                fz = _wall(law, i, Ri - (Lz - floor), 0.0, 0.0, -1.0, v, w, R, zd_box, wk, F, T,
-                           out)
-                out[Out.box_z] -= fz
-                out[Out.floor_lid_z] -= fz
-                out[Out.n_lid] += 1.0
-            if r[i, 0] < Ri:
-                out[Out.box_z] -= _wall(law, i, Ri - r[i, 0], 1.0, 0.0, 0.0, v, w, R, zd_box,
-                                        wk, F, T, out)
-            if Lx - r[i, 0] < Ri:
-                out[Out.box_z] -= _wall(law, i, Ri - (Lx - r[i, 0]), -1.0, 0.0, 0.0, v, w, R,
-                                        zd_box, wk, F, T, out)
-            if r[i, 1] < Ri:
-                out[Out.box_z] -= _wall(law, i, Ri - r[i, 1], 0.0, 1.0, 0.0, v, w, R, zd_box,
-                                        wk, F, T, out)
-            if Ly - r[i, 1] < Ri:
-                out[Out.box_z] -= _wall(law, i, Ri - (Ly - r[i, 1]), 0.0, -1.0, 0.0, v, w, R,
-                                        zd_box, wk, F, T, out)
+        return e_sum, ln_sum, lf_sum
 
     @_kernel()
     def _advance_one(b, n_steps, system, law, cutoff, skin,
@@ -365,7 +302,14 @@ if AVAILABLE:
         """Advance system ``b`` by ``n_steps``. ``box``: the box state (:data:`BOX_RECORD`),
         ``diag`` the diagnostics (:data:`DIAG_RECORD`), ``sc`` the scalar parameters
         (:data:`SCALAR_RECORD`), ``table``/``wall_table`` the contact tables, ``sid`` the
-        grains' species."""
+        grains' species.
+
+        A step is two passes over the grains and one over the listed pairs: (1) the
+        velocity-Verlet predictor, gravity and drag, the six walls, the drag power and the
+        displacement since the last list build (rebuilt from the predicted positions when a
+        grain moved more than ``skin / 2``); (2) the pairs; (3) the primary, the rotation and
+        the corrector, with the finite-check of the new accelerations. Divisions by mass and
+        inertia are multiplications by reciprocals computed once per call."""
         prm = sc[b]
         Lx, Ly, Lz, grav, drag, dt = prm.Lx, prm.Ly, prm.Lz, prm.gravity, prm.drag, prm.dt
         M, K, C, U, om = prm.M, prm.K, prm.C, prm.U, prm.omega
@@ -374,10 +318,12 @@ if AVAILABLE:
         rb, vb, wb, qb, ab, alb = r[b], v[b], w[b], q[b], a[b], al[b]
         Rb, mb, Ib = R[b], m[b], I[b]
         tab, wtab = table[b], wall_table[b]
-        pi = np.empty(16 * n + 16, np.int64)
-        pj = np.empty(16 * n + 16, np.int64)
-        pc = np.empty((16 * n + 16, 5))
+        pi = np.empty(4 * n + 16, np.int64)  # grown by _pairs when a bed lists more
+        pj = np.empty(4 * n + 16, np.int64)
+        pc = np.empty((4 * n + 16, 5))
         wk = _wall_constants(Rb, mb, sid, wtab, law)
+        inv_m = 1.0 / mb
+        inv_I = 1.0 / Ib
         ref = np.empty((n, 3))
         bx = box[b]
         z, zd, zdd, t, zmax, zmin, step = bx.z, bx.zd, bx.zdd, bx.t, bx.z_max, bx.z_min, bx.step
@@ -385,44 +331,155 @@ if AVAILABLE:
         if n > 1:
             npairs, pi, pj, pc = _pairs(rb, z, cutoff, pi, pj, pc, ref, Rb, mb, sid, tab, law)
         half_skin2 = 0.25 * skin * skin
+        hdt2 = 0.5 * dt * dt
         r1 = np.empty((n, 3))
         vp = np.empty((n, 3))
-        wp = np.empty((n, 3))
+        rw = np.empty((n, 3))
         F = np.empty((n, 3))
         T = np.empty((n, 3))
-        out = np.empty(N_OUT)
         pw = np.empty(7)
         imp0 = 0.0
         imp1 = 0.0
+        e_el = 0.0
+        floor_lid = 0.0
+        box_z = 0.0
+        n_floor = 0.0
+        n_lid = 0.0
         for _ in range(n_steps):
-            if n > 1 and _moved_too_far(rb, z, ref, half_skin2):
-                npairs, pi, pj, pc = _pairs(rb, z, cutoff, pi, pj, pc, ref, Rb, mb, sid, tab, law)
             t1 = t + dt
-            for i in range(n):
-                for k in range(3):
-                    r1[i, k] = rb[i, k] + dt * vb[i, k] + 0.5 * dt * dt * ab[i, k]
-                    vp[i, k] = vb[i, k] + dt * ab[i, k]
-                    wp[i, k] = wb[i, k] + dt * alb[i, k]
             if system == 0:
-                z1 = z + dt * zd + 0.5 * dt * dt * zdd
+                z1 = z + dt * zd + hdt2 * zdd
                 zdp = zd + dt * zdd
             else:
                 z1, zdp, zdd1 = drive_motion_scalar(t1, z_off, amp, om)
-            _forces(law, r1, vp, wp, z1, zdp, Rb, mb, wk, Lx, Ly, Lz, grav, drag,
-                    pi, pj, pc, npairs, F, T, out)
-            box_z = out[Out.box_z]
-            health = (box_z + out[Out.e_elastic] + out[Out.pp_normal] + out[Out.pp_friction]
-                      + out[Out.pw_normal] + out[Out.pw_friction] + z1 + zdp)
+            # pass 1: predictor, body force, walls, drag power, displacement since the build
+            e_el = 0.0
+            pw_n = 0.0
+            pw_f = 0.0
+            box_z = 0.0
+            floor_lid = 0.0
+            n_floor = 0.0
+            n_lid = 0.0
+            pdrag = 0.0
+            far = False
             for i in range(n):
-                health += F[i, 0] + F[i, 1] + F[i, 2] + T[i, 0] + T[i, 1] + T[i, 2]
-            if not math.isfinite(health):
-                # the state blew up: mark it non-finite and stop; the runner reports it
-                for i in range(n):
-                    for k in range(3):
-                        rb[i, k] = np.nan
-                        vb[i, k] = np.nan
-                zd = np.nan
-                break
+                x = rb[i, 0] + dt * vb[i, 0] + hdt2 * ab[i, 0]
+                y = rb[i, 1] + dt * vb[i, 1] + hdt2 * ab[i, 1]
+                zz = rb[i, 2] + dt * vb[i, 2] + hdt2 * ab[i, 2]
+                ux = vb[i, 0] + dt * ab[i, 0]
+                uy = vb[i, 1] + dt * ab[i, 1]
+                uz = vb[i, 2] + dt * ab[i, 2]
+                Ri = Rb[i]
+                sx = Ri * (wb[i, 0] + dt * alb[i, 0])
+                sy = Ri * (wb[i, 1] + dt * alb[i, 1])
+                sz = Ri * (wb[i, 2] + dt * alb[i, 2])
+                r1[i, 0], r1[i, 1], r1[i, 2] = x, y, zz
+                vp[i, 0], vp[i, 1], vp[i, 2] = ux, uy, uz
+                rw[i, 0], rw[i, 1], rw[i, 2] = sx, sy, sz
+                ddx = x - ref[i, 0]
+                ddy = y - ref[i, 1]
+                ddz = zz - z1 - ref[i, 2]
+                far = far | (ddx * ddx + ddy * ddy + ddz * ddz > half_skin2)
+                pdrag += mb[i] * (ux * ux + uy * uy + uz * uz)
+                fx, fy, fz = body_force_scalar(mb[i], ux, uy, uz, grav, drag)
+                tx = 0.0
+                ty = 0.0
+                tz = 0.0
+                # walls: floor, lid, x = 0, x = Lx, y = 0, y = Ly (inward normals), unrolled:
+                # most grains touch none, so the common path is six compares
+                floor = zz - z1
+                wz = uz - zdp
+                if floor < Ri:
+                    gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
+                        law, Ri - floor, 0.0, 0.0, 1.0, ux, uy, wz, sx, sy, sz, Ri, wk[i])
+                    fx += gx
+                    fy += gy
+                    fz += gz
+                    tx += hx
+                    ty += hy
+                    tz += hz
+                    e_el += e
+                    pw_n += ln
+                    pw_f += lf
+                    box_z -= gz
+                    floor_lid -= gz
+                    n_floor += 1.0
+                if Lz - floor < Ri:
+                    gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
+                        law, Ri - (Lz - floor), 0.0, 0.0, -1.0, ux, uy, wz, sx, sy, sz, Ri, wk[i])
+                    fx += gx
+                    fy += gy
+                    fz += gz
+                    tx += hx
+                    ty += hy
+                    tz += hz
+                    e_el += e
+                    pw_n += ln
+                    pw_f += lf
+                    box_z -= gz
+                    floor_lid -= gz
+                    n_lid += 1.0
+                if x < Ri:
+                    gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
+                        law, Ri - x, 1.0, 0.0, 0.0, ux, uy, wz, sx, sy, sz, Ri, wk[i])
+                    fx += gx
+                    fy += gy
+                    fz += gz
+                    tx += hx
+                    ty += hy
+                    tz += hz
+                    e_el += e
+                    pw_n += ln
+                    pw_f += lf
+                    box_z -= gz
+                if Lx - x < Ri:
+                    gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
+                        law, Ri - (Lx - x), -1.0, 0.0, 0.0, ux, uy, wz, sx, sy, sz, Ri, wk[i])
+                    fx += gx
+                    fy += gy
+                    fz += gz
+                    tx += hx
+                    ty += hy
+                    tz += hz
+                    e_el += e
+                    pw_n += ln
+                    pw_f += lf
+                    box_z -= gz
+                if y < Ri:
+                    gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
+                        law, Ri - y, 0.0, 1.0, 0.0, ux, uy, wz, sx, sy, sz, Ri, wk[i])
+                    fx += gx
+                    fy += gy
+                    fz += gz
+                    tx += hx
+                    ty += hy
+                    tz += hz
+                    e_el += e
+                    pw_n += ln
+                    pw_f += lf
+                    box_z -= gz
+                if Ly - y < Ri:
+                    gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
+                        law, Ri - (Ly - y), 0.0, -1.0, 0.0, ux, uy, wz, sx, sy, sz, Ri, wk[i])
+                    fx += gx
+                    fy += gy
+                    fz += gz
+                    tx += hx
+                    ty += hy
+                    tz += hz
+                    e_el += e
+                    pw_n += ln
+                    pw_f += lf
+                    box_z -= gz
+                F[i, 0], F[i, 1], F[i, 2] = fx, fy, fz
+                T[i, 0], T[i, 1], T[i, 2] = tx, ty, tz
+            if n > 1 and far:  # a grain moved more than skin/2: list the pairs anew
+                npairs, pi, pj, pc = _pairs(r1, z1, cutoff, pi, pj, pc, ref, Rb, mb, sid, tab,
+                                            law)
+            # pass 2: the grain pairs
+            pp_e, pp_n, pp_f = _pair_forces(law, r1, vp, rw, Rb, pi, pj, pc, npairs, F, T)
+            e_el += pp_e
+            # pass 3: the primary, rotation and corrector
             if system == 0:
                 u1, ud1 = base_motion_scalar(t1, U, om)
                 zdd1 = primary_acceleration_scalar(z1, zdp, u1, ud1, box_z, M, K, C)
@@ -432,25 +489,31 @@ if AVAILABLE:
                 zd1 = zdp
                 pw[0] = -box_z * zdp
                 pw[1] = 0.0
-            pw[2], pw[3] = out[Out.pp_normal], out[Out.pp_friction]
-            pw[4], pw[5] = out[Out.pw_normal], out[Out.pw_friction]
-            pdrag = 0.0
-            for i in range(n):
-                pdrag += mb[i] * (vp[i, 0] ** 2 + vp[i, 1] ** 2 + vp[i, 2] ** 2)
+            pw[2], pw[3], pw[4], pw[5] = pp_n, pp_f, pw_n, pw_f
             pw[6] = drag * pdrag
+            health = box_z + e_el + pp_n + pp_f + pw_n + pw_f + z1 + zdp + zdd1
             for i in range(n):
                 # rotation by the mid-step angular velocity ω + α dt/2
                 qb[i, 0], qb[i, 1], qb[i, 2], qb[i, 3] = rotate_scalar(
                     qb[i, 0], qb[i, 1], qb[i, 2], qb[i, 3], wb[i, 0] + 0.5 * dt * alb[i, 0],
                     wb[i, 1] + 0.5 * dt * alb[i, 1], wb[i, 2] + 0.5 * dt * alb[i, 2], dt)
                 for k in range(3):
-                    a1 = F[i, k] / mb[i]
-                    al1 = T[i, k] / Ib[i]
+                    a1 = F[i, k] * inv_m[i]
+                    al1 = T[i, k] * inv_I[i]
+                    health += a1 + al1
                     vb[i, k] = vb[i, k] + 0.5 * dt * (ab[i, k] + a1)
                     wb[i, k] = wb[i, k] + 0.5 * dt * (alb[i, k] + al1)
                     ab[i, k] = a1
                     alb[i, k] = al1
                     rb[i, k] = r1[i, k]
+            if not math.isfinite(health):
+                # the state blew up: mark it non-finite and stop; the runner reports it
+                for i in range(n):
+                    for k in range(3):
+                        rb[i, k] = np.nan
+                        vb[i, k] = np.nan
+                zd = np.nan
+                break
             for c in range(7):
                 work[b, c] = work[b, c] + 0.5 * dt * (power[b, c] + pw[c])
                 power[b, c] = pw[c]
@@ -459,12 +522,12 @@ if AVAILABLE:
                 zmax = max(zmax, z1)
                 zmin = min(zmin, z1)
             step += 1
-            imp0 += out[Out.floor_lid_z]
+            imp0 += floor_lid
             imp1 += box_z
         bx.z, bx.zd, bx.zdd, bx.t, bx.z_max, bx.z_min, bx.step = z, zd, zdd, t, zmax, zmin, step
         dg = diag[b]
-        dg.e_elastic, dg.f_floor_lid, dg.f_box = out[Out.e_elastic], out[Out.floor_lid_z], box_z
-        dg.n_floor, dg.n_lid = out[Out.n_floor], out[Out.n_lid]
+        dg.e_elastic, dg.f_floor_lid, dg.f_box = e_el, floor_lid, box_z
+        dg.n_floor, dg.n_lid = n_floor, n_lid
         impulse[b, 0] = imp0 / n_steps
         impulse[b, 1] = imp1 / n_steps
 
