@@ -50,6 +50,8 @@ GAMMAS = (0.0, 2500.0, 5000.0, 10000.0)
 MATERIALS = (("steel", 8030.0, 2.03e11, 0.28), ("lead", 11340.0, 1.6e10, 0.44),
              ("aluminium", 2700.0, 7.0e10, 0.33))
 NS = (25, 50, 100, 250)
+#: (part, runs detected stationary, runs), filled by the parts as they read their sweeps
+STATIONARITY: list = []
 SPLIT = ("pp_normal", "pw_normal", "pp_friction", "pw_friction")
 
 
@@ -84,7 +86,8 @@ def gamma_scan(s, ctx) -> list:
                            ctx.raw(f"gammas_Lz{Lz:g}_R{s['R']}.h5"), progress=ctx.progress,
                            replicates=s["R"])
         E, _ = steady_or_window(res, "granular_loss_per_cycle")  # (P, R)
-        Z, _ = steady_or_window(res, "amplitude")
+        Z, fb = steady_or_window(res, "amplitude")
+        STATIONARITY.append((f"γ scans at Lz = {Lz} m", Z.size - fb, Z.size))
         split = {k: np.asarray(res.replicate_summary[f"{k}_per_cycle"]) for k in SPLIT}
         nf = len(s["res_freqs"])
         for scan in ("gamma_n", "gamma_s"):
@@ -112,7 +115,8 @@ def material_scan(s, ctx) -> list:
         res = reuse_or_run(cfg, {"frequency": list(s["frf_freqs"])},
                            ctx.raw(f"material_{name}_R{s['R']}.h5"), progress=ctx.progress,
                            replicates=s["R"])
-        Z, _ = steady_or_window(res, "amplitude")  # (F, R)
+        Z, fb = steady_or_window(res, "amplitude")  # (F, R)
+        STATIONARITY.append((f"material {name}", Z.size - fb, Z.size))
         peaks = np.array([resonance(s["frf_freqs"], Z[:, r]) for r in range(s["R"])])
         out.append(dict(material=name, density=rho, E=E, nu=nu, scale=k, ZU=Z / p.U,
                         peak=peaks[:, 1] / p.U, f_peak=peaks[:, 0],
@@ -132,7 +136,8 @@ def few_grains(s, ctx) -> list:
                        "frequency": [f for _ in (GN, 0.0) for f in s["res_freqs"]]})
         res = reuse_or_run(cfg, axes, ctx.raw(f"few_N{n}_R{s['R']}.h5"), progress=ctx.progress,
                            replicates=s["R"])
-        Z, _ = steady_or_window(res, "amplitude")
+        Z, fb = steady_or_window(res, "amplitude")
+        STATIONARITY.append((f"N = {n}", Z.size - fb, Z.size))
         nf = len(s["res_freqs"])
         U = cfg.primary.U
         peak = {g: Z[i * nf:(i + 1) * nf].max(axis=0) / U for i, g in enumerate((GN, 0.0))}
@@ -143,8 +148,10 @@ def few_grains(s, ctx) -> list:
 
 def compute(quick: bool, log, ctx):
     s = settings(quick)
+    STATIONARITY.clear()
     r = dict(gammas=gamma_scan(s, ctx), materials=material_scan(s, ctx),
              few=few_grains(s, ctx))
+    r["stationarity"] = list(STATIONARITY)
     for row in r["few"]:
         d, h = welch(row["peak_off"], row["peak_on"])
         row.update(d_peak=d, d_peak_ci=h, changed=bool(abs(d) > h) if np.isfinite(h) else None)
@@ -161,7 +168,7 @@ def main(argv=None):
 
 
 def write(r, s, out, prov):
-    wall = sum(x["wall"] for part in r.values() for x in part)
+    wall = sum(x["wall"] for k in ("gammas", "materials", "few") for x in r[k])
     with h5py.File(os.path.join(out, "data.h5"), "w") as h:
         scaffold.stamp(h, dict(prov, sweep_wall_s=wall))
         h.attrs["settings"] = json.dumps(s)
@@ -233,6 +240,11 @@ def _summary(r, s, out, prov, wall):
          f"`sanchez2012-optimal`, R = {R} independently poured beds per point, {s['duration']} "
          "s per run; steady means after the MSER-detected start (collisional share: final "
          "10 % of each run); ± = standard error over the beds, comparisons Welch 95 %.", "",
+         "**Stationarity** (runs whose per-period amplitude and dissipation were detected "
+         "stationary by MSER; the others are averaged over their final 10 % and weigh as much): "
+         + "; ".join(f"{part}: {k} of {n}" for part, k, n in r["stationarity"]) + ". "
+         f"{s['duration']} s per run is what two shared cores afforded; where few runs are "
+         "stationary, a verdict rests on runs that may still drift.", "",
          "## Contact damping at resonance (figs. 5.2c,d; fig. 5.5 at Lz = 0.282 m)", "",
          "| Lz [m] | scanned | γ | f [Hz] | loss per cycle [J] | collisional share | Z/U |",
          "| --- | --- | --- | --- | --- | --- | --- |"]
