@@ -59,7 +59,7 @@ import scaffold
 
 from jaxdamp.analysis import dynamics as dyn
 from jaxdamp.analysis.response import fit_frf_replicates, parabolic_extremum, resonance
-from jaxdamp.analysis.stats import detect, per_period, t_quantile, welch
+from jaxdamp.analysis.stats import per_period, t_quantile, welch
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.physics.model import grain_mass
@@ -487,7 +487,8 @@ def _summary(result, out, prov):
         o = cmp_["optimum"][n]
         lines.append(f"- N = {n}: {o['mean']:.4f} ± {o['se']:.4f} m (95 %: ± {o['ci95']:.4f}; "
                      f"beds' vertices {', '.join(f'{x:.4f}' for x in scans[n]['opt']['vertices'])};"
-                     f" {'interior to the grid in every bed' if o['interior'] else 'at an end of the grid in some bed'}).")
+                     " " + ("interior to the grid in every bed" if o["interior"]
+                            else "at an end of the grid in some bed") + ").")
     for k, o in cmp_["optimum"].items():
         if isinstance(k, str):
             verdict = ("significant" if np.isfinite(o["ci95"]) and abs(o["diff"]) > o["ci95"]
@@ -495,8 +496,8 @@ def _summary(result, out, prov):
             lines.append(f"- optimum of N = {k.split('-')[0]} minus N = {k.split('-')[1]}: "
                          f"{o['diff']:+.4f} ± {o['ci95']:.4f} m (Welch 95 %, {verdict}).")
     lines += ["", "**Z_res between N at each height** (Welch 95 % of the difference, relative to "
-              "the fewer grains; − / + : more grains give a significantly smaller / larger resonant "
-              "amplitude, n.s.: not significant; ≡ : equivalent within the tolerance):", ""]
+              "the fewer grains; − / + : more grains give a significantly smaller / larger "
+              "resonant amplitude, n.s.: not significant; ≡ : equivalent within the tolerance):", ""]
     for k, rows in cmp_["pairs"].items():
         b, a = k.split("-")
         cells = []

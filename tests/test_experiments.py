@@ -337,3 +337,16 @@ def test_grain_number_quick(tmp_path):
     assert "Settled beds (thesis table 3.2)" in text and "The optimum" in text
     for name in ("figure.png", "fig3_3_3_4.png"):
         assert (tmp_path / name).stat().st_size > 10_000
+
+
+def test_contact_checks(tmp_path):
+    """A sliding sphere ends rolling at 5/7 v0 without slip on both engines, having lost
+    (2/7) ½ m v0² in friction; the mixtures' mixed A is the mean of the species' A."""
+    out = _load("contact_checks").main(["--out", str(tmp_path), "--no-progress"])
+    for r in out["runs"]:
+        assert r["ratio"] == pytest.approx(5 / 7, rel=1e-3), r["engine"]
+        assert abs(r["no_slip"]) < 1e-6 and r["friction_loss"] == pytest.approx(
+            r["loss_expected"], rel=0.02)
+    for m in out["mixed"]:
+        assert abs(m["rel_diff"]) < 1e-12 and 0.6 < m["restitution_mixed"] < 0.75
+    assert (tmp_path / "figure.png").stat().st_size > 10_000
