@@ -58,7 +58,12 @@ import numpy as np
 import scaffold
 
 from jaxdamp.analysis import dynamics as dyn
-from jaxdamp.analysis.response import fit_frf_replicates, parabolic_extremum, resonance
+from jaxdamp.analysis.response import (
+    first_harmonic,
+    fit_frf_replicates,
+    parabolic_extremum,
+    resonance,
+)
 from jaxdamp.analysis.stats import per_period, t_quantile, welch
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
@@ -131,6 +136,15 @@ def run_measures(rec: dict, f: float, t0: float, n: int) -> dict:
     periods = max((t[keep][-1] - t[keep][0]) * f, 1e-9)
     gap = max(int(round(0.1 / (f * (t[1] - t[0])))), 1)  # samples in a tenth of a period
     extent = np.asarray(rec["z_highest"])[keep] - np.asarray(rec["z_lowest"])[keep]
+    # impact phases against the box motion, and the velocities just before each impact
+    tk = t[keep]
+    _, ph_box = first_harmonic(tk, np.asarray(rec["z_box"])[keep], f)
+    on_lid = impact_onsets(nl > 0, gap)
+    on_floor = impact_onsets(nf > 0, gap)
+    phase = lambda i: 2 * np.pi * f * tk[i] - ph_box  # noqa: E731
+    vb = np.asarray(rec["v_box"])[keep]
+    vc = np.asarray(rec["vz_cm"])[keep]
+    before = np.maximum(np.r_[on_lid, on_floor] - 1, 0)
     zc = np.asarray(rec["z_cm"])
     sec = dyn.poincare_section(t, zc, f, t_start=t0)
     spread = (float(dyn.strobe_spread(sec, float(np.std(zc[keep])), max_period=2)[0])
@@ -141,9 +155,23 @@ def run_measures(rec: dict, f: float, t0: float, n: int) -> dict:
                 wall_grains=float(np.mean(nf + nl) / n),
                 lid_impacts=impacts(nl > 0, gap) / periods,
                 floor_impacts=impacts(nf > 0, gap) / periods,
+                lid_phase=circular_mean_deg(phase(on_lid)),
+                floor_phase=circular_mean_deg(phase(on_floor)),
+                lid_floor=(circular_mean_deg(phase(on_lid) - circular_mean_rad(phase(on_floor)))
+                           if on_lid.size and on_floor.size else math.nan),
+                opposite=(float(np.mean(vb[before] * vc[before] < 0)) if before.size
+                          else math.nan),
                 extent=float(np.mean(extent)),
                 rest_extent=float(rec["z_highest"][0] - rec["z_lowest"][0]),
                 strobe_spread=spread)
+
+
+def impact_onsets(touching, gap: int) -> np.ndarray:
+    """Sample indices where contact episodes start (see :func:`impacts`)."""
+    idx = np.flatnonzero(touching)
+    if idx.size == 0:
+        return idx
+    return idx[np.r_[True, np.diff(idx) > gap]]
 
 
 def impacts(touching, gap: int) -> int:
@@ -155,8 +183,18 @@ def impacts(touching, gap: int) -> int:
     >>> impacts(np.array([0, 1, 1, 0, 1, 0, 0, 0, 0, 1], bool), gap=2)
     2
     """
-    idx = np.flatnonzero(touching)
-    return 0 if idx.size == 0 else 1 + int(np.sum(np.diff(idx) > gap))
+    return len(impact_onsets(touching, gap))
+
+
+def circular_mean_rad(angles) -> float:
+    """Circular mean [rad] of angles [rad]."""
+    return float(np.angle(np.mean(np.exp(1j * np.asarray(angles, float)))))
+
+
+def circular_mean_deg(angles) -> float:
+    """Circular mean [deg] of angles [rad] (NaN for none)."""
+    a = np.asarray(angles, float)
+    return float(np.degrees(np.angle(np.mean(np.exp(1j * a))))) if a.size else math.nan
 
 
 def _t_interval(x) -> tuple[float, float, float]:
@@ -332,7 +370,7 @@ def write(result, out, prov):
             g["fric"].attrs["what"] = "frictional loss per cycle (pp + pw tangential) at resonance"
             g["bed_cm"].attrs["what"] = "twice the mean height of the grain centres, settled bed"
             for k in ("airborne", "lid_touch", "wall_grains", "lid_impacts", "floor_impacts",
-                      "strobe_spread"):
+                      "strobe_spread", "lid_phase", "floor_phase", "lid_floor", "opposite"):
                 g.create_dataset(f"measures/{k}", data=_arr(sc["measures"], k)).attrs[
                     "dims"] = "frequency, Lz, replicate"
             g.create_dataset("M_ef_reps", data=np.array([x["M_reps"] for x in sc["fits"]])
@@ -544,6 +582,33 @@ def _summary(result, out, prov):
                      ("airborne", "lid_touch", "lid_impacts", "floor_impacts", "wall_grains",
                       "strobe_spread")]
             lines.append(f"| {n} | {L} ({f[i]:g} Hz) | " + " | ".join(cells) + " |")
+    lines += ["", "## Impact timing (thesis ch. 6 and §4.2.4)", "",
+              "At the frequency sample nearest each bed's resonance: mean phase of the lid and "
+              "floor impacts (episode onsets) against the box's first harmonic [deg], their "
+              "separation |lid − floor| (180°: counter-phase; per bed, then mean ± SE), and the "
+              "fraction of impacts at which the centre of mass and the box move in opposite "
+              "directions just before (the sample before the onset).", "",
+              "| N | Lz [m] | Z_res/U | lid phase | floor phase | abs(lid − floor) [deg] | "
+              "velocities opposite before impact |", "| --- | --- | --- | --- | --- | --- | --- |"]
+    for n, sc in scans.items():
+        U = sc["cfg"].primary.U
+        sep = []
+        for j, L in enumerate(s["lz"]):
+            i = int(np.argmin(np.abs(f - np.mean(sc["f_res"][j]))))
+            ms = sc["measures"][i][j]
+            lf = np.abs([m["lid_floor"] for m in ms])
+            sep.append(float(np.nanmean(lf)))
+            lines.append(f"| {n} | {L} | {_fmt(sc['Z_res'][j] / U)} | "
+                         f"{_fmt([m['lid_phase'] for m in ms], 3)} | "
+                         f"{_fmt([m['floor_phase'] for m in ms], 3)} | {_fmt(lf, 3)} | "
+                         f"{_fmt([m['opposite'] for m in ms], 2)} |")
+        j_best = int(np.argmin(sc["Z_res"].mean(-1)))
+        sep = np.asarray(sep)
+        j_cp = int(np.nanargmin(np.abs(sep - 180.0))) if np.isfinite(sep).any() else -1
+        sc["timing"] = dict(best_lz=float(s["lz"][j_best]),
+                            counterphase_lz=float(s["lz"][j_cp]) if j_cp >= 0 else math.nan)
+        lines.append(f"| {n} | smallest Z_res at {s['lz'][j_best]} m; impacts nearest "
+                     f"counter-phase at {s['lz'][j_cp] if j_cp >= 0 else 'none'} m | | | | | |")
     lines += ["", f"## Frequency response of N = {resp['n']} at Lz = {LZ_RESPONSE} m "
               "(thesis figs. 3.3, 3.4)", "",
               "| f [Hz] | Z/U | collisional loss/cycle [J] | frictional [J] | collisional share | "

@@ -350,3 +350,15 @@ def test_contact_checks(tmp_path):
     for m in out["mixed"]:
         assert abs(m["rel_diff"]) < 1e-12 and 0.6 < m["restitution_mixed"] < 0.75
     assert (tmp_path / "figure.png").stat().st_size > 10_000
+
+
+def test_driven_regimes_quick(tmp_path):
+    """The reference box at 1.5 and 3.5 cm, 2 beds: the bed crosses more of the gap and its
+    centre of mass follows the drive more strongly above A_opt than below; files written."""
+    out = _load("driven_regimes").main(["--quick", "--out", str(tmp_path), "--no-progress"])
+    m = out["m"]
+    assert m["contact"].shape == (2, 2) and np.all(np.isfinite(m["excursion"]))
+    assert m["excursion"][1].mean() > m["excursion"][0].mean()
+    assert m["com_amp"][1].mean() > m["com_amp"][0].mean()
+    assert out["balance"] < 1e-3
+    assert (tmp_path / "figure.png").stat().st_size > 10_000
