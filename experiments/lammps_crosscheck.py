@@ -188,6 +188,9 @@ class Mapping:
     eta_pw: float       # same, fix wall/gran
     E_wall_lammps: float  # modulus given to fix wall/gran (bug compensated)
     wall_bug_factor: float  # LAMMPS wall stiffness / intended, for the uncompensated input
+    mu: float = 0.0         # Coulomb coefficient (pairs and walls: one material)
+    xt_pp: float = 0.0      # tangential damping over normal damping, γ_s / g (pairs)
+    xt_pw: float = 0.0      # the same for the walls
 
     def k_wall_lammps(self, E_fed: float) -> float:
         """Wall Hertz stiffness LAMMPS builds from ``E_fed`` (its ``E/(2(1-ν))`` formula)."""
@@ -198,12 +201,18 @@ class Mapping:
 
 
 def build_mapping(cfg) -> Mapping:
-    """The numbers jaxdamp uses (``jaxdamp.physics.model.build``) and their LAMMPS equivalents."""
+    """The numbers jaxdamp uses (``jaxdamp.physics.model.build``) and their LAMMPS equivalents.
+
+    One monodisperse species. The normal damping may be given as the paper's ``A`` or the
+    thesis' ``γ_n`` (jaxdamp's damping coefficient ``g = γ_n + (3/2) A k`` either way); with
+    friction, jaxdamp's ``F_t = γ_s sqrt(ξ) v_s`` capped at ``μ F_n`` is LAMMPS'
+    ``tangential linear_nohistory x_γt μ`` with ``x_γt = γ_s / g`` (LAMMPS' tangential damping
+    is ``x_γt`` times its normal damping ``η_n0 a m* = g sqrt(ξ)``)."""
     from jaxdamp.physics.model import build, contact_law
 
     model, p = build(cfg)
     sp = cfg.grains[0]
-    assert len(cfg.grains) == 1 and sp.radius_spread == 0.0, "monodisperse reference only"
+    assert len(cfg.grains) == 1 and sp.radius_spread == 0.0, "one monodisperse species only"
     mat = sp.material
     R = float(np.asarray(p.radius)[0])
     m = float(np.asarray(p.mass)[0])
@@ -217,14 +226,14 @@ def build_mapping(cfg) -> Mapping:
     c = 1.0 / (2.0 * E_pp)
     c_w = 1.0 / E_pw - c
     assert np.allclose(np.asarray(p.radius), R)
-    for row in (pair, wall):
-        assert row[col("mu")] == 0.0 and row[col("gamma_s")] == 0.0
-        assert row[col("gamma_n")] == 0.0, "paper parameterisation (A) expected"
+    mu = float(pair[col("mu")])
+    assert float(wall[col("mu")]) == mu, "walls with another friction coefficient"
     R_pp, m_pp = R / 2.0, m / 2.0
     k_pp = 4.0 / 3.0 * E_pp * math.sqrt(R_pp)
     k_pw = 4.0 / 3.0 * E_pw * math.sqrt(R)
-    g_pp = 1.5 * A * k_pp
-    g_pw = 1.5 * 0.5 * (A + A_w) * k_pw
+    g_pp = float(pair[col("gamma_n")]) + 1.5 * A * k_pp
+    g_pw = float(wall[col("gamma_n")]) + 1.5 * 0.5 * (A + A_w) * k_pw
+    xt = lambda row, g: float(row[col("gamma_s")]) / g if g > 0 else 0.0  # noqa: E731
     E, nu = mat.E * cfg.numerics.stiffness_scale, mat.nu
     # LAMMPS' pair builds E_eff = 1/(2(1-ν²)/E): must equal jaxdamp's from its compliance.
     assert abs(1.0 / (2 * (1 - nu**2) / E) - E_pp) < 1e-9 * E_pp, "compliance != (1-ν²)/E"
@@ -234,21 +243,24 @@ def build_mapping(cfg) -> Mapping:
         wall_compliance=c_w, dt=float(p.dt), E_star_pp=E_pp, E_star_pw=E_pw, k_pp=k_pp,
         k_pw=k_pw, gamma_pp=g_pp, gamma_pw=g_pw, eta_pp=g_pp / (m_pp * math.sqrt(R_pp)),
         eta_pw=g_pw / (m * math.sqrt(R)), E_wall_lammps=E_wall,
-        wall_bug_factor=(E / (2 * (1 - nu))) / E_pw,
+        wall_bug_factor=(E / (2 * (1 - nu))) / E_pw, mu=mu, xt_pp=xt(pair, g_pp),
+        xt_pw=xt(wall, g_pw),
     )
 
 
 def pair_coeff(mp: Mapping, eta: float | None = None) -> str:
     eta = mp.eta_pp if eta is None else eta
     return (f"pair_coeff * * hertz/material {mp.E!r} {eta!r} {mp.nu!r} "
-            "tangential linear_nohistory 0.0 0.0 damping viscoelastic limit_damping")
+            f"tangential linear_nohistory {mp.xt_pp!r} {mp.mu!r} damping viscoelastic "
+            "limit_damping")
 
 
 def wall_args(mp: Mapping, eta: float | None = None, E_wall: float | None = None) -> str:
     eta = mp.eta_pw if eta is None else eta
     E_wall = mp.E_wall_lammps if E_wall is None else E_wall
     return (f"granular hertz/material {E_wall!r} {eta!r} {mp.nu!r} "
-            "tangential linear_nohistory 0.0 0.0 damping viscoelastic limit_damping")
+            f"tangential linear_nohistory {mp.xt_pw!r} {mp.mu!r} damping viscoelastic "
+            "limit_damping")
 
 
 HEADER = """units si
@@ -413,7 +425,10 @@ def mapping_checks(mp: Mapping, workdir: str, exe=None, speeds=(1.0, 5.0, 20.0),
 # The driven bed in LAMMPS (box frame)
 
 
-def write_data(path: str, r: np.ndarray, v: np.ndarray, mp: Mapping, box) -> None:
+def write_data(path: str, r: np.ndarray, v: np.ndarray, mp: Mapping, box, w=None) -> None:
+    """A LAMMPS data file of the grains (box frame), velocities ``v`` and angular velocities
+    ``w`` (zero when not given)."""
+    w = np.zeros_like(np.asarray(v)) if w is None else np.asarray(w)
     pad = 0.001
     lines = ["LAMMPS data file: jaxdamp settled bed, box frame (floor at z = 0)", "",
              f"{len(r)} atoms", "1 atom types", "",
@@ -422,7 +437,8 @@ def write_data(path: str, r: np.ndarray, v: np.ndarray, mp: Mapping, box) -> Non
     lines += [f"{i + 1} 1 {2 * mp.R!r} {mp.density!r} {x!r} {y!r} {z!r}"
               for i, (x, y, z) in enumerate(r.tolist())]
     lines += ["", "Velocities", ""]
-    lines += [f"{i + 1} {a!r} {b!r} {c!r} 0.0 0.0 0.0" for i, (a, b, c) in enumerate(v.tolist())]
+    lines += [f"{i + 1} {a!r} {b!r} {c!r} {x!r} {y!r} {z!r}"
+              for i, ((a, b, c), (x, y, z)) in enumerate(zip(v.tolist(), w.tolist()))]
     with open(path, "w") as fh:
         fh.write("\n".join(lines) + "\n")
 
