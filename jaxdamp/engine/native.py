@@ -8,8 +8,10 @@ here: the contact laws and their constants (:mod:`jaxdamp.physics.contact`: ``co
 ``pair_scalar``, the tables ``Params.pair_table`` / ``wall_table`` built once by
 :func:`jaxdamp.physics.model.build`), the base and box motion (:mod:`jaxdamp.physics.excitation`) and the body
 force, primary and rotation (:mod:`jaxdamp.physics.integrate`) are the numba scalar forms defined next
-to their JAX forms, inlined into these loops. Scalars cross into the kernel as named records
-(:data:`SCALAR_RECORD`, :data:`BOX_RECORD`, :data:`DIAG_RECORD`).
+to their JAX forms, inlined into these loops. State and parameters cross into the kernel as
+the two packed float64 arrays of the callback (:func:`pack`); the kernel reads the fields
+(:data:`STATE_FIELDS`, :data:`PARAM_FIELDS`) at their offsets and advances one copy of the
+state in place (:func:`advance_packed`).
 
 * the law's constants of a pair are looked up and formed once per listed pair when the pair
   list is built, and once per call for the walls, not per contact and step;
@@ -17,7 +19,8 @@ to their JAX forms, inlined into these loops. Scalars cross into the kernel as n
 * grain pairs come from a half neighbour list (each pair once, Newton's third law applied)
   built inside the kernel on a cell grid from box-frame positions, holding the pairs closer
   than ``R_i + R_j + skin``, and rebuilt whenever a grain moved more than ``skin / 2``; the
-  list is rebuilt at the start of every call,
+  skin is the model's or wider for fast grains (:data:`REBUILD_STEPS`), and the list is
+  rebuilt at the start of every call,
   so a call's result is a pure function of its inputs (resume stays bit-identical);
 * the batch of independent systems is spread over the CPU cores (``prange``).
 
@@ -62,16 +65,14 @@ SYSTEMS = {"primary": 0, "driven": 1}
 #: rebuilds from 7 to ~2 per 100 steps (benchmarks/RESULTS.md).
 REBUILD_STEPS = 40
 
-#: Scalar parameters of a system passed to the kernel, as a numba record (fields by name).
+#: The per-system scalar parameters the kernel reads (fields of ``Params``).
 SCALARS = ("Lx", "Ly", "Lz", "gravity", "M", "K", "C", "U", "amplitude", "omega", "z_offset",
            "dt", "drag", "t_window")
-SCALAR_RECORD = np.dtype([(name, np.float64) for name in SCALARS])
-#: The box's scalar state (in and out), a record: ``step`` is carried as a float (exact < 2^53).
-BOX = ("z", "zd", "zdd", "t", "z_max", "z_min", "step")
-BOX_RECORD = np.dtype([(name, np.float64) for name in BOX])
-#: Diagnostics of the last force evaluation returned per system, a record.
-DIAG = ("e_elastic", "f_floor_lid", "f_box", "n_floor", "n_lid")
-DIAG_RECORD = np.dtype([(name, np.float64) for name in DIAG])
+#: Fields of ``Params`` the kernel reads, in the order of its parameter offsets.
+PARAM_FIELDS = ("radius", "mass", "inertia", "pair_table", "wall_table") + SCALARS
+#: Fields of ``State`` the kernel reads and writes, in the order of its state offsets.
+STATE_FIELDS = ("r", "v", "w", "q", "a", "alpha", "z", "zd", "zdd", "t", "z_max", "z_min", "step",
+                "work", "power", "e_elastic", "f_floor_lid", "f_box", "n_floor", "n_lid")
 
 #: The scalar forms the kernels inline (with the forms they call, from the same modules): a
 #: change to their source files must recompile the cached kernels (numba's cache only watches
@@ -313,13 +314,12 @@ if AVAILABLE:
         return e_sum, ln_sum, lf_sum
 
     @_kernel()
-    def _advance_one(b, n_steps, system, law, cutoff, skin,
-                     r, v, w, q, a, al, box, work, power, diag,
-                     R, m, I, sid, table, wall_table, sc, impulse):
-        """Advance system ``b`` by ``n_steps``. ``box``: the box state (:data:`BOX_RECORD`),
-        ``diag`` the diagnostics (:data:`DIAG_RECORD`), ``sc`` the scalar parameters
-        (:data:`SCALAR_RECORD`), ``table``/``wall_table`` the contact tables, ``sid`` the
-        grains' species.
+    def _advance_one(b, n_steps, system, law, skin, st, pm, so, po, n_species, n_cols, sid,
+                     impulse):
+        """Advance system ``b`` of the packed batch by ``n_steps`` in place: row ``st[b]``
+        holds its state (the fields :data:`STATE_FIELDS` at offsets ``so``), row ``pm[b]`` its
+        parameters (:data:`PARAM_FIELDS` at offsets ``po``; contact tables of ``n_species``
+        species and ``n_cols`` columns), ``sid`` the grains' species.
 
         A step is two passes over the grains and one over the listed pairs: (1) the
         velocity-Verlet predictor, gravity and drag, the six walls, the drag power and the
@@ -327,14 +327,27 @@ if AVAILABLE:
         grain moved more than ``skin / 2``); (2) the pairs; (3) the primary, the rotation and
         the corrector, with the finite-check of the new accelerations. Divisions by mass and
         inertia are multiplications by reciprocals computed once per call."""
-        prm = sc[b]
-        Lx, Ly, Lz, grav, drag, dt = prm.Lx, prm.Ly, prm.Lz, prm.gravity, prm.drag, prm.dt
-        M, K, C, U, om = prm.M, prm.K, prm.C, prm.U, prm.omega
-        amp, z_off, t_win = prm.amplitude, prm.z_offset, prm.t_window
-        n = r.shape[1]
-        rb, vb, wb, qb, ab, alb = r[b], v[b], w[b], q[b], a[b], al[b]
-        Rb, mb, Ib = R[b], m[b], I[b]
-        tab, wtab = table[b], wall_table[b]
+        n = sid.shape[0]
+        row = st[b]  # so[k], po[k]: offsets of STATE_FIELDS[k], PARAM_FIELDS[k] in the rows
+        prow = pm[b]
+        S, F = n_species, n_cols
+        rb = row[so[0]:so[0] + 3 * n].reshape((n, 3))
+        vb = row[so[1]:so[1] + 3 * n].reshape((n, 3))
+        wb = row[so[2]:so[2] + 3 * n].reshape((n, 3))
+        qb = row[so[3]:so[3] + 4 * n].reshape((n, 4))
+        ab = row[so[4]:so[4] + 3 * n].reshape((n, 3))
+        alb = row[so[5]:so[5] + 3 * n].reshape((n, 3))
+        work = row[so[13]:so[13] + 7]
+        power = row[so[14]:so[14] + 7]
+        Rb = prow[po[0]:po[0] + n]
+        mb = prow[po[1]:po[1] + n]
+        Ib = prow[po[2]:po[2] + n]
+        tab = prow[po[3]:po[3] + S * S * F].reshape((S, S, F))
+        wtab = prow[po[4]:po[4] + S * F].reshape((S, F))
+        Lx, Ly, Lz, grav = prow[po[5]], prow[po[6]], prow[po[7]], prow[po[8]]
+        M, K, C, U = prow[po[9]], prow[po[10]], prow[po[11]], prow[po[12]]
+        amp, om, z_off, dt = prow[po[13]], prow[po[14]], prow[po[15]], prow[po[16]]
+        drag, t_win = prow[po[17]], prow[po[18]]
         pi = np.empty(4 * n + 16, np.int64)  # grown by _pairs when a bed lists more
         pj = np.empty(4 * n + 16, np.int64)
         pc = np.empty((4 * n + 16, 5))
@@ -342,8 +355,8 @@ if AVAILABLE:
         inv_m = 1.0 / mb
         inv_I = 1.0 / Ib
         ref = np.empty((n, 3))
-        bx = box[b]
-        z, zd, zdd, t, zmax, zmin, step = bx.z, bx.zd, bx.zdd, bx.t, bx.z_max, bx.z_min, bx.step
+        z, zd, zdd, t = row[so[6]], row[so[7]], row[so[8]], row[so[9]]
+        zmax, zmin, step = row[so[10]], row[so[11]], row[so[12]]
         # the skin: at least the model's, wider when grains are fast (a gas), so that a list
         # lasts about REBUILD_STEPS steps at the call's starting speeds (at most 2 R_max); a
         # wider skin lists more pairs but never changes which pairs touch
@@ -540,8 +553,8 @@ if AVAILABLE:
                 zd = np.nan
                 break
             for c in range(7):
-                work[b, c] = work[b, c] + 0.5 * dt * (power[b, c] + pw[c])
-                power[b, c] = pw[c]
+                work[c] = work[c] + 0.5 * dt * (power[c] + pw[c])
+                power[c] = pw[c]
             z, zd, zdd, t = z1, zd1, zdd1, t1
             if t1 >= t_win:
                 zmax = max(zmax, z1)
@@ -549,19 +562,18 @@ if AVAILABLE:
             step += 1
             imp0 += floor_lid
             imp1 += box_z
-        bx.z, bx.zd, bx.zdd, bx.t, bx.z_max, bx.z_min, bx.step = z, zd, zdd, t, zmax, zmin, step
-        dg = diag[b]
-        dg.e_elastic, dg.f_floor_lid, dg.f_box = e_el, floor_lid, box_z
-        dg.n_floor, dg.n_lid = n_floor, n_lid
+        row[so[6]], row[so[7]], row[so[8]], row[so[9]] = z, zd, zdd, t
+        row[so[10]], row[so[11]], row[so[12]] = zmax, zmin, step
+        row[so[15]], row[so[16]], row[so[17]] = e_el, floor_lid, box_z
+        row[so[18]], row[so[19]] = n_floor, n_lid
         impulse[b, 0] = imp0 / n_steps
         impulse[b, 1] = imp1 / n_steps
 
     @_kernel(parallel=True)
-    def _advance(n_steps, system, law, cutoff, skin, r, v, w, q, a, al, box, work, power,
-                 diag, R, m, I, sid, table, wall_table, sc, impulse):
-        for b in prange(r.shape[0]):
-            _advance_one(b, n_steps, system, law, cutoff, skin, r, v, w, q, a, al, box, work,
-                         power, diag, R, m, I, sid, table, wall_table, sc, impulse)
+    def _advance(n_steps, system, law, skin, st, pm, so, po, n_species, n_cols, sid, impulse):
+        for b in prange(st.shape[0]):
+            _advance_one(b, n_steps, system, law, skin, st, pm, so, po, n_species, n_cols, sid,
+                         impulse)
 
 
 # -- packing of pytrees (one float64 array per call across the JAX/Python boundary) ---------
@@ -601,47 +613,28 @@ def unpack_like(packed, tree):
     return type(tree)(**out)
 
 
-def unpack(packed, lay):
-    """Packed numpy array -> dict of numpy arrays (float64 views/copies per :func:`layout`)."""
-    out, k = {}, 0
-    b = packed.shape[0]
-    for name, shape, dtype in lay:
-        size = int(np.prod(shape, dtype=np.int64))
-        out[name] = packed[:, k:k + size].reshape((b,) + shape)
-        k += size
-    return out
+def offsets(lay, names) -> np.ndarray:
+    """Start of each field ``names`` in a packed row of layout ``lay`` (:func:`layout`)."""
+    starts, k = {}, 0
+    for name, shape, _ in lay:
+        starts[name] = k
+        k += int(np.prod(shape, dtype=np.int64))
+    return np.array([starts[n] for n in names], np.int64)
 
 
-def pack_numpy(d, lay):
-    b = next(iter(d.values())).shape[0]
-    return np.concatenate([np.asarray(d[name], np.float64).reshape(b, -1) for name, _, _ in lay], axis=1)
-
-
-def advance_numpy(model, state: dict, params: dict, n_steps: int):
-    """Advance a batch given as numpy dicts (fields of ``State`` / ``Params``, leading batch
-    axis). Returns ``(new_state_dict, mean_forces (B, 2))``; inputs are not modified."""
+def advance_packed(model, state_packed, params_packed, state_layout, param_layout,
+                   n_steps: int):
+    """Advance a packed batch (:func:`pack`: ``(B, total)`` float64 rows of ``State`` and
+    ``Params`` in the layouts ``state_layout``, ``param_layout``) by ``n_steps``. Returns
+    ``(new packed state, mean forces (B, 2))``; the inputs are not modified. The kernel works
+    in place on one copy of the state: no per-field copies, no re-packing."""
     from jaxdamp.physics.contact import LAWS
 
-    f64 = lambda x: np.ascontiguousarray(x, dtype=np.float64)  # noqa: E731
-    r, v, w, q = (f64(state[k]).copy() for k in ("r", "v", "w", "q"))
-    a, al = f64(state["a"]).copy(), f64(state["alpha"]).copy()
-    work = f64(state["work"]).copy()
-    power = f64(state["power"]).copy()
-    B = r.shape[0]
-    box = np.empty(B, BOX_RECORD)
-    for k in BOX:
-        box[k] = np.asarray(state[k], np.float64)
-    diag = np.zeros(B, DIAG_RECORD)
-    impulse = np.zeros((B, 2))
-    sc = np.empty(B, SCALAR_RECORD)
-    for k in SCALARS:
-        sc[k] = np.broadcast_to(f64(params[k]), (B,))
-    _advance(int(n_steps), SYSTEMS[model.system], LAWS[model.law].id, model.cutoff, model.skin,
-             r, v, w, q, a, al, box, work, power, diag,
-             f64(params["radius"]), f64(params["mass"]), f64(params["inertia"]),
-             model.species_index().astype(np.int64), f64(params["pair_table"]),
-             f64(params["wall_table"]), sc, impulse)
-    new = dict(state)
-    new.update(r=r, v=v, w=w, q=q, a=a, alpha=al, work=work, power=power,
-               **{k: box[k].copy() for k in BOX}, **{k: diag[k].copy() for k in DIAG})
-    return new, impulse
+    st = np.array(state_packed, dtype=np.float64, order="C", copy=True)
+    pm = np.ascontiguousarray(params_packed, dtype=np.float64)
+    table = dict((name, shape) for name, shape, _ in param_layout)["pair_table"]
+    impulse = np.zeros((st.shape[0], 2))
+    _advance(int(n_steps), SYSTEMS[model.system], LAWS[model.law].id, model.skin, st, pm,
+             offsets(state_layout, STATE_FIELDS), offsets(param_layout, PARAM_FIELDS),
+             int(table[0]), int(table[2]), model.species_index().astype(np.int64), impulse)
+    return st, impulse

@@ -103,11 +103,11 @@ def _native_block(model: Model, record_every: int):
     from jaxdamp.engine import native
 
     def host(state_packed, params_packed):
-        # the callback may hand over jax Arrays: slicing those would dispatch JAX ops (ms)
-        sd = native.unpack(np.asarray(state_packed), state_layout)
-        pd = native.unpack(np.asarray(params_packed), param_layout)
-        new, impulse = native.advance_numpy(model, sd, pd, record_every)
-        return native.pack_numpy(new, state_layout), impulse
+        # the callback may hand over jax Arrays: np.asarray once (slicing them would dispatch
+        # JAX ops); the kernel reads the fields at their offsets in the packed rows
+        return native.advance_packed(model, np.asarray(state_packed),
+                                     np.asarray(params_packed), state_layout, param_layout,
+                                     record_every)
 
     state_layout = param_layout = None
 
