@@ -24,9 +24,10 @@ state in place (:func:`advance_packed`).
   so a call's result is a pure function of its inputs (resume stays bit-identical);
 * the batch of independent systems is spread over the CPU cores (``prange``).
 
-It is called from JAX through :func:`jax.pure_callback` once per sampling interval (every
-``record_every`` steps), inside the same ``lax.scan`` as the JAX engine, so records, runner,
-checkpoints and sweeps are shared. It is forward-only: gradients use the JAX engine, which
+It is called from JAX through :func:`jax.pure_callback` once per chunk and writes the samples
+itself with the scalar form of the record (:func:`jaxdamp.physics.energy.record_row`, next to
+``record``), so the runner, checkpoints and sweeps are shared with the JAX engine and a chunk
+crosses the JAX/Python boundary once. It is forward-only: gradients use the JAX engine, which
 stays the reference; ``tests/test_native.py`` checks that both agree.
 """
 
@@ -39,6 +40,7 @@ import os
 import numpy as np
 
 from jaxdamp.physics.contact import FASTMATH, GAMMA_S, MU, contact_scalar, pair_scalar
+from jaxdamp.physics.energy import record_row
 from jaxdamp.physics.excitation import base_motion_scalar, drive_motion_scalar
 from jaxdamp.physics.integrate import (
     body_force_scalar,
@@ -72,13 +74,15 @@ SCALARS = ("Lx", "Ly", "Lz", "gravity", "M", "K", "C", "U", "amplitude", "omega"
 PARAM_FIELDS = ("radius", "mass", "inertia", "pair_table", "wall_table") + SCALARS
 #: Fields of ``State`` the kernel reads and writes, in the order of its state offsets.
 STATE_FIELDS = ("r", "v", "w", "q", "a", "alpha", "z", "zd", "zdd", "t", "z_max", "z_min", "step",
-                "work", "power", "e_elastic", "f_floor_lid", "f_box", "n_floor", "n_lid")
+                "work", "power", "e_elastic", "f_floor_lid", "f_box", "n_floor", "n_lid",
+                "e_start")
 
 #: The scalar forms the kernels inline (with the forms they call, from the same modules): a
 #: change to their source files must recompile the cached kernels (numba's cache only watches
 #: the kernel's own file).
 _INLINED = (contact_scalar, pair_scalar, base_motion_scalar, drive_motion_scalar,
-            body_force_scalar, primary_acceleration_scalar, primary_powers_scalar, rotate_scalar)
+            body_force_scalar, primary_acceleration_scalar, primary_powers_scalar, rotate_scalar,
+            record_row)
 
 
 def _source_files() -> tuple[str, ...]:
@@ -314,12 +318,14 @@ if AVAILABLE:
         return e_sum, ln_sum, lf_sum
 
     @_kernel()
-    def _advance_one(b, n_steps, system, law, skin, st, pm, so, po, n_species, n_cols, sid,
-                     impulse):
-        """Advance system ``b`` of the packed batch by ``n_steps`` in place: row ``st[b]``
-        holds its state (the fields :data:`STATE_FIELDS` at offsets ``so``), row ``pm[b]`` its
-        parameters (:data:`PARAM_FIELDS` at offsets ``po``; contact tables of ``n_species``
-        species and ``n_cols`` columns), ``sid`` the grains' species.
+    def _advance_one(b, n_records, record_every, system, law, skin, st, pm, so, po, n_species,
+                     n_cols, sid, bounds, rec):
+        """Advance system ``b`` of the packed batch by ``n_records × record_every`` steps in
+        place, writing a sample after every ``record_every`` steps into ``rec[b]``
+        (:func:`jaxdamp.physics.energy.record_row`; ``bounds``: the species' index ranges): row
+        ``st[b]`` holds its state (the fields :data:`STATE_FIELDS` at offsets ``so``), row
+        ``pm[b]`` its parameters (:data:`PARAM_FIELDS` at offsets ``po``; contact tables of
+        ``n_species`` species and ``n_cols`` columns), ``sid`` the grains' species.
 
         A step is two passes over the grains and one over the listed pairs: (1) the
         velocity-Verlet predictor, gravity and drag, the six walls, the drag power and the
@@ -356,6 +362,7 @@ if AVAILABLE:
         inv_I = 1.0 / Ib
         ref = np.empty((n, 3))
         z, zd, zdd, t = row[so[6]], row[so[7]], row[so[8]], row[so[9]]
+        e_start = row[so[20]]
         zmax, zmin, step = row[so[10]], row[so[11]], row[so[12]]
         # the skin: at least the model's, wider when grains are fast (a gas), so that a list
         # lasts about REBUILD_STEPS steps at the call's starting speeds (at most 2 R_max); a
@@ -363,8 +370,9 @@ if AVAILABLE:
         v2 = 0.0
         for i in range(n):
             v2 = max(v2, vb[i, 0] ** 2 + vb[i, 1] ** 2 + (vb[i, 2] - zd) ** 2)
-        skin = max(skin, min(2.0 * REBUILD_STEPS * math.sqrt(v2) * dt, 2.0 * Rb.max()))
-        cutoff = 2.0 * Rb.max() + skin
+        r_max = Rb.max() if n > 0 else 0.0
+        skin = max(skin, min(2.0 * REBUILD_STEPS * math.sqrt(v2) * dt, 2.0 * r_max))
+        cutoff = 2.0 * r_max + skin
         npairs = 0
         if n > 1:
             npairs, pi, pj, pc = _pairs(rb, z, cutoff, pi, pj, pc, ref, Rb, mb, sid, tab, law)
@@ -376,204 +384,208 @@ if AVAILABLE:
         F = np.empty((n, 3))
         T = np.empty((n, 3))
         pw = np.empty(7)
-        imp0 = 0.0
-        imp1 = 0.0
         e_el = 0.0
         floor_lid = 0.0
         box_z = 0.0
         n_floor = 0.0
         n_lid = 0.0
-        for _ in range(n_steps):
-            t1 = t + dt
-            if system == 0:
-                z1 = z + dt * zd + hdt2 * zdd
-                zdp = zd + dt * zdd
-            else:
-                z1, zdp, zdd1 = drive_motion_scalar(t1, z_off, amp, om)
-            # pass 1: predictor, body force, walls, drag power, displacement since the build
-            e_el = 0.0
-            pw_n = 0.0
-            pw_f = 0.0
-            box_z = 0.0
-            floor_lid = 0.0
-            n_floor = 0.0
-            n_lid = 0.0
-            pdrag = 0.0
-            far = False
-            for i in range(n):
-                x = rb[i, 0] + dt * vb[i, 0] + hdt2 * ab[i, 0]
-                y = rb[i, 1] + dt * vb[i, 1] + hdt2 * ab[i, 1]
-                zz = rb[i, 2] + dt * vb[i, 2] + hdt2 * ab[i, 2]
-                ux = vb[i, 0] + dt * ab[i, 0]
-                uy = vb[i, 1] + dt * ab[i, 1]
-                uz = vb[i, 2] + dt * ab[i, 2]
-                Ri = Rb[i]
-                sx = Ri * (wb[i, 0] + dt * alb[i, 0])
-                sy = Ri * (wb[i, 1] + dt * alb[i, 1])
-                sz = Ri * (wb[i, 2] + dt * alb[i, 2])
-                r1[i, 0], r1[i, 1], r1[i, 2] = x, y, zz
-                vp[i, 0], vp[i, 1], vp[i, 2] = ux, uy, uz
-                rw[i, 0], rw[i, 1], rw[i, 2] = sx, sy, sz
-                ddx = x - ref[i, 0]
-                ddy = y - ref[i, 1]
-                ddz = zz - z1 - ref[i, 2]
-                far = far | (ddx * ddx + ddy * ddy + ddz * ddz > half_skin2)
-                pdrag += mb[i] * (ux * ux + uy * uy + uz * uz)
-                fx, fy, fz = body_force_scalar(mb[i], ux, uy, uz, grav, drag)
-                tx = 0.0
-                ty = 0.0
-                tz = 0.0
-                # walls: floor, lid, x = 0, x = Lx, y = 0, y = Ly (inward normals), unrolled:
-                # most grains touch none, so the common path is six compares
-                floor = zz - z1
-                wz = uz - zdp
-                if floor < Ri:
-                    gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
-                        law, Ri - floor, 0.0, 0.0, 1.0, ux, uy, wz, sx, sy, sz, Ri, wk[i])
-                    fx += gx
-                    fy += gy
-                    fz += gz
-                    tx += hx
-                    ty += hy
-                    tz += hz
-                    e_el += e
-                    pw_n += ln
-                    pw_f += lf
-                    box_z -= gz
-                    floor_lid -= gz
-                    n_floor += 1.0
-                if Lz - floor < Ri:
-                    gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
-                        law, Ri - (Lz - floor), 0.0, 0.0, -1.0, ux, uy, wz, sx, sy, sz, Ri, wk[i])
-                    fx += gx
-                    fy += gy
-                    fz += gz
-                    tx += hx
-                    ty += hy
-                    tz += hz
-                    e_el += e
-                    pw_n += ln
-                    pw_f += lf
-                    box_z -= gz
-                    floor_lid -= gz
-                    n_lid += 1.0
-                if x < Ri:
-                    gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
-                        law, Ri - x, 1.0, 0.0, 0.0, ux, uy, wz, sx, sy, sz, Ri, wk[i])
-                    fx += gx
-                    fy += gy
-                    fz += gz
-                    tx += hx
-                    ty += hy
-                    tz += hz
-                    e_el += e
-                    pw_n += ln
-                    pw_f += lf
-                    box_z -= gz
-                if Lx - x < Ri:
-                    gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
-                        law, Ri - (Lx - x), -1.0, 0.0, 0.0, ux, uy, wz, sx, sy, sz, Ri, wk[i])
-                    fx += gx
-                    fy += gy
-                    fz += gz
-                    tx += hx
-                    ty += hy
-                    tz += hz
-                    e_el += e
-                    pw_n += ln
-                    pw_f += lf
-                    box_z -= gz
-                if y < Ri:
-                    gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
-                        law, Ri - y, 0.0, 1.0, 0.0, ux, uy, wz, sx, sy, sz, Ri, wk[i])
-                    fx += gx
-                    fy += gy
-                    fz += gz
-                    tx += hx
-                    ty += hy
-                    tz += hz
-                    e_el += e
-                    pw_n += ln
-                    pw_f += lf
-                    box_z -= gz
-                if Ly - y < Ri:
-                    gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
-                        law, Ri - (Ly - y), 0.0, -1.0, 0.0, ux, uy, wz, sx, sy, sz, Ri, wk[i])
-                    fx += gx
-                    fy += gy
-                    fz += gz
-                    tx += hx
-                    ty += hy
-                    tz += hz
-                    e_el += e
-                    pw_n += ln
-                    pw_f += lf
-                    box_z -= gz
-                F[i, 0], F[i, 1], F[i, 2] = fx, fy, fz
-                T[i, 0], T[i, 1], T[i, 2] = tx, ty, tz
-            if n > 1 and far:  # a grain moved more than skin/2: list the pairs anew
-                npairs, pi, pj, pc = _pairs(r1, z1, cutoff, pi, pj, pc, ref, Rb, mb, sid, tab,
-                                            law)
-            # pass 2: the grain pairs
-            pp_e, pp_n, pp_f = _pair_forces(law, r1, vp, rw, Rb, pi, pj, pc, npairs, F, T)
-            e_el += pp_e
-            # pass 3: the primary, rotation and corrector
-            if system == 0:
-                u1, ud1 = base_motion_scalar(t1, U, om)
-                zdd1 = primary_acceleration_scalar(z1, zdp, u1, ud1, box_z, M, K, C)
-                zd1 = zd + 0.5 * dt * (zdd + zdd1)
-                pw[0], pw[1] = primary_powers_scalar(z1, zdp, u1, ud1, K, C)
-            else:
-                zd1 = zdp
-                pw[0] = -box_z * zdp
-                pw[1] = 0.0
-            pw[2], pw[3], pw[4], pw[5] = pp_n, pp_f, pw_n, pw_f
-            pw[6] = drag * pdrag
-            health = box_z + e_el + pp_n + pp_f + pw_n + pw_f + z1 + zdp + zdd1
-            for i in range(n):
-                # rotation by the mid-step angular velocity ω + α dt/2
-                qb[i, 0], qb[i, 1], qb[i, 2], qb[i, 3] = rotate_scalar(
-                    qb[i, 0], qb[i, 1], qb[i, 2], qb[i, 3], wb[i, 0] + 0.5 * dt * alb[i, 0],
-                    wb[i, 1] + 0.5 * dt * alb[i, 1], wb[i, 2] + 0.5 * dt * alb[i, 2], dt)
-                for k in range(3):
-                    a1 = F[i, k] * inv_m[i]
-                    al1 = T[i, k] * inv_I[i]
-                    health += a1 + al1
-                    vb[i, k] = vb[i, k] + 0.5 * dt * (ab[i, k] + a1)
-                    wb[i, k] = wb[i, k] + 0.5 * dt * (alb[i, k] + al1)
-                    ab[i, k] = a1
-                    alb[i, k] = al1
-                    rb[i, k] = r1[i, k]
-            if not math.isfinite(health):
-                # the state blew up: mark it non-finite and stop; the runner reports it
+        for k_rec in range(n_records):
+            imp0 = 0.0
+            imp1 = 0.0
+            for _ in range(record_every):
+                t1 = t + dt
+                if system == 0:
+                    z1 = z + dt * zd + hdt2 * zdd
+                    zdp = zd + dt * zdd
+                else:
+                    z1, zdp, zdd1 = drive_motion_scalar(t1, z_off, amp, om)
+                # pass 1: predictor, body force, walls, drag power, displacement since the build
+                e_el = 0.0
+                pw_n = 0.0
+                pw_f = 0.0
+                box_z = 0.0
+                floor_lid = 0.0
+                n_floor = 0.0
+                n_lid = 0.0
+                pdrag = 0.0
+                far = False
                 for i in range(n):
+                    x = rb[i, 0] + dt * vb[i, 0] + hdt2 * ab[i, 0]
+                    y = rb[i, 1] + dt * vb[i, 1] + hdt2 * ab[i, 1]
+                    zz = rb[i, 2] + dt * vb[i, 2] + hdt2 * ab[i, 2]
+                    ux = vb[i, 0] + dt * ab[i, 0]
+                    uy = vb[i, 1] + dt * ab[i, 1]
+                    uz = vb[i, 2] + dt * ab[i, 2]
+                    Ri = Rb[i]
+                    sx = Ri * (wb[i, 0] + dt * alb[i, 0])
+                    sy = Ri * (wb[i, 1] + dt * alb[i, 1])
+                    sz = Ri * (wb[i, 2] + dt * alb[i, 2])
+                    r1[i, 0], r1[i, 1], r1[i, 2] = x, y, zz
+                    vp[i, 0], vp[i, 1], vp[i, 2] = ux, uy, uz
+                    rw[i, 0], rw[i, 1], rw[i, 2] = sx, sy, sz
+                    ddx = x - ref[i, 0]
+                    ddy = y - ref[i, 1]
+                    ddz = zz - z1 - ref[i, 2]
+                    far = far | (ddx * ddx + ddy * ddy + ddz * ddz > half_skin2)
+                    pdrag += mb[i] * (ux * ux + uy * uy + uz * uz)
+                    fx, fy, fz = body_force_scalar(mb[i], ux, uy, uz, grav, drag)
+                    tx = 0.0
+                    ty = 0.0
+                    tz = 0.0
+                    # walls: floor, lid, x = 0, x = Lx, y = 0, y = Ly (inward normals), unrolled:
+                    # most grains touch none, so the common path is six compares
+                    floor = zz - z1
+                    wz = uz - zdp
+                    if floor < Ri:
+                        gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
+                            law, Ri - floor, 0.0, 0.0, 1.0, ux, uy, wz, sx, sy, sz, Ri, wk[i])
+                        fx += gx
+                        fy += gy
+                        fz += gz
+                        tx += hx
+                        ty += hy
+                        tz += hz
+                        e_el += e
+                        pw_n += ln
+                        pw_f += lf
+                        box_z -= gz
+                        floor_lid -= gz
+                        n_floor += 1.0
+                    if Lz - floor < Ri:
+                        gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
+                            law, Ri - (Lz - floor), 0.0, 0.0, -1.0, ux, uy, wz, sx, sy, sz, Ri, wk[i])
+                        fx += gx
+                        fy += gy
+                        fz += gz
+                        tx += hx
+                        ty += hy
+                        tz += hz
+                        e_el += e
+                        pw_n += ln
+                        pw_f += lf
+                        box_z -= gz
+                        floor_lid -= gz
+                        n_lid += 1.0
+                    if x < Ri:
+                        gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
+                            law, Ri - x, 1.0, 0.0, 0.0, ux, uy, wz, sx, sy, sz, Ri, wk[i])
+                        fx += gx
+                        fy += gy
+                        fz += gz
+                        tx += hx
+                        ty += hy
+                        tz += hz
+                        e_el += e
+                        pw_n += ln
+                        pw_f += lf
+                        box_z -= gz
+                    if Lx - x < Ri:
+                        gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
+                            law, Ri - (Lx - x), -1.0, 0.0, 0.0, ux, uy, wz, sx, sy, sz, Ri, wk[i])
+                        fx += gx
+                        fy += gy
+                        fz += gz
+                        tx += hx
+                        ty += hy
+                        tz += hz
+                        e_el += e
+                        pw_n += ln
+                        pw_f += lf
+                        box_z -= gz
+                    if y < Ri:
+                        gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
+                            law, Ri - y, 0.0, 1.0, 0.0, ux, uy, wz, sx, sy, sz, Ri, wk[i])
+                        fx += gx
+                        fy += gy
+                        fz += gz
+                        tx += hx
+                        ty += hy
+                        tz += hz
+                        e_el += e
+                        pw_n += ln
+                        pw_f += lf
+                        box_z -= gz
+                    if Ly - y < Ri:
+                        gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
+                            law, Ri - (Ly - y), 0.0, -1.0, 0.0, ux, uy, wz, sx, sy, sz, Ri, wk[i])
+                        fx += gx
+                        fy += gy
+                        fz += gz
+                        tx += hx
+                        ty += hy
+                        tz += hz
+                        e_el += e
+                        pw_n += ln
+                        pw_f += lf
+                        box_z -= gz
+                    F[i, 0], F[i, 1], F[i, 2] = fx, fy, fz
+                    T[i, 0], T[i, 1], T[i, 2] = tx, ty, tz
+                if n > 1 and far:  # a grain moved more than skin/2: list the pairs anew
+                    npairs, pi, pj, pc = _pairs(r1, z1, cutoff, pi, pj, pc, ref, Rb, mb, sid, tab,
+                                                law)
+                # pass 2: the grain pairs
+                pp_e, pp_n, pp_f = _pair_forces(law, r1, vp, rw, Rb, pi, pj, pc, npairs, F, T)
+                e_el += pp_e
+                # pass 3: the primary, rotation and corrector
+                if system == 0:
+                    u1, ud1 = base_motion_scalar(t1, U, om)
+                    zdd1 = primary_acceleration_scalar(z1, zdp, u1, ud1, box_z, M, K, C)
+                    zd1 = zd + 0.5 * dt * (zdd + zdd1)
+                    pw[0], pw[1] = primary_powers_scalar(z1, zdp, u1, ud1, K, C)
+                else:
+                    zd1 = zdp
+                    pw[0] = -box_z * zdp
+                    pw[1] = 0.0
+                pw[2], pw[3], pw[4], pw[5] = pp_n, pp_f, pw_n, pw_f
+                pw[6] = drag * pdrag
+                health = box_z + e_el + pp_n + pp_f + pw_n + pw_f + z1 + zdp + zdd1
+                for i in range(n):
+                    # rotation by the mid-step angular velocity ω + α dt/2
+                    qb[i, 0], qb[i, 1], qb[i, 2], qb[i, 3] = rotate_scalar(
+                        qb[i, 0], qb[i, 1], qb[i, 2], qb[i, 3], wb[i, 0] + 0.5 * dt * alb[i, 0],
+                        wb[i, 1] + 0.5 * dt * alb[i, 1], wb[i, 2] + 0.5 * dt * alb[i, 2], dt)
                     for k in range(3):
-                        rb[i, k] = np.nan
-                        vb[i, k] = np.nan
-                zd = np.nan
-                break
-            for c in range(7):
-                work[c] = work[c] + 0.5 * dt * (power[c] + pw[c])
-                power[c] = pw[c]
-            z, zd, zdd, t = z1, zd1, zdd1, t1
-            if t1 >= t_win:
-                zmax = max(zmax, z1)
-                zmin = min(zmin, z1)
-            step += 1
-            imp0 += floor_lid
-            imp1 += box_z
+                        a1 = F[i, k] * inv_m[i]
+                        al1 = T[i, k] * inv_I[i]
+                        health += a1 + al1
+                        vb[i, k] = vb[i, k] + 0.5 * dt * (ab[i, k] + a1)
+                        wb[i, k] = wb[i, k] + 0.5 * dt * (alb[i, k] + al1)
+                        ab[i, k] = a1
+                        alb[i, k] = al1
+                        rb[i, k] = r1[i, k]
+                if not math.isfinite(health):
+                    # the state blew up: mark it non-finite and stop; the runner reports it
+                    for i in range(n):
+                        for k in range(3):
+                            rb[i, k] = np.nan
+                            vb[i, k] = np.nan
+                    zd = np.nan
+                    break
+                for c in range(7):
+                    work[c] = work[c] + 0.5 * dt * (power[c] + pw[c])
+                    power[c] = pw[c]
+                z, zd, zdd, t = z1, zd1, zdd1, t1
+                if t1 >= t_win:
+                    zmax = max(zmax, z1)
+                    zmin = min(zmin, z1)
+                step += 1
+                imp0 += floor_lid
+                imp1 += box_z
+            u_t = base_motion_scalar(t, U, om)[0] if system == 0 else 0.0
+            record_row(rec[b, k_rec], t, z, zd, u_t, rb, vb, wb, mb, Ib, Rb, grav, Lz, M, K,
+                       system == 0, e_el, e_start, imp0 / record_every,
+                       imp1 / record_every, n_floor, n_lid, work, bounds)
         row[so[6]], row[so[7]], row[so[8]], row[so[9]] = z, zd, zdd, t
         row[so[10]], row[so[11]], row[so[12]] = zmax, zmin, step
         row[so[15]], row[so[16]], row[so[17]] = e_el, floor_lid, box_z
         row[so[18]], row[so[19]] = n_floor, n_lid
-        impulse[b, 0] = imp0 / n_steps
-        impulse[b, 1] = imp1 / n_steps
 
     @_kernel(parallel=True)
-    def _advance(n_steps, system, law, skin, st, pm, so, po, n_species, n_cols, sid, impulse):
+    def _advance(n_records, record_every, system, law, skin, st, pm, so, po, n_species, n_cols,
+                 sid, bounds, rec):
         for b in prange(st.shape[0]):
-            _advance_one(b, n_steps, system, law, skin, st, pm, so, po, n_species, n_cols, sid,
-                         impulse)
+            _advance_one(b, n_records, record_every, system, law, skin, st, pm, so, po,
+                         n_species, n_cols, sid, bounds, rec)
 
 
 # -- packing of pytrees (one float64 array per call across the JAX/Python boundary) ---------
@@ -623,18 +635,24 @@ def offsets(lay, names) -> np.ndarray:
 
 
 def advance_packed(model, state_packed, params_packed, state_layout, param_layout,
-                   n_steps: int):
+                   n_records: int, record_every: int):
     """Advance a packed batch (:func:`pack`: ``(B, total)`` float64 rows of ``State`` and
-    ``Params`` in the layouts ``state_layout``, ``param_layout``) by ``n_steps``. Returns
-    ``(new packed state, mean forces (B, 2))``; the inputs are not modified. The kernel works
-    in place on one copy of the state: no per-field copies, no re-packing."""
+    ``Params`` in the layouts ``state_layout``, ``param_layout``) by ``n_records ×
+    record_every`` steps, sampling after every ``record_every``. Returns ``(new packed state,
+    samples (B, n_records, width))``, the samples' columns in the order of
+    :func:`jaxdamp.physics.energy.record_layout`; the inputs are not modified. The kernel
+    works in place on one copy of the state: no per-field copies, no re-packing."""
     from jaxdamp.physics.contact import LAWS
+    from jaxdamp.physics.energy import record_layout
 
     st = np.array(state_packed, dtype=np.float64, order="C", copy=True)
     pm = np.ascontiguousarray(params_packed, dtype=np.float64)
     table = dict((name, shape) for name, shape, _ in param_layout)["pair_table"]
-    impulse = np.zeros((st.shape[0], 2))
-    _advance(int(n_steps), SYSTEMS[model.system], LAWS[model.law].id, model.skin, st, pm,
-             offsets(state_layout, STATE_FIELDS), offsets(param_layout, PARAM_FIELDS),
-             int(table[0]), int(table[2]), model.species_index().astype(np.int64), impulse)
-    return st, impulse
+    width = sum(int(np.prod(shape, dtype=np.int64)) for _, shape in record_layout(model))
+    rec = np.empty((st.shape[0], int(n_records), width))
+    bounds = np.array([sl.start for sl in model.species_slices()] + [model.n], np.int64)
+    _advance(int(n_records), int(record_every), SYSTEMS[model.system], LAWS[model.law].id,
+             model.skin, st, pm, offsets(state_layout, STATE_FIELDS),
+             offsets(param_layout, PARAM_FIELDS), int(table[0]), int(table[2]),
+             model.species_index().astype(np.int64), bounds, rec)
+    return st, rec

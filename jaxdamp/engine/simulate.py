@@ -45,15 +45,15 @@ def chunk_fn(model: Model, n_records: int, record_every: int, remat: bool = Fals
 
     ``records`` is a dict of arrays shaped ``(B, n_records, ...)``. With ``remat`` each
     inner block of ``record_every`` steps is rematerialised in reverse mode (bounded memory for
-    gradients through long scans). ``engine="native"`` advances each block with the compiled
-    CPU kernel (forward only; the neighbour lists in ``nbrs`` are then passed through unused).
+    gradients through long scans). ``engine="native"`` advances the whole chunk in the compiled
+    CPU kernel, samples included, in one host callback (forward only; the neighbour lists in
+    ``nbrs`` are then passed through unused).
     """
     if resolve_engine(engine) == "native":
-        block = _native_block(model, record_every)
-    else:
-        block = _jax_block(model, record_every)
-        if remat:
-            block = jax.checkpoint(block)
+        return _native_chunk(model, n_records, record_every)
+    block = _jax_block(model, record_every)
+    if remat:
+        block = jax.checkpoint(block)
     record_b = jax.vmap(record, in_axes=(0, 0, None, 0))
 
     def outer(carry, _, params):
@@ -95,33 +95,44 @@ def _jax_block(model: Model, record_every: int):
     return block
 
 
-def _native_block(model: Model, record_every: int):
-    """``(states, nbrs, params) -> (states, nbrs, mean forces)`` through the numba kernel.
-
-    State and params cross into Python as two packed float64 arrays: :func:`jax.pure_callback`
-    costs ~35 µs per array per call (measured), so 2 arrays instead of ~50 matter."""
+def _native_chunk(model: Model, n_records: int, record_every: int):
+    """The chunk through the numba kernel (:mod:`jaxdamp.engine.native`): one host callback
+    advances the whole chunk and writes the samples itself
+    (:func:`jaxdamp.physics.energy.record_row`, the scalar form of ``record``), so a chunk
+    crosses the JAX/Python boundary once, not once per sample. State and parameters cross as
+    two packed float64 arrays (:func:`jax.pure_callback` costs ~35 µs per array); the
+    neighbour lists are passed through unused (the kernel keeps its own)."""
     from jaxdamp.engine import native
+    from jaxdamp.physics.energy import INT_RECORDS, record_layout
+
+    rec_layout = record_layout(model)
+    width = sum(int(np.prod(shape, dtype=np.int64)) for _, shape in rec_layout)
+    layouts = {}
 
     def host(state_packed, params_packed):
         # the callback may hand over jax Arrays: np.asarray once (slicing them would dispatch
         # JAX ops); the kernel reads the fields at their offsets in the packed rows
         return native.advance_packed(model, np.asarray(state_packed),
-                                     np.asarray(params_packed), state_layout, param_layout,
-                                     record_every)
+                                     np.asarray(params_packed), layouts["state"],
+                                     layouts["params"], n_records, record_every)
 
-    state_layout = param_layout = None
-
-    def block(states, nbrs, params):
-        nonlocal state_layout, param_layout
-        state_layout = native.layout(states)
-        param_layout = native.layout(params)
+    @jax.jit
+    def run(states, nbrs, params):
+        layouts["state"], layouts["params"] = native.layout(states), native.layout(params)
         sp, pp = native.pack(states), native.pack(params)
+        B = sp.shape[0]
         shapes = (jax.ShapeDtypeStruct(sp.shape, sp.dtype),
-                  jax.ShapeDtypeStruct((sp.shape[0], 2), jnp.float64))
-        new, impulse = jax.pure_callback(host, shapes, sp, pp)
-        return native.unpack_like(new, states), nbrs, impulse
+                  jax.ShapeDtypeStruct((B, n_records, width), jnp.float64))
+        new, flat = jax.pure_callback(host, shapes, sp, pp)
+        recs, k = {}, 0
+        for name, shape in rec_layout:
+            size = int(np.prod(shape, dtype=np.int64))
+            x = jnp.reshape(flat[:, :, k:k + size], (B, n_records) + shape)
+            recs[name] = x.astype(jnp.int32) if name in INT_RECORDS else x
+            k += size
+        return native.unpack_like(new, states), nbrs, recs
 
-    return block
+    return run
 
 
 def init_states(model: Model, params: Params, r, v, w, q, z, zd, t=0.0, idx=None) -> State:

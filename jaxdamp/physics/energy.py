@@ -13,8 +13,9 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
+from jaxdamp.physics.contact import scalar_form
 from jaxdamp.physics.excitation import base_motion
-from jaxdamp.physics.model import CH, Model, Params, State
+from jaxdamp.physics.model import CH, N_CHANNELS, Model, Params, State
 
 
 def grain_energies(st: State, p: Params):
@@ -111,6 +112,82 @@ def record(st: State, p: Params, model: Model, mean_forces) -> dict:
         work=st.work,
         balance_residual=balance_residual(st, p, model),
     )
+
+
+#: Integer-valued records (stored as int32).
+INT_RECORDS = ("n_floor", "n_lid", "n_floor_species", "n_lid_species")
+
+
+def record_layout(model: Model) -> list[tuple[str, tuple]]:
+    """``[(name, shape)]`` of one sample of :func:`record`, in its order: the flat row of
+    :func:`record_row` (scalars ``()``, per-species ``(S,)``, ``work`` ``(N_CHANNELS,)``)."""
+    S = (len(model.species_slices()),)
+    shapes = {"z_cm_species": S, "vz_cm_species": S, "n_floor_species": S,
+              "n_lid_species": S, "work": (N_CHANNELS,)}
+    return [(name, shapes.get(name, ())) for name in RECORD_UNITS]
+
+
+@scalar_form
+def record_row(out, t, z, zd, u, r, v, w, mass, inertia, radius, gravity, Lz, M, K, primary,
+               e_elastic, e_start, f_floor_lid, f_box, n_floor, n_lid, work, bounds):
+    """Scalar form of :func:`record` (the native engine's samples): one sample written into
+    the flat row ``out`` in the order of :func:`record_layout`. ``u``: the base position at
+    ``t`` (S1), ``primary``: whether the primary is there; ``bounds``: the species' first
+    grain and the end, ``(S + 1,)``."""
+    n = r.shape[0]
+    S = bounds.shape[0] - 1
+    m_tot = 0.0
+    mz = 0.0
+    mv = 0.0
+    kin = 0.0
+    rot = 0.0
+    lo = r[0, 2] if n else 0.0
+    hi = r[0, 2] if n else 0.0
+    for i in range(n):
+        m_tot += mass[i]
+        mz += mass[i] * r[i, 2]
+        mv += mass[i] * v[i, 2]
+        kin += mass[i] * (v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1] + v[i, 2] * v[i, 2])
+        rot += inertia[i] * (w[i, 0] * w[i, 0] + w[i, 1] * w[i, 1] + w[i, 2] * w[i, 2])
+        lo = min(lo, r[i, 2])
+        hi = max(hi, r[i, 2])
+    kin *= 0.5
+    rot *= 0.5
+    grav = gravity * mz
+    m_tot = max(m_tot, 1e-300)
+    out[0], out[1], out[2] = t, z, zd
+    out[3], out[4], out[5], out[6] = mz / m_tot, mv / m_tot, lo, hi
+    out[7], out[8], out[9], out[10] = f_floor_lid, f_box, n_floor, n_lid
+    k = 11
+    for s in range(S):
+        ms = 0.0
+        msz = 0.0
+        msv = 0.0
+        nf = 0.0
+        nl = 0.0
+        for i in range(bounds[s], bounds[s + 1]):
+            ms += mass[i]
+            msz += mass[i] * r[i, 2]
+            msv += mass[i] * v[i, 2]
+            h = r[i, 2] - z
+            nf += 1.0 if h < radius[i] else 0.0
+            nl += 1.0 if Lz - h < radius[i] else 0.0
+        ms = max(ms, 1e-300)
+        out[k + s] = msz / ms
+        out[k + S + s] = msv / ms
+        out[k + 2 * S + s] = nf
+        out[k + 3 * S + s] = nl
+    k += 4 * S
+    e_prim = 0.5 * M * zd * zd + 0.5 * K * (z - u) * (z - u) if primary else 0.0
+    out[k], out[k + 1], out[k + 2], out[k + 3], out[k + 4] = kin, rot, grav, e_elastic, e_prim
+    k += 5
+    losses = 0.0
+    for c in range(work.shape[0]):
+        out[k + c] = work[c]
+        if c >= 1:  # every channel after the input: primary damping, granular losses, drag
+            losses += work[c]
+    k += work.shape[0]
+    out[k] = kin + rot + grav + e_elastic + e_prim - e_start + losses - work[0]
 
 
 def _species_records(st: State, p: Params, model: Model) -> dict:
