@@ -72,3 +72,56 @@ def test_wall_collision_restitution(lc, mapping, tmp_path):
     ref = restitution(mapping.mass, mapping.R, mapping.E_star_pw, 1.0,
                       A=0.5 * (mapping.A + mapping.A_wall))
     assert r["restitution"] == pytest.approx(ref, rel=0.01)
+
+
+def test_friction_mapping_constants(lc):
+    """The thesis bed (γ_n, γ_s, μ): LAMMPS' viscoelastic prefactor is γ_n/(m* sqrt(R*)) and its
+    tangential damping multiplier γ_s/γ_n, the Coulomb coefficient μ, pairs and walls."""
+    from jaxdamp.cases import presets
+
+    cfg = presets.get("sanchez2012-optimal")
+    mp = lc.build_mapping(cfg)
+    mat = cfg.grains[0].material
+    lam = cfg.numerics.stiffness_scale ** 0.6  # the reduced modulus scales γ_n, γ_s alike
+    assert mp.mu == mat.mu
+    assert mp.xt_pp == pytest.approx(mat.gamma_s / mat.gamma_n, rel=1e-12)
+    assert mp.xt_pw == pytest.approx(mat.gamma_s / mat.gamma_n, rel=1e-12)
+    assert mp.eta_pp == pytest.approx(lam * mat.gamma_n / (mp.mass / 2 * (mp.R / 2) ** 0.5),
+                                      rel=1e-12)
+    assert f"linear_nohistory {mp.xt_pp!r} {mp.mu!r}" in lc.pair_coeff(mp)
+
+
+@needs_lmp
+def test_sliding_sphere_rolls_at_five_sevenths_in_lammps(lc, tmp_path):
+    """The friction mapping in LAMMPS: a thesis-steel sphere launched sliding on the floor ends
+    rolling at 5/7 of its speed (as in jaxdamp, experiments/contact_checks.py), within 1 %."""
+    from jaxdamp.cases import presets
+
+    mp = lc.build_mapping(presets.get("sanchez2012-optimal"))
+    R, dt, L, v0 = mp.R, mp.dt, 0.05, 0.1
+    xi0 = (mp.mass * 9.8 / mp.k_pw) ** (2 / 3)
+    steps = int(0.03 / dt)
+    script = lc.HEADER + f"""
+region sim block -0.001 {L!r} -0.001 {L!r} -0.001 {L!r} units box
+create_box 1 sim
+create_atoms 1 single 0.01 0.025 {R - xi0!r} units box
+set type 1 diameter {2 * R!r} density {mp.density!r}
+velocity all set {v0!r} 0.0 0.0 units box
+pair_style granular
+{lc.pair_coeff(mp)}
+fix wall all wall/gran {lc.wall_args(mp)} zplane 0.0 NULL
+fix grav all gravity 9.8 vector 0 0 -1
+fix integ all nve/sphere
+timestep {dt!r}
+compute om all property/atom omegay
+variable vx equal vx[1]
+variable wy equal c_om[1]
+thermo_style custom step v_vx v_wy
+thermo {steps}
+run {steps}
+print "RESULT $(v_vx:%.17g) $(v_wy:%.17g)"
+"""
+    log, _ = lc.run_lammps(script, "sliding", str(tmp_path))
+    vx, wy = lc.printed(log, "RESULT")[-1]
+    assert vx == pytest.approx(5 / 7 * v0, rel=0.01)
+    assert R * wy == pytest.approx(vx, rel=0.01)
