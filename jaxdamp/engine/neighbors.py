@@ -9,9 +9,10 @@ Positions given to the list are in the box frame (``z`` measured from the floor)
 distances do not change under the box's rigid translation, and a bed that rides with the box
 does not trigger rebuilds.
 
-A rebuild is needed once any grain moved more than ``skin / 2`` since the last build; the list
-holds every pair whose surfaces are closer than ``skin`` (centres closer than ``R_i + R_j +
-skin``, plus a small margin for the one step that runs before the next check). The size-aware
+A rebuild is needed once any grain moved more than ``skin / 2`` since the last build, judged
+at the positions where the next forces are evaluated (the predictor's, ``box_frame(state, dt)``;
+both engines); the list holds every pair whose surfaces are closer than ``skin`` (centres
+closer than ``R_i + R_j + skin``, plus a small safety margin). The size-aware
 cutoff keeps mixtures cheap: with radii differing tenfold a uniform ``2 R_max + skin`` would list
 hundreds of small neighbours per small grain, where a few dozen can touch. It is a metric on
 positions carrying the radius as a fourth coordinate,

@@ -240,10 +240,18 @@ def step(st: State, idx, p: Params, model: Model) -> State:
     )
 
 
-def box_frame(st: State):
-    """Grain positions relative to the floor's corner, ``(..., N, 3)`` (for neighbour lists)."""
-    shift = jnp.stack(
-        [jnp.zeros_like(st.z), jnp.zeros_like(st.z), st.z], axis=-1
-    )
-    return st.r - shift[..., None, :]
+def box_frame(st: State, dt=None):
+    """Grain positions relative to the floor's corner, ``(..., N, 3)`` (for neighbour lists).
+
+    With ``dt`` [s] (shape of ``st.z``): at the predicted positions ``r + dt v + ½ dt² a`` of
+    the next force evaluation (box likewise), where a list must hold every touching pair;
+    deciding on the current positions left a contact unlisted when a grain's predictor step
+    outran the list's margin (strongly overlapping start of ``tests/test_mixtures.py``)."""
+    r, z = st.r, st.z
+    if dt is not None:
+        h = dt[..., None, None]
+        r = r + h * st.v + 0.5 * h * h * st.a
+        z = z + dt * st.zd + 0.5 * dt * dt * st.zdd
+    shift = jnp.stack([jnp.zeros_like(z), jnp.zeros_like(z), z], axis=-1)
+    return r - shift[..., None, :]
 
