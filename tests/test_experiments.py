@@ -362,3 +362,14 @@ def test_driven_regimes_quick(tmp_path):
     assert m["com_amp"][1].mean() > m["com_amp"][0].mean()
     assert out["balance"] < 1e-3
     assert (tmp_path / "figure.png").stat().st_size > 10_000
+
+
+def test_frf_fit_quality(tmp_path):
+    """From the committed gap scan: each bed's 1-DOF fit misses its FRF more at the
+    intermediate heights (0.117, 0.162 m) than at the extremes, significantly across beds."""
+    out = _load("frf_fit_quality").main(["--out", str(tmp_path), "--no-progress"])
+    for w, comps in out["comp"].items():
+        assert len(comps) == 4
+        for c in comps:
+            assert c["diff"] > c["ci95"] > 0, (w, c)
+    assert (tmp_path / "figure.png").stat().st_size > 10_000
