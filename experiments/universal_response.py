@@ -260,6 +260,22 @@ def _summary(out, r, s, prov):
         lines.append(f"| S3 e = 0 ({m}) | {resonance(f, s3[m]['Z'])[1] / U:.2f} | largest "
                      f"\\|Z/Z_ref − 1\\| {d['max_rel_diff']:.1%} | {d['beyond_2se']} of {len(f)} "
                      "beyond 2 SE of the DEM mean | – | – |")
+    lines += ["", "**Loss per cycle: the bed against S3's impact loss** (thesis §5.3.2, fig. 5.2b): "
+              "the granular loss per drive period of every damping case (mean ± SE over the "
+              "beds, steady state) and S3's loss at its impacts (e = 0, event-driven; "
+              "deterministic); the last column is S3 over the reference case.", "",
+              "| f [Hz] | " + " | ".join(f"({gn:g}, {gs:g}) [J]" for gn, gs in s["cases"])
+              + " | S3 e = 0 [J] | S3 / reference |", "| --- " * (len(s["cases"]) + 3) + "|"]
+    for i, fi in enumerate(f):
+        cells = [f"{e.mean():.3g} ± {e.std(ddof=1) / math.sqrt(R):.2g}" for e in a["E"][:, i]]
+        ref = a["E"][0, i].mean()
+        ratio = s3["event"]["total"][i] / ref if ref > 0 else math.nan
+        lines.append(f"| {fi:g} | " + " | ".join(cells)
+                     + f" | {s3['event']['total'][i]:.3g} | {ratio:.2f} |")
+    ratios = np.array([s3["event"]["total"][i] / a["E"][0, i].mean() for i in range(len(f))])
+    lines += ["", f"S3's loss per cycle over the reference bed's: {ratios.min():.2f}–"
+              f"{ratios.max():.2f} over {f.min():g}–{f.max():g} Hz (median "
+              f"{np.median(ratios):.2f})."]
     lines += ["", f"Resonances of the analytic 1-DOF: M → {np.sqrt(p.K / p.M) / 2 / np.pi:.2f} "
               f"Hz, M + m_p → {np.sqrt(p.K / (p.M + m_p)) / 2 / np.pi:.2f} Hz. The reference "
               "and its variants share the beds (seeds 0…R−1); the Welch test treats them as "
