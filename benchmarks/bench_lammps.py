@@ -22,8 +22,9 @@ step.
 Configurations, each timed over the same number of steps from the same state (µs per
 system-step; "aggregate" = the wall time of the whole batch over systems × steps):
 
-* jaxdamp native engine through the production chunk function (``lax.scan`` + callback,
-  records every ``--record-every`` steps): one system, and batches of 8 and 32;
+* jaxdamp native engine through the production chunk function (one callback per chunk,
+  samples every ``--record-every`` steps): one system, and batches of 8 and 32; the JAX
+  engine (``lax.scan``, vmapped step) at batch 32 over ``--jax-steps`` steps;
 * LAMMPS: one process; two independent processes at once (aggregate: LAMMPS' best use of two
   cores for a sweep); one bed on two MPI processes (``mpirun -np 2``).
 
@@ -221,6 +222,8 @@ def main(argv=None):
     ap.add_argument("--steps", type=int, default=10000, help="steps per measurement")
     ap.add_argument("--record-every", type=int, default=100)
     ap.add_argument("--batches", type=int, nargs="+", default=[8, 32])
+    ap.add_argument("--jax-steps", type=int, default=400,
+                    help="steps of the JAX engine's batch-32 measurement (0: skip it)")
     ap.add_argument("--json", help="write the measurements here")
     args = ap.parse_args(argv)
     if shutil.which("lmp") is None:
@@ -251,6 +254,12 @@ def main(argv=None):
                     wall, n = time_jaxdamp(model, params, st, B, args.steps, args.record_every)
                     return wall / (n * B) * 1e6
                 measure(f"jaxdamp native, batch {B}", jd)
+            if args.jax_steps:
+                def jx():
+                    wall, n = time_jaxdamp(model, params, st, 32, args.jax_steps,
+                                           args.record_every, engine="jax")
+                    return wall / (n * 32) * 1e6
+                measure("jaxdamp JAX engine, batch 32", jx)
             measure("LAMMPS, 1 process",
                     lambda: run_lammps(path)[0] / args.steps * 1e6)
             measure("LAMMPS, 2 processes at once (aggregate)",
