@@ -59,13 +59,13 @@ THESIS_ZONES = ((0.0, 7.5, "periodic"), (7.5, 11.0, "transition (quasi-periodic 
 def settings(quick: bool):
     if quick:
         return dict(freqs=(5.5, 14.5, 21.0), detail=(5.5, 14.5, 21.0), duration=1.6,
-                    transient=0.3, settle=0.15, record_dt=1e-3)
+                    transient=0.3, settle=0.15, record_dt=1e-3, R=2)
     # The primary's free oscillation decays as exp(-C t / 2(M + m_p)) = exp(-1.46 t) where the bed
     # rests (low f): after 4 s it is 3e-3 of its start, below the classifier's 1e-2 tolerance.
     # 10 s of steady state = 55 periods at 5.5 Hz, 130 at 13 Hz, 210 at 21 Hz. Cost: 12 x 14 s
     # = 168 system-seconds, ~3 s wall each on 2 free cores (~9 min).
     return dict(freqs=F_FULL, detail=DETAIL, duration=14.0, transient=4.0, settle=1.0,
-                record_dt=1e-3)
+                record_dt=1e-3, R=3)
 
 
 def thesis_zone(f):
@@ -79,9 +79,9 @@ def run_sweep(s: dict, raw_dir: str, progress: bool):
     cfg = apply_overrides(presets.get("sanchez2012-optimal"), {
         "numerics.duration": s["duration"], "numerics.settle_time": s["settle"],
         "numerics.record_dt": s["record_dt"], "numerics.chunk": 0.2})
-    out = os.path.join(raw_dir, "sweep.h5")
+    out = os.path.join(raw_dir, f"sweep_R{s['R']}.h5")
     axes = {"frequency": list(s["freqs"])}
-    return reuse_or_run(cfg, axes, out, progress=progress), cfg
+    return reuse_or_run(cfg, axes, out, progress=progress, replicates=s["R"]), cfg
 
 
 def contact_stats(t, force_box, weight, frequency):
@@ -127,32 +127,37 @@ def embedding_of(x, frequency, dt):
 
 
 def classify_all(res, s):
-    """Classification of every frequency, for ``z_cm`` and ``z_cm - z_box``."""
+    """Classification of every frequency and bed, for ``z_cm`` and ``z_cm - z_box``: a list
+    over frequencies of lists over the beds."""
+    return [[classify_one(res, s, i, f, r) for r in range(res.replicates)]
+            for i, f in enumerate(res.axes["frequency"])]
+
+
+def classify_one(res, s, i, f, r):
+    """One frequency ``i`` and bed ``r``: regime of both observables and the contact counts."""
     rec = res.records
-    rows = []
-    for i, f in enumerate(res.axes["frequency"]):
-        t = rec["t"][i]
-        keep = t >= s["transient"]
-        row = dict(frequency=float(f))
-        for name, x in (("z_cm", rec["z_cm"][i]), ("z_rel", rec["z_cm"][i] - rec["z_box"][i])):
-            t0 = time.perf_counter()
-            dim, delay, _, _ = embedding_of(x[keep], f, t[1] - t[0])
-            c = dyn.classify(t[keep], x[keep], f, embedding=(dim, delay))
-            ev = c.evidence
-            row[name] = dict(label=c.label, period=c.period or 0,
-                             exponent=np.nan if c.exponent is None else c.exponent,
-                             lyapunov_per_period=ev.get("lyapunov_per_period", np.nan),
-                             line_fraction=ev.get("line_fraction", np.nan),
-                             d1=float(ev["return_distances"][0]),
-                             dmin=float(np.min(ev["return_distances"])),
-                             k_loose=_first_below(ev["return_distances"], 0.05),
-                             dim=ev.get("dim", 0), delay=ev.get("delay", 0),
-                             peak_ratio=ev.get("strongest_peak_ratio", np.nan),
-                             stretch=ev.get("section_stretch", np.nan),
-                             seconds=time.perf_counter() - t0)
-        row.update(contact_stats(t[keep], rec["force_box"][i][keep], res.weight, f))
-        rows.append(row)
-    return rows
+    k = res.point(i, r)
+    t = rec["t"][k]
+    keep = t >= s["transient"]
+    row = dict(frequency=float(f), replicate=r)
+    for name, x in (("z_cm", rec["z_cm"][k]), ("z_rel", rec["z_cm"][k] - rec["z_box"][k])):
+        t0 = time.perf_counter()
+        dim, delay, _, _ = embedding_of(x[keep], f, t[1] - t[0])
+        c = dyn.classify(t[keep], x[keep], f, embedding=(dim, delay))
+        ev = c.evidence
+        row[name] = dict(label=c.label, period=c.period or 0,
+                         exponent=np.nan if c.exponent is None else c.exponent,
+                         lyapunov_per_period=ev.get("lyapunov_per_period", np.nan),
+                         line_fraction=ev.get("line_fraction", np.nan),
+                         d1=float(ev["return_distances"][0]),
+                         dmin=float(np.min(ev["return_distances"])),
+                         k_loose=_first_below(ev["return_distances"], 0.05),
+                         dim=ev.get("dim", 0), delay=ev.get("delay", 0),
+                         peak_ratio=ev.get("strongest_peak_ratio", np.nan),
+                         stretch=ev.get("section_stretch", np.nan),
+                         seconds=time.perf_counter() - t0)
+    row.update(contact_stats(t[keep], rec["force_box"][k][keep], res.weight, f))
+    return row
 
 
 def _first_below(d, tol):
@@ -167,7 +172,7 @@ def details(res, s):
     freqs = list(res.axes["frequency"])
     out = {}
     for f in s["detail"]:
-        i = freqs.index(f)
+        i = res.point(freqs.index(f), 0)  # bed 0
         t = rec["t"][i]
         keep = t >= s["transient"]
         t, z, v, zb = t[keep], rec["z_cm"][i][keep], rec["vz_cm"][i][keep], rec["z_box"][i][keep]
@@ -195,7 +200,8 @@ def main(argv=None):
     os.makedirs(os.path.join(args.out, "raw"), exist_ok=True)
     t0 = time.perf_counter()
     reused = None
-    raw, old = os.path.join(args.out, "raw", "sweep.h5"), os.path.join(args.out, "data.h5")
+    raw = os.path.join(args.out, "raw", f"sweep_R{s['R']}.h5")
+    old = os.path.join(args.out, "data.h5")
     if os.path.exists(raw) and os.path.exists(old):
         with h5py.File(raw, "r") as h, h5py.File(old, "r") as g:
             if h.attrs.get("status") == "finished" and g.attrs.get("command", "").endswith(
@@ -206,19 +212,21 @@ def main(argv=None):
     m_p = grain_mass(cfg)
     res.weight = m_p * cfg.gravity
     t1 = time.perf_counter()
-    rows = classify_all(res, s)
+    reps = classify_all(res, s)
+    rows = [r[0] for r in reps]  # bed 0: the figures and the detail panels
     det = details(res, s)
     wall_analysis = time.perf_counter() - t1
     wall = wall_sim + wall_analysis
     command = "python experiments/bed_dynamics.py" + (" --quick" if args.quick else "")
-    _write(args.out, res, cfg, s, rows, det, m_p, dict(total=wall, simulation=wall_sim,
+    _write(args.out, res, cfg, s, reps, det, m_p, dict(total=wall, simulation=wall_sim,
                                                        analysis=wall_analysis), command)
     _figures(args.out, res, cfg, s, rows, det, m_p)
-    _summary(args.out, res, cfg, s, rows, det, m_p, wall, wall_sim, wall_analysis, command)
-    return dict(result=res, config=cfg, rows=rows, details=det, settings=s, grain_mass=m_p)
+    _summary(args.out, res, cfg, s, reps, det, m_p, wall, wall_sim, wall_analysis, command)
+    return dict(result=res, config=cfg, rows=rows, replicates=reps, details=det, settings=s,
+                grain_mass=m_p)
 
 
-def _write(out, res, cfg, s, rows, det, m_p, walls, command):
+def _write(out, res, cfg, s, reps, det, m_p, walls, command):
     with h5py.File(os.path.join(out, "data.h5"), "w") as h:
         h.attrs["jaxdamp_version"] = jaxdamp.__version__
         h.attrs["command"] = command
@@ -235,17 +243,25 @@ def _write(out, res, cfg, s, rows, det, m_p, walls, command):
         for k, v in res.summary.items():
             if np.ndim(v):
                 h.create_dataset(f"summary/{k}", data=v)
+        h.attrs["replicates"] = res.replicates
+        dims = "frequency, replicate"
+        for k, v in res.replicate_summary.items():
+            h.create_dataset(f"replicate_summary/{k}", data=v).attrs["dims"] = dims
         for sig in ("z_cm", "z_rel"):
             g = h.create_group(f"classification/{sig}")
-            g.create_dataset("label", data=np.array([r[sig]["label"] for r in rows], dtype="S16"))
+            g.create_dataset("label", data=np.array([[r[sig]["label"] for r in rr] for rr in reps],
+                                                    dtype="S16")).attrs["dims"] = dims
             for k in ("period", "exponent", "lyapunov_per_period", "line_fraction", "d1", "dmin", "k_loose",
                       "dim", "delay", "peak_ratio", "stretch"):
-                ds = g.create_dataset(k, data=np.array([r[sig][k] for r in rows], float))
-                ds.attrs["units"] = {"exponent": "1/s", "delay": "samples"}.get(k, "1")
+                ds = g.create_dataset(k, data=np.array([[r[sig][k] for r in rr] for rr in reps],
+                                                       float))
+                ds.attrs.update(units={"exponent": "1/s", "delay": "samples"}.get(k, "1"),
+                                dims=dims)
         g = h.create_group("contacts")
         for k in ("lid_hits_per_period", "floor_hits_per_period", "lid_contact_fraction",
                   "floor_contact_fraction", "free_fraction"):
-            g.create_dataset(k, data=np.array([r[k] for r in rows], float))
+            g.create_dataset(k, data=np.array([[r[k] for r in rr] for rr in reps], float)
+                             ).attrs["dims"] = dims
         for f, d in det.items():
             g = h.create_group(f"detail/f{f:g}")
             g.attrs["frequency"] = f
@@ -368,26 +384,35 @@ def _figures(out, res, cfg, s, rows, det, m_p):
     plt.close(fig)
 
 
-def _summary(out, res, cfg, s, rows, det, m_p, wall, wall_sim, wall_analysis, command):
+def _summary(out, res, cfg, s, reps, det, m_p, wall, wall_sim, wall_analysis, command):
     p = cfg.primary
     f = np.asarray(res.axes["frequency"], float)
-    Z = res.summary["amplitude"]
+    R = res.replicates
+    Zr = np.asarray(res.replicate_summary["amplitude"])  # (F, R)
     bal = res.summary["balance_error"]
     duration = float(res.records["t"][0][-1])  # whole chunks: may exceed s["duration"]
     steady = duration - s["transient"]
+    st = res.steady["amplitude"]
+    stationary = np.asarray(st["stationary"], bool)
+    starts = np.asarray(st["start"], float)
+    late = int(np.sum(stationary & (starts > s["transient"])))
     lines = [
         "# Bed dynamics along the FRF of the optimal damper (thesis fig. 4.1, ch. 4)", "",
         f"Command: `{command}` — wall time {wall / 60:.1f} min on 2 cores (simulation "
         f"{wall_sim / 60:.1f} min, analysis {wall_analysis:.0f} s). Data: `data.h5`; figures: "
-        "`fig4_1.png`, `fig_details.png`.", "",
+        "`fig4_1.png`, `fig_details.png` (bed 0).", "",
         f"Runs: `sanchez2012-optimal` (N = 250, Lz = {cfg.box.Lz} m, C = {p.C} N s/m, U = {p.U} m, "
         "E = 2.03e9 via stiffness_scale 0.01), one batched sweep over "
-        f"{len(f)} frequencies, {duration:g} s simulated per frequency after settling, samples every "
+        f"{len(f)} frequencies × **R = {R} independently poured beds** (seeds 0…{R - 1}), "
+        f"{duration:g} s simulated per run after settling, samples every "
         f"{s['record_dt'] * 1e3:g} ms. The first {s['transient']} s are dropped as transient (the thesis: "
         f"~5 s of 196.83 s); the classifier sees the remaining {steady:g} s, i.e. "
         f"{steady * f.min():.0f} drive periods at {f.min():g} Hz to {steady * f.max():.0f} at {f.max():g} Hz "
-        "(the thesis' series were 15× longer). Amplitude Z: half peak-to-peak of the box over the "
-        f"final 10 % of the run. Balance error (max over frequencies): {np.max(bal):.1e}.", "",
+        "(the thesis' series were 15× longer). Stationarity (MSER on the per-period amplitude and "
+        f"dissipation): {int(stationary.sum())} of {stationary.size} runs detected stationary, "
+        f"{late} of them only after the {s['transient']} s cut (their first steady periods are "
+        "still classified). Amplitude Z: half peak-to-peak of the box over the final 10 % of "
+        f"each run, mean ± SE over the beds. Balance error (max): {np.max(bal):.1e}.", "",
         "Observable: the lab-frame centre of mass `z_cm` of the bed (what the thesis analyses); "
         "`z_cm − z_box` (the bed in the box's frame) is classified as a cross-check — it is another "
         "observable of the same deterministic system (the box position is a state variable in S1), "
@@ -398,34 +423,51 @@ def _summary(out, res, cfg, s, rows, det, m_p, wall, wall_sim, wall_analysis, co
         "undetermined if the two disagree). λ: Kantz, embedding passed to the classifier: delay "
         "from the first minimum of the mutual information of prominence ≥ 0.2 of its range (the "
         "plain first minimum is a spurious one-sample dip on these nearly sinusoidal series), "
-        "dimension from false nearest neighbours (< 1 %); Theiler window one drive period.", "",
+        "dimension from false nearest neighbours (< 1 %); Theiler window one drive period. "
+        "Every bed is classified on its own: a regime is a verdict of the beds, the table says "
+        "how many agree.", "",
         "Contacts (from the interval-averaged force of the grains on the box, over the steady part): "
         "each sample is lid (F > +0.5 m_p g), floor (F < −0.5 m_p g) or free flight (|F| < 0.2 m_p g); "
         "an impact is an entry into lid or floor from another state (a bed that never leaves the "
         "floor has none).", "",
-        "Columns: d1 = median distance between section points one period apart (return map, relative "
-        "to the series' std; < 0.01 is periodic-1); 'k at 0.05' = the period k the section shows at a "
-        "5× looser tolerance (a noisy period-k: granular noise of 250 grains), 0 if none; lines = "
-        "fraction of the non-harmonic power in 20 spectral lines.", "",
-        "| f [Hz] | Z/U | regime z_cm | λ [1/s] | λ/f | d1 | k at 0.05 | lines | regime z_cm−z_box | "
-        "λ_rel [1/s] | lid hits/T | floor hits/T | thesis (fig. 4.1) |",
-        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+        "Columns (mean ± SE over the beds where numeric): d1 = median distance between section "
+        "points one period apart (return map, relative to the series' std; < 0.01 is "
+        "periodic-1); 'k at 0.05' = the period k each bed's section shows at a 5× looser "
+        "tolerance (a noisy period-k), 0 if none; lines = fraction of the non-harmonic power in "
+        "20 spectral lines.", "",
+        "| f [Hz] | Z/U | regime z_cm (beds) | λ [1/s] | λ/f | d1 | k at 0.05 | lines | "
+        "regime z_cm−z_box (beds) | lid hits/T | floor hits/T | thesis (fig. 4.1) |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
 
     def lab(c):
         return f"periodic-{c['period']}" if c["label"] == "periodic" else c["label"]
 
-    def num(x, fmt):
-        return "—" if not np.isfinite(x) else format(x, fmt)
+    def labs(rr, sig):
+        from collections import Counter
 
-    for fi, zi, r in zip(f, Z, rows):
-        a, b = r["z_cm"], r["z_rel"]
+        n = Counter(lab(r[sig]) for r in rr)
+        return ", ".join(f"{k} ×{v}" if v > 1 else k for k, v in n.most_common())
+
+    def ms(x, fmt):
+        x = np.asarray(x, float)
+        x = x[np.isfinite(x)]
+        if not len(x):
+            return "—"
+        if len(x) == 1:
+            return format(x[0], fmt)
+        return f"{format(x.mean(), fmt)} ± {format(x.std(ddof=1) / np.sqrt(len(x)), '.2g')}"
+
+    for i, (fi, rr) in enumerate(zip(f, reps)):
+        a = [r["z_cm"] for r in rr]
         lines.append(
-            f"| {fi:g} | {zi / p.U:.2f} | {lab(a)} | {num(a['exponent'], '.3g')} | "
-            f"{num(a['lyapunov_per_period'], '.3f')} | {a['d1']:.2g} | {a['k_loose']} | "
-            f"{num(a['line_fraction'], '.2f')} | "
-            f"{lab(b)} | {num(b['exponent'], '.3g')} | {r['lid_hits_per_period']:.2f} | "
-            f"{r['floor_hits_per_period']:.2f} | {thesis_zone(fi)} |")
+            f"| {fi:g} | {ms(Zr[i] / p.U, '.2f')} | {labs(rr, 'z_cm')} | "
+            f"{ms([c['exponent'] for c in a], '.3g')} | "
+            f"{ms([c['lyapunov_per_period'] for c in a], '.3f')} | "
+            f"{ms([c['d1'] for c in a], '.2g')} | {', '.join(str(c['k_loose']) for c in a)} | "
+            f"{ms([c['line_fraction'] for c in a], '.2f')} | {labs(rr, 'z_rel')} | "
+            f"{ms([r['lid_hits_per_period'] for r in rr], '.2f')} | "
+            f"{ms([r['floor_hits_per_period'] for r in rr], '.2f')} | {thesis_zone(fi)} |")
     lines += ["", "Detail frequencies (z_cm): MI delay, FNN dimension, Kantz exponent from the curve "
               "in `fig_details.png` (the classifier's embedding; λ is computed for periodic points too, "
               "where it should be ≈ 0 or negative).", "",
@@ -437,7 +479,7 @@ def _summary(out, res, cfg, s, rows, det, m_p, wall, wall_sim, wall_analysis, co
                      f"{ly.exponent:.3g} | {ly.time[ly.fit_range[0]]:.3f}–{ly.time[ly.fit_range[1]]:.3f} |")
     lines += ["", "## Comparison with the thesis (SPEC §6), zone by zone", ""]
     for lo, hi, zone in THESIS_ZONES:
-        sel = [(fi, r["z_cm"]) for fi, r in zip(f, rows) if lo <= fi < hi]
+        sel = [(fi, rr) for fi, rr in zip(f, reps) if lo <= fi < hi]
         if not sel:
             continue
         want = {"periodic": ("periodic",), "chaotic": ("chaotic",),
@@ -445,10 +487,11 @@ def _summary(out, res, cfg, s, rows, det, m_p, wall, wall_sim, wall_analysis, co
         key = next((k for k in want if zone.startswith(k)), None)
         if zone.startswith("periodic window"):
             key = "periodic"
-        found = ", ".join(f"{fi:g} Hz {lab(c)}" for fi, c in sel)
-        ok = key is not None and all(c["label"] in want[key] for _, c in sel)
-        lines.append(f"- thesis {zone} ({lo:g}–{hi:g} Hz): {found} — "
-                     f"{'agrees' if ok else 'differs'}.")
+        found = "; ".join(f"{fi:g} Hz {labs(rr, 'z_cm')}" for fi, rr in sel)
+        hits = [key is not None and r["z_cm"]["label"] in want[key] for _, rr in sel for r in rr]
+        verdict = "agrees" if all(hits) else "partly agrees" if any(hits) else "differs"
+        lines.append(f"- thesis {zone} ({lo:g}–{hi:g} Hz): {found} — {verdict} "
+                     f"({sum(hits)} of {len(hits)} bed-frequencies).")
     lines += ["", "Caveats: the steady series are ~20× shorter than the thesis' (a weak exponent or a "
               "slow drift of a torus is hard to tell from a transient on 50–200 periods); the modulus is "
               "reduced 100× (collision outcomes kept, collisions 6.3× longer); the thesis' regime "

@@ -89,8 +89,8 @@ def test_universal_response_quick(tmp_path):
 
 
 def test_bed_dynamics_quick(tmp_path):
-    """5.5, 14.5, 21 Hz x 1.5 s of the optimal damper: energy balance closes; every frequency
-    and observable gets a regime label (with a finite exponent when not periodic); the bed
+    """5.5, 14.5, 21 Hz x 1.5 s x 2 beds of the optimal damper: energy balance closes; every
+    frequency, bed and observable gets a regime label (with a finite exponent when not periodic); the bed
     never reaches the lid at 5.5 Hz and hits it about once per period at 14.5 Hz, where the
     grains hold the amplitude far below the rigid-mass resonance; one section point per period."""
     import json
@@ -120,7 +120,8 @@ def test_bed_dynamics_quick(tmp_path):
         assert abs(len(d["sec_t"]) - n_periods) <= 1.01
     with h5py.File(tmp_path / "data.h5") as h:
         assert len(json.loads(h.attrs["configs"])) == len(freqs)
-        assert h["classification/z_cm/label"].shape == (len(freqs),)
+        assert h["classification/z_cm/label"].shape == (len(freqs), 2)  # two beds each
+    assert len(out["replicates"]) == len(freqs) and all(len(r) == 2 for r in out["replicates"])
     for name in ("fig4_1.png", "fig_details.png"):
         assert (tmp_path / name).stat().st_size > 10_000
     assert "regime z_cm" in (tmp_path / "summary.md").read_text()
