@@ -41,7 +41,7 @@ CONVENTIONS = ("mixed", "calibrated")
 def settings(quick: bool) -> dict:
     if quick:
         return dict(families=(("varela2023-reference", None), ("varela2023-a", 0.5)),
-                    amps=[0.03], periods=7, transient=1, R=2, settle=0.05)
+                    amps=[0.03], periods=20, transient=1, R=2, settle=0.05)
     return dict(families=(("varela2023-reference", None), ("varela2023-a", 0.5)),
                 amps=[0.02, 0.03, 0.04], periods=50, transient=10, R=4, settle=None)
 
