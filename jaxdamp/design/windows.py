@@ -255,7 +255,8 @@ class DEMProblem:
         batch = self._windows(ens)
         B = ens.states.t.shape[0]
         while True:
-            v, ovf = self._fns[key](jnp.full((B,), float(lz)), ens.states, batch.nbrs, ens.params)
+            v, ovf = driver.call_chunk(self._fns[key], jnp.full((B,), float(lz)), ens.states,
+                                       batch.nbrs, ens.params)
             if not bool(ovf):
                 return np.asarray(v)
             batch = driver.grow(batch)

@@ -206,7 +206,7 @@ def advance(batch: Batch, n_records: int, record_every: int, *, systems: int | N
     fn = chunk_fn(model, n_records, record_every, engine=batch.engine)
     nbrs = batch.nbrs
     while True:
-        states, new_nbrs, recs = fn(batch.states, nbrs, batch.params)
+        states, new_nbrs, recs = call_chunk(fn, batch.states, nbrs, batch.params)
         if model.n < 2 or not bool(np.any(np.asarray(new_nbrs.overflow))):
             break
         old = nb.capacity(nbrs)
@@ -230,8 +230,8 @@ def run_chunks(batch: Batch, chunks: range, records_per_chunk: int, record_every
     A non-finite chunk calls ``on_diverged(error)`` (keep what was written, mark the file)
     and re-raises :class:`SimulationDiverged`; Ctrl-C (``KeyboardInterrupt``) calls
     ``on_interrupt()`` (the file keeps every finished chunk and its checkpoint: mark it
-    resumable) and re-raises; a Ctrl-C while a chunk is being written waits until it is
-    written. ``progress``: the description of a tqdm bar
+    resumable) and re-raises; a Ctrl-C while a chunk is computed stops once it is done
+    (:func:`call_chunk`), one while it is being written waits until it is written. ``progress``: the description of a tqdm bar
     over ``total`` chunks (starting at ``chunks.start``), or ``None`` for none. Returns the
     batch after the last chunk."""
     bar = None
@@ -245,6 +245,14 @@ def run_chunks(batch: Batch, chunks: range, records_per_chunk: int, record_every
             try:
                 batch, recs = advance(batch, records_per_chunk, record_every, systems=systems,
                                       on_realloc=on_realloc)
+                if on_chunk is not None:
+                    with _interrupt_deferred() as asked:  # never half a chunk in the file
+                        on_chunk(k, batch, recs)
+                    if asked():
+                        raise KeyboardInterrupt
+                if bar is not None:
+                    bar.update(1)
+                    bar.set_postfix(t=f"{float(np.asarray(batch.states.t)[0]):.3f}s")
             except SimulationDiverged as e:
                 if on_diverged is not None:
                     on_diverged(e)
@@ -253,20 +261,25 @@ def run_chunks(batch: Batch, chunks: range, records_per_chunk: int, record_every
                 if on_interrupt is not None:
                     on_interrupt()
                 raise
-            if on_chunk is not None:
-                with _interrupt_deferred() as asked:  # never half a chunk in the file
-                    on_chunk(k, batch, recs)
-                if asked():
-                    if on_interrupt is not None:
-                        on_interrupt()
-                    raise KeyboardInterrupt
-            if bar is not None:
-                bar.update(1)
-                bar.set_postfix(t=f"{float(np.asarray(batch.states.t)[0]):.3f}s")
     finally:
         if bar is not None:
             bar.close()
     return batch
+
+
+def call_chunk(fn, *args):
+    """``fn(*args)`` for a chunk function of :func:`jaxdamp.engine.simulate.chunk_fn`, with
+    Ctrl-C held until it returns, then raised as ``KeyboardInterrupt``.
+
+    A chunk cannot be stopped midway anyway (XLA and the numba kernel only return to Python
+    at its end), and a ``KeyboardInterrupt`` raised inside a host callback (the native engine
+    spends nearly all of a chunk in one) would reach the caller wrapped in a runtime error by
+    JAX, no longer a Ctrl-C."""
+    with _interrupt_deferred() as asked:
+        out = fn(*args)
+    if asked():
+        raise KeyboardInterrupt
+    return out
 
 
 class _interrupt_deferred:
