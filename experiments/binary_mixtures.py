@@ -465,9 +465,9 @@ def write_summary(args, s, runs, elapsed, drift=()):
         P(f"- {line}")
     P("")
     P("## At A_d = 3 cm: wall contacts, wall force, centre-of-mass speed, segregation\n")
-    P("Mean contacts and S: mean ± SE across beds (S over the analysed periods). Peak contacts, "
-      "peak |F_z| and the largest centre-of-mass speed: from the phase curves averaged over "
-      "the beds (no error bar).\n")
+    P("Every column: mean ± SE across beds. Mean contacts and S over the analysed periods; "
+      "peak contacts, peak abs(F_z) and the largest centre-of-mass speed from each bed's own "
+      "phase curve (averaged over its analysed periods).\n")
     P("| family | ⟨E_d⟩/m | E_pw/(E_pp+E_pw) | mean contacts | contacts per species | peak "
       "contacts | peak abs(F_z) [N] | max abs(v_z) COM per species [m/s] | S | "
       "S trend [1/period] |")
@@ -475,16 +475,15 @@ def write_summary(args, s, runs, elapsed, drift=()):
     for run in runs:
         r = run["result"]
         k = at3(r)
-        ph = r.phase
         rs = r.replicate_summary
-        vmax = np.abs(ph["vz_cm_species"][k]).max(axis=0)
-        csp = ph["contacts_species"][k].mean(axis=0)
+        b = bed_phase(run, k)
         seg = segregation_at3(run)
         P(f"| {fam_label(run)} | {fmt(per_mass(run)[k])} | {fmt(rs['wall_fraction'][k])} | "
           f"{fmt(rs['contacts_mean'][k])} | "
-          + ", ".join(f"{spec.name} {c:.2f}" for spec, c in zip(r.config.grains, csp))
-          + f" | {ph['contacts'][k].max():.1f} | {np.abs(ph['force_floor_lid'][k]).max():.4g} | "
-          + ", ".join(f"{spec.name} {v:.3g}" for spec, v in zip(r.config.grains, vmax))
+          + ", ".join(f"{spec.name} {fmt(c)}" for spec, c
+                      in zip(r.config.grains, b["contacts_species"].T))
+          + f" | {fmt(b['contacts_peak'])} | {fmt(b['force_peak'], 4)} | "
+          + ", ".join(f"{spec.name} {fmt(v)}" for spec, v in zip(r.config.grains, b["vz_max"].T))
           + f" | {seg['S']} | {seg['trend']} |")
     P("")
     P("S trend: each bed's least-squares slope of S over its analysed periods, mean ± SE "
@@ -498,6 +497,20 @@ def write_summary(args, s, runs, elapsed, drift=()):
     with open(os.path.join(args.out, "claims.json"), "w") as fh:
         json.dump({fam_label(r): {"A_opt_cm": [float(x) for x in a_opt(r) * 100]} for r in runs},
                   fh, indent=1)
+
+
+def bed_phase(run, k):
+    """Each bed's phase features at amplitude index ``k`` (from its own phase curves, averaged
+    over its analysed periods): ``force_peak``, ``force_mean`` the peak and the period mean of
+    abs(F_z) on floor + lid [N] ``(R,)``; ``contacts_peak`` ``(R,)``; ``contacts_species`` the
+    mean wall contacts per species ``(R, S)``; ``vz_max`` the largest abs(v_z) of each
+    species' centre of mass [m/s] ``(R, S)``."""
+    ph = run["result"].replicate_phase
+    f = np.abs(np.asarray(ph["force_floor_lid"][k]))  # (R, spp)
+    return dict(force_peak=f.max(axis=1), force_mean=f.mean(axis=1),
+                contacts_peak=np.asarray(ph["contacts"][k]).max(axis=1),
+                contacts_species=np.asarray(ph["contacts_species"][k]).mean(axis=1),
+                vz_max=np.abs(np.asarray(ph["vz_cm_species"][k])).max(axis=1))
 
 
 def segregation_at3(run):
@@ -574,9 +587,14 @@ def diagnostics(runs):
     rr = ref["result"]
     kr = at3(rr)
     c_ref = rr.replicate_summary["contacts_mean"][kr]
-    f_ref = float(np.abs(rr.phase["force_floor_lid"][kr]).max())
-    fm_ref = float(np.abs(rr.phase["force_floor_lid"][kr]).mean())
-    v_ref = float(np.abs(rr.phase["vz_cm_species"][kr]).max())
+    b_ref = bed_phase(ref, kr)
+    v_ref = b_ref["vz_max"][:, 0]
+
+    def versus(x, y, unit, digits=4):
+        ratio, rse, d, h, verdict = compare(x, y)
+        return (f"{fmt(x, digits)} vs {fmt(y, digits)} {unit} (difference {d:+.4g} ± {h:.2g}, "
+                f"Welch 95 %: {verdict})")
+
     for run in runs[1:]:
         if run["sigma"] != 0.5:
             continue
@@ -590,22 +608,21 @@ def diagnostics(runs):
                 f"or lid on average vs {fmt(c_ref)} for the reference (difference {d:+.2f} ± "
                 f"{h:.2f}, Welch 95 %: {verdict}; paper: {'more' if want == 'above' else 'fewer'}; "
                 f"{'as the paper' if verdict == want else 'not as the paper'})")
-        csp = r.phase["contacts_species"][k].mean(axis=0)
-        text += ("; per species " + ", ".join(f"{sp.name} {x:.2f}"
-                                              for sp, x in zip(r.config.grains, csp)))
+        b = bed_phase(run, k)
+        text += ("; per species " + ", ".join(f"{sp.name} {fmt(x)}" for sp, x
+                                              in zip(r.config.grains, b["contacts_species"].T)))
         if klass in "ac":
-            fpk = float(np.abs(r.phase["force_floor_lid"][k]).max())
-            fmn = float(np.abs(r.phase["force_floor_lid"][k]).mean())
-            text += (f"; **wall force** (bed-mean phase curve, no error bar) peak {fpk:.4g} vs "
-                     f"{f_ref:.4g} N, period mean {fmn:.4g} vs {fm_ref:.4g} N (paper: "
-                     f"{'larger' if klass == 'a' else 'smaller'})")
+            text += (f"; **wall force** (each bed's phase curve) peak "
+                     + versus(b["force_peak"], b_ref["force_peak"], "N")
+                     + ", period mean " + versus(b["force_mean"], b_ref["force_mean"], "N")
+                     + f" (paper: {'larger' if klass == 'a' else 'smaller'})")
         if klass in "bc":
-            vmax = np.abs(r.phase["vz_cm_species"][k]).max(axis=0)
-            vs = ", ".join(f"{sp.name} {v:.3g}" for sp, v in zip(r.config.grains, vmax))
+            vs = "; ".join(f"{sp.name} " + versus(v, v_ref, "m/s", 3)
+                           for sp, v in zip(r.config.grains, b["vz_max"].T))
             want_v = ("both species faster than the reference" if klass == "b"
                       else "large grains like the reference, small grains faster")
-            text += (f"; **largest centre-of-mass speed** {vs} m/s vs {v_ref:.3g} m/s "
-                     f"(bed-mean phase curve; paper: {want_v})")
+            text += (f"; **largest centre-of-mass speed** (each bed's phase curve) {vs} "
+                     f"(paper: {want_v})")
         out.append(text + ".")
     # segregation (paper fig. 3: "size segregation appears")
     seg_rows = []
@@ -622,26 +639,36 @@ def diagnostics(runs):
                    "across beds; 95 % interval against 0): " + "; ".join(seg_rows) + ". In a "
                    "well-mixed bed of unequal radii S is not exactly 0 (small centres reach "
                    "R_large − R_small closer to the floor), so a small |S| is not segregation.")
-    # fig. 3: spread in the snapshots (first bed, last period)
-    for run in runs:
+    # fig. 3: spread in the snapshots (last period of every bed)
+    def spreads(run):
+        """Per snapshot (phase): the quarter ``q``, and per bed the spread (std) of all grain
+        heights and the mean heights of the two species above the floor ``(R,)`` [cm]."""
         r = run["result"]
-        if run["sigma"] is None or r.snapshots is None or run["klass"] != "a":
-            continue
-        row = at3(r) * r.replicates
         sp = grain_species(r.config)
-        ref_row = at3(rr) * rr.replicates
-        rows = []
+        out = []
         for j, t in enumerate(r.snapshots["t"]):
-            z = r.snapshots["r"][row, j, :, 2] - r.snapshots["z_box"][row, j]
-            zr = rr.snapshots["r"][ref_row, j, :, 2] - rr.snapshots["z_box"][ref_row, j]
+            rows = at3(r) * r.replicates + np.arange(r.replicates)
+            z = (r.snapshots["r"][rows, j, :, 2] - r.snapshots["z_box"][rows, j][:, None]) * 100
             q = int(round((t * r.config.frequency % 1.0) * 4)) % 4
-            rows.append((q, z[sp == 0].mean(), z[sp == 1].mean(), z.std(), zr.std()))
-        out.append(f"fig. 3, class a σ = {run['sigma']:g} at 3 cm, snapshots of the last period "
-                   "of the first bed (phase: mean height of large / small grains above the "
-                   "floor, spread (std) of all heights; reference spread; one bed, no error bar): "
-                   + "; ".join(f"{q / 4:.2f}T: {a * 100:.2f} / {b * 100:.2f} cm, spread "
-                               f"{c * 100:.2f} cm (ref {d * 100:.2f} cm)"
-                               for q, a, b, c, d in rows) + ".")
+            out.append((q, z.std(axis=1), z[:, sp == 0].mean(axis=1),
+                        z[:, sp == 1].mean(axis=1) if (sp == 1).any() else None))
+        return out
+
+    if rr.snapshots is not None:
+        ref_sp = spreads(ref)
+        for run in runs:
+            r = run["result"]
+            if run["sigma"] is None or r.snapshots is None or run["klass"] != "a":
+                continue
+            rows = []
+            for (q, std, hl, hs), (_, std_ref, _, _) in zip(spreads(run), ref_sp):
+                _, _, d, h, verdict = compare(std, std_ref)
+                rows.append(f"{q / 4:.2f}T: {fmt(hl)} / {fmt(hs)} cm, spread {fmt(std)} cm vs "
+                            f"reference {fmt(std_ref)} cm ({verdict}, Welch 95 %)")
+            out.append(f"fig. 3, class a σ = {run['sigma']:g} at 3 cm, snapshots of the last "
+                       "period of every bed (phase: mean height of large / small grains above "
+                       "the floor, spread (std) of all heights, mean ± SE across beds): "
+                       + "; ".join(rows) + ".")
     return out
 
 

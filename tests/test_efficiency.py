@@ -147,6 +147,8 @@ def test_efficiency_cli_quick_writes_data_and_figures(tmp_path):
         assert g["summary/E_pp"].attrs["units"] == "J"
         assert g["per_period/E_d"].shape == (2, 3)
         assert g["phase/contacts_species"].shape == (2, 100, 2)
+        assert g["replicate_phase/force_floor_lid"].shape == (2, 1, 100)
+        assert g["replicate_phase/force_floor_lid"].attrs["units"] == "N"
         assert h5["snapshots/r"].shape == (2, 4, 300, 3)
         assert "4 m A_d^2" in g.attrs["E_max"]
         assert np.all(np.isfinite(g["summary/E_d_mean"][()]))
@@ -154,6 +156,9 @@ def test_efficiency_cli_quick_writes_data_and_figures(tmp_path):
         assert (tmp_path / f"b{suffix}.png").stat().st_size > 10_000
     back = ef.read(str(out))
     assert back.config.grains[1].radius == pytest.approx(1.25e-3)
+    # one bed: its phase curves are the mean's
+    np.testing.assert_array_equal(back.replicate_phase["vz_cm_species"][:, 0],
+                                  back.phase["vz_cm_species"])
     # bad input is refused before any compute, naming the parameter
     for args, match in ((["--preset", "varela2023-reference", "--sigma", "0.5"], "monodisperse"),
                         (["--preset", "varela2023-a", "--sigma", "1.5"], "sigma = 1.5"),

@@ -231,6 +231,9 @@ def test_binary_mixtures_quick(tmp_path):
     text = (tmp_path / "summary.md").read_text()
     assert "A_opt ≈ 2.8 cm" in text and "class c (σ = 0.5) vs the reference" in text
     assert "Size segregation at 3 cm" in text and "Per damper (J dissipated per period)" in text
+    # wall force, speeds and the fig. 3 spread: from each bed, with their spread across beds
+    assert "**wall force** (each bed's phase curve) peak" in text
+    assert "snapshots of the last period of every bed" in text
     for r in runs:  # two beds per amplitude, each with its own per-period segregation index
         seg = r["result"].replicate_per_period["segregation"]
         assert seg.shape == (2, 2, 3)

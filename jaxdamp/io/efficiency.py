@@ -33,7 +33,8 @@ def write(path: str, result, transient: int, samples_per_period: int, summary_un
             for k, v in result.replicate_summary.items():
                 rs.create_dataset(k, data=v).attrs["units"] = summary_units.get(k, "")
         for part, units in (("summary", summary_units), ("per_period", per_period_units),
-                            ("phase", phase_units), ("replicate_per_period", per_period_units)):
+                            ("phase", phase_units), ("replicate_per_period", per_period_units),
+                            ("replicate_phase", phase_units)):
             if getattr(result, part) is None:
                 continue
             sub = g.create_group(part)
@@ -59,9 +60,9 @@ def read(path: str) -> dict:
         if "replicate_summary" in g:
             out["replicate_summary"] = {k: g["replicate_summary"][k][()]
                                         for k in g["replicate_summary"]}
-        if "replicate_per_period" in g:
-            out["replicate_per_period"] = {k: g["replicate_per_period"][k][()]
-                                           for k in g["replicate_per_period"]}
+        for part in ("replicate_per_period", "replicate_phase"):
+            if part in g:
+                out[part] = {k: g[part][k][()] for k in g[part]}
         if "steady" in g:
             out["steady"] = {q: {f: g["steady"][q][f][()] for f in g["steady"][q]}
                              for q in g["steady"]}

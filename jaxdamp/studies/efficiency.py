@@ -235,7 +235,10 @@ class EfficiencyResult:
 
     With ``replicates = R`` independent beds per amplitude, ``summary``, ``per_period`` and
     ``phase`` are means over the replicates, ``replicate_summary`` ``{name: (P, R)}`` and
-    ``replicate_per_period`` ``{name: (P, R, n, ...)}`` hold each replicate's values, and ``steady`` the estimates of ``E_d`` and ``E_d_per_mass`` over
+    ``replicate_per_period`` ``{name: (P, R, n, ...)}`` and ``replicate_phase``
+    ``{name: (P, R, spp, ...)}`` hold each replicate's values (so any phase feature, a peak
+    force or a largest speed, gets a spread across beds), and ``steady`` the estimates of
+    ``E_d`` and ``E_d_per_mass`` over
     replicates from each replicate's detected steady state (MSER on its per-period ``E_d``;
     :func:`jaxdamp.analysis.stats.to_arrays` layout: ``mean``, ``se``, ``ci95``, ``n`` ``(P,)``,
     ``values``, ``batch_se``, ``start``, ``stationary`` ``(P, R)``)."""
@@ -252,6 +255,7 @@ class EfficiencyResult:
     replicate_summary: dict | None = None
     steady: dict | None = None
     replicate_per_period: dict | None = None
+    replicate_phase: dict | None = None
 
 
 def measure(config: Config, amplitudes, periods: int = 50, transient: int = 10,
@@ -294,6 +298,7 @@ def measure(config: Config, amplitudes, periods: int = 50, transient: int = 10,
                               wall_time=float(res.summary["wall_time"]), path=out,
                               replicates=R, replicate_summary=stack("summary", reduce=False),
                               replicate_per_period=stack("per_period", reduce=False),
+                              replicate_phase=stack("phase", reduce=False),
                               steady=stats.to_arrays(steady, (len(amplitudes),)))
     if out:
         from jaxdamp.io import efficiency as efficiency_file
