@@ -193,6 +193,15 @@ def _placed(batch: Batch) -> Batch:
     return batch.replace(states=batch.place(batch.states), nbrs=batch.place(batch.nbrs))
 
 
+def sharded(tree) -> jax.sharding.NamedSharding | None:
+    """The sharding of a batched pytree when its batch axis is split over several devices
+    (:func:`jaxdamp.studies.sweep` places it so), else ``None``."""
+    sh = getattr(jax.tree_util.tree_leaves(tree)[0], "sharding", None)
+    if isinstance(sh, jax.sharding.NamedSharding) and len(sh.device_set) > 1:
+        return sh
+    return None
+
+
 def advance(batch: Batch, n_records: int, record_every: int, *, systems: int | None = None,
             on_realloc=None, check: bool = True) -> tuple[Batch, dict]:
     """Run ``n_records × record_every`` steps; return the new batch and the samples
@@ -203,7 +212,8 @@ def advance(batch: Batch, n_records: int, record_every: int, *, systems: int | N
     (``on_realloc(old, new)`` is told the capacities). With ``check`` a non-finite sample or
     state raises :class:`SimulationDiverged` (the batch is left as it was before the chunk)."""
     model = batch.model
-    fn = chunk_fn(model, n_records, record_every, engine=batch.engine)
+    fn = chunk_fn(model, n_records, record_every, engine=batch.engine,
+                  sharding=sharded(batch.states))
     nbrs = batch.nbrs
     while True:
         states, new_nbrs, recs = call_chunk(fn, batch.states, nbrs, batch.params)

@@ -580,7 +580,7 @@ if AVAILABLE:
         row[so[15]], row[so[16]], row[so[17]] = e_el, floor_lid, box_z
         row[so[18]], row[so[19]] = n_floor, n_lid
 
-    @_kernel(parallel=True)
+    @_kernel(parallel=True, nogil=True)  # nogil: sharded chunks call it from device threads
     def _advance(n_records, record_every, system, law, skin, st, pm, so, po, n_species, n_cols,
                  sid, bounds, rec):
         for b in prange(st.shape[0]):

@@ -40,17 +40,20 @@ def resolve_engine(engine: str) -> str:
 
 @functools.lru_cache(maxsize=64)
 def chunk_fn(model: Model, n_records: int, record_every: int, remat: bool = False,
-             engine: str = "jax"):
+             engine: str = "jax", sharding: jax.sharding.NamedSharding | None = None):
     """Jitted ``(states, nbrs, params) -> (states, nbrs, records)`` for a batch.
 
     ``records`` is a dict of arrays shaped ``(B, n_records, ...)``. With ``remat`` each
     inner block of ``record_every`` steps is rematerialised in reverse mode (bounded memory for
     gradients through long scans). ``engine="native"`` advances the whole chunk in the compiled
     CPU kernel, samples included, in one host callback (forward only; the neighbour lists in
-    ``nbrs`` are then passed through unused).
+    ``nbrs`` are then passed through unused). ``sharding``: the batch's sharding over several
+    devices (the batch axis split over a mesh axis); the JAX engine's jit partitions by itself,
+    the native chunk runs per shard (:func:`jax.shard_map`), each device's callback advancing
+    its own systems.
     """
     if resolve_engine(engine) == "native":
-        return _native_chunk(model, n_records, record_every)
+        return _native_chunk(model, n_records, record_every, sharding)
     block = _jax_block(model, record_every)
     if remat:
         block = jax.checkpoint(block)
@@ -95,13 +98,16 @@ def _jax_block(model: Model, record_every: int):
     return block
 
 
-def _native_chunk(model: Model, n_records: int, record_every: int):
+def _native_chunk(model: Model, n_records: int, record_every: int,
+                  sharding: jax.sharding.NamedSharding | None = None):
     """The chunk through the numba kernel (:mod:`jaxdamp.engine.native`): one host callback
     advances the whole chunk and writes the samples itself
     (:func:`jaxdamp.physics.energy.record_row`, the scalar form of ``record``), so a chunk
     crosses the JAX/Python boundary once, not once per sample. State and parameters cross as
     two packed float64 arrays (:func:`jax.pure_callback` costs ~35 µs per array); the
-    neighbour lists are passed through unused (the kernel keeps its own)."""
+    neighbour lists are passed through unused (the kernel keeps its own). With ``sharding``
+    the chunk is mapped over the shards (``shard_map``): every device calls the kernel on its
+    own rows (the kernel releases the GIL, so the shards' callbacks run side by side)."""
     from jaxdamp.engine import native
     from jaxdamp.physics.energy import INT_RECORDS, record_layout
 
@@ -116,7 +122,6 @@ def _native_chunk(model: Model, n_records: int, record_every: int):
                                      np.asarray(params_packed), layouts["state"],
                                      layouts["params"], n_records, record_every)
 
-    @jax.jit
     def run(states, nbrs, params):
         layouts["state"], layouts["params"] = native.layout(states), native.layout(params)
         sp, pp = native.pack(states), native.pack(params)
@@ -132,7 +137,11 @@ def _native_chunk(model: Model, n_records: int, record_every: int):
             k += size
         return native.unpack_like(new, states), nbrs, recs
 
-    return run
+    if sharding is None:
+        return jax.jit(run)
+    spec = sharding.spec  # the batch axis, split over the mesh
+    return jax.jit(jax.shard_map(run, mesh=sharding.mesh, in_specs=spec, out_specs=spec,
+                                 check_vma=False))
 
 
 def init_states(model: Model, params: Params, r, v, w, q, z, zd, t=0.0, idx=None) -> State:
