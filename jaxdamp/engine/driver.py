@@ -113,8 +113,20 @@ def take(tree, i):
 
 
 def _allocate(model, states, params, multiplier, at_least=0):
-    return nb.allocate(model, box_frame(states), multiplier, at_least=at_least,
-                       radius=params.radius)
+    return nb.allocate(model, to_host(box_frame(states)), multiplier, at_least=at_least,
+                       radius=to_host(params.radius))
+
+
+def to_host(tree):
+    """Numpy copies of a pytree of (batched) arrays. Arrays spread over several processes
+    (a sweep across hosts, :mod:`jaxdamp.studies.sweep`) are gathered from all of them first,
+    a collective: every process must make the same call."""
+    leaves = jax.tree_util.tree_leaves(tree)
+    if any(isinstance(x, jax.Array) and not x.is_fully_addressable for x in leaves):
+        from jax.experimental import multihost_utils
+
+        tree = multihost_utils.process_allgather(tree, tiled=True)
+    return jax.tree_util.tree_map(np.asarray, tree)
 
 
 def start(model: Model, params: Params, r, v, w, q, z, zd, t: float = 0.0, *,
@@ -167,7 +179,7 @@ def checkpoint(batch: Batch, systems: int | None = None) -> dict:
     as ``{"state/<field>", "nbrs/<field>"}`` arrays (:func:`state_to_arrays`)."""
 
     n = batch.size if systems is None else systems
-    host = lambda tree: jax.tree_util.tree_map(lambda x: np.asarray(x)[:n], tree)  # noqa: E731
+    host = lambda tree: jax.tree_util.tree_map(lambda x: x[:n], to_host(tree))  # noqa: E731
     return state_to_arrays(host(batch.states), host(batch.nbrs))
 
 
@@ -217,16 +229,17 @@ def advance(batch: Batch, n_records: int, record_every: int, *, systems: int | N
     nbrs = batch.nbrs
     while True:
         states, new_nbrs, recs = call_chunk(fn, batch.states, nbrs, batch.params)
-        if model.n < 2 or not bool(np.any(np.asarray(new_nbrs.overflow))):
+        if model.n < 2 or not bool(np.any(to_host(new_nbrs.overflow))):
             break
         old = nb.capacity(nbrs)
         nbrs = grow(batch.replace(nbrs=nbrs)).nbrs
         if on_realloc is not None:
             on_realloc(old, nb.capacity(nbrs))
     n = batch.size if systems is None else systems
-    recs = {k: np.asarray(v)[:n] for k, v in recs.items()}
+    recs = {k: v[:n] for k, v in to_host(recs).items()}
     if check:
-        check_finite(recs, states, int(np.asarray(batch.states.step)[0]), record_every, n)
+        check_finite(recs, to_host(states), int(to_host(batch.states.step)[0]), record_every,
+                     n)
     return batch.replace(states=states, nbrs=new_nbrs), recs
 
 
@@ -262,7 +275,7 @@ def run_chunks(batch: Batch, chunks: range, records_per_chunk: int, record_every
                         raise KeyboardInterrupt
                 if bar is not None:
                     bar.update(1)
-                    bar.set_postfix(t=f"{float(np.asarray(batch.states.t)[0]):.3f}s")
+                    bar.set_postfix(t=f"{float(recs['t'][0, -1]):.3f}s")
             except SimulationDiverged as e:
                 if on_diverged is not None:
                     on_diverged(e)
@@ -322,7 +335,7 @@ class _interrupt_deferred:
 def run_for(batch: Batch, seconds: float, pieces: int = 1, check: bool = True) -> Batch:
     """Advance by ``seconds`` (rounded to whole steps, at least one) in about ``pieces``
     chunks, discarding the samples (burn-in, transients)."""
-    dt = float(np.asarray(batch.params.dt).ravel()[0])
+    dt = float(to_host(batch.params.dt).ravel()[0])
     steps = max(1, int(round(seconds / dt)))
     per = max(1, steps // pieces)
     done = 0

@@ -97,23 +97,31 @@ class SweepFile:
     def resume(cls, path: str, config, axes: dict, replicates: int, records_per_chunk: int):
         """Open ``path`` to continue the sweep: ``(file, checkpoint arrays, chunk, compute time
         so far)``; samples after the checkpoint are dropped. Refuses a different sweep."""
-        from jaxdamp.config import ConfigError
-
+        arrays, chunk, wall = cls.checkpoint_of(path, config, axes, replicates)
         h5 = h5py.File(path, "a")
-        if (h5.attrs["base_config"] != config.to_json()
-                or h5.attrs["axes"] != axes_json(axes, replicates)):
-            h5.close()
-            raise ConfigError(f"--resume: {path} holds a different sweep")
-        g = h5["checkpoint"]
-        chunk = int(g.attrs["chunk"])
-        wall = float(h5.attrs.get("wall_time", h5["summary/wall_time"][()]
-                                  if "summary/wall_time" in h5 else 0.0))
-        arrays = {}
-        g.visititems(lambda n, o: arrays.__setitem__(n, o[()])
-                     if isinstance(o, h5py.Dataset) else None)
         for ds in h5["records"].values():
             ds.resize(chunk * records_per_chunk, axis=1)
         return cls(h5), arrays, chunk, wall
+
+    @staticmethod
+    def checkpoint_of(path: str, config, axes: dict, replicates: int):
+        """``(checkpoint arrays, chunk, compute time so far)`` of the sweep in ``path``, read
+        only (every process of a sweep across hosts reads it; one writes). Refuses a different
+        sweep."""
+        from jaxdamp.config import ConfigError
+
+        with h5py.File(path, "r") as h5:
+            if (h5.attrs["base_config"] != config.to_json()
+                    or h5.attrs["axes"] != axes_json(axes, replicates)):
+                raise ConfigError(f"--resume: {path} holds a different sweep")
+            g = h5["checkpoint"]
+            chunk = int(g.attrs["chunk"])
+            wall = float(h5.attrs.get("wall_time", h5["summary/wall_time"][()]
+                                      if "summary/wall_time" in h5 else 0.0))
+            arrays = {}
+            g.visititems(lambda n, o: arrays.__setitem__(n, o[()])
+                         if isinstance(o, h5py.Dataset) else None)
+        return arrays, chunk, wall
 
     # -- while running --------------------------------------------------------------------
     def append_records(self, recs: dict) -> None:

@@ -10,7 +10,10 @@ The bed is settled once per distinct geometry (grains, base, walls, seed — not
 excitation). The batch axis is sharded over every device JAX sees
 (:func:`jax.sharding.NamedSharding` on a 1-D mesh, batch padded to a multiple of the device
 count), so the same code runs on one CPU, several GPUs, or several hosts after
-``jax.distributed.initialize()``. Between chunks: progress, overflow handling (in ``advance``)
+``jax.distributed.initialize()``. The native engine runs its kernel on every device's shard.
+Across processes every process runs the same call on its own shards; the samples are gathered
+to every process after each chunk and only process 0 writes ``out`` (the others return the
+same result from memory). Between chunks: progress, overflow handling (in ``advance``)
 and a checkpoint; ``resume=True`` skips finished chunks.
 """
 
@@ -54,12 +57,23 @@ def _mesh_sharding(batch: int):
 
 def _pad_and_shard(tree, padded, sharding):
     def one(x):
-        x = jnp.asarray(x)
+        if sharding is not None and not getattr(x, "is_fully_addressable", True):
+            return x  # already spread over the processes, padded
+        xp = jnp if sharding is None else np  # sharded: host data, each process puts its shards
+        x = xp.asarray(x)
         if x.shape[0] < padded:  # repeat the last point: padding systems are valid, ignored
-            x = jnp.concatenate([x, jnp.repeat(x[-1:], padded - x.shape[0], axis=0)])
+            x = xp.concatenate([x, xp.repeat(x[-1:], padded - x.shape[0], axis=0)])
         return jax.device_put(x, sharding) if sharding is not None else x
 
     return jax.tree_util.tree_map(one, tree)
+
+
+def _barrier(name: str) -> None:
+    """Wait for every process of a sweep across hosts (no-op in one process)."""
+    if jax.process_count() > 1:
+        from jax.experimental import multihost_utils
+
+        multihost_utils.sync_global_devices(name)
 
 
 def reuse_or_run(config: Config, axes: dict, out: str, **kwargs) -> SweepResult:
@@ -132,9 +146,13 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
 
     sf = None
     start_chunk = 0
+    writer = jax.process_index() == 0  # across hosts, process 0 writes the file
     if resume and out and os.path.exists(out):
-        sf, arrays, start_chunk, wall_before = SweepFile.resume(
-            out, config, axes, R, sched.records_per_chunk)
+        arrays, start_chunk, wall_before = SweepFile.checkpoint_of(out, config, axes, R)
+        _barrier("jaxdamp-sweep-resume")  # every process has read before the writer opens
+        if writer:
+            sf, arrays, start_chunk, wall_before = SweepFile.resume(
+                out, config, axes, R, sched.records_per_chunk)
         batch = driver.restore(model, pb, arrays, **drive).replace(params=pb_s)
         say(f"resuming sweep at chunk {start_chunk}/{sched.n_chunks}")
     else:
@@ -167,7 +185,7 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
             v0.append(bed.v), w0.append(bed.w), q0.append(bed.q), z0.append(z)
         batch = driver.start(model, pb, np.stack(r0), np.stack(v0), np.stack(w0), np.stack(q0),
                              np.asarray(z0), np.zeros(P), **drive).replace(params=pb_s)
-        if out:
+        if out and writer:
             sf = SweepFile.create(out, config, axes, configs, dt, sched.duration, engine, R,
                                   devices=len(jax.devices()))
             sf.write_settle([beds[k] for k in keys], [c.numerics.settle_speed for c in configs])
@@ -177,10 +195,11 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
     snaps: dict = {}
 
     def keep(chunk, batch, recs):
+        if out:  # gathered by every process (a collective across hosts), written by one
+            arrays = driver.checkpoint(batch, P)
         if sf is not None:
             sf.append_records(recs)
-            sf.write_checkpoint(driver.checkpoint(batch, P), chunk + 1,
-                                wall_before + time.perf_counter() - wall0)
+            sf.write_checkpoint(arrays, chunk + 1, wall_before + time.perf_counter() - wall0)
         if chunk >= sched.n_chunks - snapshots:
             _keep_snapshot(sf, snaps, batch.states, P)
         for k, v in recs.items():
@@ -214,7 +233,7 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
     else:
         records = {k: np.concatenate(v, axis=1) for k, v in mem.items()}
         snaps = {k: np.stack(v, axis=1 if k != "t" else 0) for k, v in snaps.items()}
-    final = jax.tree_util.tree_map(lambda x: np.asarray(x)[:P], batch.states)
+    final = jax.tree_util.tree_map(lambda x: x[:P], driver.to_host(batch.states))
     summaries, series = [], []
     for i, c in enumerate(configs):
         rec_i = {k: v[i] for k, v in records.items()}
@@ -239,9 +258,9 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
 def _keep_snapshot(sf, mem: dict, states, P: int) -> None:
     """The batch's positions, velocities and box heights now: into the file's
     ``/snapshots`` (resumable) or into ``mem``."""
-    t = float(np.asarray(states.t)[0])
-    per_point = {k: np.asarray(getattr(states, f))[:P]
-                 for k, f in (("r", "r"), ("v", "v"), ("z_box", "z"))}
+    host = driver.to_host({"t": states.t, "r": states.r, "v": states.v, "z_box": states.z})
+    t = float(host.pop("t")[0])
+    per_point = {k: x[:P] for k, x in host.items()}
     if sf is not None:
         sf.append_snapshot(t, per_point)
         return
