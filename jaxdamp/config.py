@@ -113,12 +113,19 @@ class Primary:
       K: spring stiffness [N/m].
       C: viscous damping [N s/m].
       U: base displacement amplitude [m].
+      z0: the primary's displacement from its static equilibrium (under the bed's weight) at
+        t = 0 [m]: with ``U = 0``, a free-decay test (``jaxdamp decay``); the grains start
+        where the settled bed lies, moved with the box.
+      v0: the primary's velocity at t = 0 [m/s] (an impulse on the structure: the grains
+        start at rest).
     """
 
     M: float
     K: float
     C: float
     U: float
+    z0: float = 0.0
+    v0: float = 0.0
 
 
 @dataclass(frozen=True)

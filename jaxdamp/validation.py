@@ -82,6 +82,10 @@ def validate(config: Config) -> Config:
         _positive(pr.K, "primary.K", allow_zero=True)
         _positive(pr.C, "primary.C", allow_zero=True)
         _positive(pr.U, "primary.U", allow_zero=True)
+        for name in ("z0", "v0"):
+            value = getattr(pr, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value)):
+                raise ConfigError(f"primary.{name} = {value!r}: must be a finite number")
     else:
         if config.drive is None:
             raise ConfigError("drive: system 'driven' (S2) needs a [drive] table (amplitude)")
@@ -181,6 +185,10 @@ def _validate_impact(config: Config) -> Config:
     _positive(pr.K, "primary.K")
     _positive(pr.C, "primary.C", allow_zero=True)
     _positive(pr.U, "primary.U", allow_zero=True)
+    if pr.z0 != 0.0 or pr.v0 != 0.0:
+        raise ConfigError(f"primary.z0 = {pr.z0!r}, primary.v0 = {pr.v0!r}: the single-particle "
+                          "model (S3) starts at rest; free decay runs on the DEM (system "
+                          "'primary')")
     _positive(im.mass, "impactor.mass")
     if not (isinstance(im.restitution, (int, float)) and 0.0 <= im.restitution <= 1.0):
         raise ConfigError(f"impactor.restitution = {im.restitution!r}: must be in [0, 1]")

@@ -112,6 +112,13 @@ def resume_or_overwrite(args) -> list:
     return [args.out] if getattr(args, "resume", False) else []
 
 
+def say_written(*paths) -> None:
+    """``wrote a and b`` for the outputs that were asked for (``None``: not asked)."""
+    written = [x for x in paths if x]
+    if written:
+        print("wrote " + " and ".join(written))
+
+
 def base_config(args):
     from jaxdamp.cases import presets
 
@@ -122,19 +129,25 @@ def base_config(args):
     return cfg
 
 
+def command_config(args, quick=(), options=()):
+    """The configuration a command runs: ``--preset``/``--config``, then (with ``--quick``) the
+    command's ``quick`` overrides, then the user's ``--set`` (which win over them), then the
+    command's own ``options`` as overrides (``None`` entries: options not given)."""
+    overrides = list(quick) if getattr(args, "quick", False) else []
+    overrides += list(args.set or []) + [o for o in options if o is not None]
+    return apply_overrides(base_config(args), overrides)
+
+
+def _given(key, value):
+    return None if value is None else f"{key}={value}"
+
+
 def run_config(args):
-    cfg = base_config(args)
-    overrides = list(args.set or [])
-    if args.quick:
-        # A demo of about a minute on 2 cores: short drive, quick settling, coarser samples.
-        overrides = ["numerics.duration=1.0", "numerics.settle_time=0.3", "numerics.chunk=0.1"] + overrides
-    if args.frequency is not None:
-        overrides.append(f"frequency={args.frequency}")
-    if args.duration is not None:
-        overrides.append(f"numerics.duration={args.duration}")
-    if args.seed is not None:
-        overrides.append(f"numerics.seed={args.seed}")
-    return apply_overrides(cfg, overrides)
+    # --quick: a demo of about a minute on 2 cores: short drive, quick settling, coarser samples
+    return command_config(
+        args, ["numerics.duration=1.0", "numerics.settle_time=0.3", "numerics.chunk=0.1"],
+        [_given("frequency", args.frequency), _given("numerics.duration", args.duration),
+         _given("numerics.seed", args.seed)])
 
 
 def print_steady(steady: dict, keys=("amplitude", "granular_loss_per_cycle", "phase")) -> None:
@@ -168,11 +181,14 @@ def replicates(args) -> int:
     return R
 
 
-def float_list(text):
+def float_list(text, option: str = "") -> list[float]:
+    """``"1,2.5,3"`` -> ``[1.0, 2.5, 3.0]``; otherwise a one-line error naming ``option``."""
     try:
         return [float(x) for x in text.split(",") if x.strip()]
     except ValueError:
-        raise ConfigError(f"expected a comma-separated list of numbers, got {text!r}") from None
+        where = f"{option} {text!r}: " if option else ""
+        raise ConfigError(f"{where}expected a comma-separated list of numbers, got "
+                          f"{text!r}") from None
 
 
 def to_toml(data: dict, prefix: str = "") -> str:

@@ -30,7 +30,7 @@ def _amplitudes(text):
         if len(parts) != 3 or n < 1 or not 0 < lo <= hi:
             raise ConfigError(f"--amplitude {text!r}: need 0 < A0 <= A1 and N >= 1")
         return list(np.linspace(lo, hi, n))
-    values = float_list(text)
+    values = float_list(text, "--amplitude")
     if not values or min(values) <= 0:
         raise ConfigError(f"--amplitude {text!r}: every amplitude must be > 0 m")
     return values
@@ -89,7 +89,7 @@ def cmd_efficiency(args) -> int:
         [0.02, 0.03, 0.04] if args.quick else list(np.linspace(0.02, 0.04, 9)))
     periods = args.periods if args.periods is not None else (3 if args.quick else 50)
     transient = args.transient if args.transient is not None else (1 if args.quick else 10)
-    sigmas = float_list(args.sigma) if args.sigma else [None]
+    sigmas = float_list(args.sigma, "--sigma") if args.sigma else [None]
     if args.preset in mixtures.FAMILIES and args.config is None:
         if mixtures.FAMILIES[args.preset] is None and args.sigma:
             raise ConfigError("--sigma: the reference system (varela2023-reference) is "

@@ -7,33 +7,30 @@ import textwrap
 
 from jaxdamp.cli.common import (
     add_overwrite,
-    base_config,
     check_outputs,
+    command_config,
     float_list,
     positive_float,
     positive_int,
     replicates,
     resume_or_overwrite,
+    say_written,
 )
-from jaxdamp.config import ConfigError, apply_overrides
+from jaxdamp.config import ConfigError
 
 
 def cmd_frf(args) -> int:
     import numpy as np
 
-    cfg = base_config(args)
-    overrides = list(args.set or [])
-    if args.quick:
-        overrides = ["numerics.duration=0.5", "numerics.settle_time=0.3", "numerics.chunk=0.1"] + overrides
-    if args.duration is not None:
-        overrides.append(f"numerics.duration={args.duration}")
-    cfg = apply_overrides(cfg, overrides)
+    cfg = command_config(
+        args, ["numerics.duration=0.5", "numerics.settle_time=0.3", "numerics.chunk=0.1"],
+        [None if args.duration is None else f"numerics.duration={args.duration}"])
     if cfg.system not in ("primary", "impact"):
         raise ConfigError("jaxdamp frf needs system 'primary' (S1) or 'impact' (S3): an FRF is "
                           "the primary's response")
     impact = cfg.system == "impact"  # S3: one particle of mass impactor.mass, gap impactor.gap
     if args.frequencies:
-        freqs = float_list(args.frequencies)
+        freqs = float_list(args.frequencies, "--frequencies")
     else:
         n = args.n if args.n is not None else (6 if args.quick else 30)
         if not 0 < args.fmin < args.fmax:
@@ -42,7 +39,7 @@ def cmd_frf(args) -> int:
     if any(f <= 0 for f in freqs):
         raise ConfigError(f"--frequencies: every frequency must be > 0 Hz, got {freqs}")
     axes = {"frequency": freqs}
-    lz = float_list(args.lz) if args.lz else None
+    lz = float_list(args.lz, "--lz") if args.lz else None
     if lz:
         axes["box.Lz"] = lz
     R = replicates(args)
@@ -125,9 +122,7 @@ def cmd_frf(args) -> int:
                    + f", {res.summary['wall_time']:.0f} s wall"
                    + (f", mean of R = {R} beds ± 2 SE" if R > 1 else ""),
                    model="S3" if impact else "DEM", Z_se=Z_se, failures=failures), png)
-    written = [x for x in (args.out, png) if x]
-    if written:
-        print("wrote " + " and ".join(written))
+    say_written(args.out, png)
     return 0
 
 

@@ -7,8 +7,8 @@ import textwrap
 
 from jaxdamp.cli.common import (
     add_overwrite,
-    base_config,
     check_outputs,
+    command_config,
     float_list,
     positive_float,
     positive_int,
@@ -20,7 +20,7 @@ def cmd_optimize(args) -> int:
     import json
     import math
 
-    cfg = apply_overrides(base_config(args), list(args.set or []))
+    cfg = command_config(args)
     check_outputs([args.out], args.overwrite)
 
     import h5py
@@ -30,7 +30,7 @@ def cmd_optimize(args) -> int:
     from jaxdamp.design.surrogate import descend, propose
     from jaxdamp.io import optimisation as optimisation_file
 
-    band = tuple(float_list(args.band)) if args.band else None
+    band = tuple(float_list(args.band, "--band")) if args.band else None
     objective = Objective(args.objective, frequency=args.frequency, band=band)
     impact = cfg.system == "impact"
     names = tuple(v.strip() for v in (args.vars or "Lz").split(",") if v.strip())
@@ -196,7 +196,7 @@ def _cmd_design(args, cfg, objective, names) -> int:
     bounds = parse_bounds(args.bounds)
     space = DesignSpace.of(cfg, names, bounds)  # refuse bad input before any compute
     if args.x0:
-        x0 = np.asarray(float_list(args.x0), float)
+        x0 = np.asarray(float_list(args.x0, "--x0"), float)
         if len(x0) != space.dim:
             raise ConfigError(f"--x0: {len(x0)} values for {space.dim} variables "
                               f"({','.join(names)})")

@@ -146,7 +146,7 @@ class DEMProblem:
         fits under the new lid (advanced at the old ``Lz`` by up to two periods until it does),
         else from the settled bed."""
         from jaxdamp.engine import driver
-        from jaxdamp.studies.runner import initial_box_position
+        from jaxdamp.studies.runner import initial_box_position, initial_box_velocity
 
         t0 = time.perf_counter()
         F, K = len(self.freqs), self.n_windows
@@ -170,7 +170,8 @@ class DEMProblem:
             r0 = np.broadcast_to(self.bed.r + np.array([0.0, 0.0, z0]), (F,) + self.bed.r.shape)
             rep = lambda a: np.broadcast_to(a, (F,) + a.shape)  # noqa: E731
             states = driver.start(self.model, params, r0, rep(self.bed.v), rep(self.bed.w),
-                                  rep(self.bed.q), np.full((F,), z0), np.zeros(F),
+                                  rep(self.bed.q), np.full((F,), z0),
+                                  np.full((F,), initial_box_velocity(self.config)),
                                   engine=self.engine).states
             burn = self.burn_in
         states = self._advance(states, params, burn, pieces=max(1, int(burn / 0.05)))

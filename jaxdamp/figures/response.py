@@ -8,6 +8,8 @@ energy channels of a run.
   box, versus time; :func:`band_from_file` from a run file.
 - :func:`energy_figure` — cumulative work channels and the energy-balance residual;
   :func:`energy_from_file` from a run file.
+- :func:`decay_figure` — a free decay's damping ratio and frequency versus amplitude, ζ(Z)
+  and f(Z), per initial displacement, with the replicates' ± 2 SE band.
 """
 
 from __future__ import annotations
@@ -263,3 +265,43 @@ def energy_from_file(h5_or_path, t0=None, t1=None):
     finally:
         if close:
             h5.close()
+
+
+# -- free decay ----------------------------------------------------------------------------------
+def decay_figure(curves, labels, zeta_struct=None, title=""):
+    """The damper's characteristic curves from free decays: damping ratio ζ [%] and damped
+    frequency f [Hz] versus the cycle's amplitude Z [mm] (log axis), one line per curve
+    (:func:`jaxdamp.analysis.decay.on_amplitudes`: mean over replicates, band ± 2 SE where
+    two or more replicates cover the amplitude); ``zeta_struct``: the empty box's ratio,
+    drawn as a horizontal line."""
+    fig = figure(FIGSIZE["decay"], layout="constrained")
+    ax_z, ax_f = fig.subplots(1, 2)
+    for c, lab in zip(curves, labels):
+        Z = np.asarray(c["Z"]) * 1e3
+        line, = ax_z.plot(Z, 100 * np.asarray(c["zeta"]), lw=1.2, label=lab)
+        ax_f.plot(Z, c["f"], lw=1.2, color=line.get_color(), label=lab)
+        for ax, m, se, k in ((ax_z, c["zeta"], c["zeta_se"], 100.0), (ax_f, c["f"], c["f_se"], 1.0)):
+            se = np.asarray(se)
+            ok = np.isfinite(se)
+            if ok.any():
+                ax.fill_between(Z[ok], k * (np.asarray(m)[ok] - 2 * se[ok]),
+                                k * (np.asarray(m)[ok] + 2 * se[ok]), color=line.get_color(),
+                                alpha=0.25, lw=0)
+    if zeta_struct is not None:
+        ax_z.axhline(100 * zeta_struct, color="k", ls="--", lw=0.8,
+                     label=f"empty box (grains as dead mass): {100 * zeta_struct:.2f} %")
+    from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
+
+    for ax in (ax_z, ax_f):
+        ax.set_xscale("log")
+        ax.xaxis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+        ax.xaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.xaxis.set_minor_formatter(NullFormatter())
+        ax.set_xlabel("amplitude of the cycle Z [mm]")
+        ax.grid(alpha=0.3, which="both")
+    ax_z.set_ylabel("equivalent damping ratio ζ [%]")
+    ax_f.set_ylabel("damped frequency f [Hz]")
+    ax_z.legend(fontsize=7)
+    if title:
+        fig.suptitle(title, fontsize=9)
+    return fig

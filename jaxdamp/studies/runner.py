@@ -59,12 +59,18 @@ def schedule(config: Config, dt: float) -> Schedule:
 
 
 def initial_box_position(config: Config, grain_mass: float) -> float:
-    """Box floor height at t = 0: the primary's static equilibrium under the bed's weight (S1),
-    or the drive's starting point ``A_d`` (S2)."""
+    """Box floor height at t = 0: the primary's static equilibrium under the bed's weight plus
+    its initial displacement ``primary.z0`` (S1), or the drive's starting point ``A_d`` (S2)."""
     if config.system == "primary":
         K = config.primary.K
-        return -grain_mass * config.gravity / K if K > 0 else 0.0
+        return (-grain_mass * config.gravity / K if K > 0 else 0.0) + config.primary.z0
     return config.drive.amplitude
+
+
+def initial_box_velocity(config: Config) -> float:
+    """Box velocity at t = 0: the primary's ``v0`` (S1), or the drive's (0 at the start of
+    ``A_d cos ωt``, S2)."""
+    return config.primary.v0 if config.system == "primary" else 0.0
 
 
 @dataclass
@@ -167,7 +173,7 @@ def run(
         z0 = initial_box_position(config, m_grains)
         r0 = bed.r + np.array([0.0, 0.0, z0])
         batch = driver.start(model, pb, r0[None], bed.v[None], bed.w[None], bed.q[None],
-                             np.full(1, z0), np.zeros(1), **engine)
+                             np.full(1, z0), np.full(1, initial_box_velocity(config)), **engine)
         if out is not None:
             rf = RunFile.create(out, config, radii, masses, grain_species(config), bed,
                                 extra_attrs={"dt": sched.dt, "duration": sched.duration})

@@ -43,7 +43,7 @@ from jaxdamp.studies.grid import (
     grid_shape,
     replicate_configs,
 )
-from jaxdamp.studies.runner import initial_box_position, schedule
+from jaxdamp.studies.runner import initial_box_position, initial_box_velocity, schedule
 
 
 def _mesh_sharding(batch: int):
@@ -184,7 +184,8 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
             r0.append(bed.r + np.array([0.0, 0.0, z]))
             v0.append(bed.v), w0.append(bed.w), q0.append(bed.q), z0.append(z)
         batch = driver.start(model, pb, np.stack(r0), np.stack(v0), np.stack(w0), np.stack(q0),
-                             np.asarray(z0), np.zeros(P), **drive).replace(params=pb_s)
+                             np.asarray(z0), np.array([initial_box_velocity(c) for c in configs]),
+                             **drive).replace(params=pb_s)
         if out and writer:
             sf = SweepFile.create(out, config, axes, configs, dt, sched.duration, engine, R,
                                   devices=len(jax.devices()))
