@@ -28,6 +28,16 @@ def test_log_decrement_is_exact_for_a_viscous_oscillator():
         np.testing.assert_allclose(c["zeta"], zeta, rtol=1e-3)
         np.testing.assert_allclose(c["f"], 15.0 * math.sqrt(1 - zeta ** 2), rtol=1e-4)
         assert np.all(np.diff(c["Z"]) < 0)
+    # the granular ratio from a loss record: for a linear oscillator the energy lost between
+    # two peaks (where x' = 0) is ½K(X_k² − X_k+1²), so ΔW/(2πKZ²) = sinh(δ)/(2π) exactly
+    K, m = 1e4, 1e4 / wn ** 2
+    wd = wn * math.sqrt(1 - zeta ** 2)
+    xd = 0.02 * np.exp(-zeta * wn * t) * (-zeta * wn * np.cos(wd * t + 0.3)
+                                          - wd * np.sin(wd * t + 0.3))
+    W = (0.5 * m * xd[0] ** 2 + 0.5 * K * x[0] ** 2) - (0.5 * m * xd ** 2 + 0.5 * K * x ** 2)
+    c = decay_curve(t, x, 0.0, 15.0, loss=W, K=K)
+    delta = np.log(c["Z"][:-1] / c["Z"][1:]).mean()
+    np.testing.assert_allclose(c["zeta_g"], np.sinh(delta) / (2 * np.pi), rtol=2e-3)
     cur = on_amplitudes([c, c], np.geomspace(c["Z"].min(), c["Z"].max(), 5))
     np.testing.assert_allclose(cur["zeta"], 0.3, rtol=1e-3)
     assert np.all(cur["n"] == 2) and np.allclose(cur["zeta_se"], 0.0, atol=1e-12)
@@ -84,6 +94,10 @@ def test_decay_cli_quick_writes_curves_and_figure(tmp_path):
         assert g["cycles/zeta"].shape[:2] == (1, 2) and g["cycles/Z"].attrs["units"] == "m"
         zeta = g["curve/zeta"][0]
         assert np.nanmax(zeta) > 1.5 * g.attrs["zeta_struct"]
+        # the grains' own share, from their dissipated energy: positive, below the total
+        zg = g["curve/zeta_g"][0]
+        ok = np.isfinite(zg)
+        assert ok.sum() > 10 and np.all(zg[ok] > 0) and np.nanmax(zg) < np.nanmax(zeta)
         assert np.all(zeta[np.isfinite(zeta)] > 0)
         assert h["records/z_box"].shape[0] == 2
     assert (tmp_path / "d.png").stat().st_size > 10_000

@@ -16,6 +16,19 @@ damped frequency. For a particle damper ζ and f depend on the amplitude: ``ζ(Z
 damper's characteristic curve (structural damping included: the empty box gives
 ``C / (2\\sqrt{K (M + m_p)})`` with its grains' mass ``m_p`` as dead mass).
 
+The grains' own share is measured from the energy they dissipate, not from the decrement:
+with the cumulative granular loss ``W(t)`` (the contact work channels) between the cycle's two
+peaks, ``ΔW_k``, the **granular damping ratio** is the energy-equivalent
+
+.. math::
+
+    ζ_{g,k} = ΔW_k / (2π K Z_k^2),
+
+the ratio a linear viscous damper dissipating ``ΔW_k`` per cycle at amplitude ``Z_k`` near
+resonance would have (``π c ω Z^2 / (2π K Z^2) = c ω / 2K ≈ ζ``). It needs no model of the
+structural damping and is defined the same way for a stepped-sine run (loss per cycle at its
+steady amplitude), which is how the two tests are compared.
+
 Peaks are the sampled maxima refined by the parabola through each and its two neighbours, at
 least ``0.6`` of the undamped period apart (impacts make the signal jagged), and above
 ``floor × X_0`` (below it the decay has reached the numerical noise).
@@ -36,7 +49,7 @@ from __future__ import annotations
 import numpy as np
 
 #: Units of the per-cycle arrays of :func:`decay_curve`.
-UNITS = {"t": "s", "Z": "m", "zeta": "1", "f": "Hz"}
+UNITS = {"t": "s", "Z": "m", "zeta": "1", "f": "Hz", "zeta_g": "1"}
 
 
 def peaks(t, x, min_distance: int = 1):
@@ -57,11 +70,14 @@ def peaks(t, x, min_distance: int = 1):
     return t[i] + d * h, y1 - 0.25 * (y0 - y2) * d
 
 
-def decay_curve(t, z, z_eq: float, f_hint: float, floor: float = 1e-4) -> dict:
+def decay_curve(t, z, z_eq: float, f_hint: float, floor: float = 1e-4, loss=None,
+                K: float | None = None) -> dict:
     """Per cycle of a free decay ``z(t)`` about the equilibrium ``z_eq``: ``t`` [s] (the
     cycle's start), amplitude ``Z`` [m], damping ratio ``zeta`` and damped frequency ``f``
     [Hz] (:data:`UNITS`), from successive positive peaks at least 0.6 / ``f_hint`` apart
-    (``f_hint``: the undamped natural frequency [Hz]) and above ``floor × X_0``."""
+    (``f_hint``: the undamped natural frequency [Hz]) and above ``floor × X_0``. With the
+    cumulative granular loss ``loss`` [J] at the samples and the stiffness ``K`` [N/m], also
+    ``zeta_g``, the granular damping ratio ``ΔW / (2π K Z²)`` of each cycle."""
     t = np.asarray(t, float)
     x = np.asarray(z, float) - float(z_eq)
     dt = float(np.median(np.diff(t)))
@@ -71,37 +87,44 @@ def decay_curve(t, z, z_eq: float, f_hint: float, floor: float = 1e-4) -> dict:
         stop = np.flatnonzero(~keep)
         n = int(stop[0]) if len(stop) else len(X)
         tk, X = tk[:n], X[:n]
+    names = [k for k in UNITS if k != "zeta_g" or loss is not None]
     if len(X) < 2:
-        return {k: np.zeros(0) for k in UNITS}
+        return {k: np.zeros(0) for k in names}
     delta = np.log(X[:-1] / X[1:])
-    return dict(t=tk[:-1], Z=np.sqrt(X[:-1] * X[1:]),
-                zeta=delta / np.sqrt(4.0 * np.pi ** 2 + delta ** 2), f=1.0 / np.diff(tk))
+    out = dict(t=tk[:-1], Z=np.sqrt(X[:-1] * X[1:]),
+               zeta=delta / np.sqrt(4.0 * np.pi ** 2 + delta ** 2), f=1.0 / np.diff(tk))
+    if loss is not None:
+        if K is None or K <= 0:
+            raise ValueError(f"K = {K!r}: the granular damping ratio needs the stiffness > 0")
+        W = np.interp(tk, t, np.asarray(loss, float))
+        out["zeta_g"] = np.diff(W) / (2.0 * np.pi * K * out["Z"] ** 2)
+    return out
 
 
 def on_amplitudes(curves: list[dict], Z_grid) -> dict:
     """Replicates' curves (:func:`decay_curve`) on a common amplitude grid ``Z_grid`` [m]:
     each interpolated linearly in ``log Z`` within its own range (NaN outside), then the mean
     and its standard error across replicates at every amplitude: ``{"Z", "zeta", "zeta_se",
-    "f", "f_se", "n"}`` (``n`` replicates covering each amplitude)."""
+    "f", "f_se", "n"}`` and, when the curves have it, ``"zeta_g", "zeta_g_se"`` (``n``
+    replicates covering each amplitude)."""
     Z_grid = np.asarray(Z_grid, float)
-    zeta = np.full((len(curves), len(Z_grid)), np.nan)
-    freq = np.full_like(zeta, np.nan)
+    names = [k for k in ("zeta", "f", "zeta_g") if curves and all(k in c for c in curves)]
+    vals = {k: np.full((len(curves), len(Z_grid)), np.nan) for k in names}
     for j, c in enumerate(curves):
         if len(c["Z"]) < 2:
             continue
         order = np.argsort(c["Z"])
         lz = np.log(c["Z"][order])
         inside = (np.log(Z_grid) >= lz[0]) & (np.log(Z_grid) <= lz[-1])
-        zeta[j, inside] = np.interp(np.log(Z_grid[inside]), lz, c["zeta"][order])
-        freq[j, inside] = np.interp(np.log(Z_grid[inside]), lz, c["f"][order])
-    n = np.isfinite(zeta).sum(axis=0)
-
-    def mean_se(v):
+        for k in names:
+            vals[k][j, inside] = np.interp(np.log(Z_grid[inside]), lz, c[k][order])
+    n = (np.isfinite(vals["zeta"]).sum(axis=0) if names
+         else np.zeros(len(Z_grid), int))
+    out = dict(Z=Z_grid, n=n)
+    for k in names:
+        v = vals[k]
         with np.errstate(invalid="ignore", divide="ignore"):
             m = np.where(n > 0, np.nansum(v, axis=0) / np.maximum(n, 1), np.nan)
             sd = np.sqrt(np.nansum((v - m) ** 2, axis=0) / np.maximum(n - 1, 1))
-            return m, np.where(n > 1, sd / np.sqrt(np.maximum(n, 1)), np.nan)
-
-    zm, zs = mean_se(zeta)
-    fm, fs = mean_se(freq)
-    return dict(Z=Z_grid, zeta=zm, zeta_se=zs, f=fm, f_se=fs, n=n)
+        out[k], out[f"{k}_se"] = m, np.where(n > 1, sd / np.sqrt(np.maximum(n, 1)), np.nan)
+    return out

@@ -269,7 +269,8 @@ def energy_from_file(h5_or_path, t0=None, t1=None):
 
 # -- free decay ----------------------------------------------------------------------------------
 def decay_figure(curves, labels, zeta_struct=None, title=""):
-    """The damper's characteristic curves from free decays: damping ratio ζ [%] and damped
+    """The damper's characteristic curves from free decays: damping ratio ζ [%] (total, from
+    the decrement; dashed: the grains' share from their dissipated energy) and damped
     frequency f [Hz] versus the cycle's amplitude Z [mm] (log axis), one line per curve
     (:func:`jaxdamp.analysis.decay.on_amplitudes`: mean over replicates, band ± 2 SE where
     two or more replicates cover the amplitude); ``zeta_struct``: the empty box's ratio,
@@ -278,7 +279,10 @@ def decay_figure(curves, labels, zeta_struct=None, title=""):
     ax_z, ax_f = fig.subplots(1, 2)
     for c, lab in zip(curves, labels):
         Z = np.asarray(c["Z"]) * 1e3
-        line, = ax_z.plot(Z, 100 * np.asarray(c["zeta"]), lw=1.2, label=lab)
+        line, = ax_z.plot(Z, 100 * np.asarray(c["zeta"]), lw=1.2, label=f"{lab}: total")
+        if "zeta_g" in c:
+            ax_z.plot(Z, 100 * np.asarray(c["zeta_g"]), lw=1.0, ls="--", color=line.get_color(),
+                      label=f"{lab}: grains, ΔW/(2πKZ²)")
         ax_f.plot(Z, c["f"], lw=1.2, color=line.get_color(), label=lab)
         for ax, m, se, k in ((ax_z, c["zeta"], c["zeta_se"], 100.0), (ax_f, c["f"], c["f_se"], 1.0)):
             se = np.asarray(se)

@@ -7,13 +7,14 @@ import numpy as np
 
 from jaxdamp.analysis.decay import UNITS
 
-CURVE_UNITS = {"Z": "m", "zeta": "1", "zeta_se": "1", "f": "Hz", "f_se": "Hz", "n": "1"}
+CURVE_UNITS = {"Z": "m", "zeta": "1", "zeta_se": "1", "f": "Hz", "f_se": "Hz", "zeta_g": "1",
+               "zeta_g_se": "1", "n": "1"}
 
 
 def write(path: str, result) -> None:
     """Store ``result`` (:class:`jaxdamp.studies.decay.DecayResult`) in ``/decay`` of the sweep
     file ``path``: ``z0`` (P,) [m]; ``cycles/<name>`` (P, R, K) per bed and cycle, NaN-padded
-    (``t`` cycle start [s], ``Z`` [m], ``zeta``, ``f`` [Hz]); ``curve/<name>`` (P, G) the mean
+    (``t`` cycle start [s], ``Z`` [m], ``zeta``, ``f`` [Hz], ``zeta_g`` the granular ratio ΔW/(2πKZ²)); ``curve/<name>`` (P, G) the mean
     over beds on a common amplitude grid with its SE and the number of beds ``n``; attrs
     ``zeta_struct``, ``f_n``, ``replicates``, ``method``."""
     P, R = len(result.z0), result.replicates
@@ -35,13 +36,13 @@ def write(path: str, result) -> None:
             a = np.full((P, R, K), np.nan)
             for i, per in enumerate(result.cycles):
                 for r, c in enumerate(per):
-                    a[i, r, :len(c[name])] = c[name]
+                    a[i, r, :len(c[name])] = c.get(name, np.nan)
             cyc.create_dataset(name, data=a).attrs["units"] = unit
         cur = g.create_group("curve")
         for name, unit in CURVE_UNITS.items():
             a = np.full((P, G), np.nan)
             for i, c in enumerate(result.curves):
-                a[i, :len(c[name])] = c[name]
+                a[i, :len(c["Z"])] = c.get(name, np.nan)
             cur.create_dataset(name, data=a).attrs["units"] = unit
 
 

@@ -24,7 +24,7 @@ from jaxdamp.config import Config, ConfigError, apply_overrides
 @dataclasses.dataclass
 class DecayResult:
     """Free decays from the initial displacements ``z0`` [m] ``(P,)``: ``cycles[i][r]`` each
-    bed's per-cycle arrays (``t, Z, zeta, f``), ``curves[i]`` their mean ± SE on a common
+    bed's per-cycle arrays (``t, Z, zeta, f`` and the granular ratio ``zeta_g``), ``curves[i]`` their mean ± SE on a common
     amplitude grid (:func:`jaxdamp.analysis.decay.on_amplitudes`); ``zeta_struct`` the empty
     box's ratio ``C / (2√(K (M + m_p)))`` (grains as dead mass), ``f_n`` the undamped
     frequency with the grains as dead mass [Hz]; ``sweep`` the underlying
@@ -57,6 +57,7 @@ def measure(config: Config, z0, duration: float | None = None, v0: float = 0.0,
     [m/s]), ``replicates`` beds each, as one batch (:func:`jaxdamp.studies.sweep.sweep`; with
     ``out`` the file, resumable, gets a ``/decay`` group). ``duration`` [s]: simulated time
     (default: the configuration's). ``grid``: amplitudes of the common curve."""
+    from jaxdamp.physics.energy import granular_loss
     from jaxdamp.physics.model import grain_mass
     from jaxdamp.studies.runner import initial_box_position
     from jaxdamp.studies.sweep import sweep
@@ -84,8 +85,9 @@ def measure(config: Config, z0, duration: float | None = None, v0: float = 0.0,
     z_eq = initial_box_position(apply_overrides(cfg, {"primary.z0": 0.0}), m_p)
     cycles, curves = [], []
     for i in range(len(z0)):
-        per = [decay_curve(res.records["t"][res.point(i, r)], res.records["z_box"][res.point(i, r)],
-                           z_eq, f_n) for r in range(R)]
+        per = [decay_curve(res.records["t"][k], res.records["z_box"][k], z_eq, f_n,
+                           loss=granular_loss(res.records["work"][k]), K=p.K)
+               for k in (res.point(i, r) for r in range(R))]
         cycles.append(per)
         Zs = np.concatenate([c["Z"] for c in per]) if per else np.zeros(0)
         if len(Zs) >= 2:
