@@ -106,7 +106,8 @@ def on_amplitudes(curves: list[dict], Z_grid) -> dict:
     each interpolated linearly in ``log Z`` within its own range (NaN outside), then the mean
     and its standard error across replicates at every amplitude: ``{"Z", "zeta", "zeta_se",
     "f", "f_se", "n"}`` and, when the curves have it, ``"zeta_g", "zeta_g_se"`` (``n``
-    replicates covering each amplitude)."""
+    replicates covering each amplitude); ``"values"``: each replicate's interpolated values
+    ``{name: (R, G)}``."""
     Z_grid = np.asarray(Z_grid, float)
     names = [k for k in ("zeta", "f", "zeta_g") if curves and all(k in c for c in curves)]
     vals = {k: np.full((len(curves), len(Z_grid)), np.nan) for k in names}
@@ -120,7 +121,7 @@ def on_amplitudes(curves: list[dict], Z_grid) -> dict:
             vals[k][j, inside] = np.interp(np.log(Z_grid[inside]), lz, c[k][order])
     n = (np.isfinite(vals["zeta"]).sum(axis=0) if names
          else np.zeros(len(Z_grid), int))
-    out = dict(Z=Z_grid, n=n)
+    out = dict(Z=Z_grid, n=n, values=vals)
     for k in names:
         v = vals[k]
         with np.errstate(invalid="ignore", divide="ignore"):
