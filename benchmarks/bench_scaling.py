@@ -65,7 +65,24 @@ warm = apply_overrides(base, ["numerics.duration={chunk}"])
 sweep(warm, axes, progress=False, echo=None, beds=beds)  # compiles the chunk function
 res = sweep(apply_overrides(base, ["numerics.duration={duration}"]), axes, progress=False,
             echo=None, beds=beds)
-print("RESULT", json.dumps(dict(wall=float(res.summary["wall_time"]),
+gather = None
+if {processes} > 1:  # one chunk's samples and states gathered to every process, as per chunk
+    import time
+    from jax.sharding import Mesh, NamedSharding, PartitionSpec
+    from jaxdamp.engine.driver import to_host
+    per_chunk = sum(v[:, :res.records["t"].shape[1] // {n_chunks}].nbytes
+                    for v in res.records.values())
+    per_chunk += {systems} * 250 * 20 * 8  # the states: ~20 floats a grain (r, v, w, q, forces)
+    n = -(-{systems} // len(jax.devices())) * len(jax.devices())
+    mesh = Mesh(np.array(jax.devices()), ("b",))
+    x = jax.device_put(np.zeros((n, per_chunk // (8 * {systems}))),
+                       NamedSharding(mesh, PartitionSpec("b")))
+    to_host(x)
+    t0 = time.perf_counter()
+    for _ in range(10):
+        to_host(x)
+    gather = (time.perf_counter() - t0) / 10
+print("RESULT", json.dumps(dict(wall=float(res.summary["wall_time"]), gather=gather,
                                  devices=len(jax.devices()))))
 """
 
@@ -82,7 +99,8 @@ def run_config(processes: int, devices: int, duration: float, chunk: float, syst
     address = f"127.0.0.1:{_free_port()}"
     procs = [subprocess.Popen(
         [sys.executable, "-c", WORKER.format(processes=processes, address=address, pid=pid,
-                                             duration=duration, chunk=chunk, systems=systems)],
+                                             duration=duration, chunk=chunk, systems=systems,
+                                             n_chunks=max(1, round(duration / chunk)))],
         env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         for pid in range(processes)]
     out = []
@@ -111,12 +129,15 @@ def main(argv=None):
     steps = int(round(args.duration / dt))
     names = [n.strip() for n in args.configs.split(",")]
     times = {n: [] for n in names}
+    gathers: dict = {}
     loads = []
     for r in range(args.rounds):
         for n in names:
             loads.append(wait_quiet())
             res = run_config(*CONFIGS[n], args.duration, args.chunk, args.systems)
             times[n].append(res["wall"])
+            if res["gather"] is not None:
+                gathers.setdefault(n, []).append(res["gather"])
             print(f"round {r + 1}: {n:24s} {res['wall']:.2f} s "
                   f"({res['wall'] / (args.systems * steps) * 1e6:.2f} µs/system-step, "
                   f"{res['devices']} devices)", flush=True)
@@ -133,6 +154,17 @@ def main(argv=None):
                        ratio=ref / float(np.median(t)))
         print(f"{n:26s} {np.median(us):7.2f} [{us.min():.2f}, {us.max():.2f}]"
               f"{'':16s}{ref / np.median(t):.2f}×")
+    n_chunks = max(1, round(args.duration / args.chunk))
+    for n in names:
+        extra = (float(np.median(times[n])) - ref) / n_chunks
+        line = f"{n}: {1e3 * extra:+.1f} ms per chunk against {names[0]}"
+        if n in gathers:
+            g = float(np.median(gathers[n]))
+            line += (f"; of it, gathering one chunk's samples and states to every process "
+                     f"(gloo): {1e3 * g:.1f} ms")
+            rows[n]["gather_s_per_chunk"] = g
+        rows[n]["extra_s_per_chunk"] = extra
+        print(line)
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(dict(command="python benchmarks/bench_scaling.py "
