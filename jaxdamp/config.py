@@ -355,6 +355,18 @@ def from_json(text: str) -> Config:
     return from_dict(json.loads(text))
 
 
+def is_stored(text, config: Config) -> bool:
+    """Whether the stored configuration ``text`` (JSON, e.g. a file's attribute) is
+    ``config``: compared as configurations, so a file written before a field with a default
+    was added still matches (its JSON lacks the field); ``False`` for anything unreadable."""
+    if not isinstance(text, str):
+        return False
+    try:
+        return from_json(text) == config
+    except (ConfigError, ValueError, TypeError):
+        return False
+
+
 def load_toml(path: str, base: Config | None = None) -> Config:
     """Read a TOML file. With ``base``, the file's keys override ``base`` (partial files OK).
 

@@ -85,3 +85,19 @@ def test_cli_reports_errors_before_compute(capsys):
     assert "--frequency: 0: must be > 0" in capsys.readouterr().err
     assert cli.main(["run", "--preset", "sanchez2012-optimal", "--set", "box.Lz"]) == 2
     assert "expected key=value" in capsys.readouterr().err
+
+
+def test_stored_configuration_matches_across_added_defaults():
+    """A file written before a field with a default was added (its JSON lacks the field) still
+    holds the same configuration, so sweeps resume and raw files are reused; a different
+    value, or an unreadable text, does not match."""
+    import json
+
+    from jaxdamp.config import is_stored
+
+    cfg = presets.get("sanchez2012-optimal")
+    old = json.loads(cfg.to_json())
+    del old["primary"]["z0"], old["primary"]["v0"]
+    assert is_stored(json.dumps(old), cfg)
+    assert not is_stored(json.dumps(old), apply_overrides(cfg, {"primary.z0": 0.01}))
+    assert not is_stored("not json", cfg) and not is_stored(None, cfg)

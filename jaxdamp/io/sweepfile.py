@@ -27,6 +27,7 @@ import os
 import h5py
 import numpy as np
 
+from jaxdamp.config import is_stored
 from jaxdamp.io.common import put, stamp, write_steady
 
 FORMAT = "jaxdamp-sweep/1"
@@ -51,7 +52,7 @@ def holds(path: str, config, axes: dict, replicates: int = 1) -> bool:
         return False
     try:
         with h5py.File(path, "r") as h5:
-            return (h5.attrs.get("base_config") == config.to_json()
+            return (is_stored(h5.attrs.get("base_config"), config)
                     and h5.attrs.get("axes") == axes_json(axes, replicates)
                     and "checkpoint" in h5)
     except OSError:  # not an HDF5 file (e.g. cut short while being created)
@@ -111,7 +112,7 @@ class SweepFile:
         from jaxdamp.config import ConfigError
 
         with h5py.File(path, "r") as h5:
-            if (h5.attrs["base_config"] != config.to_json()
+            if (not is_stored(h5.attrs["base_config"], config)
                     or h5.attrs["axes"] != axes_json(axes, replicates)):
                 raise ConfigError(f"--resume: {path} holds a different sweep")
             g = h5["checkpoint"]

@@ -20,7 +20,7 @@ import numpy as np
 
 from jaxdamp.analysis import stats
 from jaxdamp.analysis.response import analysis_start, steady_state_summary
-from jaxdamp.config import Config, ConfigError
+from jaxdamp.config import Config, ConfigError, is_stored
 from jaxdamp.engine import driver
 from jaxdamp.engine.driver import SimulationDiverged  # noqa: F401  (re-exported: runs raise it)
 from jaxdamp.engine.packing import SettledBed, settle
@@ -134,7 +134,7 @@ def run(
             raise ConfigError(f"--resume: no run file at {out!r} to resume from")
         rf = RunFile(out, "a")
         stored = rf.h5.attrs["config"]
-        if stored != config.to_json():
+        if not is_stored(stored, config):
             rf.close()
             raise ConfigError(
                 f"--resume: {out} was written with a different configuration; "
