@@ -52,7 +52,7 @@ def throughput(engine: str, steps: int, batch: int = 32) -> dict:
     z0 = -float(np.asarray(params.mass).sum()) * cfg.gravity / cfg.primary.K
     st = init_states(model, pb, rep(bed.r + [0, 0, z0]), rep(bed.v), rep(bed.w), rep(bed.q),
                      jnp.full(batch, z0), jnp.zeros(batch))
-    nbrs = nb.allocate(model, box_frame(st), 1.5)
+    nbrs = nb.allocate(model, box_frame(st, pb), 1.5)
     every = 100
     n_rec = max(1, steps // every)
     fn = chunk_fn(model, n_rec, every, engine=engine)

@@ -144,7 +144,7 @@ def time_jaxdamp(model, params, st, batch: int, steps: int, every: int, engine="
                                                      batch, 0))
                       for f in dataclasses.fields(st)})
     pb = jax.tree_util.tree_map(lambda x: jnp.stack([x] * batch), params)
-    nbrs = nb.allocate(model, box_frame(states), 1.5)
+    nbrs = nb.allocate(model, box_frame(states, pb), 1.5)
     fn = chunk_fn(model, max(1, steps // every), every, engine=engine)
     jax.block_until_ready(fn(states, nbrs, pb))  # compile
     t0 = time.perf_counter()

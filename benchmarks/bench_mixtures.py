@@ -45,14 +45,14 @@ def driven_state(cfg):
 def time_chunk(model, params, state, batch, steps, engine, uniform=False, record_every=100):
     pb = jax.tree_util.tree_map(lambda x: jnp.stack([x] * batch), params)
     st = jax.tree_util.tree_map(lambda x: jnp.stack([x] * batch), state)
-    nbrs = nb.allocate(model, box_frame(st), 1.5, radius=None if uniform else pb.radius)
+    nbrs = nb.allocate(model, box_frame(st, pb), 1.5, radius=None if uniform else pb.radius)
     record_every = min(record_every, steps)
     steps -= steps % record_every
     fn = chunk_fn(model, steps // record_every, record_every, engine=engine)
     out = fn(st, nbrs, pb)
     jax.block_until_ready(out)  # compile
     if bool(np.any(np.asarray(out[1].overflow))):
-        nbrs = nb.allocate(model, box_frame(st), 3.0, radius=None if uniform else pb.radius)
+        nbrs = nb.allocate(model, box_frame(st, pb), 3.0, radius=None if uniform else pb.radius)
     t0 = time.perf_counter()
     jax.block_until_ready(fn(st, nbrs, pb))
     return (time.perf_counter() - t0) / steps / batch, nb.capacity(nbrs)

@@ -47,7 +47,7 @@ def time_chunk(model, params, settled, batch: int, steps: int, engine: str, reco
     rep = lambda x: np.stack([x] * batch)  # noqa: E731
     st = init_states(model, pb, rep(settled.r), rep(settled.v), rep(settled.w), rep(settled.q),
                      jnp.zeros(batch), jnp.zeros(batch))
-    nbrs = nb.allocate(model, box_frame(st), 1.5)
+    nbrs = nb.allocate(model, box_frame(st, pb), 1.5)
     fn = chunk_fn(model, steps // record_every, record_every, engine=engine)
     jax.block_until_ready(fn(st, nbrs, pb))  # compile
     t0 = time.perf_counter()

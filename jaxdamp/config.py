@@ -231,6 +231,11 @@ class Config:
       impactor: the single particle (required for S3).
       numerics: integration and recording.
       gravity: ``g`` [m/s^2] along ``-z``.
+      direction: the axis of the excitation, a vector ``(x, y, z)`` (normalised when the model
+        is built): the base motion and the primary's degree of freedom (S1) or the prescribed
+        box motion (S2) act along it, the box translating rigidly along it; gravity stays along
+        ``-z``. Default ``(0, 0, 1)``, vertical (both sources); ``(1, 0, 0)`` drives the box
+        horizontally. S3 is vertical only.
       mixing: how per-species constants combine for a pair: ``"arithmetic"``, ``"harmonic"``
         or ``"geometric"`` mean (the 2023 paper: arithmetic).
       wall_damping: how grain–wall contacts are damped (docs/physics.md §7, "Grain–wall damping
@@ -255,6 +260,7 @@ class Config:
     impactor: Impactor | None = None
     numerics: Numerics = field(default_factory=Numerics)
     gravity: float = 9.8
+    direction: tuple[float, float, float] = (0.0, 0.0, 1.0)
     mixing: str = "arithmetic"
     wall_damping: str = "mixed"
     contact_law: str = "hertz"
@@ -339,6 +345,8 @@ _NESTED = {
 def _convert(cls, name: str, value: Any, path: str):
     if (cls, name) in _NESTED:
         return _build(_NESTED[(cls, name)], value, path)
+    if cls is Config and name == "direction" and isinstance(value, (list, tuple)):
+        return tuple(value)
     if cls is Config and name == "grains":
         if isinstance(value, dict):
             value = [value]

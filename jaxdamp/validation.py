@@ -74,6 +74,12 @@ def validate(config: Config) -> Config:
     if config.system == "impact":
         return _validate_impact(config)
 
+    d = config.direction
+    if not (isinstance(d, tuple) and len(d) == 3
+            and all(isinstance(x, (int, float)) and math.isfinite(x) for x in d)
+            and math.hypot(*d) > 0):
+        raise ConfigError(f"direction = {d!r}: the excitation axis must be three finite numbers "
+                          "(x, y, z), not all zero, e.g. [0, 0, 1] (vertical) or [1, 0, 0]")
     if config.system == "primary":
         if config.primary is None:
             raise ConfigError("primary: system 'primary' (S1) needs a [primary] table (M, K, C, U)")
@@ -171,6 +177,10 @@ def validate(config: Config) -> Config:
 
 def _validate_impact(config: Config) -> Config:
     """Checks of an S3 (single-particle impact damper) configuration, see :mod:`jaxdamp.s3.impact`."""
+    d = config.direction
+    if not (isinstance(d, tuple) and len(d) == 3 and d[0] == 0 and d[1] == 0 and d[2] > 0):
+        raise ConfigError(f"direction = {d!r}: the single-particle model (S3) is vertical; use "
+                          "[0, 0, 1] (other directions run on the DEM, system 'primary')")
     if config.grains:
         raise ConfigError(f"grains: system 'impact' (S3) models the bed as one particle; grains must "
                           f"be empty (got {config.n_grains} grains) — set impactor.mass instead")

@@ -92,7 +92,7 @@ def test_cell_grid_pair_list_is_complete_and_grows():
         ref = np.empty((n, 3))
         pi, pj, pc = np.empty(1, np.int64), np.empty(1, np.int64), np.empty((1, 5))
         table = np.ones((1, 1, len(LAWS["hertz"].columns)))
-        k, pi, pj, pc = native._pairs(r, 0.0, cutoff, pi, pj, pc, ref, ones * 1e-3, ones,
+        k, pi, pj, pc = native._pairs(r, 0.0, 0.0, 0.0, cutoff, pi, pj, pc, ref, ones * 1e-3, ones,
                                       np.zeros(n, np.int64), table, LAWS["hertz"].id)
         pairs = [tuple(sorted((int(a), int(b)))) for a, b in zip(pi[:k], pj[:k])]
         got = set(pairs)

@@ -49,7 +49,7 @@ def test_overflow_reallocates_and_redoes_the_chunk():
     cfg = config(n=n, radius=radius, material=MAT, box=(0.01, 0.01, 0.01))
     r, v, w = _dense_packing(n, radius, 0.01, seed=5)
     model, pb, st, good = start(cfg, r, v, w, dt=2e-7)
-    small = nb._build(model, 2, box_frame(st))
+    small = nb._build(model, 2, box_frame(st, pb))
     assert bool(small.overflow.any())
     calls = []
     a, rec_a = advance(model, st, small, pb, 5, 20,

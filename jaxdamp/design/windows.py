@@ -111,7 +111,10 @@ class DEMProblem:
         self.settle_wall = time.perf_counter() - t0
         self.radius_max = float(np.max(np.asarray(self.params.radius)))
         self.m_grains = float(np.sum(np.asarray(self.params.mass)))
-        self.z_static = -self.m_grains * self.config.gravity / self.config.primary.K
+        from jaxdamp.physics.model import excitation_axis
+
+        self.z_static = (-self.m_grains * self.config.gravity
+                         * float(excitation_axis(self.config)[2]) / self.config.primary.K)
         self._fns = {}
 
     # -- geometry ---------------------------------------------------------------------------

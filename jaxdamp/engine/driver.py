@@ -113,7 +113,7 @@ def take(tree, i):
 
 
 def _allocate(model, states, params, multiplier, at_least=0):
-    return nb.allocate(model, to_host(box_frame(states)), multiplier, at_least=at_least,
+    return nb.allocate(model, to_host(box_frame(states, params)), multiplier, at_least=at_least,
                        radius=to_host(params.radius))
 
 

@@ -69,7 +69,7 @@ REBUILD_STEPS = 40
 
 #: The per-system scalar parameters the kernel reads (fields of ``Params``).
 SCALARS = ("Lx", "Ly", "Lz", "gravity", "M", "K", "C", "U", "amplitude", "omega", "z_offset",
-           "dt", "drag", "t_window")
+           "dt", "drag", "t_window", "ex", "ey", "ez")
 #: Fields of ``Params`` the kernel reads, in the order of its parameter offsets.
 PARAM_FIELDS = ("radius", "mass", "inertia", "pair_table", "wall_table") + SCALARS
 #: Fields of ``State`` the kernel reads and writes, in the order of its state offsets.
@@ -136,22 +136,23 @@ def _kernel(**flags):
 if AVAILABLE:
 
     @_kernel()
-    def _build_pairs(r, z_box, cutoff, pi, pj, pc, ref, R, m, sid, table, law):
+    def _build_pairs(r, bx, by, bz, cutoff, pi, pj, pc, ref, R, m, sid, table, law):
         """Half list of the pairs whose surfaces are closer than the skin, ``|r_i - r_j| < R_i +
         R_j + cutoff - 2 R_max`` (box frame; size-aware, as :mod:`jaxdamp.engine.neighbors`), via a
         cell grid of side ``cutoff``, with the pairs' constants ``pc[k] = (R_i + R_j, k, g,
         γ_s, μ)``: the row ``table[sid_i, sid_j]`` of the pair table and the law's radius- and
         mass-dependent part (:func:`jaxdamp.physics.contact.pair_scalar`), once per listed pair;
-        stores the reference positions. Returns the number of pairs, or minus the number
-        needed when the arrays are too small."""
+        stores the reference positions (box frame: the box's corner at ``(bx, by, bz)``).
+        Returns the number of pairs, or minus the number needed when the arrays are too
+        small."""
         n = r.shape[0]
         extra = cutoff - 2.0 * R.max()
         lo = np.full(3, np.inf)
         hi = np.full(3, -np.inf)
         for i in range(n):
-            ref[i, 0] = r[i, 0]
-            ref[i, 1] = r[i, 1]
-            ref[i, 2] = r[i, 2] - z_box
+            ref[i, 0] = r[i, 0] - bx
+            ref[i, 1] = r[i, 1] - by
+            ref[i, 2] = r[i, 2] - bz
             for k in range(3):
                 if not math.isfinite(ref[i, k]):
                     return 0  # non-finite state: no pairs; the runner stops on it
@@ -234,14 +235,14 @@ if AVAILABLE:
         return k if k <= cap else -k
 
     @_kernel()
-    def _pairs(r, z_box, cutoff, pi, pj, pc, ref, R, m, sid, table, law):
+    def _pairs(r, bx, by, bz, cutoff, pi, pj, pc, ref, R, m, sid, table, law):
         """:func:`_build_pairs`, growing the pair arrays when they are too small."""
-        k = _build_pairs(r, z_box, cutoff, pi, pj, pc, ref, R, m, sid, table, law)
+        k = _build_pairs(r, bx, by, bz, cutoff, pi, pj, pc, ref, R, m, sid, table, law)
         if k < 0:
             pi = np.empty(2 * (-k), np.int64)
             pj = np.empty(2 * (-k), np.int64)
             pc = np.empty((2 * (-k), 5))
-            k = _build_pairs(r, z_box, cutoff, pi, pj, pc, ref, R, m, sid, table, law)
+            k = _build_pairs(r, bx, by, bz, cutoff, pi, pj, pc, ref, R, m, sid, table, law)
         return k, pi, pj, pc
 
     @_kernel()
@@ -354,6 +355,7 @@ if AVAILABLE:
         M, K, C, U = prow[po[9]], prow[po[10]], prow[po[11]], prow[po[12]]
         amp, om, z_off, dt = prow[po[13]], prow[po[14]], prow[po[15]], prow[po[16]]
         drag, t_win = prow[po[17]], prow[po[18]]
+        ex, ey, ez = prow[po[19]], prow[po[20]], prow[po[21]]  # the excitation axis
         pi = np.empty(4 * n + 16, np.int64)  # grown by _pairs when a bed lists more
         pj = np.empty(4 * n + 16, np.int64)
         pc = np.empty((4 * n + 16, 5))
@@ -369,13 +371,15 @@ if AVAILABLE:
         # wider skin lists more pairs but never changes which pairs touch
         v2 = 0.0
         for i in range(n):
-            v2 = max(v2, vb[i, 0] ** 2 + vb[i, 1] ** 2 + (vb[i, 2] - zd) ** 2)
+            v2 = max(v2, (vb[i, 0] - ex * zd) ** 2 + (vb[i, 1] - ey * zd) ** 2
+                     + (vb[i, 2] - ez * zd) ** 2)
         r_max = Rb.max() if n > 0 else 0.0
         skin = max(skin, min(2.0 * REBUILD_STEPS * math.sqrt(v2) * dt, 2.0 * r_max))
         cutoff = 2.0 * r_max + skin
         npairs = 0
         if n > 1:
-            npairs, pi, pj, pc = _pairs(rb, z, cutoff, pi, pj, pc, ref, Rb, mb, sid, tab, law)
+            npairs, pi, pj, pc = _pairs(rb, ex * z, ey * z, ez * z, cutoff, pi, pj, pc, ref, Rb,
+                                        mb, sid, tab, law)
         half_skin2 = 0.25 * skin * skin
         hdt2 = 0.5 * dt * dt
         r1 = np.empty((n, 3))
@@ -423,9 +427,16 @@ if AVAILABLE:
                     r1[i, 0], r1[i, 1], r1[i, 2] = x, y, zz
                     vp[i, 0], vp[i, 1], vp[i, 2] = ux, uy, uz
                     rw[i, 0], rw[i, 1], rw[i, 2] = sx, sy, sz
-                    ddx = x - ref[i, 0]
-                    ddy = y - ref[i, 1]
-                    ddz = zz - z1 - ref[i, 2]
+                    # box frame (the box's corner at e z1) and velocities relative to the walls
+                    bx = x - ex * z1
+                    by = y - ey * z1
+                    floor = zz - ez * z1
+                    wx = ux - ex * zdp
+                    wy = uy - ey * zdp
+                    wz = uz - ez * zdp
+                    ddx = bx - ref[i, 0]
+                    ddy = by - ref[i, 1]
+                    ddz = floor - ref[i, 2]
                     far = far | (ddx * ddx + ddy * ddy + ddz * ddz > half_skin2)
                     pdrag += mb[i] * (ux * ux + uy * uy + uz * uz)
                     fx, fy, fz = body_force_scalar(mb[i], ux, uy, uz, grav, drag)
@@ -433,12 +444,11 @@ if AVAILABLE:
                     ty = 0.0
                     tz = 0.0
                     # walls: floor, lid, x = 0, x = Lx, y = 0, y = Ly (inward normals), unrolled:
-                    # most grains touch none, so the common path is six compares
-                    floor = zz - z1
-                    wz = uz - zdp
+                    # most grains touch none, so the common path is six compares; box_z sums
+                    # the force on the box along the axis e
                     if floor < Ri:
                         gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
-                            law, Ri - floor, 0.0, 0.0, 1.0, ux, uy, wz, sx, sy, sz, Ri, wk[i])
+                            law, Ri - floor, 0.0, 0.0, 1.0, wx, wy, wz, sx, sy, sz, Ri, wk[i])
                         fx += gx
                         fy += gy
                         fz += gz
@@ -448,12 +458,12 @@ if AVAILABLE:
                         e_el += e
                         pw_n += ln
                         pw_f += lf
-                        box_z -= gz
+                        box_z -= ex * gx + ey * gy + ez * gz
                         floor_lid -= gz
                         n_floor += 1.0
                     if Lz - floor < Ri:
                         gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
-                            law, Ri - (Lz - floor), 0.0, 0.0, -1.0, ux, uy, wz, sx, sy, sz, Ri, wk[i])
+                            law, Ri - (Lz - floor), 0.0, 0.0, -1.0, wx, wy, wz, sx, sy, sz, Ri, wk[i])
                         fx += gx
                         fy += gy
                         fz += gz
@@ -463,12 +473,12 @@ if AVAILABLE:
                         e_el += e
                         pw_n += ln
                         pw_f += lf
-                        box_z -= gz
+                        box_z -= ex * gx + ey * gy + ez * gz
                         floor_lid -= gz
                         n_lid += 1.0
-                    if x < Ri:
+                    if bx < Ri:
                         gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
-                            law, Ri - x, 1.0, 0.0, 0.0, ux, uy, wz, sx, sy, sz, Ri, wk[i])
+                            law, Ri - bx, 1.0, 0.0, 0.0, wx, wy, wz, sx, sy, sz, Ri, wk[i])
                         fx += gx
                         fy += gy
                         fz += gz
@@ -478,10 +488,10 @@ if AVAILABLE:
                         e_el += e
                         pw_n += ln
                         pw_f += lf
-                        box_z -= gz
-                    if Lx - x < Ri:
+                        box_z -= ex * gx + ey * gy + ez * gz
+                    if Lx - bx < Ri:
                         gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
-                            law, Ri - (Lx - x), -1.0, 0.0, 0.0, ux, uy, wz, sx, sy, sz, Ri, wk[i])
+                            law, Ri - (Lx - bx), -1.0, 0.0, 0.0, wx, wy, wz, sx, sy, sz, Ri, wk[i])
                         fx += gx
                         fy += gy
                         fz += gz
@@ -491,10 +501,10 @@ if AVAILABLE:
                         e_el += e
                         pw_n += ln
                         pw_f += lf
-                        box_z -= gz
-                    if y < Ri:
+                        box_z -= ex * gx + ey * gy + ez * gz
+                    if by < Ri:
                         gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
-                            law, Ri - y, 0.0, 1.0, 0.0, ux, uy, wz, sx, sy, sz, Ri, wk[i])
+                            law, Ri - by, 0.0, 1.0, 0.0, wx, wy, wz, sx, sy, sz, Ri, wk[i])
                         fx += gx
                         fy += gy
                         fz += gz
@@ -504,10 +514,10 @@ if AVAILABLE:
                         e_el += e
                         pw_n += ln
                         pw_f += lf
-                        box_z -= gz
-                    if Ly - y < Ri:
+                        box_z -= ex * gx + ey * gy + ez * gz
+                    if Ly - by < Ri:
                         gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
-                            law, Ri - (Ly - y), 0.0, -1.0, 0.0, ux, uy, wz, sx, sy, sz, Ri, wk[i])
+                            law, Ri - (Ly - by), 0.0, -1.0, 0.0, wx, wy, wz, sx, sy, sz, Ri, wk[i])
                         fx += gx
                         fy += gy
                         fz += gz
@@ -517,12 +527,12 @@ if AVAILABLE:
                         e_el += e
                         pw_n += ln
                         pw_f += lf
-                        box_z -= gz
+                        box_z -= ex * gx + ey * gy + ez * gz
                     F[i, 0], F[i, 1], F[i, 2] = fx, fy, fz
                     T[i, 0], T[i, 1], T[i, 2] = tx, ty, tz
                 if n > 1 and far:  # a grain moved more than skin/2: list the pairs anew
-                    npairs, pi, pj, pc = _pairs(r1, z1, cutoff, pi, pj, pc, ref, Rb, mb, sid, tab,
-                                                law)
+                    npairs, pi, pj, pc = _pairs(r1, ex * z1, ey * z1, ez * z1, cutoff, pi, pj,
+                                                pc, ref, Rb, mb, sid, tab, law)
                 # pass 2: the grain pairs
                 pp_e, pp_n, pp_f = _pair_forces(law, r1, vp, rw, Rb, pi, pj, pc, npairs, F, T)
                 e_el += pp_e
@@ -572,7 +582,7 @@ if AVAILABLE:
                 imp0 += floor_lid
                 imp1 += box_z
             u_t = base_motion_scalar(t, U, om)[0] if system == 0 else 0.0
-            record_row(rec[b, k_rec], t, z, zd, u_t, rb, vb, wb, mb, Ib, Rb, grav, Lz, M, K,
+            record_row(rec[b, k_rec], t, z, zd, u_t, rb, vb, wb, mb, Ib, Rb, grav, Lz, ez, M, K,
                        system == 0, e_el, e_start, imp0 / record_every,
                        imp1 / record_every, n_floor, n_lid, work, bounds)
         row[so[6]], row[so[7]], row[so[8]], row[so[9]] = z, zd, zdd, t

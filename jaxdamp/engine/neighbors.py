@@ -10,7 +10,8 @@ distances do not change under the box's rigid translation, and a bed that rides 
 does not trigger rebuilds.
 
 A rebuild is needed once any grain moved more than ``skin / 2`` since the last build, judged
-at the positions where the next forces are evaluated (the predictor's, ``box_frame(state, dt)``;
+at the positions where the next forces are evaluated (the predictor's,
+``box_frame(state, params, dt)``;
 both engines); the list holds every pair whose surfaces are closer than ``skin`` (centres
 closer than ``R_i + R_j + skin``, plus a small safety margin). The size-aware
 cutoff keeps mixtures cheap: with radii differing tenfold a uniform ``2 R_max + skin`` would list

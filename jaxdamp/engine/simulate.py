@@ -84,7 +84,7 @@ def _jax_block(model: Model, record_every: int):
     def block(states, nbrs, params):
         def inner(carry, _):
             states, nbrs, impulse = carry
-            nbrs = nb.update(model, nbrs, box_frame(states, params.dt), params.radius)
+            nbrs = nb.update(model, nbrs, box_frame(states, params, params.dt), params.radius)
             states = step_b(states, nbrs.idx, params, model)
             impulse = impulse + jnp.stack([states.f_floor_lid, states.f_box], axis=-1)
             return (states, nbrs, impulse), None

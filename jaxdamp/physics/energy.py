@@ -128,11 +128,12 @@ def record_layout(model: Model) -> list[tuple[str, tuple]]:
 
 
 @scalar_form
-def record_row(out, t, z, zd, u, r, v, w, mass, inertia, radius, gravity, Lz, M, K, primary,
+def record_row(out, t, z, zd, u, r, v, w, mass, inertia, radius, gravity, Lz, ez, M, K, primary,
                e_elastic, e_start, f_floor_lid, f_box, n_floor, n_lid, work, bounds):
     """Scalar form of :func:`record` (the native engine's samples): one sample written into
     the flat row ``out`` in the order of :func:`record_layout`. ``u``: the base position at
-    ``t`` (S1), ``primary``: whether the primary is there; ``bounds``: the species' first
+    ``t`` (S1), ``ez``: the vertical component of the excitation axis (the floor is at height
+    ``ez z``), ``primary``: whether the primary is there; ``bounds``: the species' first
     grain and the end, ``(S + 1,)``."""
     n = r.shape[0]
     S = bounds.shape[0] - 1
@@ -169,7 +170,7 @@ def record_row(out, t, z, zd, u, r, v, w, mass, inertia, radius, gravity, Lz, M,
             ms += mass[i]
             msz += mass[i] * r[i, 2]
             msv += mass[i] * v[i, 2]
-            h = r[i, 2] - z
+            h = r[i, 2] - ez * z
             nf += 1.0 if h < radius[i] else 0.0
             nl += 1.0 if Lz - h < radius[i] else 0.0
         ms = max(ms, 1e-300)
@@ -191,7 +192,7 @@ def record_row(out, t, z, zd, u, r, v, w, mass, inertia, radius, gravity, Lz, M,
 
 
 def _species_records(st: State, p: Params, model: Model) -> dict:
-    floor = st.r[:, 2] - st.z  # centre height above the floor
+    floor = st.r[:, 2] - p.ez * st.z  # centre height above the floor
     on_floor = floor < p.radius
     on_lid = p.Lz - floor < p.radius
     out = {k: [] for k in ("z_cm_species", "vz_cm_species", "n_floor_species", "n_lid_species")}

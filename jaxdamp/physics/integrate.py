@@ -240,8 +240,9 @@ def step(st: State, idx, p: Params, model: Model) -> State:
     )
 
 
-def box_frame(st: State, dt=None):
-    """Grain positions relative to the floor's corner, ``(..., N, 3)`` (for neighbour lists).
+def box_frame(st: State, p: Params, dt=None):
+    """Grain positions relative to the box's corner ``e z``, ``(..., N, 3)`` (for neighbour
+    lists; ``p`` gives the excitation axis ``e``, batched like ``st``).
 
     With ``dt`` [s] (shape of ``st.z``): at the predicted positions ``r + dt v + ½ dt² a`` of
     the next force evaluation (box likewise), where a list must hold every touching pair;
@@ -252,6 +253,6 @@ def box_frame(st: State, dt=None):
         h = dt[..., None, None]
         r = r + h * st.v + 0.5 * h * h * st.a
         z = z + dt * st.zd + 0.5 * dt * dt * st.zdd
-    shift = jnp.stack([jnp.zeros_like(z), jnp.zeros_like(z), z], axis=-1)
+    shift = jnp.stack([p.ex, p.ey, p.ez], axis=-1) * z[..., None]  # the box's corner (..., 3)
     return r - shift[..., None, :]
 

@@ -88,7 +88,8 @@ class Params:
     ``γ_s`` [kg s^-1 m^-1/2], ``μ`` [-], ``E*`` [Pa], ``γ_n`` [kg s^-1 m^-1/2], ``A`` [s]);
     all else is scalar (per system). ``omega`` = 2πf [rad/s]; ``U`` base amplitude (S1) [m]; ``amplitude`` box amplitude (S2) [m];
     ``z_offset`` box position about which it moves (S2) [m]; ``drag`` settling drag rate [1/s];
-    ``t_window`` start of the analysis window [s].
+    ``t_window`` start of the analysis window [s]; ``ex, ey, ez`` the unit vector of the
+    excitation axis (``Config.direction``), along which the box and the primary move.
     """
 
     radius: jnp.ndarray
@@ -110,6 +111,9 @@ class Params:
     dt: jnp.ndarray
     drag: jnp.ndarray
     t_window: jnp.ndarray
+    ex: jnp.ndarray
+    ey: jnp.ndarray
+    ez: jnp.ndarray
 
 
 @pytree_dataclass
@@ -119,12 +123,14 @@ class State:
     Grains, shapes ``(N, 3)`` (``q``: ``(N, 4)`` unit quaternions ``(w, x, y, z)``):
     ``r`` position [m], ``v`` velocity [m/s], ``w`` angular velocity [rad/s], ``a`` and
     ``alpha`` the accelerations at ``t`` [m/s², rad/s²].
-    Box (scalars): ``z``, ``zd``, ``zdd`` position [m], velocity, acceleration of the floor.
+    Box (scalars): ``z``, ``zd``, ``zdd`` position [m], velocity, acceleration of the floor
+    along the excitation axis ``e`` (the box's corner is at ``e z``).
     ``power`` [W] and ``work`` [J], shape ``(N_CHANNELS,)``: the channel powers at ``t`` and
     their time integrals (trapezoid rule) since the run started (see :data:`CHANNELS`).
     ``e_elastic`` [J] elastic contact energy at ``t``; ``e_start`` [J] total mechanical energy
     when accounting started; ``f_floor_lid``, ``f_box`` [N] vertical force of the grains on
-    floor + lid and on the whole box at ``t``; ``n_floor``, ``n_lid`` grains touching them;
+    floor + lid and on the whole box along ``e`` at ``t``; ``n_floor``, ``n_lid`` grains
+    touching them;
     ``z_max``, ``z_min`` [m] box extrema since ``t_window``; ``step`` steps taken.
     """
 
@@ -249,8 +255,15 @@ def build(config: Config, radii: np.ndarray | None = None) -> tuple[Model, Param
         dt=f64(config_dt(config, radii)),
         drag=f64(0.0),
         t_window=f64((1.0 - config.numerics.analysis_window) * config.numerics.duration),
+        **{k: f64(x) for k, x in zip(("ex", "ey", "ez"), excitation_axis(config))},
     )
     return model, params
+
+
+def excitation_axis(config: Config) -> np.ndarray:
+    """The unit vector of ``config.direction``: the axis of the base or box motion."""
+    d = np.asarray(config.direction, dtype=np.float64)
+    return d / np.linalg.norm(d)
 
 
 def impact_speed(config: Config) -> float:

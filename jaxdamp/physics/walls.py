@@ -1,7 +1,8 @@
 """Sphere–wall contacts with the six flat walls of the box (docs/physics.md §2).
 
-The box spans ``x ∈ [0, Lx]``, ``y ∈ [0, Ly]`` and ``z ∈ [z_box, z_box + Lz]``: it moves rigidly
-along ``z`` only, with velocity ``zd_box``. Walls use the same contact law as grain pairs with
+The box spans ``[0, Lx] × [0, Ly] × [0, Lz]`` shifted by ``e z_box``: it moves rigidly along
+the excitation axis ``e = (ex, ey, ez)`` (``Params``; vertical by default), with velocity
+``e zd_box``. Walls use the same contact law as grain pairs with
 ``R* = R_i``, ``m* = m_i`` and the constants of the grain's species against the wall material
 (a row of ``Params.wall_table``, mixed when the model was built).
 """
@@ -27,7 +28,8 @@ class WallForces(NamedTuple):
 
     Attributes:
       force, torque: on each grain [N], [N m], ``(N, 3)``.
-      box_z: vertical force of the grains on the whole box [N] (its weight is carried here).
+      box_z: force of the grains on the whole box along the excitation axis ``e`` [N] (for a
+        vertical axis their weight is carried here).
       floor_lid_z: vertical force of the grains on floor + lid only [N].
       n_floor, n_lid: number of grains touching floor / lid.
       elastic_energy: [J]; normal_loss, friction_loss: dissipated power [W] (all walls).
@@ -45,17 +47,16 @@ class WallForces(NamedTuple):
 
 
 def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
-    """Contacts of grains ``(N, 3)`` with the six walls of a box at height ``z_box``.
+    """Contacts of grains ``(N, 3)`` with the six walls of a box at ``e z_box``.
 
     Args:
       r, v, w: positions [m], velocities [m/s], angular velocities [rad/s], ``(N, 3)``.
-      z_box, zd_box: floor position [m] and box velocity [m/s] (scalars).
+      z_box, zd_box: box position [m] and velocity [m/s] along the axis ``e`` (scalars).
       p: :class:`jaxdamp.physics.model.Params`.
       model: :class:`jaxdamp.physics.model.Model` (the law and the grains' species).
     """
     # Signed distance of each centre to each wall plane, (N, 6).
-    x, y, z = r[:, 0], r[:, 1], r[:, 2]
-    floor = z - z_box
+    x, y, floor = r[:, 0] - p.ex * z_box, r[:, 1] - p.ey * z_box, r[:, 2] - p.ez * z_box
     dist = jnp.stack(
         (floor, p.Lz - floor, x, p.Lx - x, y, p.Ly - y), axis=-1
     )
@@ -68,7 +69,8 @@ def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
         row = p.wall_table[jnp.asarray(model.species_index())][:, None, :]  # (N, 1, F)
     stiffness, damping = law.pair_jax(row, R, p.mass[:, None])
     normals = Vec(*(jnp.asarray(_NORMALS[:, k]) for k in range(3)))  # (6,) each
-    v_rel = Vec(v[:, 0:1], v[:, 1:2], v[:, 2:3] - zd_box)  # the walls move with (0, 0, zd_box)
+    # the walls move with e zd_box
+    v_rel = Vec(v[:, 0:1] - p.ex * zd_box, v[:, 1:2] - p.ey * zd_box, v[:, 2:3] - p.ez * zd_box)
     Rw = p.radius[:, None] * w
     spin = Vec(Rw[:, 0:1], Rw[:, 1:2], Rw[:, 2:3])
     c = contact_force(law, xi, normals, v_rel, spin, R, stiffness, damping, row[..., GAMMA_S],
@@ -78,7 +80,7 @@ def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
     return WallForces(
         force=c.force.sum(axis=1).stack(),
         torque=c.torque.sum(axis=1).stack(),
-        box_z=-fz.sum(),
+        box_z=-(p.ex * c.force.x.sum() + p.ey * c.force.y.sum() + p.ez * fz.sum()),
         floor_lid_z=-(fz[:, FLOOR] + fz[:, LID]).sum(),
         n_floor=c.touching[:, FLOOR].sum(),
         n_lid=c.touching[:, LID].sum(),

@@ -59,11 +59,15 @@ def schedule(config: Config, dt: float) -> Schedule:
 
 
 def initial_box_position(config: Config, grain_mass: float) -> float:
-    """Box floor height at t = 0: the primary's static equilibrium under the bed's weight plus
-    its initial displacement ``primary.z0`` (S1), or the drive's starting point ``A_d`` (S2)."""
+    """Box position along the excitation axis at t = 0: the primary's static equilibrium under
+    the bed's weight (its component along the axis) plus its initial displacement
+    ``primary.z0`` (S1), or the drive's starting point ``A_d`` (S2)."""
     if config.system == "primary":
+        from jaxdamp.physics.model import excitation_axis
+
         K = config.primary.K
-        return (-grain_mass * config.gravity / K if K > 0 else 0.0) + config.primary.z0
+        weight = grain_mass * config.gravity * float(excitation_axis(config)[2])
+        return (-weight / K if K > 0 else 0.0) + config.primary.z0
     return config.drive.amplitude
 
 
