@@ -200,9 +200,12 @@ def compute(quick: bool, log, ctx):
     s = settings(quick)
     results = {}
     for C in s["C"]:
-        res, cfg = run_scan(C, s, ctx.raw(f"sweep_C{C:g}_R{s['R']}.h5"), ctx.progress)
+        path = ctx.raw(f"sweep_C{C:g}_R{s['R']}.h5")
+        res, cfg = run_scan(C, s, path, ctx.progress)
         a = analyse(res, cfg, s)
-        results[C] = dict(res=res, cfg=cfg, **a)
+        with h5py.File(path, "r") as h:  # the R settled beds (the same at every grid point)
+            heights = np.asarray(h["settle/bed_height"][()])[:s["R"]]
+        results[C] = dict(res=res, cfg=cfg, bed_heights=heights, **a)
         o = a["optimum"][f"max_C_ef_{THESIS_WEIGHTING}"]
         log(f"C = {C}: optimum (largest C_ef, {THESIS_WEIGHTING} fit) {o['mean']:.4f} ± "
             f"{o['ci95']:.4f} m; smallest peak {a['optimum']['min_peak']['mean']:.4f} ± "
@@ -408,7 +411,11 @@ def _summary(out, results, s, prov):
         f"**Runs.** `sanchez2012-optimal` (N = 250, E = 2.03e9 via stiffness_scale 0.01), "
         f"{len(s['freqs'])} frequencies {min(s['freqs'])}–{max(s['freqs'])} Hz × {len(s['lz'])} "
         f"heights × **R = {R} independently poured beds** (seeds 0…{R - 1}), {s['duration']} s "
-        f"simulated per run after settling (thesis: 13.12 s).", "",
+        f"simulated per run after settling (thesis: 13.12 s). Settled bed heights: "
+        + ", ".join(f"{x:.6f}" for x in r0["bed_heights"])
+        + f" m (mean {np.mean(r0['bed_heights']):.6f} ± "
+        f"{np.std(r0['bed_heights'], ddof=1) / np.sqrt(len(r0['bed_heights'])):.6f} m, SE; "
+        "thesis ≈ 0.039 m).", "",
         "**Stationarity.** The amplitude of a run is its mean over the steady state detected by "
         "MSER on the per-period amplitude and dissipation, not a fixed window. "
         + "; ".join(f"C = {C}: {r['stationary']} of {r['runs']} runs stationary (steady from "
