@@ -590,10 +590,21 @@ if AVAILABLE:
         row[so[15]], row[so[16]], row[so[17]] = e_el, floor_lid, box_z
         row[so[18]], row[so[19]] = n_floor, n_lid
 
-    @_kernel(parallel=True, nogil=True)  # nogil: sharded chunks call it from device threads
+    @_kernel(parallel=True)
     def _advance(n_records, record_every, system, law, skin, st, pm, so, po, n_species, n_cols,
                  sid, bounds, rec):
+        """The batch over the cores (OpenMP threads, one system per thread at a time)."""
         for b in prange(st.shape[0]):
+            _advance_one(b, n_records, record_every, system, law, skin, st, pm, so, po,
+                         n_species, n_cols, sid, bounds, rec)
+
+    @_kernel(nogil=True)
+    def _advance_serial(n_records, record_every, system, law, skin, st, pm, so, po, n_species,
+                        n_cols, sid, bounds, rec):
+        """The batch in the calling thread, without the GIL: for shards, whose device threads
+        call the kernel side by side. (Two threads entering the OpenMP kernel at once
+        deadlocked in about 3 of 4 runs of a 2-device sweep, so shards never use it.)"""
+        for b in range(st.shape[0]):
             _advance_one(b, n_records, record_every, system, law, skin, st, pm, so, po,
                          n_species, n_cols, sid, bounds, rec)
 
@@ -645,13 +656,15 @@ def offsets(lay, names) -> np.ndarray:
 
 
 def advance_packed(model, state_packed, params_packed, state_layout, param_layout,
-                   n_records: int, record_every: int):
+                   n_records: int, record_every: int, threads: bool = True):
     """Advance a packed batch (:func:`pack`: ``(B, total)`` float64 rows of ``State`` and
     ``Params`` in the layouts ``state_layout``, ``param_layout``) by ``n_records ×
     record_every`` steps, sampling after every ``record_every``. Returns ``(new packed state,
     samples (B, n_records, width))``, the samples' columns in the order of
     :func:`jaxdamp.physics.energy.record_layout`; the inputs are not modified. The kernel
-    works in place on one copy of the state: no per-field copies, no re-packing."""
+    works in place on one copy of the state: no per-field copies, no re-packing.
+    ``threads=False``: the batch runs in the calling thread (no OpenMP), for callers that run
+    several batches side by side in their own threads (sharded chunks)."""
     from jaxdamp.physics.contact import LAWS
     from jaxdamp.physics.energy import record_layout
 
@@ -661,8 +674,9 @@ def advance_packed(model, state_packed, params_packed, state_layout, param_layou
     width = sum(int(np.prod(shape, dtype=np.int64)) for _, shape in record_layout(model))
     rec = np.empty((st.shape[0], int(n_records), width))
     bounds = np.array([sl.start for sl in model.species_slices()] + [model.n], np.int64)
-    _advance(int(n_records), int(record_every), SYSTEMS[model.system], LAWS[model.law].id,
-             model.skin, st, pm, offsets(state_layout, STATE_FIELDS),
-             offsets(param_layout, PARAM_FIELDS), int(table[0]), int(table[2]),
-             model.species_index().astype(np.int64), bounds, rec)
+    kernel = _advance if threads else _advance_serial
+    kernel(int(n_records), int(record_every), SYSTEMS[model.system], LAWS[model.law].id,
+           model.skin, st, pm, offsets(state_layout, STATE_FIELDS),
+           offsets(param_layout, PARAM_FIELDS), int(table[0]), int(table[2]),
+           model.species_index().astype(np.int64), bounds, rec)
     return st, rec

@@ -16,6 +16,7 @@ import functools
 
 import jax
 import jax.numpy as jnp
+
 import numpy as np
 
 from jaxdamp.engine import neighbors as nb
@@ -49,8 +50,8 @@ def chunk_fn(model: Model, n_records: int, record_every: int, remat: bool = Fals
     CPU kernel, samples included, in one host callback (forward only; the neighbour lists in
     ``nbrs`` are then passed through unused). ``sharding``: the batch's sharding over several
     devices (the batch axis split over a mesh axis); the JAX engine's jit partitions by itself,
-    the native chunk runs per shard (:func:`jax.shard_map`), each device's callback advancing
-    its own systems.
+    the native chunk advances every local shard in its own host thread and puts the results
+    back on the shards' devices.
     """
     if resolve_engine(engine) == "native":
         return _native_chunk(model, n_records, record_every, sharding)
@@ -105,43 +106,72 @@ def _native_chunk(model: Model, n_records: int, record_every: int,
     (:func:`jaxdamp.physics.energy.record_row`, the scalar form of ``record``), so a chunk
     crosses the JAX/Python boundary once, not once per sample. State and parameters cross as
     two packed float64 arrays (:func:`jax.pure_callback` costs ~35 µs per array); the
-    neighbour lists are passed through unused (the kernel keeps its own). With ``sharding``
-    the chunk is mapped over the shards (``shard_map``): every device calls the kernel on its
-    own rows (the kernel releases the GIL, so the shards' callbacks run side by side)."""
+    neighbour lists are passed through unused (the kernel keeps its own).
+
+    With ``sharding`` (batch split over devices, possibly over processes) there is no callback:
+    the packed batch is computed sharded, every local shard is copied to the host and advanced
+    by the kernel in its own thread without OpenMP (``threads=False``: the shards run side by
+    side, one core each; a process with a single local device keeps the OpenMP kernel), and
+    the results are put back on the shards' devices. (A ``pure_callback`` inside ``shard_map``
+    puts its operands on CPU device 0 first; with two devices that transfer waited on device
+    0's own callback and deadlocked about one run in two.)"""
     from jaxdamp.engine import native
     from jaxdamp.physics.energy import INT_RECORDS, record_layout
 
     rec_layout = record_layout(model)
     width = sum(int(np.prod(shape, dtype=np.int64)) for _, shape in rec_layout)
-    layouts = {}
 
-    def host(state_packed, params_packed):
-        # the callback may hand over jax Arrays: np.asarray once (slicing them would dispatch
-        # JAX ops); the kernel reads the fields at their offsets in the packed rows
-        return native.advance_packed(model, np.asarray(state_packed),
-                                     np.asarray(params_packed), layouts["state"],
-                                     layouts["params"], n_records, record_every)
+    def advance(sp, pp, state_layout, param_layout, threads=True):
+        return native.advance_packed(model, sp, pp, state_layout, param_layout, n_records,
+                                     record_every, threads)
 
-    def run(states, nbrs, params):
-        layouts["state"], layouts["params"] = native.layout(states), native.layout(params)
-        sp, pp = native.pack(states), native.pack(params)
-        B = sp.shape[0]
-        shapes = (jax.ShapeDtypeStruct(sp.shape, sp.dtype),
-                  jax.ShapeDtypeStruct((B, n_records, width), jnp.float64))
-        new, flat = jax.pure_callback(host, shapes, sp, pp)
+    def unpack(new, flat, states):
         recs, k = {}, 0
         for name, shape in rec_layout:
             size = int(np.prod(shape, dtype=np.int64))
-            x = jnp.reshape(flat[:, :, k:k + size], (B, n_records) + shape)
+            x = jnp.reshape(flat[:, :, k:k + size], (flat.shape[0], n_records) + shape)
             recs[name] = x.astype(jnp.int32) if name in INT_RECORDS else x
             k += size
-        return native.unpack_like(new, states), nbrs, recs
+        return native.unpack_like(new, states), recs
 
     if sharding is None:
+        def run(states, nbrs, params):
+            lay = native.layout(states), native.layout(params)
+            sp, pp = native.pack(states), native.pack(params)
+            shapes = (jax.ShapeDtypeStruct(sp.shape, sp.dtype),
+                      jax.ShapeDtypeStruct((sp.shape[0], n_records, width), jnp.float64))
+            # the callback may hand over jax Arrays: np.asarray once (slicing them would
+            # dispatch JAX ops); the kernel reads the fields at their offsets in the rows
+            new, flat = jax.pure_callback(
+                lambda a, b: advance(np.asarray(a), np.asarray(b), *lay), shapes, sp, pp)
+            states, recs = unpack(new, flat, states)
+            return states, nbrs, recs
+
         return jax.jit(run)
-    spec = sharding.spec  # the batch axis, split over the mesh
-    return jax.jit(jax.shard_map(run, mesh=sharding.mesh, in_specs=spec, out_specs=spec,
-                                 check_vma=False))
+
+    import concurrent.futures
+
+    threads = len(sharding.addressable_devices) == 1
+    pack = jax.jit(lambda states, params: (native.pack(states), native.pack(params)),
+                   out_shardings=(sharding, sharding))
+    finish = jax.jit(unpack, out_shardings=(sharding, sharding))
+    pool = concurrent.futures.ThreadPoolExecutor(len(sharding.addressable_devices))
+
+    def run_sharded(states, nbrs, params):
+        lay = native.layout(states), native.layout(params)
+        sp, pp = pack(states, params)
+        shards = [(a.device, a.index, np.asarray(a.data), np.asarray(b.data))
+                  for a, b in zip(sp.addressable_shards, pp.addressable_shards, strict=True)]
+        done = list(pool.map(lambda x: advance(x[2], x[3], *lay, threads=threads), shards))
+        new = jax.make_array_from_single_device_arrays(
+            sp.shape, sharding, [jax.device_put(d[0], sh[0]) for d, sh in zip(done, shards)])
+        flat = jax.make_array_from_single_device_arrays(
+            (sp.shape[0], n_records, width), sharding,
+            [jax.device_put(d[1], sh[0]) for d, sh in zip(done, shards)])
+        states, recs = finish(new, flat, states)
+        return states, nbrs, recs
+
+    return run_sharded
 
 
 def init_states(model: Model, params: Params, r, v, w, q, z, zd, t=0.0, idx=None) -> State:
