@@ -601,9 +601,8 @@ if AVAILABLE:
     @_kernel(nogil=True)
     def _advance_serial(n_records, record_every, system, law, skin, st, pm, so, po, n_species,
                         n_cols, sid, bounds, rec):
-        """The batch in the calling thread, without the GIL: for shards, whose device threads
-        call the kernel side by side. (Two threads entering the OpenMP kernel at once
-        deadlocked in about 3 of 4 runs of a 2-device sweep, so shards never use it.)"""
+        """The batch in the calling thread, without the GIL: for sharded chunks, whose host
+        threads (one per local shard) call the kernel side by side."""
         for b in range(st.shape[0]):
             _advance_one(b, n_records, record_every, system, law, skin, st, pm, so, po,
                          n_species, n_cols, sid, bounds, rec)

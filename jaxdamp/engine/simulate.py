@@ -16,7 +16,6 @@ import functools
 
 import jax
 import jax.numpy as jnp
-
 import numpy as np
 
 from jaxdamp.engine import neighbors as nb
@@ -160,14 +159,14 @@ def _native_chunk(model: Model, n_records: int, record_every: int,
     def run_sharded(states, nbrs, params):
         lay = native.layout(states), native.layout(params)
         sp, pp = pack(states, params)
-        shards = [(a.device, a.index, np.asarray(a.data), np.asarray(b.data))
-                  for a, b in zip(sp.addressable_shards, pp.addressable_shards, strict=True)]
-        done = list(pool.map(lambda x: advance(x[2], x[3], *lay, threads=threads), shards))
-        new = jax.make_array_from_single_device_arrays(
-            sp.shape, sharding, [jax.device_put(d[0], sh[0]) for d, sh in zip(done, shards)])
-        flat = jax.make_array_from_single_device_arrays(
-            (sp.shape[0], n_records, width), sharding,
-            [jax.device_put(d[1], sh[0]) for d, sh in zip(done, shards)])
+        pairs = list(zip(sp.addressable_shards, pp.addressable_shards, strict=True))
+        done = list(pool.map(lambda ab: advance(np.asarray(ab[0].data), np.asarray(ab[1].data),
+                                                *lay, threads=threads), pairs))
+        devices = [a.device for a, _ in pairs]
+        new, flat = (jax.make_array_from_single_device_arrays(
+            (sp.shape[0],) + done[0][i].shape[1:], sharding,
+            [jax.device_put(d[i], dev) for d, dev in zip(done, devices, strict=True)])
+            for i in (0, 1))
         states, recs = finish(new, flat, states)
         return states, nbrs, recs
 
