@@ -140,6 +140,44 @@ class Drive:
 
 
 @dataclass(frozen=True)
+class RandomBase:
+    """Band-limited random base motion of S1, added to the harmonic one
+    (:mod:`jaxdamp.physics.excitation`: a random-phase multisine).
+
+    Attributes:
+      psd: the one-sided base *acceleration* spectral density as breakpoints
+        ``[[f_1, S_1], [f_2, S_2], …]`` (``f`` [Hz] increasing, ``S`` [(m/s²)²/Hz] ≥ 0), linear
+        between them and zero outside ``[f_1, f_n]``; a flat band is ``[[f_lo, S], [f_hi, S]]``.
+      scale: factor on ``S`` (a level sweep varies it: RMS ∝ √scale) [-].
+      resolution: line spacing ``Δf`` [Hz]; the motion repeats every ``1/Δf`` s.
+      seed: seed of the phases; ``None`` uses ``numerics.seed`` (each bed of a replicated study
+        its own realisation of the excitation).
+    """
+
+    psd: tuple[tuple[float, float], ...]
+    scale: float = 1.0
+    resolution: float = 0.25
+    seed: int | None = None
+
+
+@dataclass(frozen=True)
+class Shock:
+    """A half-sine base acceleration pulse of S1 (:func:`jaxdamp.physics.excitation.shock_pulse`):
+    ``u'' = peak sin(π (t - start)/duration)`` during the pulse, from rest; the base keeps the
+    velocity ``2 peak duration / π`` it ends with.
+
+    Attributes:
+      peak: peak base acceleration [m/s²] (its sign gives the direction along the axis).
+      duration: pulse length ``T`` [s].
+      start: time of the pulse's start after settling [s].
+    """
+
+    peak: float
+    duration: float
+    start: float = 0.0
+
+
+@dataclass(frozen=True)
 class Impactor:
     """The single particle of S3 (docs/physics.md §1 S3; thesis §2.1.3, §5.3.2), see :mod:`jaxdamp.s3.impact`.
 
@@ -229,6 +267,8 @@ class Config:
       primary: the primary system (required for S1).
       drive: the prescribed box motion (required for S2).
       impactor: the single particle (required for S3).
+      random: band-limited random base motion (S1), added to the harmonic ``primary.U``.
+      shock: a half-sine base acceleration pulse (S1), added to the rest.
       numerics: integration and recording.
       gravity: ``g`` [m/s^2] along ``-z``.
       direction: the axis of the excitation, a vector ``(x, y, z)`` (normalised when the model
@@ -258,6 +298,8 @@ class Config:
     primary: Primary | None = None
     drive: Drive | None = None
     impactor: Impactor | None = None
+    random: RandomBase | None = None
+    shock: Shock | None = None
     numerics: Numerics = field(default_factory=Numerics)
     gravity: float = 9.8
     direction: tuple[float, float, float] = (0.0, 0.0, 1.0)
@@ -336,6 +378,8 @@ _NESTED = {
     (Config, "primary"): Primary,
     (Config, "drive"): Drive,
     (Config, "impactor"): Impactor,
+    (Config, "random"): RandomBase,
+    (Config, "shock"): Shock,
     (Config, "numerics"): Numerics,
     (Box, "wall"): Material,
     (Species, "material"): Material,
@@ -347,6 +391,8 @@ def _convert(cls, name: str, value: Any, path: str):
         return _build(_NESTED[(cls, name)], value, path)
     if cls is Config and name == "direction" and isinstance(value, (list, tuple)):
         return tuple(value)
+    if cls is RandomBase and name == "psd" and isinstance(value, (list, tuple)):
+        return tuple(tuple(row) if isinstance(row, (list, tuple)) else row for row in value)
     if cls is Config and name == "grains":
         if isinstance(value, dict):
             value = [value]
@@ -447,12 +493,13 @@ def apply_overrides(config: Config, overrides: list[str] | dict[str, Any]) -> Co
                 raise ConfigError(f"--set {item!r}: the key before '=' is empty")
             items.append((key, parse_value(value)))
     data = config.to_dict()
+    created: set = set()  # tables made by these overrides: any key may be added (checked later)
     for key, value in items:
-        _set_path(data, key, value)
+        _set_path(data, key, value, created)
     return from_dict(data)
 
 
-def _set_path(data: dict, key: str, value: Any) -> None:
+def _set_path(data: dict, key: str, value: Any, created: set) -> None:
     parts = key.split(".")
     node: Any = data
     for i, part in enumerate(parts[:-1]):
@@ -464,12 +511,13 @@ def _set_path(data: dict, key: str, value: Any) -> None:
             raise ConfigError(f"--set {key}: unknown key {where!r}")
         if node[part] is None:
             node[part] = {}
+            created.add(id(node[part]))
         node = node[part]
     last = parts[-1]
     if isinstance(node, list):
         node[_index(last, node, key)] = value
     elif isinstance(node, dict):
-        if last not in node and node:  # an existing table: key must exist
+        if last not in node and node and id(node) not in created:  # an existing table
             raise ConfigError(f"--set {key}: unknown key {last!r}; known: {sorted(node)}")
         node[last] = value
     else:

@@ -42,6 +42,49 @@ CONTACT_LAWS = ("hertz", "linear")
 WALL_DAMPING = ("mixed", "calibrated")
 
 
+#: Most lines a random base motion may have (``(f_n - f_1)/resolution``): every line costs a
+#: cosine and a sine per time step.
+MAX_LINES = 20000
+
+
+def _random(rnd) -> None:
+    """Checks of ``Config.random`` (:class:`jaxdamp.config.RandomBase`)."""
+    table = rnd.psd
+    rows = table if isinstance(table, (list, tuple)) else None
+    if (rows is None or len(rows) < 2
+            or not all(isinstance(r, (list, tuple)) and len(r) == 2 for r in rows)):
+        raise ConfigError(f"random.psd = {table!r}: expected at least two breakpoints "
+                          "[[f_1, S_1], [f_2, S_2], ...] (f in Hz, S in (m/s²)²/Hz), e.g. "
+                          "[[5, 0.01], [30, 0.01]] for a flat band 5–30 Hz")
+    for i, (f, S) in enumerate(rows):
+        for name, v in (("f", f), ("S", S)):
+            if not (isinstance(v, (int, float)) and math.isfinite(v)):
+                raise ConfigError(f"random.psd[{i}] = {[f, S]!r}: {name} must be a finite "
+                                  "number")
+        if f < 0:
+            raise ConfigError(f"random.psd[{i}] = {[f, S]!r}: frequency {f} Hz must be ≥ 0")
+        if S < 0:
+            raise ConfigError(f"random.psd[{i}] = {[f, S]!r}: spectral density {S} "
+                              "(m/s²)²/Hz must be ≥ 0 (a density is never negative)")
+    fs = [r[0] for r in rows]
+    if any(b <= a for a, b in zip(fs, fs[1:])):
+        raise ConfigError(f"random.psd frequencies {fs}: must increase strictly")
+    if not any(r[1] > 0 for r in rows):
+        raise ConfigError("random.psd: every density is zero; nothing would move the base")
+    _positive(rnd.scale, "random.scale", allow_zero=True)
+    _positive(rnd.resolution, "random.resolution")
+    if (fs[-1] - fs[0]) / rnd.resolution > MAX_LINES:
+        raise ConfigError(f"random.resolution = {rnd.resolution} Hz: the band {fs[0]}–{fs[-1]} "
+                          f"Hz would need {(fs[-1] - fs[0]) / rnd.resolution:.0f} lines, more "
+                          f"than {MAX_LINES}; use a coarser resolution")
+    if fs[-1] < rnd.resolution:
+        raise ConfigError(f"random.psd: the band ends at {fs[-1]} Hz, below the first line "
+                          f"(random.resolution = {rnd.resolution} Hz)")
+    if rnd.seed is not None and not (isinstance(rnd.seed, int) and rnd.seed >= 0):
+        raise ConfigError(f"random.seed = {rnd.seed!r}: must be an integer ≥ 0 (or absent: "
+                          "the bed's numerics.seed)")
+
+
 def validate(config: Config) -> Config:
     """Raise :class:`ConfigError` for any invalid value; return the config unchanged."""
     if config.system not in SYSTEMS:
@@ -92,7 +135,19 @@ def validate(config: Config) -> Config:
             value = getattr(pr, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value)):
                 raise ConfigError(f"primary.{name} = {value!r}: must be a finite number")
+        if config.random is not None:
+            _random(config.random)
+        if config.shock is not None:
+            sh = config.shock
+            if not (isinstance(sh.peak, (int, float)) and math.isfinite(sh.peak)):
+                raise ConfigError(f"shock.peak = {sh.peak!r}: must be a finite number [m/s²]")
+            _positive(sh.duration, "shock.duration")
+            _positive(sh.start, "shock.start", allow_zero=True)
     else:
+        for name in ("random", "shock"):
+            if getattr(config, name) is not None:
+                raise ConfigError(f"{name}: base excitation acts on the primary's base (S1, "
+                                  f"system 'primary'), not on system {config.system!r}")
         if config.drive is None:
             raise ConfigError("drive: system 'driven' (S2) needs a [drive] table (amplitude)")
         _positive(config.drive.amplitude, "drive.amplitude", allow_zero=True)

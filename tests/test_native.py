@@ -33,15 +33,21 @@ def _mixture(system, mixing, law="hertz"):
     )
 
 
-@pytest.mark.parametrize("system, mixing, law", [("primary", "arithmetic", "hertz"),
-                                                 ("driven", "harmonic", "hertz"),
-                                                 ("driven", "geometric", "hertz"),
-                                                 ("primary", "harmonic", "linear")])
-def test_native_equals_jax_on_a_mixture(system, mixing, law):
+#: Random base motion (120 lines, 10–600 Hz) and a shock pulse that starts, peaks and ends
+#: inside the 600 steps, on top of the harmonic drive.
+BASE_EXTRAS = {"random.psd": [[10.0, 50.0], [600.0, 20.0]], "random.resolution": 5.0,
+               "shock.peak": -30.0, "shock.duration": 1e-4, "shock.start": 2e-5}
+
+
+@pytest.mark.parametrize("system, mixing, law, extras", [
+    ("primary", "arithmetic", "hertz", {}), ("driven", "harmonic", "hertz", {}),
+    ("driven", "geometric", "hertz", {}), ("primary", "harmonic", "linear", {}),
+    ("primary", "arithmetic", "hertz", BASE_EXTRAS)])
+def test_native_equals_jax_on_a_mixture(system, mixing, law, extras):
     """Two species (5 % radius spread, different materials and walls), friction, rotation,
-    both systems, all mixing rules and both contact laws: states and samples agree to
-    round-off after 600 steps."""
-    cfg = _mixture(system, mixing, law)
+    both systems, all mixing rules, both contact laws, and random + shock base motion: states
+    and samples agree to round-off after 600 steps."""
+    cfg = apply_overrides(_mixture(system, mixing, law), extras)
     rng = np.random.default_rng(2)
     grid = np.stack(np.meshgrid(*[np.arange(4)] * 3, indexing="ij"), -1).reshape(-1, 3)[:50]
     r = (grid + 0.5) * 0.0045 + rng.uniform(-3e-4, 3e-4, (50, 3))

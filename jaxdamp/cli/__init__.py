@@ -1,4 +1,4 @@
-"""The ``jaxdamp`` command line: one module per subcommand (``run``, ``frf``, ``decay``, ``optimize``,
+"""The ``jaxdamp`` command line: one module per subcommand (``run``, ``frf``, ``decay``, ``random``, ``optimize``,
 ``efficiency``) and one for the file commands (``presets``, ``info``, ``plot``, ``export``).
 Side effects (files, printing) live here and in the studies; heavy imports (JAX) happen
 inside the commands, after the configuration is built and every output file is checked, so
@@ -13,7 +13,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from jaxdamp.cli import decay, efficiency, files, frf, optimize, run
+from jaxdamp.cli import decay, efficiency, files, frf, optimize, random, run
 from jaxdamp.config import ConfigError
 
 
@@ -33,7 +33,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--debug", action="store_true",
                    help="show the full Python traceback of an error (for bug reports)")
     sub = p.add_subparsers(dest="command", required=True)
-    for command in (run, frf, decay, optimize, efficiency, files):
+    for command in (run, frf, decay, random, optimize, efficiency, files):
         command.register(sub)
     return p
 

@@ -71,7 +71,8 @@ REBUILD_STEPS = 40
 SCALARS = ("Lx", "Ly", "Lz", "gravity", "M", "K", "C", "U", "amplitude", "omega", "z_offset",
            "dt", "drag", "t_window", "ex", "ey", "ez")
 #: Fields of ``Params`` the kernel reads, in the order of its parameter offsets.
-PARAM_FIELDS = ("radius", "mass", "inertia", "pair_table", "wall_table") + SCALARS
+PARAM_FIELDS = (("radius", "mass", "inertia", "pair_table", "wall_table") + SCALARS
+                + ("lines", "shock_a", "shock_t0", "shock_T"))
 #: Fields of ``State`` the kernel reads and writes, in the order of its state offsets.
 STATE_FIELDS = ("r", "v", "w", "q", "a", "alpha", "z", "zd", "zdd", "t", "z_max", "z_min", "step",
                 "work", "power", "e_elastic", "f_floor_lid", "f_box", "n_floor", "n_lid",
@@ -320,13 +321,14 @@ if AVAILABLE:
 
     @_kernel()
     def _advance_one(b, n_records, record_every, system, law, skin, st, pm, so, po, n_species,
-                     n_cols, sid, bounds, rec):
+                     n_cols, n_lines, sid, bounds, rec):
         """Advance system ``b`` of the packed batch by ``n_records × record_every`` steps in
         place, writing a sample after every ``record_every`` steps into ``rec[b]``
         (:func:`jaxdamp.physics.energy.record_row`; ``bounds``: the species' index ranges): row
         ``st[b]`` holds its state (the fields :data:`STATE_FIELDS` at offsets ``so``), row
         ``pm[b]`` its parameters (:data:`PARAM_FIELDS` at offsets ``po``; contact tables of
-        ``n_species`` species and ``n_cols`` columns), ``sid`` the grains' species.
+        ``n_species`` species and ``n_cols`` columns; ``n_lines`` lines of the random base
+        motion), ``sid`` the grains' species.
 
         A step is two passes over the grains and one over the listed pairs: (1) the
         velocity-Verlet predictor, gravity and drag, the six walls, the drag power and the
@@ -356,6 +358,8 @@ if AVAILABLE:
         amp, om, z_off, dt = prow[po[13]], prow[po[14]], prow[po[15]], prow[po[16]]
         drag, t_win = prow[po[17]], prow[po[18]]
         ex, ey, ez = prow[po[19]], prow[po[20]], prow[po[21]]  # the excitation axis
+        lines = prow[po[22]:po[22] + 3 * n_lines].reshape((n_lines, 3))
+        sh_a, sh_t0, sh_T = prow[po[23]], prow[po[24]], prow[po[25]]
         pi = np.empty(4 * n + 16, np.int64)  # grown by _pairs when a bed lists more
         pj = np.empty(4 * n + 16, np.int64)
         pc = np.empty((4 * n + 16, 5))
@@ -538,7 +542,7 @@ if AVAILABLE:
                 e_el += pp_e
                 # pass 3: the primary, rotation and corrector
                 if system == 0:
-                    u1, ud1 = base_motion_scalar(t1, U, om)
+                    u1, ud1 = base_motion_scalar(t1, U, om, lines, sh_a, sh_t0, sh_T)
                     zdd1 = primary_acceleration_scalar(z1, zdp, u1, ud1, box_z, M, K, C)
                     zd1 = zd + 0.5 * dt * (zdd + zdd1)
                     pw[0], pw[1] = primary_powers_scalar(z1, zdp, u1, ud1, K, C)
@@ -581,7 +585,8 @@ if AVAILABLE:
                 step += 1
                 imp0 += floor_lid
                 imp1 += box_z
-            u_t = base_motion_scalar(t, U, om)[0] if system == 0 else 0.0
+            u_t = (base_motion_scalar(t, U, om, lines, sh_a, sh_t0, sh_T)[0] if system == 0
+                   else 0.0)
             record_row(rec[b, k_rec], t, z, zd, u_t, rb, vb, wb, mb, Ib, Rb, grav, Lz, ez, M, K,
                        system == 0, e_el, e_start, imp0 / record_every,
                        imp1 / record_every, n_floor, n_lid, work, bounds)
@@ -592,20 +597,20 @@ if AVAILABLE:
 
     @_kernel(parallel=True)
     def _advance(n_records, record_every, system, law, skin, st, pm, so, po, n_species, n_cols,
-                 sid, bounds, rec):
+                 n_lines, sid, bounds, rec):
         """The batch over the cores (OpenMP threads, one system per thread at a time)."""
         for b in prange(st.shape[0]):
             _advance_one(b, n_records, record_every, system, law, skin, st, pm, so, po,
-                         n_species, n_cols, sid, bounds, rec)
+                         n_species, n_cols, n_lines, sid, bounds, rec)
 
     @_kernel(nogil=True)
     def _advance_serial(n_records, record_every, system, law, skin, st, pm, so, po, n_species,
-                        n_cols, sid, bounds, rec):
+                        n_cols, n_lines, sid, bounds, rec):
         """The batch in the calling thread, without the GIL: for sharded chunks, whose host
         threads (one per local shard) call the kernel side by side."""
         for b in range(st.shape[0]):
             _advance_one(b, n_records, record_every, system, law, skin, st, pm, so, po,
-                         n_species, n_cols, sid, bounds, rec)
+                         n_species, n_cols, n_lines, sid, bounds, rec)
 
 
 # -- packing of pytrees (one float64 array per call across the JAX/Python boundary) ---------
@@ -669,7 +674,8 @@ def advance_packed(model, state_packed, params_packed, state_layout, param_layou
 
     st = np.array(state_packed, dtype=np.float64, order="C", copy=True)
     pm = np.ascontiguousarray(params_packed, dtype=np.float64)
-    table = dict((name, shape) for name, shape, _ in param_layout)["pair_table"]
+    shapes = dict((name, shape) for name, shape, _ in param_layout)
+    table = shapes["pair_table"]
     width = sum(int(np.prod(shape, dtype=np.int64)) for _, shape in record_layout(model))
     rec = np.empty((st.shape[0], int(n_records), width))
     bounds = np.array([sl.start for sl in model.species_slices()] + [model.n], np.int64)
@@ -677,5 +683,5 @@ def advance_packed(model, state_packed, params_packed, state_layout, param_layou
     kernel(int(n_records), int(record_every), SYSTEMS[model.system], LAWS[model.law].id,
            model.skin, st, pm, offsets(state_layout, STATE_FIELDS),
            offsets(param_layout, PARAM_FIELDS), int(table[0]), int(table[2]),
-           model.species_index().astype(np.int64), bounds, rec)
+           int(shapes["lines"][0]), model.species_index().astype(np.int64), bounds, rec)
     return st, rec

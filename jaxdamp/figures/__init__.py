@@ -13,7 +13,8 @@ dimensionless quantities say what they are a ratio of (``"amplitude ratio Z / U"
   :data:`SPECIES_COLOURS`), :func:`figure` and :func:`save`.
 - :mod:`jaxdamp.figures.response` — the FRF (:func:`frf_figure`, :func:`frf_from_file`), the
   bed-band plot (:func:`band_figure`, :func:`band_from_file`; :func:`draw_band` into given axes), the energy channels
-  (:func:`energy_figure`, :func:`energy_from_file`), free-decay curves (:func:`decay_figure`).
+  (:func:`energy_figure`, :func:`energy_from_file`), free-decay curves (:func:`decay_figure`), random-excitation FRFs with coherence
+  (:func:`random_figure`).
 - :mod:`jaxdamp.figures.dynamics` — Poincaré sections (:func:`poincare_figure`,
   :func:`poincare_from_file`), spectra (:func:`spectrum_figure`), Kantz's divergence
   (:func:`kantz_figure`).
@@ -51,12 +52,13 @@ from jaxdamp.figures.response import (
     energy_from_file,
     frf_figure,
     frf_from_file,
+    random_figure,
 )
 from jaxdamp.figures.style import DPI, FIGSIZE, SPECIES_COLOURS, figure, save  # noqa: F401
 
 __all__ = ["DPI", "FIGSIZE", "SPECIES_COLOURS", "figure", "save",
            "frf_figure", "frf_from_file", "band_figure", "band_from_file", "draw_band", "BAND_PERIODS",
-           "energy_figure", "energy_from_file", "decay_figure",
+           "energy_figure", "energy_from_file", "decay_figure", "random_figure",
            "poincare_figure", "poincare_from_file", "spectrum_figure", "kantz_figure",
            "draw_snapshot", "snapshot_figure", "snapshot_from_file", "snapshot_grid_figure",
            "animate", "efficiency_figure", "phase_figure"]

@@ -26,6 +26,7 @@ import numpy as np
 
 from jaxdamp.config import Config
 from jaxdamp.physics.contact import LAWS, Law, calibrate_wall_row
+from jaxdamp.physics.excitation import base_motion, random_lines
 
 #: Names of the cumulative work channels, in order (all in J).
 #:   input:       work done on the system by the base through spring and damper (S1) or by the
@@ -89,7 +90,10 @@ class Params:
     all else is scalar (per system). ``omega`` = 2πf [rad/s]; ``U`` base amplitude (S1) [m]; ``amplitude`` box amplitude (S2) [m];
     ``z_offset`` box position about which it moves (S2) [m]; ``drag`` settling drag rate [1/s];
     ``t_window`` start of the analysis window [s]; ``ex, ey, ez`` the unit vector of the
-    excitation axis (``Config.direction``), along which the box and the primary move.
+    excitation axis (``Config.direction``), along which the box and the primary move;
+    ``lines`` ``(L, 3)`` the random base motion's lines ``(ω_k, c_k, s_k)`` and ``shock_a``
+    [m/s²], ``shock_t0``, ``shock_T`` [s] the shock pulse (:mod:`jaxdamp.physics.excitation`;
+    one zero line and ``shock_T = 0`` when absent).
     """
 
     radius: jnp.ndarray
@@ -114,6 +118,10 @@ class Params:
     ex: jnp.ndarray
     ey: jnp.ndarray
     ez: jnp.ndarray
+    lines: jnp.ndarray
+    shock_a: jnp.ndarray
+    shock_t0: jnp.ndarray
+    shock_T: jnp.ndarray
 
 
 @pytree_dataclass
@@ -234,6 +242,7 @@ def build(config: Config, radii: np.ndarray | None = None) -> tuple[Model, Param
         species=tuple(int(sp.count) for sp in config.grains),
     )
     prim = config.primary
+    shock = config.shock if config.system == "primary" else None
     f64 = lambda x: jnp.asarray(x, dtype=jnp.float64)  # noqa: E731
     params = Params(
         radius=f64(radii),
@@ -256,6 +265,10 @@ def build(config: Config, radii: np.ndarray | None = None) -> tuple[Model, Param
         drag=f64(0.0),
         t_window=f64((1.0 - config.numerics.analysis_window) * config.numerics.duration),
         **{k: f64(x) for k, x in zip(("ex", "ey", "ez"), excitation_axis(config))},
+        lines=f64(random_lines(config)),
+        shock_a=f64(shock.peak if shock else 0.0),
+        shock_t0=f64(shock.start if shock else 0.0),
+        shock_T=f64(shock.duration if shock else 0.0),
     )
     return model, params
 
@@ -325,3 +338,12 @@ def grain_mass(config: Config) -> float:
     return sum(
         sp.count * sp.material.density * 4.0 / 3.0 * math.pi * sp.radius**3 for sp in config.grains
     )
+
+
+def base_series(config, t) -> tuple[np.ndarray, np.ndarray]:
+    """The base motion ``(u [m], u' [m/s])`` of ``config`` (S1) at the times ``t`` [s] (NumPy
+    arrays): :func:`jaxdamp.physics.excitation.base_motion` evaluated on the host, e.g. the
+    input of an FRF estimate from recorded samples."""
+    _, p = build(config)
+    u, ud = jax.vmap(lambda s: base_motion(s, p))(jnp.asarray(t, dtype=jnp.float64))
+    return np.asarray(u), np.asarray(ud)

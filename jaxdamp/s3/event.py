@@ -9,7 +9,7 @@ import numpy as np
 
 from jaxdamp.analysis.response import analysis_start
 from jaxdamp.config import Config
-from jaxdamp.physics.excitation import base_motion_scalar
+from jaxdamp.physics.excitation import harmonic_base_scalar
 from jaxdamp.s3.common import (
     ImpactRun,
     _add_energy,
@@ -257,7 +257,7 @@ def _integrate(ctx, mode, ta, tb, hq, K, C, U, gap, t_w, rec_dt, n_rec, rec, ri,
         for q in range(gl_x.shape[0]):
             s = mid + half * gl_x[q]
             z, zd, _, _ = _box(ctx, s)
-            u, ud = base_motion_scalar(s, U, Om)
+            u, ud = harmonic_base_scalar(s, U, Om)
             f = K * (z - u) + C * (zd - ud)
             w_in += gl_w[q] * (-f * ud)
             w_c += gl_w[q] * C * (zd - ud) ** 2
@@ -288,7 +288,7 @@ def _integrate(ctx, mode, ta, tb, hq, K, C, U, gap, t_w, rec_dt, n_rec, rec, ri,
             rec[ri, 2] = zd
             rec[ri, 3] = y
             rec[ri, 4] = yd
-            rec[ri, 5] = base_motion_scalar(t, U, Om)[0]
+            rec[ri, 5] = harmonic_base_scalar(t, U, Om)[0]
             rec[ri, 6] = work[0]
             rec[ri, 7] = work[1]
             rec[ri, 8] = work[2]
@@ -343,7 +343,7 @@ def _event_core(M, K, C, U, Om, m, e, gap, g, v_stick, h, rec_dt, n_rec, t_w, gl
             break
         t = t_ev
         z, zd, _, _ = _box(ctx, t)
-        u, ud = base_motion_scalar(t, U, Om)
+        u, ud = harmonic_base_scalar(t, U, Om)
         if mode != _FREE:  # lift-off: the particle keeps the box's velocity and flies
             y = z + (gap if mode == _LID else 0.0)
             _start_segment(ctx, coef_free, t, z, zd, y, zd)

@@ -12,7 +12,7 @@ import numpy as np
 
 from jaxdamp.analysis.response import analysis_start
 from jaxdamp.config import Config
-from jaxdamp.physics.excitation import base_motion
+from jaxdamp.physics.excitation import harmonic_base
 from jaxdamp.physics.model import pytree_dataclass
 from jaxdamp.s3.common import ImpactRun, _check, n_records, summarize
 
@@ -153,7 +153,7 @@ def _contact(d, dd, p: SmoothParams):
 
 def _forces(z, vz, y, vy, t, p: SmoothParams):
     """Accelerations of box and particle [m/s²] and the floor and lid contact forces [N]."""
-    u, ud = base_motion(t, p)
+    u, ud = harmonic_base(t, p.U, p.omega)
     f_floor, _ = _contact(z - y, vz - vy, p)
     f_lid, _ = _contact(y - z - p.gap, vy - vz, p)
     spring = p.K * (z - u) + p.C * (vz - ud)
@@ -163,7 +163,7 @@ def _forces(z, vz, y, vy, t, p: SmoothParams):
 
 def _primary_power(z, vz, t, p: SmoothParams):
     """Power input by the base through spring and damper, and the power lost in C [W]."""
-    u, ud = base_motion(t, p)
+    u, ud = harmonic_base(t, p.U, p.omega)
     spring = p.K * (z - u) + p.C * (vz - ud)
     return jnp.stack([-spring * ud, p.C * (vz - ud) ** 2])
 
@@ -209,14 +209,15 @@ def smooth_step(st: SmoothState, p: SmoothParams) -> SmoothState:
 
 def smooth_energy(st: SmoothState, p: SmoothParams):
     """Mechanical energy [J] including the penalty springs."""
-    u, _ = base_motion(st.i * p.dt, p)
+    u, _ = harmonic_base(st.i * p.dt, p.U, p.omega)
     return (0.5 * p.M * st.vz**2 + 0.5 * p.m * st.vy**2 + 0.5 * p.K * (st.z - u) ** 2
             + p.m * p.g * st.y + _elastic(st.z, st.y, p))
 
 def _sample(st: SmoothState, p: SmoothParams) -> dict:
     t = st.i * p.dt
     return {"t": t, "z_box": st.z, "v_box": st.vz, "z_particle": st.y, "v_particle": st.vy,
-            "u": base_motion(t, p)[0], "work": st.work, "energy": smooth_energy(st, p)}
+            "u": harmonic_base(t, p.U, p.omega)[0], "work": st.work,
+            "energy": smooth_energy(st, p)}
 
 @functools.partial(jax.jit, static_argnames=("n_rec", "record_every", "records"))
 def smooth_run(p: SmoothParams, n_rec: int, record_every: int, records: bool = True):

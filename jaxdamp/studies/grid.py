@@ -76,7 +76,7 @@ def grid_shape(axes: dict) -> tuple:
 
 
 def _value(key: str, v):
-    return int(v) if key == "numerics.seed" else float(v)
+    return int(v) if key.endswith(".seed") else float(v)
 
 
 def grid_configs(config: Config, axes: dict) -> list[Config]:

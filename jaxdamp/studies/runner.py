@@ -25,6 +25,7 @@ from jaxdamp.engine import driver
 from jaxdamp.engine.driver import SimulationDiverged  # noqa: F401  (re-exported: runs raise it)
 from jaxdamp.engine.packing import SettledBed, settle
 from jaxdamp.io import RunFile, write_steady
+from jaxdamp.physics.excitation import random_start
 from jaxdamp.physics.model import State, build, grain_species
 from jaxdamp.validation import validate
 
@@ -61,20 +62,22 @@ def schedule(config: Config, dt: float) -> Schedule:
 def initial_box_position(config: Config, grain_mass: float) -> float:
     """Box position along the excitation axis at t = 0: the primary's static equilibrium under
     the bed's weight (its component along the axis) plus its initial displacement
-    ``primary.z0`` (S1), or the drive's starting point ``A_d`` (S2)."""
+    ``primary.z0`` and, with random base motion, the empty structure's steady response
+    (:func:`jaxdamp.physics.excitation.random_start`) (S1), or the drive's starting point
+    ``A_d`` (S2)."""
     if config.system == "primary":
         from jaxdamp.physics.model import excitation_axis
 
         K = config.primary.K
         weight = grain_mass * config.gravity * float(excitation_axis(config)[2])
-        return (-weight / K if K > 0 else 0.0) + config.primary.z0
+        return (-weight / K if K > 0 else 0.0) + config.primary.z0 + random_start(config)[0]
     return config.drive.amplitude
 
 
 def initial_box_velocity(config: Config) -> float:
-    """Box velocity at t = 0: the primary's ``v0`` (S1), or the drive's (0 at the start of
-    ``A_d cos ωt``, S2)."""
-    return config.primary.v0 if config.system == "primary" else 0.0
+    """Box velocity at t = 0: the primary's ``v0`` plus the random start's velocity (S1), or
+    the drive's (0 at the start of ``A_d cos ωt``, S2)."""
+    return config.primary.v0 + random_start(config)[1] if config.system == "primary" else 0.0
 
 
 @dataclass
