@@ -2,6 +2,7 @@
 item 3).
 
     python experiments/bed_dynamics_long.py            # full mode (see summary.md)
+    python experiments/bed_dynamics_long.py --beds 5   # 5 beds per frequency (default 3)
     python experiments/bed_dynamics_long.py --quick    # test-sized
 
 ``sanchez2012-optimal`` (N = 250, Lz = 0.1225 m, C = 7.6 N s/m) at the thesis' frequencies of
@@ -23,24 +24,34 @@ by 1e-9 m at ``t_perturb``. Per frequency, on the reference run after the transi
 
 For both observables: ``z_box`` (the primary: a state variable of the whole system) and
 ``z_cm`` (the bed's centre of mass, the thesis' observable). The thesis analyses ≈ 197 s
-series; this run affords the duration in ``summary.md`` (one realisation per frequency: the
-dynamics of one trajectory is the object here, not a steady mean). Writes ``data.h5``,
-``figure.png``, ``summary.md``; the raw twin sweep in ``--out/raw`` (not committed).
+series; this run affords the duration in ``summary.md``.
+
+**Realisations.** Every frequency runs on ``--beds`` (default 3) independently poured beds,
+seeded by the package's replicate mechanism (:func:`jaxdamp.studies.grid.replicate_configs`:
+seeds ``seed + 0 … R − 1``, bed 0 the preset's own): one twin sweep per bed, hence one twin
+pair per bed and frequency. Each bed is analysed on its own; the summary gives every bed's
+values, their mean ± standard error over the beds, and the period-k verdicts as counts of beds
+("within 1 % on 3 of 3 beds"). Writes ``data.h5``, ``figure.png``, ``summary.md``; the raw
+twin sweeps (one file per bed) in ``--out/raw`` (not committed).
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 import math
 import os
+from collections import Counter
 
 import h5py
 import numpy as np
 import scaffold
 
 from jaxdamp.analysis import dynamics as dyn
+from jaxdamp.analysis import stats
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
+from jaxdamp.studies.grid import replicate_configs
 from jaxdamp.studies.twin import twin_sweep
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -52,6 +63,15 @@ THESIS = {10.0: "period-2", 10.5: "torus, wrinkling", 11.0: "torus break-up → 
 TOLERANCES = (0.01, 0.05)
 DELTA = 1e-9  # [m]
 SIGNALS = ("z_box", "z_cm")
+BEDS = 3  # default number of independently poured beds per frequency
+#: per-bed measures combined over the beds (mean ± SE): key -> value from one bed's analysis
+MEASURES = {"s1": lambda d: d["spread1"], "s2": lambda d: d["spread2"],
+            "off1": lambda d: 1 - d["harm1"], "off2": lambda d: 1 - d["harm2"],
+            "kantz": lambda d: d["kantz_per_period"],
+            "twin": lambda d: d["div_exponent"], "twin_per_period": lambda d: d["div_per_period"],
+            "plateau_rel": lambda d: d["div_plateau_rel"],
+            "t_sat": lambda d: (d["div_t_sat"] if d["div_saturated"] and not d["div_bound"]
+                                else math.nan)}
 
 
 def settings(quick: bool) -> dict:
@@ -95,35 +115,90 @@ def level(spread: float, harm: float) -> str:
     return f"within {100 * ok[0]:g} %" if ok else "no"
 
 
-def compute(quick: bool, log, ctx):
+def within(spread: float, harm: float, tol: float) -> bool:
+    """Period-k at tolerance ``tol``: the strobe spread and the off-line power both below it."""
+    return bool(spread < tol and 1 - harm < tol)
+
+
+def combine(beds: list[dict]) -> dict:
+    """One frequency's beds (each :func:`analyse_pair`'s output) combined per signal: every
+    measure's per-bed values with their mean, standard error over the beds and count
+    (:func:`jaxdamp.analysis.stats.across`; NaN left out); the period-k verdicts as counts of
+    beds within each tolerance; the classifier's labels; how many twin exponents are only
+    lower bounds (saturated within the first period), did not grow, or did not saturate."""
+    out = {}
+    for name in SIGNALS:
+        ds = [b[name] for b in beds]
+        c = {"beds": len(ds)}
+        for key, fn in MEASURES.items():
+            v = np.array([fn(d) for d in ds], float)
+            e = stats.across(v)
+            c[key] = dict(values=v, mean=e.mean, se=e.se, n=e.n)
+        for k in (1, 2):
+            for tol in TOLERANCES:
+                c[f"period{k}_{tol:g}"] = sum(within(d[f"spread{k}"], d[f"harm{k}"], tol)
+                                              for d in ds)
+        c["labels"] = [d["label"] + (f"-{d['period']}" if d["period"] else "") for d in ds]
+        c["bounds"] = sum(bool(d["div_bound"]) for d in ds)
+        c["not_grown"] = sum(not d["div_grew"] for d in ds)
+        c["not_reached"] = sum(bool(d["div_grew"] and not d["div_saturated"]) for d in ds)
+        out[name] = c
+    return out
+
+
+def compute(quick: bool, log, ctx, beds: int = BEDS):
     s = settings(quick)
+    s["beds"] = int(beds)
     cfg = apply_overrides(presets.get("sanchez2012-optimal"), {
         "numerics.duration": s["duration"], "numerics.settle_time": s["settle"],
         "numerics.record_dt": 1e-3, "numerics.chunk": s["chunk"]})
-    res = twin_sweep(cfg, s["freqs"], s["t_perturb"], ctx.raw("twin.h5"), delta=DELTA,
-                     progress=ctx.progress)
-    rec = res.records
-    rows = {}
-    for i, f in enumerate(s["freqs"]):
-        a, b = 2 * i, 2 * i + 1
-        t = rec["t"][a]
-        pre = t < s["t_perturb"] - 1e-9
-        same = float(np.max(np.abs(rec["z_box"][a][pre] - rec["z_box"][b][pre])))
-        r = analyse_pair(t, {k: rec[k][a] for k in SIGNALS}, {k: rec[k][b] for k in SIGNALS},
-                         f, s)
-        r["identical_before"] = same
-        rows[f] = r
-        zb = r["z_box"]
-        log(f"{f:g} Hz: z_box spread1 {zb['spread1']:.3g}, spread2 {zb['spread2']:.3g}, "
-            f"harmonic {zb['harm1']:.4f}; twin exponent {zb['div_exponent']:.3g} 1/s "
-            f"(saturated: {zb['div_saturated']}); classify {zb['label']}")
-    result = dict(rows=rows, config=cfg, wall=float(res.summary["wall_time"]),
-                  balance=np.asarray(res.summary["balance_error"]))
-    return result, lambda path, prov: write(result, s, path, prov)
+    bed_cfgs = replicate_configs([cfg], s["beds"])  # the package's replicate seeds
+    s["seeds"] = [int(c.numerics.seed) for c in bed_cfgs]
+    rows = {f: dict(beds=[], identical_before=[]) for f in s["freqs"]}
+    wall, balance = 0.0, []
+    for r, bc in enumerate(bed_cfgs):
+        raw = ctx.raw(f"twin_t{s['duration']:g}_f{len(s['freqs'])}_seed{bc.numerics.seed}.h5")
+        log(f"bed {r + 1} of {s['beds']} (seed {bc.numerics.seed}): {raw}")
+        res = twin_sweep(bc, s["freqs"], s["t_perturb"], raw, delta=DELTA,
+                         progress=ctx.progress)
+        wall += float(res.summary["wall_time"])
+        balance.append(np.ravel(res.summary["balance_error"]))
+        rec = res.records
+        for i, f in enumerate(s["freqs"]):
+            a, b = 2 * i, 2 * i + 1
+            t = rec["t"][a]
+            pre = t < s["t_perturb"] - 1e-9
+            same = float(np.max(np.abs(rec["z_box"][a][pre] - rec["z_box"][b][pre])))
+            an = analyse_pair(t, {k: rec[k][a] for k in SIGNALS},
+                              {k: rec[k][b] for k in SIGNALS}, f, s)
+            rows[f]["beds"].append(an)
+            rows[f]["identical_before"].append(same)
+            zb = an["z_box"]
+            log(f"  {f:g} Hz: z_box spread1 {zb['spread1']:.3g}, spread2 {zb['spread2']:.3g}, "
+                f"harmonic {zb['harm1']:.4f}; twin exponent {zb['div_exponent']:.3g} 1/s "
+                f"(saturated: {zb['div_saturated']}); classify {zb['label']}")
+    for row in rows.values():
+        row["stats"] = combine(row["beds"])
+    result = dict(rows=rows, config=cfg, wall=wall, balance=np.concatenate(balance),
+                  beds=s["beds"], seeds=s["seeds"])
+    def writer(path, prov):
+        if s["beds"] != BEDS:  # the provenance's command line carries a non-default --beds
+            prov = dict(prov, command=prov["command"] + f" --beds {s['beds']}")
+        write(result, s, path, prov)
+
+    return result, writer
 
 
 def main(argv=None):
-    return scaffold.main(__doc__, "bed_dynamics_long", argv, compute)
+    pre = argparse.ArgumentParser(add_help=False)
+    pre.add_argument("--beds", type=int, default=BEDS)
+    args, rest = pre.parse_known_args(argv)
+    if args.beds < 1:
+        pre.error(f"--beds {args.beds}: need at least one bed per frequency")
+    doc = (__doc__ + f"\n--beds R: independently poured beds per frequency (default {BEDS}; "
+           "≥ 2 for standard errors).")
+    return scaffold.main(doc, "bed_dynamics_long", rest,
+                         lambda quick, log, ctx: compute(quick, log, ctx, args.beds))
 
 
 def write(r, s, out, prov):
@@ -132,17 +207,35 @@ def write(r, s, out, prov):
         h.attrs["settings"] = json.dumps(s)
         h.attrs["config"] = r["config"].to_json()
         h.attrs["delta"] = DELTA
+        h.attrs["beds"] = r["beds"]
+        h.attrs["seeds"] = r["seeds"]
         for f, row in r["rows"].items():
             g = h.create_group(f"f_{f:g}")
             g.attrs["frequency"] = f
             g.attrs["identical_before_perturbation"] = row["identical_before"]
             for name in SIGNALS:
-                d = row[name]
-                gg = g.create_group(name)
-                gg.attrs.update({k: v for k, v in d.items() if np.ndim(v) == 0})
-                gg.create_dataset("twin_distance", data=d["D"]).attrs.update(
-                    units="m", what="per-period maximum of |reference − perturbed|")
-                gg.create_dataset("twin_t", data=d["t_D"]).attrs["units"] = "s"
+                c = row["stats"][name]
+                gs = g.create_group(f"over_beds/{name}")
+                gs.attrs["what"] = ("per-bed values (dataset), mean, SE over the beds and count "
+                                    "of finite values (attributes); period-k counts of beds")
+                for key in MEASURES:
+                    ds = gs.create_dataset(key, data=c[key]["values"])
+                    ds.attrs.update(mean=c[key]["mean"], se=c[key]["se"], n=c[key]["n"])
+                gs.attrs.update({k: v for k, v in c.items()
+                                 if k.startswith("period") or k in ("bounds", "not_grown",
+                                                                    "not_reached", "beds")})
+                gs.attrs["labels"] = c["labels"]
+            for b, (bed, seed) in enumerate(zip(row["beds"], r["seeds"])):
+                gb = g.create_group(f"bed_{b}")
+                gb.attrs["seed"] = seed
+                gb.attrs["identical_before_perturbation"] = row["identical_before"][b]
+                for name in SIGNALS:
+                    d = bed[name]
+                    gg = gb.create_group(name)
+                    gg.attrs.update({k: v for k, v in d.items() if np.ndim(v) == 0})
+                    gg.create_dataset("twin_distance", data=d["D"]).attrs.update(
+                        units="m", what="per-period maximum of |reference − perturbed|")
+                    gg.create_dataset("twin_t", data=d["t_D"]).attrs["units"] = "s"
     _figure(r, s, out)
     _summary(r, s, out, prov)
 
@@ -153,79 +246,156 @@ def _figure(r, s, out):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axs = plt.subplots(1, 3, figsize=(15, 4.4))
-    for f, row in r["rows"].items():
-        for name, ax in zip(SIGNALS, axs[:2]):
-            d = row[name]
-            ax.semilogy(d["t_D"], d["D"], label=f"{f:g} Hz")
+    fig, axs = plt.subplots(1, 3, figsize=(15, 4.6))
+    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    styles = ("-", "--", ":", "-.")
+    for j, (f, row) in enumerate(r["rows"].items()):
+        for b, bed in enumerate(row["beds"]):
+            for name, ax in zip(SIGNALS, axs[:2]):
+                d = bed[name]
+                ax.semilogy(d["t_D"], d["D"], color=colors[j % len(colors)],
+                            ls=styles[b % len(styles)], lw=0.9,
+                            label=f"{f:g} Hz" if b == 0 else None)
     for name, ax in zip(SIGNALS, axs[:2]):
         ax.axvline(s["t_perturb"], color="k", lw=0.6, ls=":")
         ax.set_xlabel("time t [s]")
         ax.set_ylabel(f"twin distance |Δ{name}| per period (max) [m]")
-        ax.set_title(f"{name}: twin runs, one grain moved by {DELTA:g} m at "
-                     f"t = {s['t_perturb']:g} s", fontsize=9)
+        ax.set_title(f"{name}: twins, one grain moved {DELTA:g} m at t = {s['t_perturb']:g} s;"
+                     f"\n{r['beds']} beds (line styles)", fontsize=9)
         ax.legend(fontsize=7)
     fs = list(r["rows"])
     x = np.arange(len(fs))
-    zb = [r["rows"][f]["z_box"] for f in fs]
-    for dx, key, mk in ((-0.1, "spread1", "o"), (0.1, "spread2", "s")):
-        axs[2].semilogy(x + dx, [max(d[key], 1e-8) for d in zb], mk,
-                        label=f"strobe spread, k = {key[-1]}")
-    axs[2].semilogy(x, [max(1 - d["harm1"], 1e-8) for d in zb], "^",
-                    label="power off the drive's lines, 1 − h₁")
+    for dx, key, mk, lab in ((-0.15, "s1", "o", "strobe spread s₁"),
+                             (0.0, "s2", "s", "strobe spread s₂"),
+                             (0.15, "off1", "^", "power off the drive's lines, 1 − h₁")):
+        cs = [r["rows"][f]["stats"]["z_box"][key] for f in fs]
+        for i, c in enumerate(cs):
+            axs[2].semilogy(np.full(len(c["values"]), x[i] + dx),
+                            np.maximum(c["values"], 1e-8), mk, color="0.6", ms=4, mfc="none")
+        m = np.array([max(c["mean"], 1e-8) for c in cs])
+        e = np.array([c["se"] if np.isfinite(c["se"]) else 0.0 for c in cs])
+        axs[2].errorbar(x + dx, m, yerr=[np.minimum(e, m * 0.999), e], fmt=mk, capsize=3,
+                        label=f"{lab} (mean ± SE; grey: beds)")
     for tol in TOLERANCES:
         axs[2].axhline(tol, color="0.5", lw=0.7, ls="--")
     axs[2].set_xticks(x, [f"{f:g}" for f in fs])
     axs[2].set_xlabel("drive frequency f [Hz]")
     axs[2].set_ylabel("periodicity level of z_box [-] (dashed: 1 %, 5 % tolerances)")
-    axs[2].set_title("distance from a period-1 / period-2 orbit", fontsize=9)
+    axs[2].set_title(f"distance from a period-1 / period-2 orbit, {r['beds']} beds", fontsize=9)
     axs[2].legend(fontsize=7)
     scaffold.save_figure(fig, out, "figure.png")
 
 
+def pm(c: dict, digits: int = 2, bound: bool = False) -> str:
+    """``mean ± SE`` of a combined measure (``≥`` for a mean over lower bounds)."""
+    if not np.isfinite(c["mean"]):
+        return "n/a"
+    ge = "≥ " if bound else ""
+    if not np.isfinite(c["se"]):
+        return f"{ge}{c['mean']:.{digits}g} (n = {c['n']})"
+    n = "" if c["n"] == len(c["values"]) else f" (n = {c['n']})"
+    return f"{ge}{c['mean']:.{digits}g} ± {c['se']:.2g}{n}"
+
+
+def counts(c: dict, k: int) -> str:
+    """Period-k verdict as counts of beds, e.g. ``within 1 % on 3 of 3 beds``."""
+    R = c["beds"]
+    n1, n5 = (c[f"period{k}_{tol:g}"] for tol in TOLERANCES)
+    if n1 == R:
+        return f"within 1 % on {R} of {R} beds"
+    if n5 == 0:
+        return f"no bed within 5 % (0 of {R})"
+    return f"within 1 % on {n1}, within 5 % on {n5} of {R} beds"
+
+
+def labels(c: dict) -> str:
+    return ", ".join(f"{lab} ×{n}" for lab, n in Counter(c["labels"]).most_common())
+
+
+def saturation(c: dict) -> str:
+    parts = []
+    if np.isfinite(c["t_sat"]["mean"]):
+        parts.append(pm(c["t_sat"], 3))
+    if c["bounds"]:
+        parts.append(f"within the first period on {c['bounds']}")
+    if c["not_reached"]:
+        parts.append(f"not reached on {c['not_reached']}")
+    if c["not_grown"]:
+        parts.append(f"did not grow on {c['not_grown']}")
+    return "; ".join(parts)
+
+
+def _bed_cell(d: dict, key: str) -> str:
+    v = MEASURES[key](d)
+    if key == "twin" or key == "twin_per_period":
+        return ("≥ " if d["div_bound"] else "") + f"{v:.3g}"
+    if key == "t_sat":
+        return ("1st period" if d["div_bound"] else f"{v:.2f}" if np.isfinite(v) else
+                "not reached" if d["div_grew"] else "no growth")
+    return f"{v:.2g}"
+
+
 def _summary(r, s, out, prov):
+    R = r["beds"]
+    seeds = ", ".join(str(x) for x in r["seeds"])
+    ident = max(max(row["identical_before"]) for row in r["rows"].values())
     L = ["# Bed dynamics: long series, periodicity levels, twin runs (thesis ch. 4)", "",
          scaffold.provenance_line(prov, r["wall"]), "",
-         f"`sanchez2012-optimal`, one twin pair per frequency, {s['duration']:g} s per run "
-         f"(the thesis: ≈ 197 s), analysed after t = {s['transient']:g} s "
-         f"({(s['duration'] - s['transient']):g} s = "
+         f"`sanchez2012-optimal`, **{R} independently poured beds** per frequency (seeds "
+         f"{seeds}: the package's replicate seeds; `--beds`), one twin pair per bed and "
+         f"frequency, {s['duration']:g} s per run (the thesis: ≈ 197 s), analysed after "
+         f"t = {s['transient']:g} s ({(s['duration'] - s['transient']):g} s = "
          + ", ".join(f"{(s['duration'] - s['transient']) * f:.0f}" for f in s["freqs"])
          + " drive periods); one grain moved by "
          f"{DELTA:g} m at t = {s['t_perturb']:g} s in the second run of each pair (before "
-         "that the pairs agree to "
-         f"{max(row['identical_before'] for row in r['rows'].values()):.1e} m). "
-         f"Energy balance error ≤ {float(np.max(r['balance'])):.1e}.", "",
+         f"that the pairs agree to {ident:.1e} m). Energy balance error ≤ "
+         f"{float(np.max(r['balance'])):.1e}. Every bed is analysed on its own; numbers are "
+         f"mean ± standard error over the {R} beds (s/√R; n = … where a bed gave no value), "
+         "verdicts are counts of beds. Per-bed values follow each table.", "",
          "Periodicity levels: strobe spread s_k = RMS distance of the stroboscopic section "
          "from a period-k orbit over the orbit's standard deviation; h_k = fraction of the "
-         "power at the lines n f/k. A period-k verdict needs s_k and 1 − h_k both below the "
-         "tolerance (1 %: the classifier's; 5 %: a looser one). Kantz exponents are fitted "
-         "over more than one drive period (span given).", "",
+         "power at the lines n f/k. A bed is period-k at a tolerance when s_k and 1 − h_k are "
+         "both below it (1 %: the classifier's; 5 %: a looser one). Kantz exponents are fitted "
+         "over more than one drive period (span per bed below); the classifier fits none where "
+         "it finds a period (nan per bed; the mean is over the beds with a fit, n = …, or n/a "
+         "when no bed has one).", "",
          f"Twin growth is judged from the perturbation itself ({DELTA:g} m of one grain), not "
          "from the first period's distance: where the per-period maximum distance is already "
          "within a factor 10 of its plateau in the first period after the perturbation, the "
          f"pair separated within one period and only a lower bound ln(D₀/{DELTA:g} m)/T is known "
-         "(marked ≥). 'Plateau / orbit size' says how far the separation reaches the observable: "
+         "(marked ≥; a mean containing such a bed is marked ≥ and is itself only a bound). "
+         "The plateau time is averaged over the beds that saturated after the first period. "
+         "'Plateau / orbit size' says how far the separation reaches the observable: "
          "a bed whose grains diverge at once while z_box stays within ~1 % of its orbit is "
          "chaotic at the grain level and nearly periodic at the level of the damper.", ""]
     for name in SIGNALS:
         L += [f"## {name}", "",
+              f"Mean ± SE over {R} beds; period-k: counts of beds.", "",
               "| f [Hz] | thesis | s₁ | s₂ | 1 − h₁ | 1 − h₂ | period-1 | period-2 | "
-              "classifier | Kantz λ/f (span [periods]) | twin λ [1/s] | twin λ/f | twin "
-              "plateau at [s] | plateau / orbit size |", "| --- " * 14 + "|"]
+              "classifier (beds) | Kantz λ/f | twin λ [1/s] | twin λ/f | twin plateau at [s] "
+              "| plateau / orbit size |", "| --- " * 14 + "|"]
         for f, row in r["rows"].items():
-            d = row[name]
-            lab = d["label"] + (f"-{d['period']}" if d["period"] else "")
-            L.append(
-                f"| {f:g} | {THESIS.get(f, '')} | {d['spread1']:.2g} | {d['spread2']:.2g} | "
-                f"{1 - d['harm1']:.2g} | {1 - d['harm2']:.2g} | {level(d['spread1'], d['harm1'])} "
-                f"| {level(d['spread2'], d['harm2'])} | {lab} | {d['kantz_per_period']:.3g} "
-                f"({d['kantz_span_periods']:.1f}) | {'≥ ' if d['div_bound'] else ''}"
-                f"{d['div_exponent']:.3g} | {'≥ ' if d['div_bound'] else ''}"
-                f"{d['div_per_period']:.3g} | "
-                + ("within the first period" if d["div_bound"] else
-                   f"{d['div_t_sat']:.2f}" if d["div_saturated"] else
-                   "did not grow" if not d["div_grew"] else "not reached")
-                + f" | {d['div_plateau_rel']:.2g} |")
+            c = row["stats"][name]
+            bd = c["bounds"] > 0
+            L.append(f"| {f:g} | {THESIS.get(f, '')} | {pm(c['s1'])} | {pm(c['s2'])} | "
+                     f"{pm(c['off1'])} | {pm(c['off2'])} | {counts(c, 1)} | {counts(c, 2)} | "
+                     f"{labels(c)} | {pm(c['kantz'], 3)} | {pm(c['twin'], 3, bd)} | "
+                     f"{pm(c['twin_per_period'], 3, bd)} | {saturation(c)} | "
+                     f"{pm(c['plateau_rel'])} |")
+        L += ["", f"Per bed ({name}):", "",
+              "| f [Hz] | bed (seed) | s₁ | s₂ | 1 − h₁ | 1 − h₂ | period-1 | period-2 | "
+              "classifier | Kantz λ/f (span [periods]) | twin λ [1/s] | twin λ/f | plateau at "
+              "[s] | plateau / orbit size |", "| --- " * 14 + "|"]
+        for f, row in r["rows"].items():
+            for b, (bed, seed) in enumerate(zip(row["beds"], r["seeds"])):
+                d = bed[name]
+                lab = d["label"] + (f"-{d['period']}" if d["period"] else "")
+                L.append(f"| {f:g} | {b} ({seed}) | {_bed_cell(d, 's1')} | {_bed_cell(d, 's2')} "
+                         f"| {_bed_cell(d, 'off1')} | {_bed_cell(d, 'off2')} | "
+                         f"{level(d['spread1'], d['harm1'])} | {level(d['spread2'], d['harm2'])}"
+                         f" | {lab} | {d['kantz_per_period']:.3g} ({d['kantz_span_periods']:.1f})"
+                         f" | {_bed_cell(d, 'twin')} | {_bed_cell(d, 'twin_per_period')} | "
+                         f"{_bed_cell(d, 't_sat')} | {_bed_cell(d, 'plateau_rel')} |")
         L.append("")
     L += ["What the twin exponent can and cannot tell: it is the growth rate of a perturbation "
           "of the whole simulated system (6N + 2 ≈ 1500 phase-space dimensions for N = 250), "

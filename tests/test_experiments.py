@@ -248,26 +248,44 @@ def test_binary_mixtures_quick(tmp_path):
 
 
 def test_bed_dynamics_long_quick(tmp_path):
-    """Twin pairs at 14.5 and 21 Hz, 1.2 s: the pair is bit-identical until the perturbation;
-    every frequency and signal gets periodicity levels in [0, 1] and a twin exponent; at both
-    frequencies the twins' box motion separates by orders of magnitude from the 1e-9 m
-    perturbation (the grains are chaotic in the periodic window too: the full run measures
-    twin exponents of >= 167 /s at 14.5 Hz and 46 /s at 21 Hz, so the quick run asserts no
-    ordering between them — on 0.8 s after the perturbation that ordering is not robust)."""
-    out = _load("bed_dynamics_long").main(["--quick", "--out", str(tmp_path), "--no-progress"])
+    """Twin pairs at 14.5 and 21 Hz, 1.2 s, on 2 independently poured beds (the package's
+    replicate seeds 0, 1): every pair is bit-identical until the perturbation, the beds differ
+    (independent pours); every bed, frequency and signal gets periodicity levels in [0, 1] and
+    a twin exponent; the combined values are the beds' means with a standard error, and the
+    period-k verdicts are counts of beds. On every bed the twins' box motion separates by
+    orders of magnitude from the 1e-9 m perturbation (the grains are chaotic in the periodic
+    window too: in the full run the twins separate on every bed at both frequencies, and the
+    exponents scatter between beds by more than their difference, so the quick run asserts no
+    ordering between the frequencies)."""
+    out = _load("bed_dynamics_long").main(["--quick", "--beds", "2", "--out", str(tmp_path),
+                                           "--no-progress"])
     rows = out["rows"]
-    assert set(rows) == {14.5, 21.0}
+    assert set(rows) == {14.5, 21.0} and out["beds"] == 2 and out["seeds"] == [0, 1]
     for f, r in rows.items():
-        assert r["identical_before"] == 0.0, f
+        assert len(r["beds"]) == 2 and r["identical_before"] == [0.0, 0.0], f
         for name in ("z_box", "z_cm"):
-            d = r[name]
-            assert 0 <= d["harm1"] <= 1 and d["spread1"] >= 0 and np.isfinite(d["div_exponent"])
-    for f in rows:
-        assert rows[f]["z_box"]["div_grew"], f
-        assert rows[f]["z_box"]["div_exponent"] > 0, f
+            for d in (b[name] for b in r["beds"]):
+                assert 0 <= d["harm1"] <= 1 and d["spread1"] >= 0
+                assert np.isfinite(d["div_exponent"])
+            c = r["stats"][name]
+            assert c["beds"] == 2
+            v = c["s1"]["values"]
+            assert v[0] != v[1], (f, name)  # independent beds, not copies
+            assert np.isclose(c["s1"]["mean"], v.mean()) and c["s1"]["se"] > 0
+            for k in (1, 2):
+                assert 0 <= c[f"period{k}_0.01"] <= c[f"period{k}_0.05"] <= 2
+        for b in r["beds"]:
+            assert b["z_box"]["div_grew"] and b["z_box"]["div_exponent"] > 0, f
     assert np.all(out["balance"] < 1e-3)
     assert (tmp_path / "figure.png").stat().st_size > 10_000
-    assert "twin" in (tmp_path / "summary.md").read_text()
+    text = (tmp_path / "summary.md").read_text()
+    assert "2 independently poured beds" in text and "of 2 beds" in text and "twin" in text
+    import h5py
+
+    with h5py.File(tmp_path / "data.h5") as h:
+        assert list(h.attrs["seeds"]) == [0, 1]
+        assert h["f_14.5/over_beds/z_box/s1"].shape == (2,)
+        assert "twin_distance" in h["f_21/bed_1/z_cm"]
 
 
 def test_inelastic_collapse(tmp_path):
