@@ -161,6 +161,42 @@ class RandomBase:
 
 
 @dataclass(frozen=True)
+class Structure:
+    """A multi-degree-of-freedom primary structure carrying the damper (S1), in place of the
+    1-DOF primary's ``M, K, C`` (:mod:`jaxdamp.physics.structure`; ``primary`` still gives the
+    base amplitude ``U`` and the box's initial ``z0``, ``v0``; its ``M, K, C`` are not used).
+
+    Give either the matrices or the modal data:
+
+    Attributes:
+      M, K, C: mass [kg], stiffness [N/m] and damping [N s/m] matrices ``(n, n)``, symmetric
+        (``C`` optional: zero).
+      frequencies: natural frequencies ``f_k`` [Hz] of the modes.
+      damping: modal damping ratios ``ζ_k`` [-] (optional: zero).
+      shapes: mode shapes ``Φ`` ``(n, n)``: row ``i`` degree of freedom ``i``, column ``k``
+        mode ``k``.
+      modal_masses: ``m_k`` [kg] of the shapes as given; ``None``: mass-normalised shapes.
+      attach: the degree of freedom that carries the box (0-based).
+      influence: how the base moves each degree of freedom, ``r`` ``(n,)`` (default all ones:
+        the whole structure on the moving base).
+      force: amplitude ``F0`` [N] of a harmonic force ``F0 cos(2π f t)`` on ``force_dof``.
+      force_dof: the degree of freedom the force acts on (0-based).
+    """
+
+    M: tuple[tuple[float, ...], ...] | None = None
+    K: tuple[tuple[float, ...], ...] | None = None
+    C: tuple[tuple[float, ...], ...] | None = None
+    frequencies: tuple[float, ...] | None = None
+    damping: tuple[float, ...] | None = None
+    shapes: tuple[tuple[float, ...], ...] | None = None
+    modal_masses: tuple[float, ...] | None = None
+    attach: int = 0
+    influence: tuple[float, ...] | None = None
+    force: float = 0.0
+    force_dof: int = 0
+
+
+@dataclass(frozen=True)
 class Shock:
     """A half-sine base acceleration pulse of S1 (:func:`jaxdamp.physics.excitation.shock_pulse`):
     ``u'' = peak sin(π (t - start)/duration)`` during the pulse, from rest; the base keeps the
@@ -269,6 +305,7 @@ class Config:
       impactor: the single particle (required for S3).
       random: band-limited random base motion (S1), added to the harmonic ``primary.U``.
       shock: a half-sine base acceleration pulse (S1), added to the rest.
+      structure: a multi-DOF primary structure (S1) in place of the primary's ``M, K, C``.
       numerics: integration and recording.
       gravity: ``g`` [m/s^2] along ``-z``.
       direction: the axis of the excitation, a vector ``(x, y, z)`` (normalised when the model
@@ -300,6 +337,7 @@ class Config:
     impactor: Impactor | None = None
     random: RandomBase | None = None
     shock: Shock | None = None
+    structure: Structure | None = None
     numerics: Numerics = field(default_factory=Numerics)
     gravity: float = 9.8
     direction: tuple[float, float, float] = (0.0, 0.0, 1.0)
@@ -380,6 +418,7 @@ _NESTED = {
     (Config, "impactor"): Impactor,
     (Config, "random"): RandomBase,
     (Config, "shock"): Shock,
+    (Config, "structure"): Structure,
     (Config, "numerics"): Numerics,
     (Box, "wall"): Material,
     (Species, "material"): Material,
@@ -391,6 +430,8 @@ def _convert(cls, name: str, value: Any, path: str):
         return _build(_NESTED[(cls, name)], value, path)
     if cls is Config and name == "direction" and isinstance(value, (list, tuple)):
         return tuple(value)
+    if cls is Structure and isinstance(value, (list, tuple)):
+        return tuple(tuple(row) if isinstance(row, (list, tuple)) else row for row in value)
     if cls is RandomBase and name == "psd" and isinstance(value, (list, tuple)):
         return tuple(tuple(row) if isinstance(row, (list, tuple)) else row for row in value)
     if cls is Config and name == "grains":

@@ -85,6 +85,95 @@ def _random(rnd) -> None:
                           "the bed's numerics.seed)")
 
 
+def _matrix(value, name: str, n: int | None = None):
+    """A finite square matrix (as nested lists), or a ConfigError naming ``name``."""
+    import numpy as np
+
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        a = None
+    if a is None or a.ndim != 2 or a.shape[0] != a.shape[1] or a.shape[0] < 1:
+        raise ConfigError(f"{name} = {value!r}: expected a square matrix [[...], [...], ...]")
+    if n is not None and a.shape[0] != n:
+        raise ConfigError(f"{name}: {a.shape[0]}×{a.shape[0]}, expected {n}×{n} like "
+                          "structure.M (or the number of modes)")
+    if not np.all(np.isfinite(a)):
+        raise ConfigError(f"{name}: every entry must be a finite number")
+    return a
+
+
+def _vector(value, name: str, n: int, positive: bool = False, allow_zero: bool = False):
+    import numpy as np
+
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        a = None
+    if a is None or a.shape != (n,) or not np.all(np.isfinite(a)):
+        raise ConfigError(f"{name} = {value!r}: expected {n} finite numbers")
+    if positive and not (np.all(a >= 0) if allow_zero else np.all(a > 0)):
+        bad = a[a < 0] if allow_zero else a[a <= 0]
+        raise ConfigError(f"{name} = {value!r}: every value must be {'≥' if allow_zero else '>'}"
+                          f" 0 (got {bad[0]:g})")
+    return a
+
+
+def _structure(s) -> None:
+    """Checks of ``Config.structure`` (:class:`jaxdamp.config.Structure`): matrices symmetric,
+    ``M`` positive definite, ``K`` and ``C`` positive semi-definite; modal data positive and
+    the shapes invertible; indices in range."""
+    import numpy as np
+
+    if (s.M is None) == (s.frequencies is None):
+        raise ConfigError("structure: give either the matrices (structure.M, K[, C]) or the "
+                          "modal data (structure.frequencies, shapes[, damping, modal_masses]), "
+                          "not both and not neither")
+    if s.M is not None:
+        M = _matrix(s.M, "structure.M")
+        n = len(M)
+        if s.K is None:
+            raise ConfigError("structure.K: the stiffness matrix is missing (structure.M given)")
+        mats = {"M": M, "K": _matrix(s.K, "structure.K", n)}
+        if s.C is not None:
+            mats["C"] = _matrix(s.C, "structure.C", n)
+        for key, a in mats.items():
+            if not np.allclose(a, a.T, rtol=1e-10, atol=1e-12 * np.abs(a).max()):
+                raise ConfigError(f"structure.{key} is not symmetric (largest |A - Aᵀ| = "
+                                  f"{np.abs(a - a.T).max():.3g}); a physical {key} is")
+            low = float(np.linalg.eigvalsh(a).min())
+            scale = max(float(np.abs(a).max()), 1e-300)
+            if key == "M" and low <= 1e-12 * scale:
+                raise ConfigError(f"structure.M is not positive definite (smallest eigenvalue "
+                                  f"{low:.3g} kg); every motion must carry mass")
+            if key != "M" and low < -1e-10 * scale:
+                raise ConfigError(f"structure.{key} is indefinite (smallest eigenvalue "
+                                  f"{low:.3g}); it must be positive semi-definite")
+    else:
+        f = np.atleast_1d(np.asarray(s.frequencies, dtype=float))
+        n = len(f)
+        _vector(s.frequencies, "structure.frequencies", n, positive=True)
+        if s.shapes is None:
+            raise ConfigError("structure.shapes: the mode shapes are missing (structure."
+                              "frequencies given)")
+        phi = _matrix(s.shapes, "structure.shapes", n)
+        if abs(np.linalg.det(phi)) < 1e-12 * max(np.abs(phi).max(), 1e-300) ** n:
+            raise ConfigError("structure.shapes is singular: the modes must be independent "
+                              "(one column per mode, one row per degree of freedom)")
+        if s.damping is not None:
+            _vector(s.damping, "structure.damping", n, positive=True, allow_zero=True)
+        if s.modal_masses is not None:
+            _vector(s.modal_masses, "structure.modal_masses", n, positive=True)
+    for name in ("attach", "force_dof"):
+        v = getattr(s, name)
+        if not (isinstance(v, int) and 0 <= v < n):
+            raise ConfigError(f"structure.{name} = {v!r}: must be a degree of freedom 0..{n - 1}")
+    if s.influence is not None:
+        _vector(s.influence, "structure.influence", n)
+    if not (isinstance(s.force, (int, float)) and math.isfinite(s.force)):
+        raise ConfigError(f"structure.force = {s.force!r}: must be a finite number [N]")
+
+
 def validate(config: Config) -> Config:
     """Raise :class:`ConfigError` for any invalid value; return the config unchanged."""
     if config.system not in SYSTEMS:
@@ -137,6 +226,8 @@ def validate(config: Config) -> Config:
                 raise ConfigError(f"primary.{name} = {value!r}: must be a finite number")
         if config.random is not None:
             _random(config.random)
+        if config.structure is not None:
+            _structure(config.structure)
         if config.shock is not None:
             sh = config.shock
             if not (isinstance(sh.peak, (int, float)) and math.isfinite(sh.peak)):
@@ -144,7 +235,7 @@ def validate(config: Config) -> Config:
             _positive(sh.duration, "shock.duration")
             _positive(sh.start, "shock.start", allow_zero=True)
     else:
-        for name in ("random", "shock"):
+        for name in ("random", "shock", "structure"):
             if getattr(config, name) is not None:
                 raise ConfigError(f"{name}: base excitation acts on the primary's base (S1, "
                                   f"system 'primary'), not on system {config.system!r}")

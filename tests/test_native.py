@@ -39,14 +39,21 @@ BASE_EXTRAS = {"random.psd": [[10.0, 50.0], [600.0, 20.0]], "random.resolution":
                "shock.peak": -30.0, "shock.duration": 1e-4, "shock.start": 2e-5}
 
 
+#: A 3-DOF chain carrying the box on its middle mass, a harmonic force on the top one.
+STRUCTURE = {"structure.M": [[0.4, 0.0, 0.0], [0.0, 0.5, 0.0], [0.0, 0.0, 0.3]],
+             "structure.K": [[4e4, -2e4, 0.0], [-2e4, 4e4, -2e4], [0.0, -2e4, 2e4]],
+             "structure.C": [[6.0, -3.0, 0.0], [-3.0, 6.0, -3.0], [0.0, -3.0, 3.0]],
+             "structure.attach": 1, "structure.force": 40.0, "structure.force_dof": 2}
+
+
 @pytest.mark.parametrize("system, mixing, law, extras", [
     ("primary", "arithmetic", "hertz", {}), ("driven", "harmonic", "hertz", {}),
     ("driven", "geometric", "hertz", {}), ("primary", "harmonic", "linear", {}),
-    ("primary", "arithmetic", "hertz", BASE_EXTRAS)])
+    ("primary", "arithmetic", "hertz", BASE_EXTRAS), ("primary", "arithmetic", "hertz", STRUCTURE)])
 def test_native_equals_jax_on_a_mixture(system, mixing, law, extras):
     """Two species (5 % radius spread, different materials and walls), friction, rotation,
-    both systems, all mixing rules, both contact laws, and random + shock base motion: states
-    and samples agree to round-off after 600 steps."""
+    both systems, all mixing rules, both contact laws, random + shock base motion and a 3-DOF
+    structure: states and samples agree to round-off after 600 steps."""
     cfg = apply_overrides(_mixture(system, mixing, law), extras)
     rng = np.random.default_rng(2)
     grid = np.stack(np.meshgrid(*[np.arange(4)] * 3, indexing="ij"), -1).reshape(-1, 3)[:50]
@@ -61,12 +68,13 @@ def test_native_equals_jax_on_a_mixture(system, mixing, law, extras):
     (sa, _, ra), (sb, _, rb) = out["jax"], out["native"]
     work = np.asarray(sa.work[0])
     assert work[2] > 0 and work[3] > 0 and work[4] > 0 and work[5] > 0  # pp and pw contacts
-    for f in ("r", "v", "w", "q", "z", "zd", "work", "e_elastic", "f_box"):
+    for f in ("r", "v", "w", "q", "z", "zd", "y", "yd", "ydd", "work", "e_elastic", "f_box"):
         a, b = np.asarray(getattr(sa, f)), np.asarray(getattr(sb, f))
-        np.testing.assert_allclose(b, a, rtol=1e-9, atol=1e-12 * max(1.0, np.abs(a).max()), err_msg=f)
+        np.testing.assert_allclose(b, a, rtol=1e-9, atol=1e-12 * max(1.0, np.abs(a).max(initial=0.0)),
+                                   err_msg=f)
     for k in ra:
         np.testing.assert_allclose(np.asarray(rb[k]), np.asarray(ra[k]), rtol=1e-8,
-                                   atol=1e-12 * max(1.0, float(np.abs(np.asarray(ra[k])).max())),
+                                   atol=1e-12 * max(1.0, float(np.abs(np.asarray(ra[k])).max(initial=0.0))),
                                    err_msg=k)
 
 

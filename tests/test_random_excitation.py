@@ -181,3 +181,36 @@ def test_random_command_writes_h1_and_refuses_bad_input(tmp_path):
                          capture_output=True, text=True, timeout=120)
     assert bad.returncode != 0
     assert "must be ≥ 0" in bad.stderr and "Traceback" not in bad.stderr
+
+
+def test_random_vs_sine_experiment_quick(tmp_path):
+    """The random-vs-stepped-sine experiment on test-sized settings: H1 per realisation at the
+    sine's frequencies (lines of the multisine), the sine's Z/U per bed, matched pairs judged
+    by a Welch interval; data, figure and summary written."""
+    from helpers import load_experiment
+
+    r = load_experiment("random_vs_sine").main(["--quick", "--out", str(tmp_path),
+                                                "--no-progress"])
+    assert r["mag"].shape == (1, 2, 2) and np.all(np.isfinite(r["mag"])) and np.all(r["mag"] > 0)
+    assert r["ratio"].shape == (1, 2, 2) and np.all(r["ratio"] > 0)
+    assert np.all((r["coh"] > 0) & (r["coh"] <= 1))
+    text = (tmp_path / "summary.md").read_text()
+    assert "Convention: amplitudes matched by the RMS" in text and "## Matched pairs" in text
+    assert (tmp_path / "figure.png").stat().st_size > 10_000
+
+
+def test_horizontal_drive_experiment_quick(tmp_path):
+    """Vertical against horizontal base motion on test-sized settings: an FRF per direction
+    and bed, M_ef and C_ef fitted per bed, Welch verdicts; data, figure and summary."""
+    from helpers import load_experiment
+
+    r = load_experiment("horizontal_drive").main(["--quick", "--out", str(tmp_path),
+                                                  "--no-progress"])
+    for name in ("vertical", "horizontal"):
+        d = r["runs"][name]
+        assert d["Z"].shape == (3, 2) and np.all(d["Z"] > 0)
+        assert np.all(np.isfinite(d["fit"]["M_reps"])) and np.all(d["fit"]["C_reps"] > 0)
+    assert set(r["cmp"]) == {"M_ef", "C_ef", "Z_peak", "f_peak"}
+    text = (tmp_path / "summary.md").read_text()
+    assert "relative residuals" in text and "| M_ef [kg] |" in text
+    assert (tmp_path / "figure.png").stat().st_size > 10_000

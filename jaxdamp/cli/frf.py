@@ -28,6 +28,10 @@ def cmd_frf(args) -> int:
     if cfg.system not in ("primary", "impact"):
         raise ConfigError("jaxdamp frf needs system 'primary' (S1) or 'impact' (S3): an FRF is "
                           "the primary's response")
+    if cfg.structure is not None:
+        raise ConfigError("jaxdamp frf fits the 1-DOF primary's FRF (M_ef, C_ef), which does not "
+                          "apply to a multi-DOF [structure]; use jaxdamp random (H1 at the box) "
+                          "or jaxdamp run, whose records hold every degree of freedom (y_dofs)")
     impact = cfg.system == "impact"  # S3: one particle of mass impactor.mass, gap impactor.gap
     if args.frequencies:
         freqs = float_list(args.frequencies, "--frequencies")

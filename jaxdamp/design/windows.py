@@ -149,7 +149,7 @@ class DEMProblem:
         fits under the new lid (advanced at the old ``Lz`` by up to two periods until it does),
         else from the settled bed."""
         from jaxdamp.engine import driver
-        from jaxdamp.studies.runner import initial_box_position, initial_box_velocity
+        from jaxdamp.studies.runner import initial_structure
 
         t0 = time.perf_counter()
         F, K = len(self.freqs), self.n_windows
@@ -169,13 +169,12 @@ class DEMProblem:
         if states is not None:
             burn = self.warm_burn_in  # the warm state continues under the new lid
         else:
-            z0 = initial_box_position(self.config, self.m_grains)
-            r0 = np.broadcast_to(self.bed.r + np.array([0.0, 0.0, z0]), (F,) + self.bed.r.shape)
+            x0, xd0 = initial_structure(self.config, self.m_grains)
+            r0 = np.broadcast_to(self.bed.r + np.array([0.0, 0.0, x0[0]]),
+                                 (F,) + self.bed.r.shape)
             rep = lambda a: np.broadcast_to(a, (F,) + a.shape)  # noqa: E731
             states = driver.start(self.model, params, r0, rep(self.bed.v), rep(self.bed.w),
-                                  rep(self.bed.q), np.full((F,), z0),
-                                  np.full((F,), initial_box_velocity(self.config)),
-                                  engine=self.engine).states
+                                  rep(self.bed.q), rep(x0), rep(xd0), engine=self.engine).states
             burn = self.burn_in
         states = self._advance(states, params, burn, pieces=max(1, int(burn / 0.05)))
         sim += F * burn

@@ -133,7 +133,9 @@ def start(model: Model, params: Params, r, v, w, q, z, zd, t: float = 0.0, *,
           engine: str = "auto", multiplier: float = 1.5, place: Callable | None = None,
           e_start=None) -> Batch:
     """A batch at time ``t`` from grain kinematics ``(B, N, 3)`` (``q``: ``(B, N, 4)``) and box
-    position/velocity ``(B,)`` (ignored for a driven box, which follows its drive): forces and
+    position/velocity ``(B,)`` — or, for a structure of ``model.dofs`` degrees of freedom,
+    ``(B, dofs)`` in the engines' order, the box first — (ignored for a driven box, which
+    follows its drive): forces and
     accelerations evaluated there, neighbour lists allocated. ``e_start`` ``(B,)`` sets the
     reference energy of the balance (default: the energy of this state)."""
     r = jnp.asarray(r)
@@ -196,6 +198,8 @@ def arrays_to_state(arrays: dict) -> tuple[State, nb.Neighbors]:
     """Inverse of :func:`state_to_arrays`: ``(State, Neighbors)`` as JAX arrays."""
     st = {k.split("/", 1)[1]: jnp.asarray(v) for k, v in arrays.items() if k.startswith("state/")}
     nbr = {k.split("/", 1)[1]: v for k, v in arrays.items() if k.startswith("nbrs/")}
+    for name in ("y", "yd", "ydd"):  # files from before multi-DOF structures: one DOF
+        st.setdefault(name, jnp.zeros(st["z"].shape + (0,)))
     return State(**st), nb.from_numpy(nbr)
 
 

@@ -42,6 +42,9 @@ import numpy as np
 from jaxdamp.physics.contact import FASTMATH, GAMMA_S, MU, contact_scalar, pair_scalar
 from jaxdamp.physics.energy import record_row
 from jaxdamp.physics.excitation import base_motion_scalar, drive_motion_scalar
+from jaxdamp.physics.structure import acceleration_scalar as structure_acceleration_scalar
+from jaxdamp.physics.structure import energy_scalar as structure_energy_scalar
+from jaxdamp.physics.structure import powers_scalar as structure_powers_scalar
 from jaxdamp.physics.integrate import (
     body_force_scalar,
     primary_acceleration_scalar,
@@ -72,18 +75,20 @@ SCALARS = ("Lx", "Ly", "Lz", "gravity", "M", "K", "C", "U", "amplitude", "omega"
            "dt", "drag", "t_window", "ex", "ey", "ez")
 #: Fields of ``Params`` the kernel reads, in the order of its parameter offsets.
 PARAM_FIELDS = (("radius", "mass", "inertia", "pair_table", "wall_table") + SCALARS
-                + ("lines", "shock_a", "shock_t0", "shock_T"))
+                + ("lines", "shock_a", "shock_t0", "shock_T", "s_M", "s_Minv", "s_K", "s_C", "s_r",
+                   "s_b"))
 #: Fields of ``State`` the kernel reads and writes, in the order of its state offsets.
 STATE_FIELDS = ("r", "v", "w", "q", "a", "alpha", "z", "zd", "zdd", "t", "z_max", "z_min", "step",
                 "work", "power", "e_elastic", "f_floor_lid", "f_box", "n_floor", "n_lid",
-                "e_start")
+                "e_start", "y", "yd", "ydd")
 
 #: The scalar forms the kernels inline (with the forms they call, from the same modules): a
 #: change to their source files must recompile the cached kernels (numba's cache only watches
 #: the kernel's own file).
 _INLINED = (contact_scalar, pair_scalar, base_motion_scalar, drive_motion_scalar,
             body_force_scalar, primary_acceleration_scalar, primary_powers_scalar, rotate_scalar,
-            record_row)
+            record_row, structure_acceleration_scalar, structure_energy_scalar,
+            structure_powers_scalar)
 
 
 def _source_files() -> tuple[str, ...]:
@@ -321,14 +326,15 @@ if AVAILABLE:
 
     @_kernel()
     def _advance_one(b, n_records, record_every, system, law, skin, st, pm, so, po, n_species,
-                     n_cols, n_lines, sid, bounds, rec):
+                     n_cols, n_lines, ndof, sid, bounds, rec):
         """Advance system ``b`` of the packed batch by ``n_records × record_every`` steps in
         place, writing a sample after every ``record_every`` steps into ``rec[b]``
         (:func:`jaxdamp.physics.energy.record_row`; ``bounds``: the species' index ranges): row
         ``st[b]`` holds its state (the fields :data:`STATE_FIELDS` at offsets ``so``), row
         ``pm[b]`` its parameters (:data:`PARAM_FIELDS` at offsets ``po``; contact tables of
         ``n_species`` species and ``n_cols`` columns; ``n_lines`` lines of the random base
-        motion), ``sid`` the grains' species.
+        motion; ``ndof`` degrees of freedom of the primary structure), ``sid`` the grains'
+        species.
 
         A step is two passes over the grains and one over the listed pairs: (1) the
         velocity-Verlet predictor, gravity and drag, the six walls, the drag power and the
@@ -360,6 +366,24 @@ if AVAILABLE:
         ex, ey, ez = prow[po[19]], prow[po[20]], prow[po[21]]  # the excitation axis
         lines = prow[po[22]:po[22] + 3 * n_lines].reshape((n_lines, 3))
         sh_a, sh_t0, sh_T = prow[po[23]], prow[po[24]], prow[po[25]]
+        # a multi-DOF structure (ndof > 1): its matrices (box first) and the other DOFs, views
+        nd2 = ndof * ndof
+        sM = prow[po[26]:po[26] + nd2].reshape((ndof, ndof))
+        sMinv = prow[po[27]:po[27] + nd2].reshape((ndof, ndof))
+        sK = prow[po[28]:po[28] + nd2].reshape((ndof, ndof))
+        sC = prow[po[29]:po[29] + nd2].reshape((ndof, ndof))
+        sr = prow[po[30]:po[30] + ndof]
+        sb = prow[po[31]:po[31] + ndof]
+        ny = ndof - 1
+        yv = row[so[21]:so[21] + ny]
+        ydv = row[so[22]:so[22] + ny]
+        yddv = row[so[23]:so[23] + ny]
+        y1 = np.empty(ny)
+        ydp = np.empty(ny)
+        xs = np.empty(ndof)
+        xds = np.empty(ndof)
+        acc = np.empty(ndof)
+        tmp = np.empty(ndof)
         pi = np.empty(4 * n + 16, np.int64)  # grown by _pairs when a bed lists more
         pj = np.empty(4 * n + 16, np.int64)
         pc = np.empty((4 * n + 16, 5))
@@ -405,6 +429,9 @@ if AVAILABLE:
                 if system == 0:
                     z1 = z + dt * zd + hdt2 * zdd
                     zdp = zd + dt * zdd
+                    for j in range(ny):
+                        y1[j] = yv[j] + dt * ydv[j] + hdt2 * yddv[j]
+                        ydp[j] = ydv[j] + dt * yddv[j]
                 else:
                     z1, zdp, zdd1 = drive_motion_scalar(t1, z_off, amp, om)
                 # pass 1: predictor, body force, walls, drag power, displacement since the build
@@ -541,7 +568,20 @@ if AVAILABLE:
                 pp_e, pp_n, pp_f = _pair_forces(law, r1, vp, rw, Rb, pi, pj, pc, npairs, F, T)
                 e_el += pp_e
                 # pass 3: the primary, rotation and corrector
-                if system == 0:
+                if system == 0 and ndof > 1:
+                    u1, ud1 = base_motion_scalar(t1, U, om, lines, sh_a, sh_t0, sh_T)
+                    cos1 = math.cos(om * t1)
+                    xs[0] = z1
+                    xds[0] = zdp
+                    for j in range(ny):
+                        xs[j + 1] = y1[j]
+                        xds[j + 1] = ydp[j]
+                    structure_acceleration_scalar(acc, xs, xds, u1, ud1, box_z, cos1, sMinv, sK,
+                                                  sC, sr, sb, tmp)
+                    zdd1 = acc[0]
+                    zd1 = zd + 0.5 * dt * (zdd + zdd1)
+                    pw[0], pw[1] = structure_powers_scalar(xs, xds, u1, ud1, cos1, sK, sC, sr, sb)
+                elif system == 0:
                     u1, ud1 = base_motion_scalar(t1, U, om, lines, sh_a, sh_t0, sh_T)
                     zdd1 = primary_acceleration_scalar(z1, zdp, u1, ud1, box_z, M, K, C)
                     zd1 = zd + 0.5 * dt * (zdd + zdd1)
@@ -578,6 +618,11 @@ if AVAILABLE:
                 for c in range(7):
                     work[c] = work[c] + 0.5 * dt * (power[c] + pw[c])
                     power[c] = pw[c]
+                if system == 0:
+                    for j in range(ny):
+                        ydv[j] = ydv[j] + 0.5 * dt * (yddv[j] + acc[j + 1])
+                        yddv[j] = acc[j + 1]
+                        yv[j] = y1[j]
                 z, zd, zdd, t = z1, zd1, zdd1, t1
                 if t1 >= t_win:
                     zmax = max(zmax, z1)
@@ -585,11 +630,21 @@ if AVAILABLE:
                 step += 1
                 imp0 += floor_lid
                 imp1 += box_z
-            u_t = (base_motion_scalar(t, U, om, lines, sh_a, sh_t0, sh_T)[0] if system == 0
-                   else 0.0)
-            record_row(rec[b, k_rec], t, z, zd, u_t, rb, vb, wb, mb, Ib, Rb, grav, Lz, ez, M, K,
-                       system == 0, e_el, e_start, imp0 / record_every,
-                       imp1 / record_every, n_floor, n_lid, work, bounds)
+            e_prim = 0.0
+            if system == 0:
+                u_t = base_motion_scalar(t, U, om, lines, sh_a, sh_t0, sh_T)[0]
+                if ndof > 1:
+                    xs[0] = z
+                    xds[0] = zd
+                    for j in range(ny):
+                        xs[j + 1] = yv[j]
+                        xds[j + 1] = ydv[j]
+                    e_prim = structure_energy_scalar(xs, xds, u_t, sM, sK, sr)
+                else:
+                    e_prim = 0.5 * M * zd * zd + 0.5 * K * (z - u_t) * (z - u_t)
+            record_row(rec[b, k_rec], t, z, zd, yv, e_prim, rb, vb, wb, mb, Ib, Rb, grav, Lz, ez,
+                       e_el, e_start, imp0 / record_every, imp1 / record_every, n_floor, n_lid,
+                       work, bounds)
         row[so[6]], row[so[7]], row[so[8]], row[so[9]] = z, zd, zdd, t
         row[so[10]], row[so[11]], row[so[12]] = zmax, zmin, step
         row[so[15]], row[so[16]], row[so[17]] = e_el, floor_lid, box_z
@@ -597,20 +652,20 @@ if AVAILABLE:
 
     @_kernel(parallel=True)
     def _advance(n_records, record_every, system, law, skin, st, pm, so, po, n_species, n_cols,
-                 n_lines, sid, bounds, rec):
+                 n_lines, ndof, sid, bounds, rec):
         """The batch over the cores (OpenMP threads, one system per thread at a time)."""
         for b in prange(st.shape[0]):
             _advance_one(b, n_records, record_every, system, law, skin, st, pm, so, po,
-                         n_species, n_cols, n_lines, sid, bounds, rec)
+                         n_species, n_cols, n_lines, ndof, sid, bounds, rec)
 
     @_kernel(nogil=True)
     def _advance_serial(n_records, record_every, system, law, skin, st, pm, so, po, n_species,
-                        n_cols, n_lines, sid, bounds, rec):
+                        n_cols, n_lines, ndof, sid, bounds, rec):
         """The batch in the calling thread, without the GIL: for sharded chunks, whose host
         threads (one per local shard) call the kernel side by side."""
         for b in range(st.shape[0]):
             _advance_one(b, n_records, record_every, system, law, skin, st, pm, so, po,
-                         n_species, n_cols, n_lines, sid, bounds, rec)
+                         n_species, n_cols, n_lines, ndof, sid, bounds, rec)
 
 
 # -- packing of pytrees (one float64 array per call across the JAX/Python boundary) ---------
@@ -632,7 +687,8 @@ def pack(tree):
 
     leaves = [getattr(tree, f.name) for f in dataclasses.fields(tree)]
     b = leaves[0].shape[0]
-    return jnp.concatenate([jnp.reshape(x, (b, -1)).astype(jnp.float64) for x in leaves], axis=1)
+    return jnp.concatenate([jnp.reshape(x, (b, int(np.prod(x.shape[1:], dtype=np.int64))))
+                            .astype(jnp.float64) for x in leaves], axis=1)
 
 
 def unpack_like(packed, tree):
@@ -683,5 +739,5 @@ def advance_packed(model, state_packed, params_packed, state_layout, param_layou
     kernel(int(n_records), int(record_every), SYSTEMS[model.system], LAWS[model.law].id,
            model.skin, st, pm, offsets(state_layout, STATE_FIELDS),
            offsets(param_layout, PARAM_FIELDS), int(table[0]), int(table[2]),
-           int(shapes["lines"][0]), model.species_index().astype(np.int64), bounds, rec)
+           int(shapes["lines"][0]), int(shapes["s_r"][0]), model.species_index().astype(np.int64), bounds, rec)
     return st, rec

@@ -14,6 +14,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from jaxdamp.physics.contact import scalar_form
+from jaxdamp.physics import structure
 from jaxdamp.physics.excitation import base_motion
 from jaxdamp.physics.model import CH, N_CHANNELS, Model, Params, State
 
@@ -27,10 +28,15 @@ def grain_energies(st: State, p: Params):
 
 
 def primary_energy(st: State, p: Params, model: Model):
-    """Kinetic + spring energy of the primary [J] (0 for S2)."""
+    """Kinetic + spring energy of the primary [J] (0 for S2; a multi-DOF structure's by
+    :func:`jaxdamp.physics.structure.energy`)."""
     if model.system != "primary":
         return jnp.zeros(())
     u, _ = base_motion(st.t, p)
+    if model.dofs > 1:
+        x = jnp.concatenate([jnp.reshape(st.z, (1,)), st.y])
+        xd = jnp.concatenate([jnp.reshape(st.zd, (1,)), st.yd])
+        return structure.energy(x, xd, u, p)
     return 0.5 * p.M * st.zd**2 + 0.5 * p.K * (st.z - u) ** 2
 
 
@@ -55,6 +61,7 @@ RECORD_UNITS = {
     "t": "s",
     "z_box": "m",
     "v_box": "m/s",
+    "y_dofs": "m",
     "z_cm": "m",
     "vz_cm": "m/s",
     "z_lowest": "m",
@@ -95,6 +102,7 @@ def record(st: State, p: Params, model: Model, mean_forces) -> dict:
         t=st.t,
         z_box=st.z,
         v_box=st.zd,
+        y_dofs=st.y,
         z_cm=jnp.sum(p.mass * z) / m_tot,
         vz_cm=jnp.sum(p.mass * st.v[:, 2]) / m_tot,
         z_lowest=z.min() if has else jnp.zeros(()),
@@ -123,18 +131,18 @@ def record_layout(model: Model) -> list[tuple[str, tuple]]:
     :func:`record_row` (scalars ``()``, per-species ``(S,)``, ``work`` ``(N_CHANNELS,)``)."""
     S = (len(model.species_slices()),)
     shapes = {"z_cm_species": S, "vz_cm_species": S, "n_floor_species": S,
-              "n_lid_species": S, "work": (N_CHANNELS,)}
+              "n_lid_species": S, "work": (N_CHANNELS,), "y_dofs": (model.dofs - 1,)}
     return [(name, shapes.get(name, ())) for name in RECORD_UNITS]
 
 
 @scalar_form
-def record_row(out, t, z, zd, u, r, v, w, mass, inertia, radius, gravity, Lz, ez, M, K, primary,
+def record_row(out, t, z, zd, y, e_prim, r, v, w, mass, inertia, radius, gravity, Lz, ez,
                e_elastic, e_start, f_floor_lid, f_box, n_floor, n_lid, work, bounds):
     """Scalar form of :func:`record` (the native engine's samples): one sample written into
-    the flat row ``out`` in the order of :func:`record_layout`. ``u``: the base position at
-    ``t`` (S1), ``ez``: the vertical component of the excitation axis (the floor is at height
-    ``ez z``), ``primary``: whether the primary is there; ``bounds``: the species' first
-    grain and the end, ``(S + 1,)``."""
+    the flat row ``out`` in the order of :func:`record_layout`. ``y``: the structure's other
+    degrees of freedom, ``e_prim``: the primary's energy at ``t`` (:func:`primary_energy`),
+    ``ez``: the vertical component of the excitation axis (the floor is at height ``ez z``);
+    ``bounds``: the species' first grain and the end, ``(S + 1,)``."""
     n = r.shape[0]
     S = bounds.shape[0] - 1
     m_tot = 0.0
@@ -157,9 +165,13 @@ def record_row(out, t, z, zd, u, r, v, w, mass, inertia, radius, gravity, Lz, ez
     grav = gravity * mz
     m_tot = max(m_tot, 1e-300)
     out[0], out[1], out[2] = t, z, zd
-    out[3], out[4], out[5], out[6] = mz / m_tot, mv / m_tot, lo, hi
-    out[7], out[8], out[9], out[10] = f_floor_lid, f_box, n_floor, n_lid
-    k = 11
+    k = 3
+    for j in range(y.shape[0]):
+        out[k + j] = y[j]
+    k += y.shape[0]
+    out[k], out[k + 1], out[k + 2], out[k + 3] = mz / m_tot, mv / m_tot, lo, hi
+    out[k + 4], out[k + 5], out[k + 6], out[k + 7] = f_floor_lid, f_box, n_floor, n_lid
+    k += 8
     for s in range(S):
         ms = 0.0
         msz = 0.0
@@ -179,7 +191,6 @@ def record_row(out, t, z, zd, u, r, v, w, mass, inertia, radius, gravity, Lz, ez
         out[k + 2 * S + s] = nf
         out[k + 3 * S + s] = nl
     k += 4 * S
-    e_prim = 0.5 * M * zd * zd + 0.5 * K * (z - u) * (z - u) if primary else 0.0
     out[k], out[k + 1], out[k + 2], out[k + 3], out[k + 4] = kin, rot, grav, e_elastic, e_prim
     k += 5
     losses = 0.0

@@ -88,19 +88,27 @@ def random_lines(config) -> np.ndarray:
     return np.stack([w, disp * np.cos(phase), -disp * np.sin(phase)], axis=1)
 
 
-def random_start(config) -> tuple[float, float]:
-    """The empty structure's steady response to the random lines at ``t = 0``: displacement
-    [m] and velocity [m/s] of ``Σ Re[H_k (c_k - i s_k) e^{iω_k t}]`` with the primary's
-    ``H(ω) = (K + iωC)/(K - Mω² + iωC)``. The primary starts there, so that a random test
-    of the empty box has no start-up transient and a damper's is small; ``(0, 0)`` without
-    random lines."""
-    if config.system != "primary" or getattr(config, "random", None) is None:
-        return 0.0, 0.0
-    p = config.primary
-    w, c, s = random_lines(config).T
-    H = (p.K + 1j * w * p.C) / (p.K - p.M * w**2 + 1j * w * p.C)
-    z = H * (c - 1j * s)
-    return float(np.sum(z.real)), float(np.sum((1j * w * z).real))
+def random_start(config) -> tuple[np.ndarray, np.ndarray]:
+    """The empty structure's steady response to the random lines at ``t = 0``: displacements
+    [m] and velocities [m/s] ``(n,)`` of its degrees of freedom (user order; ``n = 1`` for the
+    1-DOF primary), ``Σ_k Re[X_k (c_k - i s_k)]`` with ``X_k = (K - ω_k² M + iω_k C)⁻¹ (K +
+    iω_k C) r`` (:func:`jaxdamp.physics.structure.matrices`). The structure starts there, so
+    that a random test of the empty box has no start-up transient and a damper's is small;
+    zeros without random lines."""
+    from jaxdamp.physics.structure import matrices
+
+    if config.system != "primary":
+        return np.zeros(1), np.zeros(1)
+    M, K, C, r, _ = matrices(config)
+    if getattr(config, "random", None) is None:
+        return np.zeros(len(M)), np.zeros(len(M))
+    x = np.zeros(len(M), complex)
+    xd = np.zeros(len(M), complex)
+    for w, c, s in random_lines(config):
+        X = np.linalg.solve(K - w * w * M + 1j * w * C, (K + 1j * w * C) @ r) * (c - 1j * s)
+        x += X
+        xd += 1j * w * X
+    return x.real, xd.real
 
 
 def shock_pulse(t, a, t0, T):

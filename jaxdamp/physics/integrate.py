@@ -29,6 +29,7 @@ import jax.numpy as jnp
 
 from jaxdamp.physics.contact import safe_norm, scalar_form
 from jaxdamp.physics.energy import mechanical_energy
+from jaxdamp.physics import structure
 from jaxdamp.physics.excitation import base_motion, drive_motion
 from jaxdamp.physics.model import N_CHANNELS, Model, Params, State
 from jaxdamp.physics.pairs import pair_forces
@@ -90,9 +91,14 @@ primary_acceleration_scalar = scalar_form(primary_acceleration)
 primary_powers_scalar = scalar_form(primary_powers)
 
 
-def _powers(fo: Forces, z, zd, t, v_pred, p: Params, model: Model):
-    """Channel powers [W] at one force evaluation (see :data:`jaxdamp.physics.model.CHANNELS`)."""
-    if model.system == "primary":
+def _powers(fo: Forces, z, zd, t, v_pred, p: Params, model: Model, y=None, yd=None):
+    """Channel powers [W] at one force evaluation (see :data:`jaxdamp.physics.model.CHANNELS`);
+    ``y``, ``yd``: the structure's other degrees of freedom (``model.dofs > 1``)."""
+    if model.system == "primary" and model.dofs > 1:
+        u, ud = base_motion(t, p)
+        p_in, p_c = structure.powers(_dofs(z, y), _dofs(zd, yd), u, ud,
+                                     jnp.cos(p.omega * t), p)
+    elif model.system == "primary":
         u, ud = base_motion(t, p)
         p_in, p_c = primary_powers(z, zd, u, ud, p.K, p.C)
     else:  # work of the moving walls on the grains
@@ -105,6 +111,19 @@ def _powers(fo: Forces, z, zd, t, v_pred, p: Params, model: Model):
 def _primary_acceleration(z, zd, t, box_z, p: Params):
     u, ud = base_motion(t, p)
     return primary_acceleration(z, zd, u, ud, box_z, p.M, p.K, p.C)
+
+
+def _dofs(z, y):
+    """The structure's vector ``(z, y...)`` (the box first)."""
+    return jnp.concatenate([jnp.reshape(z, (1,)), y])
+
+
+def _structure_acceleration(z, zd, y, yd, t, box_z, p: Params):
+    """``(z'', y'')`` of a multi-DOF structure (:func:`jaxdamp.physics.structure.acceleration`)."""
+    u, ud = base_motion(t, p)
+    a = structure.acceleration(_dofs(z, y), _dofs(zd, yd), u, ud, box_z,
+                               jnp.cos(p.omega * t), p)
+    return a[0], a[1:]
 
 
 def rotate(q, w, dt):
@@ -162,25 +181,36 @@ def _finish(state_fields: dict, fo: Forces, power, p: Params) -> State:
 def initial_state(r, v, w, q, z, zd, t, idx, p: Params, model: Model, e_start=None) -> State:
     """A state at time ``t`` with accelerations and powers evaluated there (single system).
 
-    For S2, ``z`` and ``zd`` are ignored and taken from the drive. ``e_start`` is the reference
-    mechanical energy of the balance; by default the energy of this state.
+    ``z``, ``zd``: the box's position and velocity, or for a structure of ``model.dofs``
+    degrees of freedom the vectors ``(dofs,)`` in the engines' order (the box first). For S2
+    they are ignored and taken from the drive. ``e_start`` is the reference mechanical energy
+    of the balance; by default the energy of this state.
     """
     r, v, w = jnp.asarray(r), jnp.asarray(v), jnp.asarray(w)
     t = jnp.asarray(t, jnp.float64)
+    x = jnp.reshape(jnp.asarray(z, jnp.float64), (-1,))
+    xd = jnp.reshape(jnp.asarray(zd, jnp.float64), (-1,))
+    if x.shape[0] < model.dofs:  # S2 (and settling) carry the other DOFs at rest
+        x = jnp.concatenate([x, jnp.zeros(model.dofs - x.shape[0])])
+        xd = jnp.concatenate([xd, jnp.zeros(model.dofs - xd.shape[0])])
+    y, yd = x[1:model.dofs], xd[1:model.dofs]
     if model.system == "primary":
-        z, zd = jnp.asarray(z, jnp.float64), jnp.asarray(zd, jnp.float64)
+        z, zd = x[0], xd[0]
     else:
         z, zd, _ = drive_motion(t, p)
     fo = forces(r, v, w, z, zd, idx, p, model)
-    if model.system == "primary":
+    ydd = jnp.zeros_like(y)
+    if model.system == "primary" and model.dofs > 1:
+        zdd, ydd = _structure_acceleration(z, zd, y, yd, t, fo.box_z, p)
+    elif model.system == "primary":
         zdd = _primary_acceleration(z, zd, t, fo.box_z, p)
     else:
         zdd = drive_motion(t, p)[2]
-    power = _powers(fo, z, zd, t, v, p, model)
+    power = _powers(fo, z, zd, t, v, p, model, y, yd)
     st = _finish(
         dict(
             r=r, v=v, w=w, q=jnp.asarray(q), a=fo.force / p.mass[:, None],
-            alpha=fo.torque / p.inertia[:, None], z=z, zd=zd, zdd=zdd, t=t,
+            alpha=fo.torque / p.inertia[:, None], z=z, zd=zd, zdd=zdd, y=y, yd=yd, ydd=ydd, t=t,
             step=jnp.zeros((), jnp.int64), work=jnp.zeros(N_CHANNELS), e_start=jnp.zeros(()),
             z_max=jnp.asarray(-jnp.inf), z_min=jnp.asarray(jnp.inf),
         ),
@@ -204,17 +234,23 @@ def step(st: State, idx, p: Params, model: Model) -> State:
         zd_pred = st.zd + dt * st.zdd
     else:
         z1, zd_pred, zdd1 = drive_motion(t1, p)
+    y1 = st.y + dt * st.yd + 0.5 * dt * dt * st.ydd
+    yd_pred = st.yd + dt * st.ydd
 
     fo = forces(r1, v_pred, w_pred, z1, zd_pred, idx, p, model)
     a1 = fo.force / p.mass[:, None]
     alpha1 = fo.torque / p.inertia[:, None]
-    if model.system == "primary":
+    ydd1 = st.ydd
+    if model.system == "primary" and model.dofs > 1:
+        zdd1, ydd1 = _structure_acceleration(z1, zd_pred, y1, yd_pred, t1, fo.box_z, p)
+        zd1 = st.zd + 0.5 * dt * (st.zdd + zdd1)
+    elif model.system == "primary":
         zdd1 = _primary_acceleration(z1, zd_pred, t1, fo.box_z, p)
         zd1 = st.zd + 0.5 * dt * (st.zdd + zdd1)
     else:
         zd1 = zd_pred
 
-    power = _powers(fo, z1, zd_pred, t1, v_pred, p, model)
+    power = _powers(fo, z1, zd_pred, t1, v_pred, p, model, y1, yd_pred)
     in_window = t1 >= p.t_window
     return _finish(
         dict(
@@ -227,6 +263,9 @@ def step(st: State, idx, p: Params, model: Model) -> State:
             z=z1,
             zd=zd1,
             zdd=zdd1,
+            y=y1,
+            yd=st.yd + 0.5 * dt * (st.ydd + ydd1),
+            ydd=ydd1,
             t=t1,
             step=st.step + 1,
             work=st.work + 0.5 * dt * (st.power + power),

@@ -27,6 +27,7 @@ import numpy as np
 from jaxdamp.config import Config
 from jaxdamp.physics.contact import LAWS, Law, calibrate_wall_row
 from jaxdamp.physics.excitation import base_motion, random_lines
+from jaxdamp.physics.structure import internal
 
 #: Names of the cumulative work channels, in order (all in J).
 #:   input:       work done on the system by the base through spring and damper (S1) or by the
@@ -58,6 +59,9 @@ class Model:
       skin: neighbour-list skin [m]; the list is rebuilt once a grain moved more than skin/2.
       species: grain count of each species, in order (grains are stored species after
         species); per-species records use it. Empty means one species of ``n`` grains.
+      dofs: degrees of freedom of the primary structure (S1; 1 for the 1-DOF primary and for
+        S2): more than one selects the structure's matrix equations
+        (:mod:`jaxdamp.physics.structure`).
     """
 
     n: int
@@ -66,6 +70,7 @@ class Model:
     cutoff: float
     skin: float
     species: tuple[int, ...] = ()
+    dofs: int = 1
 
     def species_slices(self) -> tuple[slice, ...]:
         """Index range of every species in the grain arrays (at least one, possibly empty)."""
@@ -93,7 +98,10 @@ class Params:
     excitation axis (``Config.direction``), along which the box and the primary move;
     ``lines`` ``(L, 3)`` the random base motion's lines ``(ω_k, c_k, s_k)`` and ``shock_a``
     [m/s²], ``shock_t0``, ``shock_T`` [s] the shock pulse (:mod:`jaxdamp.physics.excitation`;
-    one zero line and ``shock_T = 0`` when absent).
+    one zero line and ``shock_T = 0`` when absent); ``s_M``, ``s_Minv``, ``s_K``, ``s_C``
+    ``(n, n)``, ``s_r``, ``s_b`` ``(n,)`` the primary structure in the engines' order, the box's
+    degree of freedom first (:func:`jaxdamp.physics.structure.internal`; ``n = 1`` for the
+    1-DOF primary, whose equation uses ``M, K, C``).
     """
 
     radius: jnp.ndarray
@@ -122,6 +130,12 @@ class Params:
     shock_a: jnp.ndarray
     shock_t0: jnp.ndarray
     shock_T: jnp.ndarray
+    s_M: jnp.ndarray
+    s_Minv: jnp.ndarray
+    s_K: jnp.ndarray
+    s_C: jnp.ndarray
+    s_r: jnp.ndarray
+    s_b: jnp.ndarray
 
 
 @pytree_dataclass
@@ -132,7 +146,8 @@ class State:
     ``r`` position [m], ``v`` velocity [m/s], ``w`` angular velocity [rad/s], ``a`` and
     ``alpha`` the accelerations at ``t`` [m/s², rad/s²].
     Box (scalars): ``z``, ``zd``, ``zdd`` position [m], velocity, acceleration of the floor
-    along the excitation axis ``e`` (the box's corner is at ``e z``).
+    along the excitation axis ``e`` (the box's corner is at ``e z``); ``y``, ``yd``, ``ydd``
+    ``(dofs - 1,)`` the primary structure's other degrees of freedom (empty for one).
     ``power`` [W] and ``work`` [J], shape ``(N_CHANNELS,)``: the channel powers at ``t`` and
     their time integrals (trapezoid rule) since the run started (see :data:`CHANNELS`).
     ``e_elastic`` [J] elastic contact energy at ``t``; ``e_start`` [J] total mechanical energy
@@ -151,6 +166,9 @@ class State:
     z: jnp.ndarray
     zd: jnp.ndarray
     zdd: jnp.ndarray
+    y: jnp.ndarray
+    yd: jnp.ndarray
+    ydd: jnp.ndarray
     t: jnp.ndarray
     step: jnp.ndarray
     power: jnp.ndarray
@@ -237,9 +255,11 @@ def build(config: Config, radii: np.ndarray | None = None) -> tuple[Model, Param
 
     r_max = float(radii.max()) if n else 0.0
     skin = config.numerics.skin * r_max
+    structure = internal(config) if config.system == "primary" else None
     model = Model(
         n=n, system=config.system, law=config.contact_law, cutoff=2.0 * r_max + skin, skin=skin,
         species=tuple(int(sp.count) for sp in config.grains),
+        dofs=len(structure["s_r"]) if structure else 1,
     )
     prim = config.primary
     shock = config.shock if config.system == "primary" else None
@@ -269,8 +289,15 @@ def build(config: Config, radii: np.ndarray | None = None) -> tuple[Model, Param
         shock_a=f64(shock.peak if shock else 0.0),
         shock_t0=f64(shock.start if shock else 0.0),
         shock_T=f64(shock.duration if shock else 0.0),
+        **{k: f64(v) for k, v in (structure or _no_structure()).items()},
     )
     return model, params
+
+
+def _no_structure() -> dict:
+    """The structure fields of a system without a primary (S2): one inert degree of freedom."""
+    one = np.ones((1, 1))
+    return dict(s_M=one, s_Minv=one, s_K=0 * one, s_C=0 * one, s_r=np.ones(1), s_b=np.zeros(1))
 
 
 def excitation_axis(config: Config) -> np.ndarray:

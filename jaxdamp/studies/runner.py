@@ -64,20 +64,49 @@ def initial_box_position(config: Config, grain_mass: float) -> float:
     the bed's weight (its component along the axis) plus its initial displacement
     ``primary.z0`` and, with random base motion, the empty structure's steady response
     (:func:`jaxdamp.physics.excitation.random_start`) (S1), or the drive's starting point
-    ``A_d`` (S2)."""
+    ``A_d`` (S2). For a multi-DOF structure the box's entry of :func:`initial_structure`."""
+    if config.system == "primary" and config.structure is not None:
+        return float(initial_structure(config, grain_mass)[0][0])
     if config.system == "primary":
         from jaxdamp.physics.model import excitation_axis
 
         K = config.primary.K
         weight = grain_mass * config.gravity * float(excitation_axis(config)[2])
-        return (-weight / K if K > 0 else 0.0) + config.primary.z0 + random_start(config)[0]
+        return (-weight / K if K > 0 else 0.0) + config.primary.z0 + random_start(config)[0][0]
     return config.drive.amplitude
 
 
 def initial_box_velocity(config: Config) -> float:
     """Box velocity at t = 0: the primary's ``v0`` plus the random start's velocity (S1), or
     the drive's (0 at the start of ``A_d cos ωt``, S2)."""
-    return config.primary.v0 + random_start(config)[1] if config.system == "primary" else 0.0
+    if config.system != "primary":
+        return 0.0
+    return config.primary.v0 + random_start(config)[1][config.structure.attach
+                                                       if config.structure else 0]
+
+
+def initial_structure(config: Config, grain_mass: float) -> tuple[np.ndarray, np.ndarray]:
+    """Positions and velocities ``(dofs,)`` of the primary structure at t = 0 in the engines'
+    order (the box first, :func:`jaxdamp.physics.structure.order`): the static equilibrium
+    under the bed's weight on the box's degree of freedom, the box's ``primary.z0``,
+    ``primary.v0``, and the random start; ``([z], [z'])`` of :func:`initial_box_position`,
+    :func:`initial_box_velocity` for the 1-DOF primary and S2."""
+    if config.system != "primary" or config.structure is None:
+        return (np.array([initial_box_position(config, grain_mass)]),
+                np.array([initial_box_velocity(config)]))
+    from jaxdamp.physics.model import excitation_axis
+    from jaxdamp.physics.structure import order, static_offset
+
+    weight = grain_mass * config.gravity * float(excitation_axis(config)[2])
+    x0 = static_offset(config, -weight)
+    xs, vs = random_start(config)
+    a = config.structure.attach
+    x = x0 + xs
+    v = vs.copy()
+    x[a] += config.primary.z0
+    v[a] += config.primary.v0
+    o = order(config)
+    return x[o], v[o]
 
 
 @dataclass
@@ -177,10 +206,10 @@ def run(
                 f"box.Lz = {config.box.Lz} m: the settled bed is {bed.height:.5g} m high and "
                 "does not fit under the lid"
             )
-        z0 = initial_box_position(config, m_grains)
-        r0 = bed.r + np.array([0.0, 0.0, z0])
+        x0, xd0 = initial_structure(config, m_grains)
+        r0 = bed.r + np.array([0.0, 0.0, x0[0]])
         batch = driver.start(model, pb, r0[None], bed.v[None], bed.w[None], bed.q[None],
-                             np.full(1, z0), np.full(1, initial_box_velocity(config)), **engine)
+                             x0[None], xd0[None], **engine)
         if out is not None:
             rf = RunFile.create(out, config, radii, masses, grain_species(config), bed,
                                 extra_attrs={"dt": sched.dt, "duration": sched.duration})

@@ -43,7 +43,7 @@ from jaxdamp.studies.grid import (
     grid_shape,
     replicate_configs,
 )
-from jaxdamp.studies.runner import initial_box_position, initial_box_velocity, schedule
+from jaxdamp.studies.runner import initial_structure, schedule
 
 
 def _mesh_sharding(batch: int):
@@ -174,18 +174,17 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
                 say(f"warning: {len(moving)} of {len(order)} bed(s): "
                     + moving[0][1].unsettled_note(configs[moving[0][0]])
                     + "; the sweep file says so (/settle/settled)")
-        r0, v0, w0, q0, z0 = [], [], [], [], []
+        r0, v0, w0, q0, z0, zd0 = [], [], [], [], [], []
         for c, (m, p), key in zip(configs, built, keys):
             bed = beds[key]
             if m.n and bed.height >= c.box.Lz:
                 raise ConfigError(f"box.Lz = {c.box.Lz} m: the settled bed ({bed.height:.5g} m) "
                                   "does not fit")
-            z = initial_box_position(c, float(np.asarray(p.mass).sum()))
-            r0.append(bed.r + np.array([0.0, 0.0, z]))
-            v0.append(bed.v), w0.append(bed.w), q0.append(bed.q), z0.append(z)
+            x, xd = initial_structure(c, float(np.asarray(p.mass).sum()))
+            r0.append(bed.r + np.array([0.0, 0.0, x[0]]))
+            v0.append(bed.v), w0.append(bed.w), q0.append(bed.q), z0.append(x), zd0.append(xd)
         batch = driver.start(model, pb, np.stack(r0), np.stack(v0), np.stack(w0), np.stack(q0),
-                             np.asarray(z0), np.array([initial_box_velocity(c) for c in configs]),
-                             **drive).replace(params=pb_s)
+                             np.stack(z0), np.stack(zd0), **drive).replace(params=pb_s)
         if out and writer:
             sf = SweepFile.create(out, config, axes, configs, dt, sched.duration, engine, R,
                                   devices=len(jax.devices()))

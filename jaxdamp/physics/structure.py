@@ -1,0 +1,182 @@
+"""Multi-degree-of-freedom primary structures (S1 with ``Config.structure``; issue 16).
+
+A linear structure of ``n`` degrees of freedom ``x`` (displacements along the excitation axis
+``e``) carries the damper's box on one of them, ``x_a`` (``structure.attach``). With the base
+moving by ``u(t)`` (:mod:`jaxdamp.physics.excitation`) through the influence vector ``r``
+(default all ones: the whole structure stands on the moving base) and a harmonic force
+``F0 cos Ωt`` on one degree of freedom ``x_m`` (``structure.force``, ``force_dof``)::
+
+    M x'' + C (x' - r u') + K (x - r u) = e_a F_gz + b cos Ωt,      b = F0 e_m
+
+``F_gz`` is the grains' force on the box (as for the 1-DOF primary, docs/physics.md §1, which is
+the case ``n = 1``, ``M, K, C`` scalars, ``r = 1``, ``F0 = 0``). The structure is given either
+by its matrices ``M, K, C`` (symmetric; ``M`` positive definite, ``K`` and ``C`` positive
+semi-definite) or by modal data: natural frequencies ``f_k`` [Hz], damping ratios ``ζ_k``, mode
+shapes ``Φ`` (rows: degrees of freedom, columns: modes; square and invertible) and modal masses
+``m_k`` (``None``: the shapes are mass-normalised, ``m_k = 1``). Modal data become matrices by
+
+    M = Φ^-T diag(m_k) Φ^-1,   K = Φ^-T diag(m_k ω_k²) Φ^-1,   C = Φ^-T diag(2 ζ_k ω_k m_k) Φ^-1
+
+(classical damping; :func:`matrices`). Inside the engines the degrees of freedom are reordered
+so that the box's comes first: ``x = (z, y)`` with ``z`` the box (``State.z``) and ``y`` the
+others (``State.y``, ``(n - 1,)``), and ``Params`` holds the reordered ``M``, ``M⁻¹``, ``K``,
+``C``, ``r``, ``b`` (:func:`internal`). Energy of the structure ``½ x'ᵀ M x' + ½ (x - r u)ᵀ K
+(x - r u)``; the base's power ``-u' rᵀ [K (x - r u) + C (x' - r u')]`` plus the force's
+``cos Ωt bᵀ x'``; the loss in ``C``: ``(x' - r u')ᵀ C (x' - r u')``.
+
+Each function in its JAX form and, for the native kernel, its numba scalar form.
+
+Example (a 2-DOF chain, the damper on the top mass)::
+
+    import numpy as np
+    from jaxdamp.cases import presets
+    from jaxdamp.config import apply_overrides
+    from jaxdamp.physics.structure import matrices
+    cfg = apply_overrides(presets.get("sanchez2012-optimal"), {
+        "structure.M": [[2.0, 0.0], [0.0, 2.37]],
+        "structure.K": [[43000.0, -21500.0], [-21500.0, 21500.0]],
+        "structure.C": [[15.2, -7.6], [-7.6, 7.6]], "structure.attach": 1})
+    M, K, C, r, b = matrices(cfg)
+    assert np.allclose(r, 1.0) and M.shape == (2, 2)
+"""
+
+from __future__ import annotations
+
+import math
+
+import jax.numpy as jnp
+import numpy as np
+
+from jaxdamp.physics.contact import scalar_form
+
+
+def matrices(config) -> tuple[np.ndarray, ...]:
+    """``(M, K, C, r, b)`` of ``config.structure`` in the user's order of degrees of freedom
+    (module docstring); the 1-DOF primary's ``([[M]], [[K]], [[C]], [1], [0])`` without one."""
+    s = getattr(config, "structure", None)
+    if s is None:
+        p = config.primary
+        return (np.array([[p.M]]), np.array([[p.K]]), np.array([[p.C]]), np.ones(1),
+                np.zeros(1))
+    if s.M is not None:
+        M, K = np.asarray(s.M, float), np.asarray(s.K, float)
+        C = np.asarray(s.C, float) if s.C is not None else np.zeros_like(M)
+    else:
+        phi = np.asarray(s.shapes, float)
+        w = 2.0 * math.pi * np.asarray(s.frequencies, float)
+        z = np.asarray(s.damping, float) if s.damping is not None else np.zeros(len(w))
+        m = (np.asarray(s.modal_masses, float) if s.modal_masses is not None
+             else np.ones(len(w)))
+        inv = np.linalg.inv(phi)
+        M = inv.T @ np.diag(m) @ inv
+        K = inv.T @ np.diag(m * w**2) @ inv
+        C = inv.T @ np.diag(2.0 * z * w * m) @ inv
+        M, K, C = (0.5 * (A + A.T) for A in (M, K, C))
+    n = len(M)
+    r = np.asarray(s.influence, float) if s.influence is not None else np.ones(n)
+    b = np.zeros(n)
+    b[s.force_dof] = s.force
+    return M, K, C, r, b
+
+
+def order(config) -> np.ndarray:
+    """The engines' order of the degrees of freedom: the box's (``structure.attach``) first,
+    then the others in the user's order."""
+    s = getattr(config, "structure", None)
+    if s is None:
+        return np.zeros(1, np.int64)
+    n = len(matrices(config)[0])
+    return np.array([s.attach] + [i for i in range(n) if i != s.attach], np.int64)
+
+
+def internal(config) -> dict:
+    """``Params`` fields of the structure in the engines' order (:func:`order`):
+    ``s_M``, ``s_Minv``, ``s_K``, ``s_C`` ``(n, n)``, ``s_r``, ``s_b`` ``(n,)``."""
+    M, K, C, r, b = matrices(config)
+    o = order(config)
+    sel = np.ix_(o, o)
+    return dict(s_M=M[sel], s_Minv=np.linalg.inv(M[sel]), s_K=K[sel], s_C=C[sel], s_r=r[o],
+                s_b=b[o])
+
+
+def static_offset(config, box_force: float) -> np.ndarray:
+    """Static displacements ``K⁻¹ e_a F`` [m] (user order) under a constant force ``F`` [N] on
+    the box's degree of freedom (e.g. the bed's weight along the axis); zeros where ``K`` is
+    singular (a free structure has no static equilibrium)."""
+    M, K, C, r, b = matrices(config)
+    f = np.zeros(len(K))
+    f[config.structure.attach if getattr(config, "structure", None) else 0] = box_force
+    try:
+        return np.linalg.solve(K, f)
+    except np.linalg.LinAlgError:
+        return np.zeros(len(K))
+
+
+# -- JAX forms (one system; x = (z, y), the box first) -------------------------------------
+
+
+def acceleration(x, xd, u, ud, box_z, cos_t, p):
+    """``x'' = M⁻¹ [-C (x' - r u') - K (x - r u) + e_0 F_gz + b cos Ωt]`` [m/s²], ``(n,)``."""
+    rhs = -p.s_C @ (xd - p.s_r * ud) - p.s_K @ (x - p.s_r * u) + p.s_b * cos_t
+    rhs = rhs.at[0].add(box_z)
+    return p.s_Minv @ rhs
+
+
+def energy(x, xd, u, p):
+    """``½ x'ᵀ M x' + ½ (x - r u)ᵀ K (x - r u)`` [J]."""
+    d = x - p.s_r * u
+    return 0.5 * xd @ (p.s_M @ xd) + 0.5 * d @ (p.s_K @ d)
+
+
+def powers(x, xd, u, ud, cos_t, p):
+    """Power into the structure from the base and the force, and the loss in ``C`` [W]."""
+    d, dd = x - p.s_r * u, xd - p.s_r * ud
+    p_in = -ud * (p.s_r @ (p.s_K @ d + p.s_C @ dd)) + cos_t * (p.s_b @ xd)
+    return p_in, dd @ (p.s_C @ dd)
+
+
+# -- numba scalar forms (the native kernel); x, xd: (n,) arrays, out: (n,) ----------------
+
+
+@scalar_form
+def acceleration_scalar(out, x, xd, u, ud, box_z, cos_t, Minv, K, C, r, b, tmp):
+    """Scalar form of :func:`acceleration`, written into ``out`` (``tmp``: scratch ``(n,)``)."""
+    n = x.shape[0]
+    for i in range(n):
+        s = b[i] * cos_t
+        for j in range(n):
+            s -= C[i, j] * (xd[j] - r[j] * ud) + K[i, j] * (x[j] - r[j] * u)
+        tmp[i] = s
+    tmp[0] += box_z
+    for i in range(n):
+        s = 0.0
+        for j in range(n):
+            s += Minv[i, j] * tmp[j]
+        out[i] = s
+
+
+@scalar_form
+def energy_scalar(x, xd, u, M, K, r):
+    """Scalar form of :func:`energy`."""
+    n = x.shape[0]
+    e = 0.0
+    for i in range(n):
+        for j in range(n):
+            e += 0.5 * xd[i] * M[i, j] * xd[j] + 0.5 * (x[i] - r[i] * u) * K[i, j] * (
+                x[j] - r[j] * u)
+    return e
+
+
+@scalar_form
+def powers_scalar(x, xd, u, ud, cos_t, K, C, r, b):
+    """Scalar form of :func:`powers`: ``(p_in, p_loss)``."""
+    n = x.shape[0]
+    p_in = 0.0
+    p_c = 0.0
+    for i in range(n):
+        f = 0.0
+        for j in range(n):
+            f += K[i, j] * (x[j] - r[j] * u) + C[i, j] * (xd[j] - r[j] * ud)
+            p_c += (xd[i] - r[i] * ud) * C[i, j] * (xd[j] - r[j] * ud)
+        p_in += -ud * r[i] * f + cos_t * b[i] * xd[i]
+    return p_in, p_c
