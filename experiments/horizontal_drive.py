@@ -80,11 +80,6 @@ def compute(quick: bool, log, ctx):
     return result, lambda o, prov: write(result, o, prov)
 
 
-def _pm(x):
-    x = np.asarray(x, float)
-    return x.mean(), (x.std(ddof=1) / np.sqrt(len(x)) if len(x) > 1 else np.nan)
-
-
 def write(r, out, prov):
     s = r["settings"]
     f = r["f"]
@@ -150,8 +145,8 @@ def write(r, out, prov):
             ("peak Z [mm]", "Z_peak", lambda d: d["Z_peak"], 1e3),
             ("peak frequency [Hz]", "f_peak", lambda d: d["f_peak"], 1.0))
     for label, key, get, k in rows:
-        mv, ev = _pm(get(runs["vertical"]))
-        mh, eh = _pm(get(runs["horizontal"]))
+        mv, ev = scaffold.mean_se(get(runs["vertical"]))
+        mh, eh = scaffold.mean_se(get(runs["horizontal"]))
         d, hw = r["cmp"][key]
         verdict = ("no interval" if not np.isfinite(hw) else "same" if abs(d) <= hw
                    else "horizontal higher" if d > 0 else "horizontal lower")
@@ -163,7 +158,7 @@ def write(r, out, prov):
     for j, x in enumerate(f):
         cells = []
         for name in ("vertical", "horizontal"):
-            m, e = _pm(runs[name]["Z"][j])
+            m, e = scaffold.mean_se(runs[name]["Z"][j])
             cells.append(f"{1e3 * m:.4g} ± {1e3 * e:.2g}")
         L.append(f"| {x:g} | " + " | ".join(cells) + " |")
     L += ["", "Figure: `figure.png`. Data: `data.h5`."]

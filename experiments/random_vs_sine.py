@@ -64,7 +64,8 @@ def compute(quick: bool, log, ctx):
     log(f"random: {lo}–{hi} Hz, S = {s['S']} (m/s²)²/Hz × {s['scales']}, "
         f"{s['random_s']} s, R = {s['R']}")
     ran = rnd.measure(rcfg, s["scales"], duration=s["random_s"], replicates=s["R"],
-                      out=ctx.raw(f"random_R{s['R']}.h5"), progress=ctx.progress, echo=None)
+                      out=ctx.raw(f"random_R{s['R']}.h5"), resume=True, progress=ctx.progress,
+                      echo=None)
     log(f"stepped sine: U = {s['U']} m × f = {s['f']} Hz, {s['sine_s']} s, R = {s['R']}")
     sine_cfg = apply_overrides(cfg, {"numerics.duration": s["sine_s"]})
     res = reuse_or_run(sine_cfg, {"primary.U": s["U"], "frequency": s["f"]},
@@ -116,13 +117,6 @@ def verdict(d, h) -> str:
     return "agree" if abs(d) <= h else ("random above" if d > 0 else "random below")
 
 
-def _pm(x, axis=-1):
-    x = np.asarray(x, float)
-    n = x.shape[axis]
-    return x.mean(axis=axis), (x.std(axis=axis, ddof=1) / np.sqrt(n) if n > 1
-                               else np.full(x.mean(axis=axis).shape, np.nan))
-
-
 def write(r, out, prov):
     s = r["settings"]
     with h5py.File(os.path.join(out, "data.h5"), "w") as h:
@@ -147,7 +141,7 @@ def write(r, out, prov):
                         alpha=0.2, lw=0)
         axc.plot(lev["f"], lev["coherence"], lw=1.0, color=line.get_color())
     for u, U in enumerate(r["U"]):
-        m, e = _pm(r["ratio"][u])
+        m, e = scaffold.mean_se(r["ratio"][u])
         ax.errorbar(r["f"], m, yerr=2 * np.nan_to_num(e), fmt="s", ms=4, capsize=2,
                     label=f"stepped sine, U = {1e3 * U:g} mm (resonant Z "
                           f"{1e3 * r['Z_res'][u]:.3g} mm)")
@@ -187,8 +181,8 @@ def write(r, out, prov):
              f"\\|H1\\| {x:g} Hz (γ²)" for x in f) + " |",
          "|---|---|---|" + "---|" * len(f)]
     for i, sc in enumerate(s["scales"]):
-        zm, ze = _pm(np.sqrt(2) * r["z_rms"][i])
-        m, e = _pm(r["mag"][i])
+        zm, ze = scaffold.mean_se(np.sqrt(2) * r["z_rms"][i])
+        m, e = scaffold.mean_se(r["mag"][i])
         cells = [f"{m[j]:.3g} ± {e[j]:.2g} ({r['coh'][i, j]:.3f})" for j in range(len(f))]
         L.append(f"| {sc:g} | {r['a_rms'][i]:.3g} | {1e3 * zm:.3g} ± {1e3 * ze:.2g} | "
                  + " | ".join(cells) + " |")
@@ -196,7 +190,7 @@ def write(r, out, prov):
           "| U [mm] | resonant Z [mm] | " + " | ".join(f"Z/U {x:g} Hz" for x in f) + " |",
           "|---|---|" + "---|" * len(f)]
     for u, U in enumerate(s["U"]):
-        m, e = _pm(r["ratio"][u])
+        m, e = scaffold.mean_se(r["ratio"][u])
         L.append(f"| {1e3 * U:g} | {1e3 * r['Z_res'][u]:.3g} | "
                  + " | ".join(f"{m[j]:.3g} ± {e[j]:.2g}" for j in range(len(f))) + " |")
     L += ["", "## Matched pairs", ""]

@@ -62,6 +62,17 @@ def save_figure(fig, out: str, name: str = "figure.png", dpi: int = 120) -> str:
     return path
 
 
+def mean_se(x, axis=-1):
+    """Mean and standard error ``s/√n`` over independent realisations along ``axis`` (NaN for
+    one realisation): the ``±`` of a summary."""
+    import numpy as np
+
+    x = np.asarray(x, float)
+    n = x.shape[axis]
+    m = x.mean(axis=axis)
+    return m, (x.std(axis=axis, ddof=1) / np.sqrt(n) if n > 1 else np.full(np.shape(m), np.nan))
+
+
 def write_summary(out: str, lines: list[str]) -> str:
     """``out/summary.md`` from its lines; returns the path."""
     path = os.path.join(out, "summary.md")

@@ -109,8 +109,8 @@ def compute(quick: bool, log, ctx):
         cfg = apply_overrides(base, {**over, "structure.attach": dof})
         log(f"damper on DOF {dof}: {s['duration']} s, R = {s['R']}")
         res = rnd.measure(cfg, [1.0], duration=s["duration"], replicates=s["R"],
-                          out=ctx.raw(f"dof{dof}_R{s['R']}.h5"), progress=ctx.progress,
-                          echo=None)
+                          out=ctx.raw(f"dof{dof}_R{s['R']}.h5"), resume=True,
+                          progress=ctx.progress, echo=None)
         lev = res.levels[0]
         guess = [1.0, 2 * math.pi * f_e[0], 0.03, 0.3, 2 * math.pi * f_e[1], 0.03]
         fits = np.array([fit_modes(lev["f"], h, lev["coherence"], guess)
@@ -124,11 +124,6 @@ def compute(quick: bool, log, ctx):
     result = dict(settings=s, f_empty=f_e, z_empty=z_e, runs=out, cmp=cmp,
                   n_grains=int(apply_overrides(base, over).n_grains))
     return result, lambda o, prov: write(result, o, prov)
-
-
-def _pm(x):
-    x = np.asarray(x, float)
-    return x.mean(), (x.std(ddof=1) / np.sqrt(len(x)) if len(x) > 1 else np.nan)
 
 
 def write(r, out, prov):
@@ -203,12 +198,12 @@ def write(r, out, prov):
          "|---|---|---|---|---|---|"]
     for mode, (cf, cz) in ((1, (0, 1)), (2, (2, 3))):
         fe, ze = r["f_empty"][mode - 1], r["z_empty"][mode - 1]
-        m1, e1 = _pm(runs[1]["fits"][:, cf])
-        m0, e0 = _pm(runs[0]["fits"][:, cf])
+        m1, e1 = scaffold.mean_se(runs[1]["fits"][:, cf])
+        m0, e0 = scaffold.mean_se(runs[0]["fits"][:, cf])
         L.append(f"| f_{mode} [Hz] | {fe:.3f} | {m1:.3f} ± {e1:.2g} | {m0:.3f} ± {e0:.2g} | "
                  f"{m1 - m0:+.3f} | – |")
-        m1, e1 = _pm(runs[1]["fits"][:, cz])
-        m0, e0 = _pm(runs[0]["fits"][:, cz])
+        m1, e1 = scaffold.mean_se(runs[1]["fits"][:, cz])
+        m0, e0 = scaffold.mean_se(runs[0]["fits"][:, cz])
         d, h = r["cmp"][mode]
         verdict = ("no interval" if not np.isfinite(h) else "same" if abs(d) <= h else
                    "more on DOF 1" if d > 0 else "more on DOF 0")

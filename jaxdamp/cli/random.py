@@ -45,24 +45,20 @@ def cmd_random(args) -> int:
         options.append(f"random.psd={psd_table(args.psd)!r}")
     if args.resolution is not None:
         options.append(f"random.resolution={args.resolution!r}")
-    cfg = command_config(args, ["numerics.settle_time=0.3"], options)
-    if cfg.system != "primary":
-        raise ConfigError(f"system = {cfg.system!r}: jaxdamp random shakes the primary's base "
-                          "(S1, system 'primary')")
-    if cfg.random is None:
-        raise ConfigError("no base spectrum: give --psd f1:S1,f2:S2,... (base acceleration "
-                          "density [(m/s²)²/Hz]) or a [random] table in --config")
+    from jaxdamp.studies import random as rnd
+
+    given = command_config(args, ["numerics.settle_time=0.3"], options)
+    cfg = rnd.random_config(given)  # S1 with a spectrum, validated; the harmonic base off
     scales = float_list(args.scale, "--scale") if args.scale else [cfg.random.scale]
     R = replicates(args)
     png = args.png or (args.out.rsplit(".", 1)[0] + ".png" if args.out else None)
     check_outputs([args.out, png], args.overwrite, keep=resume_or_overwrite(args),
                   resumable=[args.out])
-    if cfg.primary.U != 0:
+    if given.primary.U != 0:
         print(f"random test: the harmonic base motion is switched off (primary.U = "
-              f"{cfg.primary.U:g} -> 0)")
+              f"{given.primary.U:g} -> 0)")
 
     from jaxdamp.figures import random_figure, save
-    from jaxdamp.studies import random as rnd
 
     res = rnd.measure(cfg, scales, duration=args.duration, replicates=R, out=args.out,
                       resume=args.resume, progress=not args.no_progress)

@@ -56,8 +56,9 @@ def random_config(config: Config) -> Config:
         raise ConfigError(f"system = {config.system!r}: random base excitation needs the "
                           "primary (S1, system 'primary')")
     if config.random is None:
-        raise ConfigError("random: no [random] table; give the base acceleration spectrum, e.g. "
-                          "--set 'random.psd=[[5, 0.5], [30, 0.5]]'")
+        raise ConfigError("random: no base spectrum; give the base acceleration density "
+                          "breakpoints [(m/s²)²/Hz]: --psd 5:0.5,30:0.5 on the command line, or "
+                          "random.psd = [[5, 0.5], [30, 0.5]] in the configuration")
     from jaxdamp.validation import validate
 
     return validate(apply_overrides(config, {"primary.U": 0.0}))
