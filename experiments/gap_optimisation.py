@@ -12,9 +12,16 @@ drive period at the primary's f0 = 15.157 Hz):
    start states, h = 1e-5 m) of the same averaged window objective.
 2. **DEM, AD vs FD at three Lz** (0.07, 0.1225, 0.25 m) with the chosen window.
 3. **DEM, forward vs reverse mode**: time and compiled temporary memory of one ensemble.
-4. **DEM, brute-force scan** of the steady-state dissipation per cycle over Lz (native engine,
-   one batched sweep) — the reference optimum — and the **optimiser** (optax Adam on the
-   window estimator) from Lz0 = 0.07 and 0.25 m; simulated seconds of each approach.
+4. **DEM, brute-force scan** of the steady-state dissipation per cycle and of the amplitude Z
+   over Lz (native engine, one batched sweep) on ``R`` independently poured beds per height
+   (``sweep(..., replicates=R)``: the package's replicate seeds, one bed per seed used at every
+   height; steady values per bed from :func:`jaxdamp.studies.grid.steady_or_window`): per height
+   the beds' mean ± standard error, and the optimum per bed (parabola through the best sample
+   and its neighbours) → mean ± SE and a 95 % t-interval over beds, with the package's
+   jackknife response surface (:func:`jaxdamp.design.surface.quadratic_optimum`, on the three
+   heights around the beds' mean minimum) as a cross-check. Then the **optimiser** (optax Adam
+   on the window estimator) from Lz0 = 0.07 and 0.25 m — single runs, no error bar; simulated
+   seconds of each approach.
 6. The estimator that works for the DEM — replicated steady states with central differences
    (:class:`jaxdamp.design.SteadyProblem`) — and the searches that beat a scan are in
    ``experiments/design_optimisation.py``.
@@ -40,8 +47,12 @@ import numpy as np
 import jaxdamp
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
+from jaxdamp.analysis.response import parabolic_extremum
+from jaxdamp.analysis.stats import t_quantile
 from jaxdamp.design import DEMProblem, Objective, S3Problem, optimize, scan_optimum
+from jaxdamp.design.surface import quadratic_optimum
 from jaxdamp.physics.model import primary_frequency
+from jaxdamp.studies.grid import steady_or_window
 from jaxdamp.studies.sweep import sweep
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -55,7 +66,7 @@ def settings(quick: bool) -> dict:
     if quick:
         return dict(
             grains=60, settle=0.2, burn_in=0.15, warm=0.05, K=3, windows=(0.0005,), window=0.0005,
-            fd_lz=(0.07, 0.1225, 0.25), scan_lz=(0.07, 0.1225, 0.25), scan_duration=0.2,
+            fd_lz=(0.07, 0.1225, 0.25), scan_lz=(0.07, 0.1225, 0.25), scan_duration=0.2, R=2,
             opt_iter=2, lr=0.02, decay=0.85,
             s3_duration=1.5, s3_scan=np.linspace(0.02, 0.15, 27), s3_iter=4,
             s3_objectives=("dissipation",), s3_fd_gaps=(0.05, 0.0835, 0.12))
@@ -63,7 +74,7 @@ def settings(quick: bool) -> dict:
         grains=250, settle=0.3, burn_in=0.8, warm=0.3, K=8,
         windows=(0.0005, 0.001, 0.002, 0.004, 0.008, 0.016, 0.032),
         window=0.002, fd_lz=(0.07, 0.1225, 0.25),
-        scan_lz=(0.06, 0.07, 0.085, 0.1, 0.1225, 0.15, 0.2, 0.25), scan_duration=1.5,
+        scan_lz=(0.06, 0.07, 0.085, 0.1, 0.1225, 0.15, 0.2, 0.25), scan_duration=1.5, R=5,
         opt_iter=6, lr=0.02, decay=0.85,
         s3_duration=3.0, s3_scan=np.linspace(0.02, 0.2, 145), s3_iter=25,
         s3_objectives=("dissipation", "band"), s3_fd_gaps=(0.05, 0.0835, 0.12))
@@ -144,21 +155,19 @@ def dem_part(s, raw, progress, log):
     out["mode_steps"] = float(ens.states.t.shape[0] * prob.n_rec * prob.record_every)
     log("modes: " + ", ".join(f"{k} {v['wall']:.2f} s" for k, v in modes.items()))
 
-    # 4a. brute-force scan (one batched sweep, native engine)
+    # 4a. brute-force scan (one batched sweep, native engine, R independently poured beds)
     cfg_scan = apply_overrides(base, {"frequency": f0, "numerics.duration": s["scan_duration"],
                                       "numerics.analysis_window": 0.5,
                                       "numerics.record_dt": 1e-3, "numerics.chunk": 0.1})
     t0 = time.perf_counter()
-    res = sweep(cfg_scan, {"box.Lz": list(s["scan_lz"])}, progress=progress, echo=None)
-    out["scan"] = dict(lz=np.asarray(s["scan_lz"]),
-                       dissipation=np.asarray(res.summary["granular_loss_per_cycle"]),
-                       amplitude=np.asarray(res.summary["amplitude"]),
-                       balance=np.asarray(res.summary["balance_error"]),
-                       wall=time.perf_counter() - t0,
-                       sim_seconds=len(s["scan_lz"]) * s["scan_duration"] + prob.bed.time,
-                       config=cfg_scan.to_json())
-    out["scan"]["optimum"] = scan_optimum(s["scan_lz"], out["scan"]["dissipation"], True)
-    log(f"scan optimum Lz = {out['scan']['optimum']:.4g} m")
+    R = s["R"]
+    res = sweep(cfg_scan, {"box.Lz": list(s["scan_lz"])}, progress=progress, echo=None,
+                replicates=R)
+    out["scan"] = scan_stats(s["scan_lz"], res)
+    out["scan"].update(wall=time.perf_counter() - t0, config=cfg_scan.to_json(),
+                       sim_seconds=R * (len(s["scan_lz"]) * s["scan_duration"] + prob.bed.time))
+    o = out["scan"]["opt_dissipation"]
+    log(f"scan optimum (dissipation) Lz = {o['mean']:.4g} ± {o['se']:.2g} m over {R} beds")
 
     # 4b. optimiser from both starts
     out["opt"] = {}
@@ -168,7 +177,9 @@ def dem_part(s, raw, progress, log):
         out["opt"][lz0] = r
         log(f"DEM optimiser from {lz0}: Lz = {r.lz:.4g} ({r.reason}), {r.sim_seconds:.3g} sim s")
     # 4c. the same with the amplitude objective (the designer's target at f0)
-    out["scan"]["optimum_amplitude"] = scan_optimum(s["scan_lz"], out["scan"]["amplitude"], False)
+    o = out["scan"]["opt_amplitude"]
+    log(f"scan optimum (Z) Lz = {o['mean']:.4g} ± {o['se']:.2g} m (95 %: ± {o['ci95']:.2g}) "
+        f"over {R} beds")
     prob.objective = Objective("amplitude")
     prob._fns.clear()
     out["opt_amp"] = {}
@@ -179,6 +190,71 @@ def dem_part(s, raw, progress, log):
         log(f"DEM amplitude optimiser from {lz0}: Lz = {r.lz:.4g} ({r.reason})")
     out["sim_windows"] = sim_windows
     return out
+
+
+def _mean_se(x) -> tuple[float, float, float]:
+    """Mean, standard error and 95 % t half-width of independent values (NaN dropped)."""
+    x = np.asarray(x, float)
+    x = x[np.isfinite(x)]
+    if len(x) < 2:
+        return (float(x.mean()) if len(x) else np.nan), np.nan, np.nan
+    se = float(x.std(ddof=1) / np.sqrt(len(x)))
+    return float(x.mean()), se, t_quantile(0.975, len(x) - 1) * se
+
+
+def _optimum_over_beds(lz, J, kind):
+    """The optimum of ``J`` ``(L, R)`` per bed (parabola through the bed's best sample and its
+    neighbours in Lz, :func:`parabolic_extremum`; the sample itself at either end of the
+    range), its mean ± SE and 95 % t half-width over beds, how many beds' best sample is at an
+    end of the range, and the package's jackknife quadratic (``quadratic_optimum``) on the three
+    heights around the best of the beds' mean curve."""
+    lz = np.asarray(lz, float)
+    v = [parabolic_extremum(lz, J[:, r], kind) for r in range(J.shape[1])]
+    vert = np.array([x[0] for x in v])
+    m, se, half = _mean_se(vert)
+    at_edge = int(sum(x[2] in (0, len(lz) - 1) for x in v))
+    mean_curve = scan_optimum(lz, J.mean(axis=1), kind == "max")
+    # the same per-bed parabolas in log Lz: how far the interpolation model alone moves the
+    # optimum (a systematic error that the beds' interval does not contain)
+    log_model = float(np.mean(np.exp([parabolic_extremum(np.log(lz), J[:, r], kind)[0]
+                                      for r in range(J.shape[1])])))
+    k = int(np.argmax(J.mean(axis=1)) if kind == "max" else np.argmin(J.mean(axis=1)))
+    k = min(max(k, 1), len(lz) - 2)
+    q = quadratic_optimum(lz[k - 1:k + 2], J[k - 1:k + 2], maximise=kind == "max")
+    return dict(vertices=vert, mean=m, se=se, ci95=half, at_edge=at_edge,
+                mean_curve=mean_curve, log_model=log_model,
+                surface=dict(x=q.x, se=q.se, lo=q.lo, hi=q.hi, interior=q.interior,
+                             lz=lz[k - 1:k + 2]),
+                # an interval of an optimum only when every bed's optimum is bracketed
+                contains_thesis=(bool(abs(THESIS_LZ - m) <= half)
+                                 if np.isfinite(half) and at_edge == 0 else None))
+
+
+def scan_stats(lz, res) -> dict:
+    """Per height and bed (``(L, R)``) the steady dissipation per cycle and Z
+    (``steady_or_window``), the energy-balance error, whether the steady state was detected;
+    the beds' mean ± SE per height; the optima over beds (``_optimum_over_beds``)."""
+    W, fb_w = steady_or_window(res, "granular_loss_per_cycle")
+    Z, fb_z = steady_or_window(res, "amplitude")
+    W, Z = np.asarray(W, float), np.asarray(Z, float)
+    R = Z.shape[1]
+    def se(x):
+        return x.std(axis=1, ddof=1) / np.sqrt(R) if R > 1 else np.full(len(x), np.nan)
+
+    sc = dict(lz=np.asarray(lz, float), beds=R, dissipation_beds=W, amplitude_beds=Z,
+              dissipation=W.mean(axis=1), amplitude=Z.mean(axis=1),
+              dissipation_se=se(W), amplitude_se=se(Z),
+              balance=np.asarray(res.replicate_summary["balance_error"], float),
+              stationary_amplitude=np.asarray(res.steady["amplitude"]["stationary"], bool),
+              stationary_dissipation=np.asarray(
+                  res.steady["granular_loss_per_cycle"]["stationary"], bool),
+              fallback=dict(amplitude=fb_z, dissipation=fb_w))
+    sc["opt_dissipation"] = _optimum_over_beds(lz, W, "max")
+    sc["opt_amplitude"] = _optimum_over_beds(lz, Z, "min")
+    # scalars used by the optimiser comparisons: the mean over beds of the per-bed optima
+    sc["optimum"] = sc["opt_dissipation"]["mean"]
+    sc["optimum_amplitude"] = sc["opt_amplitude"]["mean"]
+    return sc
 
 
 def s3_part(s, raw, progress, log):
@@ -316,11 +392,29 @@ def _write_data(out, s, s3, dem, wall, command):
                 w.create_dataset(f"fd_h{hh:g}", data=x)
         g.attrs["modes"] = json.dumps(dem["modes"])
         sc = g.create_group("scan")
-        sc.attrs["config"] = dem["scan"]["config"]
-        sc.attrs["optimum"] = dem["scan"]["optimum"]
-        sc.attrs["sim_seconds"] = dem["scan"]["sim_seconds"]
-        for k in ("lz", "dissipation", "amplitude", "balance"):
-            sc.create_dataset(k, data=dem["scan"][k])
+        d = dem["scan"]
+        sc.attrs["config"] = d["config"]
+        sc.attrs["beds"] = d["beds"]
+        sc.attrs["optimum"] = d["optimum"]
+        sc.attrs["sim_seconds"] = d["sim_seconds"]
+        sc.attrs["wall_time"] = d["wall"]
+        sc.attrs["fallback_to_window"] = json.dumps(d["fallback"])
+        sc.attrs["note"] = ("*_beds, balance, stationary_*: (Lz, bed); dissipation, amplitude: "
+                            "mean over beds, *_se its standard error; steady values where "
+                            "detected, else the fixed window (last half)")
+        for k in ("lz", "dissipation", "amplitude", "dissipation_se", "amplitude_se",
+                  "dissipation_beds", "amplitude_beds", "balance", "stationary_amplitude",
+                  "stationary_dissipation"):
+            sc.create_dataset(k, data=d[k])
+        for name in ("opt_dissipation", "opt_amplitude"):
+            o = d[name]
+            og = sc.create_group(name)
+            og.create_dataset("vertices", data=o["vertices"])
+            for k in ("mean", "se", "ci95", "at_edge", "mean_curve", "log_model"):
+                og.attrs[k] = o[k]
+            og.attrs["contains_thesis"] = str(o["contains_thesis"])
+            og.attrs["surface"] = json.dumps({k: (np.asarray(v).tolist() if np.ndim(v) else v)
+                                              for k, v in o["surface"].items()})
         for lz0, o in dem["opt"].items():
             _hist_group(g.create_group(f"opt_lz0_{lz0:g}"), o)
         for lz0, o in dem["opt_amp"].items():
@@ -337,7 +431,12 @@ def _figure(out, s3, dem):
     fig, ax = plt.subplots(2, 3, figsize=(16, 8))
     a = ax[0, 2]
     sc = dem["scan"]
-    a.plot(sc["lz"], sc["amplitude"] * 1e3, "ko-", label="scan (steady state, half p-p)")
+    a.errorbar(sc["lz"], sc["amplitude"] * 1e3, yerr=sc["amplitude_se"] * 1e3, fmt="ko-",
+               capsize=3, label=f"scan (steady state, half p-p), mean ± SE of {sc['beds']} beds")
+    o = sc["opt_amplitude"]
+    if np.isfinite(o["ci95"]):
+        a.axvspan(o["mean"] - o["ci95"], o["mean"] + o["ci95"], color="k", alpha=0.12,
+                  label="95 % interval of the optimum")
     for lz0, o in dem["opt_amp"].items():
         a.plot(o.history["lz"], o.history["objective"] * 1e3, ".-",
                label=f"optimiser from {lz0} m (window estimate)")
@@ -364,7 +463,8 @@ def _figure(out, s3, dem):
     a.legend(fontsize=7)
     a = ax[0, 1]
     sc = dem["scan"]
-    a.plot(sc["lz"], sc["dissipation"], "ko-", label="scan (steady state)")
+    a.errorbar(sc["lz"], sc["dissipation"], yerr=sc["dissipation_se"], fmt="ko-", capsize=3,
+               label=f"scan (steady state), mean ± SE of {sc['beds']} beds")
     for lz0, o in dem["opt"].items():
         a.plot(o.history["lz"], o.history["objective"], ".-", label=f"optimiser from {lz0} m "
                "(window estimate)")
@@ -441,13 +541,38 @@ def _findings(s, s3, dem, quick):
         L.append(f"- DEM amplitude optimiser from {lz0} m ended at Lz = {o.lz:.4g} m "
                  f"({(o.lz - sc['optimum_amplitude']) / sc['optimum_amplitude'] * 100:+.0f} % "
                  f"from the scan's Z optimum {sc['optimum_amplitude']:.4g} m): {o.reason}.")
+    R = sc["beds"]
+    oz = sc["opt_amplitude"]
+    if oz["at_edge"]:
+        L.append(f"- **Scan minimum of Z at f0** over {R} independently poured beds: "
+                 f"{oz['at_edge']} of {R} beds' smallest Z at an end of the scanned range "
+                 f"(per bed " + ", ".join(f"{x:.4g}" for x in oz["vertices"]) + " m): the "
+                 "scan does not bracket the optimum, no interval. The optimiser runs are single "
+                 "runs (no error bar).")
+    elif np.isfinite(oz["ci95"]):
+        L.append(f"- **Scan minimum of Z at f0** over {R} independently poured beds: "
+                 f"{oz['mean']:.4g} ± {oz['se']:.2g} m, 95 % interval "
+                 f"[{oz['mean'] - oz['ci95']:.4g}, {oz['mean'] + oz['ci95']:.4g}] m: the thesis' "
+                 f"0.1225 m is {'inside' if oz['contains_thesis'] else 'outside'} it "
+                 + (f"({(THESIS_LZ - oz['mean']) / oz['se']:+.1f} SE from the mean)" if oz["se"] > 0
+                    else "(the beds' optima coincide: SE = 0)")
+                 + f"; {oz['at_edge']} of {R} beds' smallest Z at an end of the range. The "
+                 f"interval is the beds' scatter only: a parabola in log Lz through the same "
+                 f"samples puts the optimum at {oz['log_model']:.4g} m "
+                 f"({(oz['log_model'] - oz['mean']) * 1e3:+.1f} mm), and the three samples "
+                 f"around it are Lz = " + ", ".join(f"{x:g}" for x in oz["surface"]["lz"])
+                 + " m. The optimiser runs are single runs (no error bar).")
     k = int(np.argmax(sc["dissipation"]))
     if k == len(sc["lz"]) - 1:
+        W = sc["dissipation_beds"]
+        grows = int(np.sum(np.all(np.diff(W, axis=0) > 0, axis=0)))
         L.append(f"- The dissipation per cycle at f0 grows up to the tallest box scanned "
-                 f"({sc['lz'][-1]} m), where Z is {sc['amplitude'][-1] / sc['amplitude'].min():.1f}× "
-                 "its smallest value: more dissipation per cycle there means more energy pumped in "
-                 "at a larger amplitude, so it is a poor design target; Z at f0 (or the band "
-                 "objective) is the one a designer minimises.")
+                 f"({sc['lz'][-1]} m; in {grows} of {R} beds monotonically over all heights, "
+                 f"{sc['opt_dissipation']['at_edge']} of {R} beds' largest value at an end), "
+                 f"where Z is {sc['amplitude'][-1] / sc['amplitude'].min():.1f}× "
+                 "its smallest value (means over beds): more dissipation per cycle there means "
+                 "more energy pumped in at a larger amplitude, so it is a poor design target; Z "
+                 "at f0 (or the band objective) is the one a designer minimises.")
     for kind, r in s3.items():
         for lz0, o in r["opt"].items():
             L.append(f"- S3 {kind} from Lz0 = {lz0} m: gap {o.x:.4g} m vs scan {r['optimum']:.4g} m "
@@ -468,11 +593,11 @@ def _findings(s, s3, dem, quick):
              f"{m['reverse']['temp_bytes'] / 1e6:.1f} MB (its memory grows with the window, "
              "forward mode's does not). One parameter: forward mode wins on both.")
     if not quick:
-        per_sim = sc["wall"] / (len(sc["lz"]) * s["scan_duration"])
+        per_sim = sc["wall"] / (len(sc["lz"]) * R * s["scan_duration"])
         its = [o for o in dem["opt"].values() if len(o.history["x"])]
         per_it = np.mean([o.wall / len(o.history["x"]) for o in its]) if its else float("nan")
         L.append(f"- Cut for the 25-minute budget: scan runs of {s['scan_duration']} s (thesis "
-                 f"13.12 s) at {len(sc['lz'])} heights, K = {s['K']} windows, at most "
+                 f"13.12 s) at {len(sc['lz'])} heights × {R} beds, K = {s['K']} windows, at most "
                  f"{s['opt_iter']} optimiser iterates per start. Projected full size at the "
                  f"measured rates: a 12-height scan of 13.12 s runs ≈ "
                  f"{per_sim * 12 * 13.12 / 60:.0f} min; 20 iterates with K = 32 ≈ "
@@ -551,26 +676,62 @@ def _summary(out, s, s3, dem, wall, t_s3, command, quick):
         L.append(f"| {k} | {v['wall']:.2f} | {v['wall'] / dem['mode_steps'] * 1e6:.0f} | "
                  f"{mb:.1f} |")
     sc = dem["scan"]
+    R = sc["beds"]
+    n_runs = sc["amplitude_beds"].size
     L += ["", "### Brute-force scan vs optimiser", "",
-          f"Scan: {len(sc['lz'])} heights × {s['scan_duration']} s (one batched sweep, native "
-          f"engine, dissipation over the last half): {sc['sim_seconds']:.3g} simulated s, "
-          f"{sc['wall']:.0f} s wall.", "",
-          "| Lz [m] | dissipation per cycle [J] | Z [mm] | balance error |",
-          "| --- | --- | --- | --- |"]
+          f"Scan: {len(sc['lz'])} heights × {R} independently poured beds × "
+          f"{s['scan_duration']} s "
+          f"(one batched sweep, native engine, `sweep(..., replicates={R})`: bed r settled from "
+          "the package's replicate seed r and used at every height): "
+          f"{sc['sim_seconds']:.3g} simulated s, {sc['wall']:.0f} s wall. Per run the steady "
+          "mean over the detected steady state (`steady_or_window`), the fixed window (last "
+          f"half) where none was detected: {sc['fallback']['amplitude']} of {n_runs} runs fell "
+          f"back for Z, {sc['fallback']['dissipation']} of {n_runs} for the dissipation. "
+          f"± = standard error over the {R} beds.", "",
+          "| Lz [m] | dissipation per cycle [J] | Z [mm] | Z per bed [mm] | steady state "
+          "detected (Z) | max balance error |",
+          "| --- | --- | --- | --- | --- | --- |"]
     for i, lz in enumerate(sc["lz"]):
-        L.append(f"| {lz} | {sc['dissipation'][i]:.4g} | {sc['amplitude'][i] * 1e3:.3g} | "
-                 f"{sc['balance'][i]:.1e} |")
-    L += ["", f"Scan optimum (parabola through the best three): **Lz = {sc['optimum']:.4g} m** "
-          f"(thesis 0.1225 m).", "",
+        L.append(f"| {lz} | {sc['dissipation'][i]:.4g} ± {sc['dissipation_se'][i]:.2g} | "
+                 f"{sc['amplitude'][i] * 1e3:.3g} ± {sc['amplitude_se'][i] * 1e3:.2g} | "
+                 + ", ".join(f"{z * 1e3:.3g}" for z in sc["amplitude_beds"][i]) + " | "
+                 f"{int(sc['stationary_amplitude'][i].sum())}/{R} | "
+                 f"{np.max(sc['balance'][i]):.1e} |")
+
+    def opt_text(o, what):
+        q = o["surface"]
+        if o["at_edge"]:
+            inside = "not testable: the optimum is not bracketed by the scan"
+        elif o["contains_thesis"] is None:
+            inside = "not testable (one bed)"
+        else:
+            inside = "inside" if o["contains_thesis"] else "outside"
+        return (f"{what}: per bed (parabola through the bed's best height and its two "
+                f"neighbours) " + ", ".join(f"{x:.4g}" for x in o["vertices"])
+                + f" m → **Lz = {o['mean']:.4g} ± {o['se']:.2g} m** (mean ± SE over {R} beds; "
+                f"95 % t-interval [{o['mean'] - o['ci95']:.4g}, {o['mean'] + o['ci95']:.4g}] m, "
+                f"thesis 0.1225 m {inside}); {o['at_edge']} of {R} beds' best sample at an end "
+                f"of the range. Cross-checks: the parabola through the beds' mean curve "
+                f"{o['mean_curve']:.4g} m; the same per-bed parabolas in log Lz (the "
+                f"interpolation model, not in the beds' interval) {o['log_model']:.4g} m; the "
+                f"package's jackknife response surface "
+                f"(`quadratic_optimum` on Lz = " + ", ".join(f"{x:g}" for x in q["lz"])
+                + f") {q['x']:.4g} m, 95 % [{q['lo']:.4g}, {q['hi']:.4g}] m"
+                + ("" if q["interior"] else " (not interior: no optimum inside these heights)")
+                + ".")
+
+    L += ["", opt_text(sc["opt_dissipation"], "Scan optimum of the dissipation (maximum)"), "",
+          "The optimiser runs below are **single runs** (one optimiser trajectory per start, no "
+          "error bar); their distance to the scan optimum is to its mean over beds.", "",
           "| start Lz0 | final Lz | vs scan optimum | vs 0.1225 | iterates | stop | simulated s "
           "| ratio to scan |", "| --- | --- | --- | --- | --- | --- | --- | --- |"]
     for lz0, o in dem["opt"].items():
         L.append(f"| {lz0} | {o.lz:.4g} | {(o.lz - sc['optimum']) / sc['optimum'] * 100:+.1f} % | "
                  f"{(o.lz - THESIS_LZ) / THESIS_LZ * 100:+.1f} % | {len(o.history['x'])} | "
                  f"{o.reason} | {o.sim_seconds:.3g} | {o.sim_seconds / sc['sim_seconds']:.2f} |")
-    L += ["", f"Amplitude objective (Z at f0, surrogate sqrt(2 <(z - z_s)²>) over the windows): "
-          f"scan optimum (parabola through the smallest three Z) **Lz = "
-          f"{sc['optimum_amplitude']:.4g} m**.", "",
+    L += ["", "Amplitude objective (Z at f0, surrogate sqrt(2 <(z - z_s)²>) over the windows). "
+          + opt_text(sc["opt_amplitude"], "Scan optimum of Z (minimum)"),
+          "", "Optimiser: single runs, no error bar.", "",
           "| start Lz0 | final Lz | vs scan optimum | vs 0.1225 | iterates | stop | simulated s |",
           "| --- | --- | --- | --- | --- | --- | --- |"]
     for lz0, o in dem["opt_amp"].items():

@@ -131,7 +131,9 @@ def test_gap_optimisation_quick(tmp_path):
     """Every part of the gap-optimisation study on tiny settings: S3 exact gradients equal
     central differences (1 %), the DEM window derivative equals central differences of the same
     averaged window objective for a 0.5 ms window (h = 1e-8 m, 2 %), forward mode needs less
-    compiled memory than reverse mode, the scan and both optimiser runs are logged."""
+    compiled memory than reverse mode, the scan and both optimiser runs are logged. The scan
+    runs 2 independently poured beds per height (``sweep(..., replicates=2)``): per-bed values
+    (Lz, bed), their means, and the optimum per bed with its mean over beds."""
     import h5py
 
     out = _load("gap_optimisation").main(["--quick", "--out", str(tmp_path), "--no-progress"])
@@ -144,14 +146,28 @@ def test_gap_optimisation_quick(tmp_path):
         assert np.isfinite(ad) and abs(ad - fd) <= 0.02 * abs(fd) + 1e-6
     m = dem["modes"]
     assert m["forward"]["temp_bytes"] < m["reverse"]["temp_bytes"]
-    assert np.all(dem["scan"]["balance"] < 1e-3)
+    sc = dem["scan"]
+    assert sc["beds"] == 2 and sc["balance"].shape == (3, 2)
+    assert np.all(sc["balance"] < 1e-3)
+    for k in ("amplitude", "dissipation"):
+        b = sc[f"{k}_beds"]
+        assert b.shape == (3, 2) and np.all(np.isfinite(b))
+        assert np.any(b[:, 0] != b[:, 1]), k  # independent beds, not copies
+        assert np.allclose(sc[k], b.mean(axis=1)) and np.all(sc[f"{k}_se"] >= 0)
+    for k in ("opt_amplitude", "opt_dissipation"):
+        o = sc[k]
+        assert len(o["vertices"]) == 2 and np.isclose(o["mean"], np.mean(o["vertices"]))
+        assert sc["lz"].min() <= o["mean"] <= sc["lz"].max()
     assert set(dem["opt"]) == {0.07, 0.25} and set(r["opt"]) == {0.07, 0.25}
     assert set(dem["opt_amp"]) == {0.07, 0.25}
     with h5py.File(tmp_path / "data.h5") as h:
         assert "config" in h["dem"].attrs and "dem/scan/dissipation" in h
+        assert h["dem/scan/amplitude_beds"].shape == (3, 2)
+        assert h["dem/scan/opt_amplitude/vertices"].shape == (2,)
         assert h["dem/opt_lz0_0.07/lz"].shape[0] >= 1
     assert (tmp_path / "figure.png").stat().st_size > 10_000
-    assert "Forward vs reverse" in (tmp_path / "summary.md").read_text()
+    text = (tmp_path / "summary.md").read_text()
+    assert "Forward vs reverse" in text and "2 independently poured beds" in text
 
 
 def test_design_optimisation_quick(tmp_path):
