@@ -64,7 +64,7 @@ def compute(quick: bool, log, ctx):
     log(f"random: {lo}–{hi} Hz, S = {s['S']} (m/s²)²/Hz × {s['scales']}, "
         f"{s['random_s']} s, R = {s['R']}")
     ran = rnd.measure(rcfg, s["scales"], duration=s["random_s"], replicates=s["R"],
-                      out=ctx.raw(f"random_R{s['R']}.h5"), resume=True, progress=ctx.progress,
+                      out=ctx.raw(f"random_R{s['R']}.h5"), reuse=True, progress=ctx.progress,
                       echo=None)
     log(f"stepped sine: U = {s['U']} m × f = {s['f']} Hz, {s['sine_s']} s, R = {s['R']}")
     sine_cfg = apply_overrides(cfg, {"numerics.duration": s["sine_s"]})

@@ -4,8 +4,9 @@
     python experiments/two_mode_structure.py            # ~20 min on 2 cores
     python experiments/two_mode_structure.py --quick    # ~1 min, test-sized
 
-A 2-DOF chain on the moving base: two equal masses m = 2.37 kg (the thesis primary's), springs
-k = 21500 N/m (base–lower and lower–upper), dampers c = 7.6 N s/m likewise, so
+The preset ``sanchez2012-chain``: a 2-DOF chain on the moving base, two equal masses m =
+2.37 kg (the thesis primary's), springs k = 21500 N/m (base–lower and lower–upper), dampers
+c = 7.6 N s/m likewise, so
 ``M = m I``, ``K = k [[2, -1], [-1, 1]]``, ``C = c [[2, -1], [-1, 1]]``: modes at 9.4 and 24.5 Hz
 with shapes (0.618, 1) and (1, -0.618) — mode 1's antinode is the upper mass (DOF 1), mode
 2's the lower one (DOF 0). The damper of ``sanchez2012-optimal`` (250 grains, Lz = 0.1225 m;
@@ -21,7 +22,7 @@ the two-mode transmissibility of a classically damped chain,
 (complex residuals weighted by the coherence; ``A_k``, ``ω_k``, ``ζ_k`` free — the grains add
 mass and move the modes) per realisation; the damper's **added damping** of mode k is
 ``ζ_k - ζ_k(empty)`` with the empty structure's ratio ``ζ_k(empty) = c ω_k/(2k)`` (stiffness-
-proportional). Verdicts: Welch 95 % intervals across realisations, placement against
+proportional; computed from the preset's matrices). Verdicts: Welch 95 % intervals across realisations, placement against
 placement for each mode.
 
 Writes ``data.h5``, ``figure.png``, ``summary.md``.
@@ -39,23 +40,29 @@ import scaffold
 from jaxdamp.analysis.stats import welch
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
+from jaxdamp.physics.structure import matrices
 from jaxdamp.studies import random as rnd
 
-MASS, STIFF, DAMP = 2.37, 21500.0, 7.6
+#: the chain and the damper: the preset (one definition)
+PRESET = "sanchez2012-chain"
 
 
-def chain() -> dict:
-    A = np.array([[2.0, -1.0], [-1.0, 1.0]])
-    return {"structure.M": (MASS * np.eye(2)).tolist(), "structure.K": (STIFF * A).tolist(),
-            "structure.C": (DAMP * A).tolist()}
+def chain():
+    """``(M, K, C)`` of the preset's chain (:func:`jaxdamp.physics.structure.matrices`)."""
+    M, K, C, _, _ = matrices(presets.get(PRESET))
+    return M, K, C
 
 
 def empty_modes():
-    """Natural frequencies [Hz] and damping ratios of the empty chain (stiffness-proportional
-    damping: ζ_k = c ω_k / (2k))."""
-    lam = np.linalg.eigvalsh(STIFF / MASS * np.array([[2.0, -1.0], [-1.0, 1.0]]))
+    """Natural frequencies [Hz] and damping ratios of the empty chain: ``K φ = ω² M φ`` with
+    mass-normalised ``φ``, ``ζ_k = φ_kᵀ C φ_k / (2 ω_k)`` (its damping is stiffness-
+    proportional, so the modes are those of the damped chain)."""
+    from scipy.linalg import eigh
+
+    M, K, C = chain()
+    lam, phi = eigh(K, M)
     w = np.sqrt(lam)
-    return w / (2 * math.pi), DAMP * w / (2 * STIFF)
+    return w / (2 * math.pi), np.einsum("ik,ij,jk->k", phi, C, phi) / (2 * w)
 
 
 def settings(quick: bool) -> dict:
@@ -96,9 +103,9 @@ def fit_modes(f, H, coh, guess):
 
 def compute(quick: bool, log, ctx):
     s = settings(quick)
-    base = presets.get("sanchez2012-optimal")
+    base = presets.get(PRESET)
     over = {"primary.U": 0.0, "random.psd": [[s["band"][0], s["S"]], [s["band"][1], s["S"]]],
-            "random.resolution": s["resolution"], **chain()}
+            "random.resolution": s["resolution"]}
     if s["settle"] is not None:
         over["numerics.settle_time"] = s["settle"]
     if s["grains"] is not None:
@@ -109,7 +116,7 @@ def compute(quick: bool, log, ctx):
         cfg = apply_overrides(base, {**over, "structure.attach": dof})
         log(f"damper on DOF {dof}: {s['duration']} s, R = {s['R']}")
         res = rnd.measure(cfg, [1.0], duration=s["duration"], replicates=s["R"],
-                          out=ctx.raw(f"dof{dof}_R{s['R']}.h5"), resume=True,
+                          out=ctx.raw(f"dof{dof}_R{s['R']}.h5"), reuse=True,
                           progress=ctx.progress, echo=None)
         lev = res.levels[0]
         guess = [1.0, 2 * math.pi * f_e[0], 0.03, 0.3, 2 * math.pi * f_e[1], 0.03]
@@ -175,9 +182,11 @@ def write(r, out, prov):
     ax.set_title("thesis damper on a 2-DOF chain: at mode 1's vs mode 2's antinode", fontsize=9)
     fig.savefig(os.path.join(out, "figure.png"), dpi=120)
 
+    M, K, C = chain()
     L = ["# The damper on a two-mode structure (issue 16)", "",
          scaffold.provenance_line(prov), "",
-         f"Structure: 2-DOF chain, m = {MASS} kg each, k = {STIFF:g} N/m, c = {DAMP} N s/m "
+         f"Structure: the preset `{PRESET}`, a 2-DOF chain, m = {M[1, 1]:g} kg each, "
+         f"k = {-K[0, 1]:g} N/m, c = {-C[0, 1]:g} N s/m "
          f"(base–lower and lower–upper); empty modes at {r['f_empty'][0]:.3f} and "
          f"{r['f_empty'][1]:.3f} Hz with ζ = {100 * r['z_empty'][0]:.3f} % and "
          f"{100 * r['z_empty'][1]:.3f} %. Damper: `sanchez2012-optimal` ({r['n_grains']} "

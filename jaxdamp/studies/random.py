@@ -76,12 +76,14 @@ def band_rms(config: Config) -> float:
 
 def measure(config: Config, scales=(1.0,), duration: float | None = None, replicates: int = 1,
             out: str | None = None, resume: bool = False, progress: bool = True,
-            echo=print) -> RandomResult:
+            echo=print, reuse: bool = False) -> RandomResult:
     """Run the random test at every spectrum scale ``scales`` (``random.scale``), ``replicates``
     realisations each, as one batch (:func:`jaxdamp.studies.sweep.sweep`; with ``out`` the file,
     resumable, gets a ``/random`` group). ``duration`` [s]: simulated time (default: the
     configuration's); it must hold the transient and at least one excitation period
-    ``1/random.resolution``."""
+    ``1/random.resolution``. ``reuse``: a finished ``out`` of the same test is read back and a
+    partial one resumed, anything else replaced (experiments; ``resume`` refuses a different
+    test instead)."""
     from scipy.interpolate import CubicSpline
 
     from jaxdamp.analysis.spectra import h1, rms, steady_start
@@ -101,8 +103,12 @@ def measure(config: Config, scales=(1.0,), duration: float | None = None, replic
                           f"at least two excitation periods 1/random.resolution = {period:g} s "
                           "(one for the transient, one to analyse)")
     R = int(replicates)
-    res = sweep(cfg, {"random.scale": list(scales)}, out=out, resume=resume, progress=progress,
-                echo=echo, replicates=R)
+    axes = {"random.scale": list(scales)}
+    if reuse and out:
+        from jaxdamp.io.sweepfile import holds
+
+        resume = holds(out, cfg, axes, R)
+    res = sweep(cfg, axes, out=out, resume=resume, progress=progress, echo=echo, replicates=R)
     if res is None:
         return None
     configs = replicate_configs(res.configs, R)
