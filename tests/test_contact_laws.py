@@ -10,7 +10,16 @@ import numpy as np
 import pytest
 from helpers import ENGINES, config, run_steps, start
 
-from jaxdamp.config import Box, Config, ConfigError, Drive, Material, Species
+from jaxdamp.config import (
+    Box,
+    Config,
+    ConfigError,
+    Drive,
+    Material,
+    Primary,
+    Species,
+    apply_overrides,
+)
 from jaxdamp.physics import contact, excitation, integrate
 from jaxdamp.physics import restitution as rst
 from jaxdamp.physics.contact import LAWS, Vec
@@ -173,12 +182,58 @@ def test_body_force_primary_and_excitation_jax_equal_scalar():
     cfg = Config(system="driven", frequency=14.5, grains=(), box=Box(0.1, 0.1, 0.1),
                  drive=Drive(0.02))
     p = dataclasses.replace(build(cfg)[1], U=jnp.asarray(0.0045), z_offset=jnp.asarray(0.013))
-    for t in rng.uniform(0, 10, 20):
-        _close(excitation.base_motion_scalar(t, float(p.U), float(p.omega)),
-               excitation.base_motion(jnp.asarray(t), p), 1.0, "base motion")
+    # the base with random lines and a shock pulse (S1)
+    s1 = apply_overrides(Config(system="primary", frequency=14.5, grains=(),
+                                box=Box(0.1, 0.1, 0.1), primary=Primary(2.37, 21500.0, 7.6,
+                                                                         0.0045)),
+                         {"random.psd": [[5.0, 1.0], [30.0, 2.0]], "random.resolution": 0.5,
+                          "shock.peak": 30.0, "shock.duration": 0.01, "shock.start": 1.0})
+    q = build(s1)[1]
+    lines = np.asarray(q.lines)
+    assert lines.shape == (51, 3)
+    for t in np.r_[rng.uniform(0, 10, 20), 1.0, 1.004, 1.01, 1.5]:
+        _close(excitation.base_motion_scalar(t, float(q.U), float(q.omega), lines,
+                                             float(q.shock_a), float(q.shock_t0),
+                                             float(q.shock_T)),
+               excitation.base_motion(jnp.asarray(t), q), 1.0, "base motion")
         _close(excitation.drive_motion_scalar(t, float(p.z_offset), float(p.amplitude),
                                               float(p.omega)),
                excitation.drive_motion(jnp.asarray(t), p), 100.0, "drive motion")
+
+
+def test_structure_jax_equals_scalar():
+    """The multi-DOF structure's acceleration, energy and powers: the kernel's scalar forms
+    against the JAX forms, on a random symmetric 3-DOF structure with a force."""
+    from jaxdamp.physics import structure
+
+    rng = np.random.default_rng(3)
+    A = rng.normal(size=(3, 3))
+    M = A @ A.T + 3 * np.eye(3)
+    B = rng.normal(size=(3, 3))
+    K = 1e4 * (B @ B.T + np.eye(3))
+    C = 1e-3 * K
+    p = structure_params(M, K, C, r=rng.normal(size=3), b=rng.normal(size=3))
+    for _ in range(10):
+        x, xd = rng.normal(0, 1e-3, 3), rng.normal(0, 1e-2, 3)
+        u, ud, fz, c = rng.normal(0, 1e-3), rng.normal(0, 1e-2), rng.normal(), rng.uniform(-1, 1)
+        out, tmp = np.empty(3), np.empty(3)
+        structure.acceleration_scalar(out, x, xd, u, ud, fz, c, np.linalg.inv(M), K, C,
+                                      p.s_r, p.s_b, tmp)
+        _close(out, structure.acceleration(jnp.asarray(x), jnp.asarray(xd), u, ud, fz, c, p),
+               1.0, "x''")
+        _close(structure.energy_scalar(x, xd, u, M, K, p.s_r),
+               structure.energy(jnp.asarray(x), jnp.asarray(xd), u, p), 1e-3, "energy")
+        _close(structure.powers_scalar(x, xd, u, ud, c, K, C, p.s_r, p.s_b),
+               structure.powers(jnp.asarray(x), jnp.asarray(xd), u, ud, c, p), 1e-2, "powers")
+
+
+def structure_params(M, K, C, r, b):
+    """The structure's ``Params`` fields as a namespace (what the JAX forms read)."""
+    import types
+
+    return types.SimpleNamespace(s_M=jnp.asarray(M), s_Minv=jnp.asarray(np.linalg.inv(M)),
+                                 s_K=jnp.asarray(K), s_C=jnp.asarray(C), s_r=np.asarray(r),
+                                 s_b=np.asarray(b))
 
 
 STEEL = Material(E=2e9, nu=0.3, density=7850.0, mu=0.3, gamma_n=40.0, gamma_s=120.0)

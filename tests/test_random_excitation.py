@@ -183,6 +183,7 @@ def test_random_command_writes_h1_and_refuses_bad_input(tmp_path):
     assert "must be ≥ 0" in bad.stderr and "Traceback" not in bad.stderr
 
 
+@pytest.mark.examples
 def test_random_vs_sine_experiment_quick(tmp_path):
     """The random-vs-stepped-sine experiment on test-sized settings: H1 per realisation at the
     sine's frequencies (lines of the multisine), the sine's Z/U per bed, matched pairs judged
@@ -199,6 +200,7 @@ def test_random_vs_sine_experiment_quick(tmp_path):
     assert (tmp_path / "figure.png").stat().st_size > 10_000
 
 
+@pytest.mark.examples
 def test_horizontal_drive_experiment_quick(tmp_path):
     """Vertical against horizontal base motion on test-sized settings: an FRF per direction
     and bed, M_ef and C_ef fitted per bed, Welch verdicts; data, figure and summary."""

@@ -176,6 +176,7 @@ def test_structure_file_loads_and_frf_refuses_it_in_one_line(tmp_path):
     assert "Traceback" not in done.stderr
 
 
+@pytest.mark.examples
 def test_two_mode_structure_experiment_quick(tmp_path):
     """The damper at mode 1's against mode 2's antinode on test-sized settings: H1 per
     placement, per-realisation two-mode fits near the empty chain's modes, Welch verdicts;
