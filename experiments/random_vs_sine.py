@@ -127,31 +127,18 @@ def write(r, out, prov):
                         ("mag_pooled", "1"), ("coh", "1"), ("z_rms", "m"), ("a_rms", "m/s^2")):
             h.create_dataset(k, data=r[k]).attrs["units"] = unit
         h.create_dataset("scales", data=np.asarray(s["scales"])).attrs["units"] = "1"
-    from jaxdamp.figures import figure
+    from jaxdamp.figures import random_figure
 
-    fig = figure((7.5, 6.0), layout="constrained")
-    ax, axc = fig.subplots(2, 1, sharex=True, height_ratios=(2.2, 1.0))
-    for i, lev in enumerate(r["levels"]):
-        m, e = np.abs(lev["H"]), lev["mag_se"]
-        line, = ax.plot(lev["f"], m, "-", marker=".", ms=3, lw=1.0,
-                        label=f"random, a_rms {r['a_rms'][i]:.3g} m/s², √2 z_rms "
-                              f"{1e3 * np.sqrt(2) * r['z_rms'][i].mean():.3g} mm")
-        ok = np.isfinite(e)
-        ax.fill_between(lev["f"][ok], (m - 2 * e)[ok], (m + 2 * e)[ok], color=line.get_color(),
-                        alpha=0.2, lw=0)
-        axc.plot(lev["f"], lev["coherence"], lw=1.0, color=line.get_color())
+    labels = [f"random, a_rms {r['a_rms'][i]:.3g} m/s², √2 z_rms "
+              f"{1e3 * np.sqrt(2) * r['z_rms'][i].mean():.3g} mm" for i in range(len(r["levels"]))]
+    fig = random_figure(r["levels"], labels, log=False,
+                        title="thesis damper: H1 from random base motion vs stepped sine (± 2 SE)")
+    ax = fig.axes[0]
     for u, U in enumerate(r["U"]):
         m, e = scaffold.mean_se(r["ratio"][u])
         ax.errorbar(r["f"], m, yerr=2 * np.nan_to_num(e), fmt="s", ms=4, capsize=2,
                     label=f"stepped sine, U = {1e3 * U:g} mm (resonant Z "
                           f"{1e3 * r['Z_res'][u]:.3g} mm)")
-    ax.set_ylabel("transmissibility |z / u| [-]")
-    axc.set_ylabel("coherence γ² [-]")
-    axc.set_xlabel("frequency f [Hz]")
-    axc.set_ylim(0, 1.05)
-    ax.set_title("thesis damper: H1 from random base motion vs stepped sine (± 2 SE)", fontsize=9)
-    for a in (ax, axc):
-        a.grid(alpha=0.3)
     ax.legend(fontsize=6.5)
     fig.savefig(os.path.join(out, "figure.png"), dpi=120)
 

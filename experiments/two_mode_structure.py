@@ -152,34 +152,21 @@ def write(r, out, prov):
             for j, (name, unit) in enumerate((("f1", "Hz"), ("zeta1", "1"), ("f2", "Hz"),
                                               ("zeta2", "1"), ("A1", "1"), ("A2", "1"))):
                 g.create_dataset(name, data=fits[:, j]).attrs["units"] = unit
-    from jaxdamp.figures import figure
+    from jaxdamp.figures import random_figure
 
-    fig = figure((7.5, 6.0), layout="constrained")
-    ax, axc = fig.subplots(2, 1, sharex=True, height_ratios=(2.2, 1.0))
+    dofs = list(runs)
+    fig = random_figure([runs[k]["level"] for k in dofs],
+                        [f"damper on DOF {k} (antinode of mode {2 - k}), H1 ± 2 SE" for k in dofs],
+                        title="thesis damper on a 2-DOF chain: at mode 1's vs mode 2's antinode")
+    ax = fig.axes[0]
     f_fine = np.linspace(s["band"][0], s["band"][1], 800)
-    for dof, d in runs.items():
-        lev = d["level"]
-        m, e = np.abs(lev["H"]), lev["mag_se"]
-        line, = ax.plot(lev["f"], m, ".", ms=3,
-                        label=f"damper on DOF {dof} (antinode of mode {2 - dof}), H1 ± 2 SE")
-        ok = np.isfinite(e)
-        ax.fill_between(lev["f"][ok], np.maximum(m - 2 * e, 1e-3)[ok], (m + 2 * e)[ok],
-                        color=line.get_color(), alpha=0.2, lw=0)
-        p = d["fits"].mean(axis=0)
+    for k, line in zip(dofs, ax.get_lines()):
+        p = runs[k]["fits"].mean(axis=0)
         ax.plot(f_fine, np.abs(two_mode(2 * math.pi * f_fine,
                                         [p[4], 2 * math.pi * p[0], p[1], p[5],
                                          2 * math.pi * p[2], p[3]])), "-", lw=0.8,
-                color=line.get_color(), label=f"DOF {dof}: two-mode fit (mean parameters)")
-        axc.plot(lev["f"], lev["coherence"], lw=1.0, color=line.get_color())
-    ax.set_yscale("log")
-    ax.set_ylabel("transmissibility |x_box / u| [-]")
-    axc.set_ylabel("coherence γ² [-]")
-    axc.set_xlabel("frequency f [Hz]")
-    axc.set_ylim(0, 1.05)
-    for a in (ax, axc):
-        a.grid(alpha=0.3, which="both")
+                color=line.get_color(), label=f"DOF {k}: two-mode fit (mean parameters)")
     ax.legend(fontsize=7)
-    ax.set_title("thesis damper on a 2-DOF chain: at mode 1's vs mode 2's antinode", fontsize=9)
     fig.savefig(os.path.join(out, "figure.png"), dpi=120)
 
     M, K, C = chain()

@@ -311,11 +311,13 @@ def decay_figure(curves, labels, zeta_struct=None, title=""):
     return fig
 
 
-def random_figure(levels, labels, reference=None, title=""):
+def random_figure(levels, labels, reference=None, title="", log=True):
     """FRFs from random excitation (:func:`jaxdamp.studies.random.measure`): the H1
-    transmissibility ``|z/u|`` (log axis; band ± 2 SE between realisations where there are
-    two or more) over the coherence γ², one line per level. ``reference``: optional
-    ``(f [Hz], |H|, label)`` drawn dashed (e.g. the empty box's analytic FRF)."""
+    transmissibility ``|z/u|`` (log axis unless ``log=False``; band ± 2 SE between
+    realisations where there are two or more, on the log axis no lower than a tenth of |H1|)
+    over the coherence γ², one line per level.
+    ``reference``: optional ``(f [Hz], |H|, label)`` drawn dashed (e.g. the empty box's
+    analytic FRF). More curves go into ``fig.axes[0]`` (then call its ``legend`` again)."""
     fig = figure(FIGSIZE["random"], layout="constrained")
     ax_h, ax_c = fig.subplots(2, 1, sharex=True, height_ratios=(2.2, 1.0))
     for lev, lab in zip(levels, labels):
@@ -325,12 +327,14 @@ def random_figure(levels, labels, reference=None, title=""):
         se = np.asarray(lev["mag_se"])
         ok = np.isfinite(se)
         if ok.any():
-            ax_h.fill_between(f[ok], np.maximum(mag[ok] - 2 * se[ok], 1e-12),
+            low = mag[ok] - 2 * se[ok]  # on a log axis the band stops at a tenth of |H1|
+            ax_h.fill_between(f[ok], np.maximum(low, 0.1 * mag[ok]) if log else low,
                               mag[ok] + 2 * se[ok], color=line.get_color(), alpha=0.25, lw=0)
         ax_c.plot(f, lev["coherence"], lw=1.0, color=line.get_color())
     if reference is not None:
         ax_h.plot(reference[0], reference[1], "k--", lw=0.8, label=reference[2])
-    ax_h.set_yscale("log")
+    if log:
+        ax_h.set_yscale("log")
     ax_h.set_ylabel("transmissibility |H1| = |z / u| [-]")
     ax_c.set_ylabel("coherence γ² [-]")
     ax_c.set_xlabel("frequency f [Hz]")
