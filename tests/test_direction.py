@@ -101,3 +101,23 @@ def test_direction_is_checked_before_compute():
     # a direction of any length is normalised
     _, p = build(validate(apply_overrides(base, {"direction": [0, 3, 4]})))
     assert (float(p.ex), float(p.ey), float(p.ez)) == pytest.approx((0, 0.6, 0.8))
+
+
+def test_the_bed_starts_moved_with_the_box_along_the_axis():
+    """A bed settled in the box at rest is moved with the box to its starting position along
+    the excitation axis (not along z): horizontal axis, primary.z0 = 1 cm."""
+    import numpy as np
+
+    from jaxdamp.cases import presets
+    from jaxdamp.config import apply_overrides
+    from jaxdamp.studies.runner import bed_with_box, initial_box_position
+
+    cfg = apply_overrides(presets.get("sanchez2012-optimal"),
+                          {"direction": [1.0, 0.0, 0.0], "primary.z0": 0.01})
+    z0 = initial_box_position(cfg, 0.227)
+    assert z0 == 0.01  # no weight along a horizontal axis
+    r = np.random.default_rng(0).uniform(0, 0.03, (5, 3))
+    np.testing.assert_allclose(bed_with_box(cfg, r, z0) - r, np.tile([0.01, 0.0, 0.0], (5, 1)),
+                               rtol=0, atol=1e-15)
+    vertical = apply_overrides(cfg, {"direction": [0.0, 0.0, 1.0]})
+    np.testing.assert_array_equal(bed_with_box(vertical, r, 0.02), r + [0.0, 0.0, 0.02])

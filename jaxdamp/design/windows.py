@@ -149,7 +149,7 @@ class DEMProblem:
         fits under the new lid (advanced at the old ``Lz`` by up to two periods until it does),
         else from the settled bed."""
         from jaxdamp.engine import driver
-        from jaxdamp.studies.runner import initial_structure
+        from jaxdamp.studies.runner import bed_with_box, initial_structure
 
         t0 = time.perf_counter()
         F, K = len(self.freqs), self.n_windows
@@ -170,7 +170,7 @@ class DEMProblem:
             burn = self.warm_burn_in  # the warm state continues under the new lid
         else:
             x0, xd0 = initial_structure(self.config, self.m_grains)
-            r0 = np.broadcast_to(self.bed.r + np.array([0.0, 0.0, x0[0]]),
+            r0 = np.broadcast_to(bed_with_box(self.config, self.bed.r, x0[0]),
                                  (F,) + self.bed.r.shape)
             rep = lambda a: np.broadcast_to(a, (F,) + a.shape)  # noqa: E731
             states = driver.start(self.model, params, r0, rep(self.bed.v), rep(self.bed.w),

@@ -158,6 +158,8 @@ def base_motion_scalar(t, U, omega, lines, shock_a, shock_t0, shock_T):
     """Scalar form of :func:`base_motion`: ``(u, u')`` at time ``t`` [s]; ``lines`` ``(L, 3)``."""
     u, ud = harmonic_base_scalar(t, U, omega)
     for k in range(lines.shape[0]):
+        if lines[k, 1] == 0.0 and lines[k, 2] == 0.0:
+            continue  # the zero line of a run without random motion: no trig per step
         w = lines[k, 0]
         c = math.cos(w * t)
         s = math.sin(w * t)

@@ -85,6 +85,14 @@ def initial_box_velocity(config: Config) -> float:
                                                        if config.structure else 0]
 
 
+def bed_with_box(config: Config, r, box_position: float) -> np.ndarray:
+    """Grain positions ``r`` of a bed settled in the box at rest, moved with the box to its
+    starting position: by ``e z0`` along the excitation axis ``e``."""
+    from jaxdamp.physics.model import excitation_axis
+
+    return np.asarray(r) + excitation_axis(config) * box_position
+
+
 def initial_structure(config: Config, grain_mass: float) -> tuple[np.ndarray, np.ndarray]:
     """Positions and velocities ``(dofs,)`` of the primary structure at t = 0 in the engines'
     order (the box first, :func:`jaxdamp.physics.structure.order`): the static equilibrium
@@ -207,7 +215,7 @@ def run(
                 "does not fit under the lid"
             )
         x0, xd0 = initial_structure(config, m_grains)
-        r0 = bed.r + np.array([0.0, 0.0, x0[0]])
+        r0 = bed_with_box(config, bed.r, x0[0])
         batch = driver.start(model, pb, r0[None], bed.v[None], bed.w[None], bed.q[None],
                              x0[None], xd0[None], **engine)
         if out is not None:

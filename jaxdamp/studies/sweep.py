@@ -43,7 +43,7 @@ from jaxdamp.studies.grid import (
     grid_shape,
     replicate_configs,
 )
-from jaxdamp.studies.runner import initial_structure, schedule
+from jaxdamp.studies.runner import bed_with_box, initial_structure, schedule
 
 
 def _mesh_sharding(batch: int):
@@ -181,7 +181,7 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
                 raise ConfigError(f"box.Lz = {c.box.Lz} m: the settled bed ({bed.height:.5g} m) "
                                   "does not fit")
             x, xd = initial_structure(c, float(np.asarray(p.mass).sum()))
-            r0.append(bed.r + np.array([0.0, 0.0, x[0]]))
+            r0.append(bed_with_box(c, bed.r, x[0]))
             v0.append(bed.v), w0.append(bed.w), q0.append(bed.q), z0.append(x), zd0.append(xd)
         batch = driver.start(model, pb, np.stack(r0), np.stack(v0), np.stack(w0), np.stack(q0),
                              np.stack(z0), np.stack(zd0), **drive).replace(params=pb_s)
