@@ -181,6 +181,13 @@ def test_random_command_writes_h1_and_refuses_bad_input(tmp_path):
                          capture_output=True, text=True, timeout=120)
     assert bad.returncode != 0
     assert "must be ≥ 0" in bad.stderr and "Traceback" not in bad.stderr
+    chain = [sys.executable, "-m", "jaxdamp", "random", "--preset", "sanchez2012-chain",
+             "--psd", "5:0.5,30:0.5", "--duration", "8",
+             "--dof", "2", "--out", str(tmp_path / "c.h5")]
+    bad = subprocess.run(chain, capture_output=True, text=True, timeout=120)
+    assert bad.returncode != 0 and not (tmp_path / "c.h5").exists()
+    assert "dof = 2: the structure has 2 degree(s) of freedom" in bad.stderr
+    assert "Traceback" not in bad.stderr
 
 
 @pytest.mark.examples

@@ -8,10 +8,8 @@ import numpy as np
 import pytest
 
 from jaxdamp.analysis.response import first_harmonic
-from jaxdamp.analysis.spectra import h1
 from jaxdamp.cases import presets
 from jaxdamp.config import ConfigError, apply_overrides
-from jaxdamp.physics.model import base_series
 from jaxdamp.physics.structure import matrices, order
 from jaxdamp.studies import random as rnd
 from jaxdamp.studies.sweep import sweep
@@ -74,18 +72,14 @@ def test_empty_two_dof_structure_random_frf_equals_the_analytic_frf(engine):
                   for f in lev["f"]])
     np.testing.assert_allclose(lev["H"], X[:, 1], rtol=5e-3)
     assert np.all(lev["coherence"] > 1 - 1e-6)
-    # the other degree of freedom from the records (whole periods after t = 2 s)
-    k = res.sweep.point(0, 0)
-    t = np.asarray(res.sweep.records["t"][k])
-    y = np.asarray(res.sweep.records["y_dofs"][k])[:, 0]
-    u, _ = base_series(cfg, t)
-    from scipy.interpolate import CubicSpline
-
-    n_per = int(math.ceil(2.0 / np.median(np.diff(t))))
-    tg = t[-1] - 2.0 + np.arange(n_per) * (2.0 / n_per)
-    est = h1([base_series(cfg, tg)[0]], [CubicSpline(t, y)(tg)], n_per / 2.0, n_per)
-    sel = (est["f"] > 4.0 - 1e-6) & (est["f"] < 25.0 + 1e-6)
-    np.testing.assert_allclose(est["H"][sel], X[:, 0], rtol=5e-3)
+    assert res.dof == 1
+    # the other degree of freedom, from the same run
+    low = rnd.analyse(res.sweep, [1.0], 1, dof=0)
+    assert low.dof == 0
+    np.testing.assert_allclose(low.levels[0]["H"], X[:, 0], rtol=5e-3)
+    assert np.all(low.levels[0]["coherence"] > 1 - 1e-6)
+    with pytest.raises(ConfigError, match="dof = 2: the structure has 2 degree"):
+        rnd.analyse(res.sweep, [1.0], 1, dof=2)
 
 
 @pytest.mark.parametrize("engine", ["jax", "native"])

@@ -61,10 +61,12 @@ def cmd_random(args) -> int:
     from jaxdamp.figures import random_figure, save
 
     res = rnd.measure(cfg, scales, duration=args.duration, replicates=R, out=args.out,
-                      resume=args.resume, progress=not args.no_progress)
+                      resume=args.resume, progress=not args.no_progress, dof=args.dof)
     seed = "numerics.seed of each bed" if cfg.random.seed is None else cfg.random.seed
-    print(f"random-phase multisine, period {res.period:g} s, phases from {seed}; H1 = z/u "
-          f"pooled over R = {R} realisation(s)")
+    where = ("" if cfg.structure is None
+             else f" at degree of freedom {res.dof} (the box is on {cfg.structure.attach})")
+    print(f"random-phase multisine, period {res.period:g} s, phases from {seed}; H1 = z/u"
+          f"{where} pooled over R = {R} realisation(s)")
     for s, lev in zip(res.scales, res.levels):
         f, mag, coh = lev["f"], np.abs(lev["H"]), lev["coherence"]
         k = int(np.argmax(mag))
@@ -77,7 +79,8 @@ def cmd_random(args) -> int:
               f"stationary start detected in {int(lev['stationary'].sum())} of {R}")
     if png:
         title = (f"{cfg.name}: N = {cfg.n_grains}, random base motion, R = {R} realisation(s)"
-                 + (" ± 2 SE" if R > 1 else ""))
+                 + (" ± 2 SE" if R > 1 else "")
+                 + ("" if cfg.structure is None else f", degree of freedom {res.dof}"))
         labels = [f"a_rms = {lev['a_rms']:.3g} m/s²" for lev in res.levels]
         save(random_figure(res.levels, labels, title=title), png)
     say_written(args.out, png)
@@ -101,6 +104,7 @@ def register(sub) -> None:
               jaxdamp random --preset sanchez2012-optimal --psd 5:0.5,30:0.5 --duration 6 \\
                              --replicates 3 --scale 1,4 --out random.h5
               jaxdamp random --config my_damper.toml --resolution 0.25 --out random.h5
+              jaxdamp random --preset sanchez2012-chain --dof 0 --out lower_mass.h5
             --psd gives breakpoints f:S (f [Hz], S the base acceleration density
             [(m/s²)²/Hz], linear between, zero outside). The HDF5 holds the sweep (/records
             per level and realisation, the configuration) and /random: H1, |H1| ± SE,
@@ -121,6 +125,11 @@ def register(sub) -> None:
                    help="simulated time per test [s] (≥ 2 periods 1/DF)")
     p.add_argument("--replicates", type=positive_int, metavar="R",
                    help="independent realisations per level, in the same batch (default 1)")
+    p.add_argument("--dof", type=int, metavar="I",
+                   help="with a [structure]: the degree of freedom (0-based, the structure's "
+                        "numbering) whose response z is analysed; default the box's "
+                        "(structure.attach). Every degree of freedom is in the records "
+                        "(z_box, y_dofs)")
     p.add_argument("--out", metavar="FILE.h5")
     p.add_argument("--png", metavar="FILE.png",
                    help="figure (default: next to --out; written with or without --out)")

@@ -19,7 +19,8 @@ def write(path: str, result) -> None:
     spectra (P, F) on the band's lines (:data:`SPECTRA`: pooled H1 ``z/u`` as real and
     imaginary parts, ``|H1|`` and its SE between realisations, coherence γ², one-sided densities
     of ``u`` and ``z``); per realisation (P, R) (:data:`PER_REALISATION`); ``H_each_re``,
-    ``H_each_im`` (P, R, F); attrs ``period``, ``replicates``, ``method``."""
+    ``H_each_im`` (P, R, F); attrs ``period``, ``replicates``, ``method``, ``dof`` (the
+    degree of freedom whose response ``z`` is, the structure's numbering)."""
     P, R = len(result.scales), result.replicates
     F = max(len(lev["f"]) for lev in result.levels)
     with h5py.File(path, "a") as h5:
@@ -30,9 +31,10 @@ def write(path: str, result) -> None:
                              "displacement u, y = primary displacement z; Welch over whole "
                              "excitation periods (rectangular window, one period per segment) "
                              "after the stationary start detected by MSER, pooled over "
-                             "realisations")
+                             "realisations; z is the displacement of degree of freedom dof")
         g.attrs["period"] = result.period
         g.attrs["replicates"] = R
+        g.attrs["dof"] = result.dof
         g.create_dataset("scale", data=result.scales).attrs["units"] = "1"
         g.create_dataset("a_rms", data=[lev["a_rms"] for lev in result.levels]
                          ).attrs["units"] = "m/s^2"

@@ -89,6 +89,30 @@ def order(config) -> np.ndarray:
     return np.array([s.attach] + [i for i in range(n) if i != s.attach], np.int64)
 
 
+def position(config, dof: int | None) -> int:
+    """Where the user's degree of freedom ``dof`` (0-based; ``None``: the box's) sits in the
+    engines' order (:func:`order`): 0 is the box's (``State.z``, record ``z_box``), ``p > 0``
+    is ``State.y[p - 1]`` (record ``y_dofs[:, p - 1]``). Refuses a ``dof`` out of range."""
+    o = order(config)
+    if dof is None:
+        return 0
+    if not (isinstance(dof, (int, np.integer)) and 0 <= dof < len(o)):
+        from jaxdamp.config import ConfigError
+
+        raise ConfigError(f"dof = {dof!r}: the structure has {len(o)} degree(s) of freedom, "
+                          f"numbered 0 to {len(o) - 1}")
+    return int(np.flatnonzero(o == dof)[0])
+
+
+def displacement(records, k: int, config, dof: int | None):
+    """The displacement series [m] of degree of freedom ``dof`` (user numbering; ``None``: the
+    box's) of system ``k`` in ``records`` (``z_box``, ``y_dofs``)."""
+    p = position(config, dof)
+    if p == 0:
+        return np.asarray(records["z_box"][k])
+    return np.asarray(records["y_dofs"][k])[:, p - 1]
+
+
 def internal(config) -> dict:
     """``Params`` fields of the structure in the engines' order (:func:`order`):
     ``s_M``, ``s_Minv``, ``s_K``, ``s_C`` ``(n, n)``, ``s_r``, ``s_b`` ``(n,)``."""

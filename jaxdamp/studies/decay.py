@@ -52,11 +52,14 @@ def free_decay_config(config: Config, v0: float = 0.0) -> Config:
 
 def measure(config: Config, z0, duration: float | None = None, v0: float = 0.0,
             replicates: int = 1, out: str | None = None, resume: bool = False,
-            progress: bool = True, echo=print, grid: int = 40) -> DecayResult:
+            progress: bool = True, echo=print, grid: int = 40,
+            reuse: bool = False) -> DecayResult:
     """Ring the primary down from each initial displacement ``z0`` [m] (and velocity ``v0``
     [m/s]), ``replicates`` beds each, as one batch (:func:`jaxdamp.studies.sweep.sweep`; with
     ``out`` the file, resumable, gets a ``/decay`` group). ``duration`` [s]: simulated time
-    (default: the configuration's). ``grid``: amplitudes of the common curve."""
+    (default: the configuration's). ``grid``: amplitudes of the common curve. ``reuse``: a
+    finished ``out`` of the same test is read back and a partial one resumed, anything else
+    replaced (experiments; ``resume`` refuses a different test instead)."""
     from jaxdamp.physics.energy import granular_loss
     from jaxdamp.physics.model import grain_mass
     from jaxdamp.studies.runner import initial_box_position
@@ -78,7 +81,12 @@ def measure(config: Config, z0, duration: float | None = None, v0: float = 0.0,
     f_n = math.sqrt(p.K / (p.M + m_p)) / (2 * math.pi)
     zeta_struct = p.C / (2.0 * math.sqrt(p.K * (p.M + m_p)))
     R = int(replicates)
-    res = sweep(cfg, {"primary.z0": list(z0)}, out=out, resume=resume, progress=progress,
+    axes = {"primary.z0": list(z0)}
+    if reuse and out:
+        from jaxdamp.io.sweepfile import holds
+
+        resume = holds(out, cfg, axes, R)
+    res = sweep(cfg, axes, out=out, resume=resume, progress=progress,
                 echo=echo, replicates=R)
     if res is None:
         return None

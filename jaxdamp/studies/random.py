@@ -38,7 +38,8 @@ class RandomResult:
     the band (``f``, ``H``, ``coherence``, ``Gxx``, ``Gyy``, ``H_each``, ``mag_se``,
     ``segments``) and ``a_rms`` the base's RMS acceleration [m/s²] from the spectrum,
     ``y_rms`` ``(R,)`` each realisation's RMS of the relative displacement ``z - u`` [m],
-    ``z_rms`` ``(R,)`` of ``z`` [m], ``start`` ``(R,)`` the detected start of the stationary
+    ``z_rms`` ``(R,)`` of ``z`` [m] (``z`` the displacement of the degree of freedom ``dof``,
+    the structure's numbering; the box's by default), ``start`` ``(R,)`` the detected start of the stationary
     record [s] and ``stationary`` ``(R,)``; ``period`` the excitation's period ``1/Δf`` [s];
     ``sweep`` the :class:`jaxdamp.studies.grid.SweepResult` (records, configuration, file)."""
 
@@ -47,6 +48,7 @@ class RandomResult:
     period: float
     replicates: int
     sweep: object
+    dof: int = 0
 
 
 def random_config(config: Config) -> Config:
@@ -76,19 +78,17 @@ def band_rms(config: Config) -> float:
 
 def measure(config: Config, scales=(1.0,), duration: float | None = None, replicates: int = 1,
             out: str | None = None, resume: bool = False, progress: bool = True,
-            echo=print, reuse: bool = False) -> RandomResult:
+            echo=print, reuse: bool = False, dof: int | None = None) -> RandomResult:
     """Run the random test at every spectrum scale ``scales`` (``random.scale``), ``replicates``
     realisations each, as one batch (:func:`jaxdamp.studies.sweep.sweep`; with ``out`` the file,
     resumable, gets a ``/random`` group). ``duration`` [s]: simulated time (default: the
     configuration's); it must hold the transient and at least one excitation period
     ``1/random.resolution``. ``reuse``: a finished ``out`` of the same test is read back and a
     partial one resumed, anything else replaced (experiments; ``resume`` refuses a different
-    test instead)."""
-    from scipy.interpolate import CubicSpline
-
-    from jaxdamp.analysis.spectra import h1, rms, steady_start
-    from jaxdamp.physics.model import base_series
-    from jaxdamp.studies.grid import replicate_configs
+    test instead). ``dof``: the degree of freedom whose response is the output (the
+    structure's numbering; default the box's); :func:`analyse` gives any other from the same
+    run."""
+    from jaxdamp.physics.structure import position
     from jaxdamp.studies.sweep import sweep
 
     cfg = random_config(config)
@@ -103,6 +103,7 @@ def measure(config: Config, scales=(1.0,), duration: float | None = None, replic
                           f"at least two excitation periods 1/random.resolution = {period:g} s "
                           "(one for the transient, one to analyse)")
     R = int(replicates)
+    position(cfg, dof)  # a clear error before any compute
     axes = {"random.scale": list(scales)}
     if reuse and out:
         from jaxdamp.io.sweepfile import holds
@@ -111,7 +112,30 @@ def measure(config: Config, scales=(1.0,), duration: float | None = None, replic
     res = sweep(cfg, axes, out=out, resume=resume, progress=progress, echo=echo, replicates=R)
     if res is None:
         return None
+    result = analyse(res, scales, R, dof)
+    if out:
+        from jaxdamp.io import random as random_file
+
+        random_file.write(out, result)
+    return result
+
+
+def analyse(res, scales, replicates: int, dof: int | None = None) -> RandomResult:
+    """The H1 estimates of a finished random sweep ``res`` (levels ``scales`` × ``replicates``
+    realisations; :func:`measure`) at degree of freedom ``dof`` (the structure's numbering,
+    ``None``: the box's). Any degree of freedom can be analysed from the same run."""
+    from scipy.interpolate import CubicSpline
+
+    from jaxdamp.analysis.spectra import h1, rms, steady_start
+    from jaxdamp.physics.model import base_series
+    from jaxdamp.physics.structure import displacement
+    from jaxdamp.studies.grid import replicate_configs
+
+    R = int(replicates)
+    scales = np.atleast_1d(np.asarray(scales, float))
     configs = replicate_configs(res.configs, R)
+    cfg = configs[0]
+    period = 1.0 / cfg.random.resolution
     f_lo = cfg.random.psd[0][0]
     f_hi = cfg.random.psd[-1][0]
     levels = []
@@ -120,7 +144,7 @@ def measure(config: Config, scales=(1.0,), duration: float | None = None, replic
         for r in range(R):
             k = res.point(i, r)
             t = np.asarray(res.records["t"][k])
-            z = np.asarray(res.records["z_box"][k])
+            z = displacement(res.records, k, configs[k], dof)
             u, _ = base_series(configs[k], t)
             start, ok = steady_start(t, z - u, block=period / 8)
             # whole excitation periods back from the end to the detected start, resampled
@@ -146,9 +170,7 @@ def measure(config: Config, scales=(1.0,), duration: float | None = None, replic
         lev.update(a_rms=band_rms(configs[res.point(i, 0)]), y_rms=np.array(y_rms),
                    z_rms=np.array(z_rms), start=np.array(starts), stationary=np.array(flags))
         levels.append(lev)
-    result = RandomResult(scales=scales, levels=levels, period=period, replicates=R, sweep=res)
-    if out:
-        from jaxdamp.io import random as random_file
-
-        random_file.write(out, result)
-    return result
+    if dof is None:
+        dof = cfg.structure.attach if cfg.structure is not None else 0
+    return RandomResult(scales=scales, levels=levels, period=period, replicates=R, sweep=res,
+                        dof=int(dof))
