@@ -419,8 +419,11 @@ def test_decay_vs_sine_quick(tmp_path):
     amplitude range get a Welch verdict; data, figure and summary are written."""
     r = _load("decay_vs_sine").main(["--quick", "--out", str(tmp_path), "--no-progress"])
     assert r["zeta_sine"].shape == (2, 2, 2) and np.all(r["zeta_sine"] > 0)
-    assert np.all(np.isfinite(r["curve"]["zeta_g"])) and r["covered"].any()
-    assert np.isfinite(r["half"][r["covered"]]).all()
+    assert np.all(np.isfinite(r["curve"]["zeta_g"]))
+    for name in ("mean", "start"):  # both cycle-amplitude conventions
+        cm = r["cmp"][name]
+        assert cm["covered"].any() and np.isfinite(cm["half"][cm["covered"]]).all()
     text = (tmp_path / "summary.md").read_text()
-    assert "Resonant points:" in text and "ζ_g = ΔW/(2πKZ²)" in text
+    assert "Resonant points (cycle at" in text and "ζ_g = ΔW/(2πKZ²)" in text
+    assert "cycle at X_k:" in text
     assert (tmp_path / "figure.png").stat().st_size > 10_000
