@@ -1,12 +1,20 @@
 """Independent-DEM cross-check: the 2023 reference damper in LAMMPS and in jaxdamp.
 
-    python experiments/lammps_crosscheck.py            # full: A_d = 2, 3, 4 cm, 10 + 50 periods
-    python experiments/lammps_crosscheck.py --quick    # one amplitude (3 cm), 2 + 3 periods
+    python experiments/lammps_crosscheck.py            # full: A_d = 2, 3, 4 cm, 10 + 50 periods, 5 beds
+    python experiments/lammps_crosscheck.py --quick    # one amplitude (3 cm), 2 + 3 periods, 2 beds
 
 System: preset ``varela2023-reference`` (S2: cube of 8 cm driven as ``z = A_d cos(2π f t)``,
 f = 70 Hz, 300 frictionless steel spheres, R = 2.5 mm, E = 2e9 Pa, ν = 0.3, ε = 0.75 at 1 m/s).
 Both codes start from the same settled bed (jaxdamp's ``packing.settle``, run inside
 ``jaxdamp.studies.runner.run``) and use the same time step (``params.dt`` of the run's configuration).
+
+**Replicates**: ``--replicates R`` independently poured beds per amplitude (seeds
+``jaxdamp.analysis.stats.replicate_seed(preset seed, k)``); each bed is handed to both codes,
+so the comparison is paired: per bed the difference LAMMPS − jaxdamp of the mean dissipation per
+period over a window common to both codes (MSER start of the steady state, never before the
+transient: ``stats.shared_window``), across beds its mean ± SE and Student-t 95 % interval.
+Every bed's results are kept in ``--out/raw/beds/`` and reused by a re-run with the same
+settings (the same ``--out``), so adding beds computes only the new ones.
 
 **Mapping to LAMMPS** (``pair_style granular``; ``fix wall/gran granular``, three plane pairs):
 
@@ -45,8 +53,9 @@ snapshots written at the step nearest to every period boundary ``t = nT``.
 cumulative granular loss (``jaxdamp.physics.energy.granular_loss`` of the recorded work channels)
 interpolated at ``t = nT`` (samples every T/500).
 
-Dissipation per period is reported as mean ± std over the analysed periods and normalised as
-``E_d = E / E_max`` with ``E_max = 4 m A_d² ω²`` (m the granulate mass; SPEC §4).
+Dissipation per period is reported per bed as mean ± std over the window's periods, across beds as
+mean ± SE, and normalised as ``E_d = E / E_max`` with ``E_max = 4 m A_d² ω²`` (m the granulate
+mass; SPEC §4).
 
 Writes ``summary.md``, ``figure.png`` and ``data.h5`` in ``--out``; LAMMPS inputs, logs and
 snapshots in ``--out/raw`` (git-ignored).
@@ -70,13 +79,15 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 PRESET = "varela2023-reference"
 AMPLITUDES = (0.02, 0.03, 0.04)
+REPLICATES = 5  # independently poured beds per amplitude
 
 
 def settings(quick: bool) -> dict:
     if quick:
-        return dict(amplitudes=(0.03,), transient=2, periods=3, settle_time=0.3, closure_periods=1)
+        return dict(amplitudes=(0.03,), transient=2, periods=3, settle_time=0.3, closure_periods=1,
+                    replicates=2)
     return dict(amplitudes=AMPLITUDES, transient=10, periods=50, settle_time=None,
-                closure_periods=2)
+                closure_periods=2, replicates=REPLICATES)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -518,13 +529,13 @@ def mechanical_energy(snap: np.ndarray, mp: Mapping, box, g: float) -> dict:
 
 
 def lammps_bed(mp: Mapping, cfg, amplitude: float, r0, v0, n_periods: int, workdir: str,
-               damped: bool = True, exe=None) -> dict:
+               damped: bool = True, exe=None, tag: str = "") -> dict:
     """Run the driven bed for ``n_periods`` periods from ``r0, v0`` (box frame).
 
     Returns per-boundary cumulative input work, energies and dissipation, the thermo series
-    and the wall time.
+    and the wall time. ``tag`` names the bed (its working directory ``bed_A<cm>cm<tag>``).
     """
-    name = f"bed_A{amplitude * 100:g}cm" + ("" if damped else "_undamped")
+    name = f"bed_A{amplitude * 100:g}cm{tag}" + ("" if damped else "_undamped")
     sub = os.path.join(workdir, name)
     snapdir = os.path.join(sub, "snaps")
     os.makedirs(snapdir, exist_ok=True)
@@ -556,12 +567,11 @@ def lammps_bed(mp: Mapping, cfg, amplitude: float, r0, v0, n_periods: int, workd
 # jaxdamp
 
 
-def jaxdamp_case(amplitude: float, n_periods: int, settle_time=None, progress=False):
-    """``jaxdamp.studies.runner.run`` of the reference preset at ``amplitude`` for ``n_periods``."""
+def case_config(amplitude: float, n_periods: int, settle_time=None, seed=None):
+    """The reference preset at ``amplitude`` for ``n_periods`` (samples every T/500), its bed
+    poured with ``numerics.seed = seed`` (``None``: the preset's seed)."""
     from jaxdamp.cases import presets
     from jaxdamp.config import apply_overrides
-    from jaxdamp.physics.energy import granular_loss
-    from jaxdamp.studies import runner
 
     base = presets.get(PRESET)
     T = 1.0 / base.frequency
@@ -569,7 +579,19 @@ def jaxdamp_case(amplitude: float, n_periods: int, settle_time=None, progress=Fa
           "numerics.chunk": T / 5, "numerics.record_dt": T / 500}
     if settle_time is not None:
         ov["numerics.settle_time"] = settle_time
-    cfg = apply_overrides(base, ov)
+    if seed is not None:
+        ov["numerics.seed"] = int(seed)
+    return apply_overrides(base, ov)
+
+
+def jaxdamp_case(amplitude: float, n_periods: int, settle_time=None, progress=False, seed=None):
+    """``jaxdamp.studies.runner.run`` of the reference preset at ``amplitude`` for ``n_periods``,
+    the bed poured with ``seed`` (see :func:`case_config`)."""
+    from jaxdamp.physics.energy import granular_loss
+    from jaxdamp.studies import runner
+
+    cfg = case_config(amplitude, n_periods, settle_time, seed)
+    T = 1.0 / cfg.frequency
     t0 = time.perf_counter()
     res = runner.run(cfg, progress=progress, snapshots=False, echo=None)
     elapsed = time.perf_counter() - t0
@@ -586,7 +608,85 @@ def jaxdamp_case(amplitude: float, n_periods: int, settle_time=None, progress=Fa
                 wall=float(res.summary["wall_time"]), elapsed=elapsed,
                 balance=float(res.summary["balance_error"]),
                 residual=float(np.max(np.abs(resid))), residual_final=float(resid[-1]),
-                input_final=float(inp[-1]), bed=res.bed, records=rec)
+                input_final=float(inp[-1]), bed=res.bed, bed_r=np.asarray(res.bed.r),
+                bed_v=np.asarray(res.bed.v), settled=bool(res.bed.settled),
+                bed_height=float(res.bed.height), bed_max_speed=float(res.bed.max_speed),
+                records={k: np.asarray(rec[k]) for k in ("t", "z_cm", "z_box")})
+
+
+# ---------------------------------------------------------------------------------------------
+# one bed in both codes, kept in raw/beds/ for a re-run with the same settings
+
+JD_SCALARS = ("dt", "wall", "elapsed", "balance", "residual", "residual_final", "input_final",
+              "settled", "bed_height", "bed_max_speed")
+LM_ARRAYS = ("steps", "t", "W", "E", "D", "elastic", "kinetic", "thermo")
+LM_SCALARS = ("wall", "loop_time", "n_steps")
+
+
+def bed_key(amplitude: float, seed: int, s: dict) -> dict:
+    """What a stored bed must match to be reused."""
+    return dict(preset=PRESET, amplitude=float(amplitude), seed=int(seed),
+                transient=int(s["transient"]), periods=int(s["periods"]),
+                settle_time=s["settle_time"])
+
+
+def bed_path(raw: str, amplitude: float, seed: int) -> str:
+    return os.path.join(raw, "beds", f"A{amplitude * 100:g}cm_seed{seed}.npz")
+
+
+def save_bed(path: str, key: dict, jd: dict, lm: dict) -> None:
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    meta = dict(key=key, jd={k: jd[k] for k in JD_SCALARS}, lm={k: lm[k] for k in LM_SCALARS})
+    arrays = {f"lm_{k}": np.asarray(lm[k]) for k in LM_ARRAYS}
+    arrays.update(jd_t=jd["t"], jd_D=jd["D"], bed_r=jd["bed_r"], bed_v=jd["bed_v"],
+                  **{f"rec_{k}": v for k, v in jd["records"].items()})
+    tmp = path + ".tmp.npz"
+    np.savez(tmp, meta=json.dumps(meta), **arrays)
+    os.replace(tmp, path)
+
+
+def load_bed(path: str, key: dict):
+    """``(jd, lm)`` of a stored bed with this ``key``, else None."""
+    if not os.path.exists(path):
+        return None
+    with np.load(path) as z:
+        meta = json.loads(str(z["meta"]))
+        if meta["key"] != key:
+            return None
+        jd = dict(meta["jd"], t=z["jd_t"], D=z["jd_D"], bed_r=z["bed_r"], bed_v=z["bed_v"],
+                  records={k: z[f"rec_{k}"] for k in ("t", "z_cm", "z_box")})
+        lm = dict(meta["lm"], **{k: z[f"lm_{k}"] for k in LM_ARRAYS})
+    jd["config"] = case_config(key["amplitude"], key["transient"] + key["periods"],
+                               key["settle_time"], key["seed"])
+    return jd, lm
+
+
+def run_bed(amplitude: float, seed: int, s: dict, raw: str, exe, progress: bool) -> dict:
+    """One bed poured by jaxdamp with ``seed``, driven at ``amplitude`` in jaxdamp and, from
+    the same settled state, in LAMMPS; reused from ``raw/beds`` when stored with the same
+    settings."""
+    n_total = s["transient"] + s["periods"]
+    key = bed_key(amplitude, seed, s)
+    path = bed_path(raw, amplitude, seed)
+    got = load_bed(path, key)
+    if got is not None:
+        jd, lm = got
+        print(f"A_d = {amplitude * 100:g} cm, seed {seed}: reused {path}", flush=True)
+        return dict(seed=seed, jd=jd, lm=lm, mp=build_mapping(jd["config"]), reused=True)
+    # jaxdamp first: its settled bed is the initial state of both codes
+    print(f"A_d = {amplitude * 100:g} cm, seed {seed}: jaxdamp ...", flush=True)
+    jd = jaxdamp_case(amplitude, n_total, s["settle_time"], progress=progress, seed=seed)
+    cfg = jd["config"]
+    mp = build_mapping(cfg)
+    assert abs(mp.dt - jd["dt"]) < 1e-15
+    print(f"  jaxdamp: dt = {jd['dt']:.6g} s, {jd['wall']:.1f} s stepping "
+          f"({jd['elapsed']:.1f} s with settling)", flush=True)
+    print(f"A_d = {amplitude * 100:g} cm, seed {seed}: LAMMPS ...", flush=True)
+    lm = lammps_bed(mp, cfg, amplitude, jd["bed_r"], jd["bed_v"], n_total, raw, exe=exe,
+                    tag=f"_seed{seed}")
+    print(f"  LAMMPS: {lm['wall']:.1f} s", flush=True)
+    save_bed(path, key, jd, lm)
+    return dict(seed=seed, jd=jd, lm=lm, mp=mp, reused=False)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -617,9 +717,19 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--out", default=os.path.join(HERE, "lammps_crosscheck"))
     ap.add_argument("--no-progress", action="store_true")
+    ap.add_argument("--replicates", type=int, default=None,
+                    help="independently poured beds per amplitude (default 3; quick: 2)")
+    ap.add_argument("--amplitudes", type=float, nargs="+", default=None,
+                    help="drive amplitudes [m] (default 0.02 0.03 0.04; quick: 0.03)")
     ap.add_argument("--lmp", default=None, help="LAMMPS executable (default: lmp on PATH)")
     args = ap.parse_args(argv)
     s = settings(args.quick)
+    if args.replicates is not None:
+        s["replicates"] = args.replicates
+    if args.amplitudes is not None:
+        s["amplitudes"] = tuple(args.amplitudes)
+    if s["replicates"] < 2:
+        raise SystemExit("--replicates must be at least 2 (an error bar needs two beds)")
     exe = args.lmp or lmp_path()
     if exe is None:
         raise SystemExit("LAMMPS (`lmp`) is not on PATH: apt-get install lammps")
@@ -628,6 +738,7 @@ def main(argv=None):
     t_start = time.perf_counter()
 
     import jaxdamp
+    from jaxdamp.analysis.stats import replicate_seed
     from jaxdamp.cases import presets
 
     version = lammps_version(exe)
@@ -635,7 +746,7 @@ def main(argv=None):
     base = presets.get(PRESET)
     T = 1.0 / base.frequency
     omega = 2 * math.pi * base.frequency
-    n_total = s["transient"] + s["periods"]
+    seeds = [replicate_seed(base.numerics.seed, k) for k in range(s["replicates"])]
 
     # 1-2. the mapping, verified with LAMMPS at the time step of the default amplitude
     mp0 = build_mapping(base)
@@ -653,41 +764,40 @@ def main(argv=None):
 
     cases = {}
     for A in s["amplitudes"]:
-        # 4. jaxdamp first: its settled bed is the initial state of both codes
-        print(f"A_d = {A * 100:g} cm: jaxdamp ...", flush=True)
-        jd = jaxdamp_case(A, n_total, s["settle_time"], progress=not args.no_progress)
-        cfg = jd["config"]
-        mp = build_mapping(cfg)
-        assert abs(mp.dt - jd["dt"]) < 1e-15
-        print(f"  jaxdamp: dt = {jd['dt']:.6g} s, {jd['wall']:.1f} s stepping "
-              f"({jd['elapsed']:.1f} s with settling)", flush=True)
-        print(f"A_d = {A * 100:g} cm: LAMMPS ...", flush=True)
-        lm = lammps_bed(mp, cfg, A, jd["bed"].r, jd["bed"].v, n_total, raw, exe=exe)
-        print(f"  LAMMPS: {lm['wall']:.1f} s", flush=True)
-        m_gran = mp.mass * cfg.grains[0].count
-        e_max = 4 * m_gran * A**2 * omega**2
-        dl, dj = per_period(lm["D"], s["transient"]), per_period(jd["D"], s["transient"])
-        cases[A] = dict(jd=jd, lm=lm, mp=mp, e_max=e_max, m=m_gran, d_lammps=dl, d_jaxdamp=dj)
-        (ml, sl, _), (mj, sj, _) = stats(dl), stats(dj)
-        print(f"  dissipation per period: LAMMPS {ml:.4g} ± {sl:.3g} J, jaxdamp {mj:.4g} ± "
-              f"{sj:.3g} J (E_max = {e_max:.4g} J)", flush=True)
+        beds = []
+        for seed in seeds:
+            b = run_bed(A, seed, s, raw, exe, progress=not args.no_progress)
+            b["d_lammps_all"] = np.diff(b["lm"]["D"])
+            b["d_jaxdamp_all"] = np.diff(b["jd"]["D"])
+            print(f"  dissipation per period after the transient: LAMMPS "
+                  f"{b['d_lammps_all'][s['transient']:].mean():.4g} J, jaxdamp "
+                  f"{b['d_jaxdamp_all'][s['transient']:].mean():.4g} J", flush=True)
+            beds.append(b)
+        mp = beds[0]["mp"]
+        m_gran = mp.mass * beds[0]["jd"]["config"].grains[0].count
+        cases[A] = dict(beds=beds, mp=mp, e_max=4 * m_gran * A**2 * omega**2, m=m_gran)
 
-    # accounting closure: undamped bed, input work = Δ(mechanical energy)
+    # accounting closure: undamped bed (the first seed's), input work = Δ(mechanical energy)
     A_c = 0.03 if 0.03 in cases else s["amplitudes"][0]
-    c = cases[A_c]
-    clo = lammps_bed(c["mp"], c["jd"]["config"], A_c, c["jd"]["bed"].r, c["jd"]["bed"].v,
-                     s["closure_periods"], raw, damped=False, exe=exe)
+    c = cases[A_c]["beds"][0]
+    clo = lammps_bed(c["mp"], c["jd"]["config"], A_c, c["jd"]["bed_r"], c["jd"]["bed_v"],
+                     s["closure_periods"], raw, damped=False, exe=exe, tag=f"_seed{c['seed']}")
     dE = float(np.max(np.abs(clo["E"] - clo["E"][0])))
-    closure = dict(amplitude=A_c, periods=s["closure_periods"], D=clo["D"].tolist(),
-                   W=clo["W"].tolist(), E=clo["E"].tolist(),
+    closure = dict(amplitude=A_c, seed=c["seed"], periods=s["closure_periods"],
+                   D=clo["D"].tolist(), W=clo["W"].tolist(), E=clo["E"].tolist(),
                    relative=float(np.max(np.abs(clo["D"])) / max(dE, 1e-300)))
     print(f"closure (undamped, {s['closure_periods']} periods): max |W - ΔE| = "
           f"{np.max(np.abs(clo['D'])):.3g} J, max |ΔE| = {np.max(np.abs(clo['E'] - clo['E'][0])):.3g} J")
     elapsed = time.perf_counter() - t_start
     command = "python experiments/lammps_crosscheck.py" + (" --quick" if args.quick else "")
-    write_outputs(args.out, cases, checks, closure, s, version, command, elapsed, checks_wall,
-                  mp0, T, jaxdamp.__version__)
-    return dict(cases=cases, checks=checks, closure=closure, mapping=mp0, settings=s)
+    if args.replicates is not None:
+        command += f" --replicates {args.replicates}"
+    if args.amplitudes is not None:
+        command += " --amplitudes " + " ".join(f"{a:g}" for a in args.amplitudes)
+    table = write_outputs(args.out, cases, checks, closure, s, version, command, elapsed,
+                          checks_wall, mp0, T, jaxdamp.__version__)
+    return dict(cases=cases, checks=checks, closure=closure, mapping=mp0, settings=s,
+                table=table)
 
 
 def lag1(d):
@@ -712,43 +822,89 @@ def stats(d):
     return float(d.mean()), sd, sd / math.sqrt(len(d)) * inflate
 
 
+KEY = "granular_loss_per_cycle"
+
+
+def analyse_bed(b: dict, s: dict, T: float) -> dict:
+    """One bed in both codes: the common analysis window (MSER on both per-period series, never
+    before the transient: :func:`jaxdamp.analysis.stats.shared_window`), each code's mean over
+    it, their difference, and the within-run figures of the single-bed comparison."""
+    from jaxdamp.analysis import stats as jstats
+
+    dl_all, dj_all = np.asarray(b["d_lammps_all"]), np.asarray(b["d_jaxdamp_all"])
+    n = len(dl_all)
+    t_start = np.arange(n) * T
+    keep = min(5, s["periods"])
+    series = [{"t_start": t_start, KEY: dl_all}, {"t_start": t_start, KEY: dj_all}]
+    w = jstats.shared_window(series, keys=(KEY,), min_discard=s["transient"], min_keep=keep)
+    dets = [jstats.detect(x, min_discard=s["transient"], min_keep=keep) for x in series]
+    start = int(w["start"])
+    dl, dj = dl_all[start:], dj_all[start:]
+    ml, sl, el = stats(dl)
+    mj, sj, ej = stats(dj)
+    corr = float(np.corrcoef(dl, dj)[0, 1]) if len(dl) > 2 else float("nan")
+    close = np.abs(dl - dj) <= 0.01 * np.abs(dj)
+    first_apart = int(np.argmin(close)) if not close.all() else len(dl)
+    half = max(1, len(dl) // 2)
+    tab = b["lm"]["thermo"]
+    t0 = start * T
+    _, zl = phase_average(tab[:, 1], tab[:, 2], T, t0=t0)
+    rec = b["jd"]["records"]
+    _, zj = phase_average(rec["t"], np.asarray(rec["z_cm"]) - np.asarray(rec["z_box"]), T, t0=t0)
+    n0 = s["transient"]
+    return dict(seed=b["seed"], start=start, kept=len(dl), stationary=bool(w["stationary"]),
+                start_l=dets[0].period, start_j=dets[1].period,
+                stat_l=dets[0].stationary, stat_j=dets[1].stationary,
+                ml=ml, sl=sl, el=el, mj=mj, sj=sj, ej=ej, diff=ml - mj, comb=math.hypot(el, ej),
+                rel=(ml - mj) / mj, corr=corr, first_apart=first_apart, lag_l=lag1(dl),
+                lag_j=lag1(dj), zcm_diff=float(np.max(np.abs(zl - zj))),
+                zcm_span=float(zl.max() - zl.min()),
+                transient_l=float(b["lm"]["D"][n0]), transient_j=float(b["jd"]["D"][n0]),
+                el_max=float(np.max(b["lm"]["elastic"])), residual=b["jd"]["residual"],
+                resid_rate=b["jd"]["residual_final"] / (len(b["jd"]["t"]) - 1),
+                halves_l=(float(dl[:half].mean()), float(dl[half:].mean())),
+                halves_j=(float(dj[:half].mean()), float(dj[half:].mean())),
+                us_l=b["lm"]["wall"] / b["lm"]["n_steps"] * 1e6,
+                us_j=b["jd"]["wall"] / b["lm"]["n_steps"] * 1e6,
+                wall_l=b["lm"]["wall"], loop_l=b["lm"]["loop_time"], wall_j=b["jd"]["wall"],
+                elapsed_j=b["jd"]["elapsed"], dt=b["mp"].dt, steps=b["lm"]["n_steps"],
+                balance=b["jd"]["balance"], settled=bool(b["jd"]["settled"]),
+                max_speed=float(b["jd"]["bed_max_speed"]),
+                reused=bool(b["reused"]))
+
+
+def analyse_amplitude(A: float, c: dict, s: dict, T: float) -> dict:
+    """Across the beds of one amplitude: each code's mean ± SE of the beds' means, and the
+    per-bed (paired) difference LAMMPS − jaxdamp with its Student-t 95 % interval; the
+    unpaired Welch interval of the two codes' bed means alongside."""
+    from jaxdamp.analysis import stats as jstats
+
+    beds = [analyse_bed(b, s, T) for b in c["beds"]]
+    ok = np.array([r["stationary"] for r in beds])
+    ml = np.array([r["ml"] for r in beds])
+    mj = np.array([r["mj"] for r in beds])
+    el = jstats.across(ml, stationary=ok)
+    ej = jstats.across(mj, stationary=ok)
+    ed = jstats.across(ml - mj, stationary=ok)
+    wd, wh = jstats.welch(ml[ok], mj[ok])
+    agree = bool(np.isfinite(ed.ci95) and abs(ed.mean) <= ed.ci95)
+    return dict(A=A, e_max=c["e_max"], beds=beds, R=len(beds), n=ed.n,
+                ml=el.mean, sel=el.se, mj=ej.mean, sej=ej.se,
+                sdl=float(np.std(ml[ok], ddof=1)) if ok.sum() > 1 else float("nan"),
+                sdj=float(np.std(mj[ok], ddof=1)) if ok.sum() > 1 else float("nan"),
+                within_l=float(np.mean([r["el"] for r in beds])),
+                within_j=float(np.mean([r["ej"] for r in beds])),
+                d=ed.mean, sed=ed.se, hw=ed.ci95, welch_d=wd, welch_hw=wh, agree=agree,
+                rel=ed.mean / ej.mean, rel_hw=ed.ci95 / ej.mean)
+
+
 def write_outputs(out, cases, checks, closure, s, version, command, elapsed, checks_wall, mp0, T,
                   jd_version):
     import h5py
 
     amps = sorted(cases)
-    rows = []
-    for A in amps:
-        c = cases[A]
-        ml, sl, el = stats(c["d_lammps"])
-        mj, sj, ej = stats(c["d_jaxdamp"])
-        diff = ml - mj
-        comb = math.hypot(el, ej)
-        dl, dj = np.asarray(c["d_lammps"]), np.asarray(c["d_jaxdamp"])
-        corr = float(np.corrcoef(dl, dj)[0, 1]) if len(dl) > 2 else float("nan")
-        close = np.abs(dl - dj) <= 0.01 * np.abs(dj)
-        first_apart = int(np.argmin(close)) if not close.all() else len(dl)
-        half = max(1, len(dl) // 2)
-        tab = c["lm"]["thermo"]
-        t0 = s["transient"] * T
-        _, zl = phase_average(tab[:, 1], tab[:, 2], T, t0=t0)
-        rec = c["jd"]["records"]
-        _, zj = phase_average(rec["t"], np.asarray(rec["z_cm"]) - np.asarray(rec["z_box"]), T, t0=t0)
-        n0 = s["transient"]
-        rows.append(dict(A=A, ml=ml, sl=sl, el=el, mj=mj, sj=sj, ej=ej, e_max=c["e_max"],
-                         corr=corr, first_apart=first_apart, lag_l=lag1(dl), lag_j=lag1(dj),
-                         zcm_diff=float(np.max(np.abs(zl - zj))), zcm_span=float(zl.max() - zl.min()),
-                         transient_l=float(c["lm"]["D"][n0]), transient_j=float(c["jd"]["D"][n0]),
-                         el_max=float(np.max(c["lm"]["elastic"])), residual=c["jd"]["residual"],
-                         resid_rate=c["jd"]["residual_final"] / (len(c["jd"]["t"]) - 1),
-                         halves_l=(float(dl[:half].mean()), float(dl[half:].mean())),
-                         halves_j=(float(dj[:half].mean()), float(dj[half:].mean())),
-                         us_l=c["lm"]["wall"] / c["lm"]["n_steps"] * 1e6,
-                         us_j=c["jd"]["wall"] / c["lm"]["n_steps"] * 1e6,
-                         diff=diff, comb=comb, rel=diff / mj,
-                         wall_l=c["lm"]["wall"], loop_l=c["lm"]["loop_time"],
-                         wall_j=c["jd"]["wall"], elapsed_j=c["jd"]["elapsed"], dt=c["mp"].dt,
-                         steps=c["lm"]["n_steps"], balance=c["jd"]["balance"]))
+    table = {A: analyse_amplitude(A, cases[A], s, T) for A in amps}
+    seeds = [b["seed"] for b in cases[amps[0]]["beds"]]
 
     with h5py.File(os.path.join(out, "data.h5"), "w") as h:
         h.attrs["command"] = command
@@ -757,32 +913,58 @@ def write_outputs(out, cases, checks, closure, s, version, command, elapsed, che
         h.attrs["preset"] = PRESET
         h.attrs["transient_periods"] = s["transient"]
         h.attrs["periods"] = s["periods"]
+        h.attrs["replicates"] = s["replicates"]
+        h.attrs["seeds"] = np.asarray(seeds)
         h.attrs["elapsed"] = elapsed
         h.attrs["mapping"] = json.dumps(mp0.as_dict())
         h.attrs["checks"] = json.dumps(checks)
         h.attrs["closure"] = json.dumps(closure)
+        h.attrs["paired"] = ("both codes start from the same bed: the difference is taken per "
+                             "bed, its interval is the Student-t 95 % one over the beds")
         h.create_dataset("amplitude", data=np.asarray(amps)).attrs["units"] = "m"
         for A in amps:
-            c = cases[A]
+            c, r = cases[A], table[A]
             g = h.create_group(f"A_{A * 100:g}cm")
-            g.attrs["config"] = c["jd"]["config"].to_json()
             g.attrs["mapping"] = json.dumps(c["mp"].as_dict())
             g.attrs.update(dt=c["mp"].dt, e_max=c["e_max"], granulate_mass=c["m"],
-                           lammps_wall_time=c["lm"]["wall"], jaxdamp_wall_time=c["jd"]["wall"],
-                           jaxdamp_elapsed=c["jd"]["elapsed"],
-                           jaxdamp_balance_error=c["jd"]["balance"])
-            for code, key in (("lammps", "d_lammps"), ("jaxdamp", "d_jaxdamp")):
-                d = g.create_dataset(f"{code}/dissipation_per_period", data=c[key])
-                d.attrs["units"] = "J"
-            g.create_dataset("lammps/cumulative_dissipation", data=c["lm"]["D"]).attrs["units"] = "J"
-            g.create_dataset("lammps/input_work", data=c["lm"]["W"]).attrs["units"] = "J"
-            g.create_dataset("lammps/mechanical_energy", data=c["lm"]["E"]).attrs["units"] = "J"
-            g.create_dataset("lammps/elastic_energy", data=c["lm"]["elastic"]).attrs["units"] = "J"
-            g.create_dataset("lammps/boundary_time", data=c["lm"]["t"]).attrs["units"] = "s"
-            g.create_dataset("lammps/thermo", data=c["lm"]["thermo"]).attrs["columns"] = \
-                "step time z_cm vz_cm W (box frame)"
-            g.create_dataset("jaxdamp/cumulative_dissipation", data=c["jd"]["D"]).attrs["units"] = "J"
-            g.create_dataset("jaxdamp/boundary_time", data=c["jd"]["t"]).attrs["units"] = "s"
+                           n_stationary=r["n"], lammps_mean=r["ml"], lammps_se=r["sel"],
+                           jaxdamp_mean=r["mj"], jaxdamp_se=r["sej"], difference_mean=r["d"],
+                           difference_se=r["sed"], difference_ci95=r["hw"],
+                           welch_difference=r["welch_d"], welch_ci95=r["welch_hw"],
+                           agree=r["agree"])
+            bs = r["beds"]
+            g.create_dataset("seed", data=np.asarray(seeds))
+            g.create_dataset("stationary", data=np.asarray([x["stationary"] for x in bs]))
+            g.create_dataset("window_start", data=np.asarray([x["start"] for x in bs])
+                             ).attrs["units"] = "periods"
+            for key, name in (("ml", "lammps/mean_per_bed"), ("mj", "jaxdamp/mean_per_bed"),
+                              ("diff", "difference_per_bed")):
+                g.create_dataset(name, data=np.asarray([x[key] for x in bs])).attrs["units"] = \
+                    "J per period"
+            for k, (b, x) in enumerate(zip(c["beds"], bs)):
+                gb = g.create_group(f"bed_{k}")
+                gb.attrs["config"] = b["jd"]["config"].to_json()
+                gb.attrs.update(seed=b["seed"], window_start=x["start"],
+                                stationary=x["stationary"], lammps_wall_time=x["wall_l"],
+                                jaxdamp_wall_time=x["wall_j"], jaxdamp_elapsed=x["elapsed_j"],
+                                jaxdamp_balance_error=x["balance"], bed_settled=x["settled"])
+                for code, key in (("lammps", "d_lammps_all"), ("jaxdamp", "d_jaxdamp_all")):
+                    d = gb.create_dataset(f"{code}/dissipation_per_period", data=b[key])
+                    d.attrs["units"] = "J"
+                    d.attrs["note"] = "every period from t = 0; the window starts at window_start"
+                lm = b["lm"]
+                gb.create_dataset("lammps/cumulative_dissipation", data=lm["D"]).attrs["units"] = "J"
+                gb.create_dataset("lammps/input_work", data=lm["W"]).attrs["units"] = "J"
+                gb.create_dataset("lammps/mechanical_energy", data=lm["E"]).attrs["units"] = "J"
+                gb.create_dataset("lammps/elastic_energy", data=lm["elastic"]).attrs["units"] = "J"
+                gb.create_dataset("lammps/boundary_time", data=lm["t"]).attrs["units"] = "s"
+                if k == 0:  # the figure's bed (the others' thermo series stay in raw/beds)
+                    gb.create_dataset("lammps/thermo", data=lm["thermo"], compression="gzip",
+                                      shuffle=True).attrs["columns"] = \
+                        "step time z_cm vz_cm W (box frame)"
+                gb.create_dataset("jaxdamp/cumulative_dissipation", data=b["jd"]["D"]
+                                  ).attrs["units"] = "J"
+                gb.create_dataset("jaxdamp/boundary_time", data=b["jd"]["t"]).attrs["units"] = "s"
 
     # figure
     import matplotlib
@@ -790,56 +972,83 @@ def write_outputs(out, cases, checks, closure, s, version, command, elapsed, che
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axs = plt.subplots(2, 2, figsize=(12, 8.5))
+    fig, axs = plt.subplots(2, 3, figsize=(17, 9))
     axs = axs.ravel()
+    rows = [table[A] for A in amps]
     a = np.array(amps) * 100
+    tq = [r["hw"] / r["sed"] if r["sed"] > 0 else float("nan") for r in rows]  # t quantile
     ax = axs[0]
-    ax.errorbar(a - 0.03, [r["ml"] for r in rows], yerr=[r["sl"] for r in rows], fmt="o", capsize=4,
-                label="LAMMPS (±1 std over periods)")
-    ax.errorbar(a + 0.03, [r["mj"] for r in rows], yerr=[r["sj"] for r in rows], fmt="s", capsize=4,
-                label="jaxdamp (±1 std over periods)")
+    for off, key, se, mk, lab in ((-0.04, "ml", "sel", "o", "LAMMPS"),
+                                  (0.04, "mj", "sej", "s", "jaxdamp")):
+        line = ax.errorbar(a + off, [r[key] for r in rows],
+                           yerr=[r[se] * q for r, q in zip(rows, tq)], fmt=mk, capsize=4,
+                           label=f"{lab}: mean ± 95 % over beds")[0]
+        for A, r in zip(a, rows):
+            ax.plot(np.full(r["R"], A + off + 0.02), [x[key] for x in r["beds"]], ".",
+                    color=line.get_color(), alpha=0.5, ms=4)
     ax.plot(a, [r["e_max"] for r in rows], "k^--", lw=0.8, ms=4, label="E_max = 4 m A² ω²")
     ax.set_xlabel("A_d [cm]")
     ax.set_ylabel("dissipated energy per period [J]")
-    ax.set_title(f"{PRESET}: mean over {s['periods']} periods")
+    ax.set_title(f"{PRESET}: {rows[0]['R']} beds per amplitude (dots: each bed)")
     ax.legend(fontsize=8)
     ax = axs[1]
-    ax.errorbar(a - 0.03, [r["ml"] / r["e_max"] for r in rows],
-                yerr=[r["sl"] / r["e_max"] for r in rows], fmt="o", capsize=4, label="LAMMPS")
-    ax.errorbar(a + 0.03, [r["mj"] / r["e_max"] for r in rows],
-                yerr=[r["sj"] / r["e_max"] for r in rows], fmt="s", capsize=4, label="jaxdamp")
+    ax.errorbar(a - 0.04, [r["ml"] / r["e_max"] for r in rows],
+                yerr=[r["sel"] / r["e_max"] for r in rows], fmt="o", capsize=4, label="LAMMPS")
+    ax.errorbar(a + 0.04, [r["mj"] / r["e_max"] for r in rows],
+                yerr=[r["sej"] / r["e_max"] for r in rows], fmt="s", capsize=4, label="jaxdamp")
     ax.set_xlabel("A_d [cm]")
     ax.set_ylabel("E_d = E / E_max")
-    ax.set_title("dissipation efficiency (±1 std over periods)")
+    ax.set_title("dissipation efficiency (mean ± SE over beds)")
     ax.legend(fontsize=8)
     ax = axs[2]
-    for A in amps:
-        c = cases[A]
-        n0 = s["transient"]
-        k = np.arange(n0, n0 + len(c["d_lammps"])) + 1
-        line, = ax.plot(k, c["d_lammps"], "o-", ms=3, lw=0.8, label=f"LAMMPS {A * 100:g} cm")
-        ax.plot(k, c["d_jaxdamp"], "s--", ms=3, lw=0.8, color=line.get_color(),
-                label=f"jaxdamp {A * 100:g} cm")
-    ax.set_xlabel("period index n (dissipation over [(n-1)T, nT])")
-    ax.set_ylabel("dissipated energy in the period [J]")
-    ax.set_title("per-period series (same initial bed)")
-    ax.legend(fontsize=7, ncol=2)
+    ax.axhline(0, color="k", lw=0.8)
+    ax.errorbar(a, [r["rel"] * 100 for r in rows], yerr=[r["rel_hw"] * 100 for r in rows],
+                fmt="D", capsize=5, color="C3", label="mean ± 95 % (paired t over beds)")
+    for A, r in zip(a, rows):
+        ax.plot(np.full(r["R"], A + 0.05), [x["diff"] / r["mj"] * 100 for x in r["beds"]],
+                ".", color="C3", alpha=0.5, ms=5)
+    ax.set_xlabel("A_d [cm]")
+    ax.set_ylabel("LAMMPS − jaxdamp [% of jaxdamp's mean]")
+    ax.set_title("paired difference per bed (dots) and over beds")
+    ax.legend(fontsize=8)
     ax = axs[3]
     for A in amps:
-        c = cases[A]
-        tab = c["lm"]["thermo"]
-        t0 = s["transient"] * T
+        b, x = cases[A]["beds"][0], table[A]["beds"][0]
+        k = np.arange(1, len(b["d_lammps_all"]) + 1)
+        line, = ax.plot(k, b["d_lammps_all"], "o-", ms=2, lw=0.7, label=f"LAMMPS {A * 100:g} cm")
+        ax.plot(k, b["d_jaxdamp_all"], "s--", ms=2, lw=0.7, color=line.get_color(),
+                label=f"jaxdamp {A * 100:g} cm")
+        ax.axvline(x["start"] + 0.5, color=line.get_color(), lw=0.6, ls=":")
+    ax.set_xlabel("period index n (dissipation over [(n-1)T, nT])")
+    ax.set_ylabel("dissipated energy in the period [J]")
+    ax.set_title(f"per-period series, bed seed {seeds[0]} (dotted: window start)")
+    ax.legend(fontsize=7, ncol=2)
+    ax = axs[4]
+    for A in amps:
+        b, x = cases[A]["beds"][0], table[A]["beds"][0]
+        tab = b["lm"]["thermo"]
+        t0 = x["start"] * T
         ph, zl = phase_average(tab[:, 1], tab[:, 2], T, t0=t0)
-        rec = c["jd"]["records"]
+        rec = b["jd"]["records"]
         ph2, zj = phase_average(rec["t"], np.asarray(rec["z_cm"]) - np.asarray(rec["z_box"]), T, t0=t0)
         line, = ax.plot(ph, zl * 100, "-", label=f"LAMMPS {A * 100:g} cm")
         ax.plot(ph2, zj * 100, "--", color=line.get_color(), label=f"jaxdamp {A * 100:g} cm")
     ax.set_xlabel("drive phase t/T mod 1 (box at its top at 0)")
     ax.set_ylabel("centre of mass above the floor [cm]")
-    ax.set_title("phase-averaged bed height (analysed periods)")
+    ax.set_title(f"phase-averaged bed height (window), bed seed {seeds[0]}")
+    ax.legend(fontsize=7)
+    ax = axs[5]
+    w_ = 0.18
+    ax.bar(a - 1.5 * w_, [r["sdl"] for r in rows], w_, label="LAMMPS: std of bed means")
+    ax.bar(a - 0.5 * w_, [r["within_l"] for r in rows], w_, label="LAMMPS: within-run SE (mean)")
+    ax.bar(a + 0.5 * w_, [r["sdj"] for r in rows], w_, label="jaxdamp: std of bed means")
+    ax.bar(a + 1.5 * w_, [r["within_j"] for r in rows], w_, label="jaxdamp: within-run SE (mean)")
+    ax.set_xlabel("A_d [cm]")
+    ax.set_ylabel("J per period")
+    ax.set_title("spread between beds vs one run's standard error")
     ax.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(os.path.join(out, "figure.png"), dpi=120)
+    fig.savefig(os.path.join(out, "figure.png"), dpi=110)
     plt.close(fig)
 
     # summary
@@ -849,15 +1058,33 @@ def write_outputs(out, cases, checks, closure, s, version, command, elapsed, che
     w(f"Command: `{command}` ({'quick' if 'quick' in command else 'full'} mode). "
       f"Machine: {platform.machine()}, 2 cores shared with another user's jobs; LAMMPS serial "
       "(one MPI rank, `OMP_NUM_THREADS=1`), jaxdamp on the same machine "
-      f"(engine `{cases[amps[0]]['jd']['config'].numerics.engine}`). Total elapsed "
-      f"{elapsed:.0f} s.\n")
+      f"(engine `{cases[amps[0]]['beds'][0]['jd']['config'].numerics.engine}`). Total elapsed "
+      f"{elapsed:.0f} s this invocation; "
+      f"{sum(x['reused'] for A in amps for x in table[A]['beds'])} of "
+      f"{sum(len(table[A]['beds']) for A in amps)} beds read back from `raw/beds` (their own "
+      f"compute: jaxdamp {sum(x['elapsed_j'] for A in amps for x in table[A]['beds']):.0f} s "
+      f"including settling, LAMMPS {sum(x['wall_l'] for A in amps for x in table[A]['beds']):.0f} s).\n")
     w(f"LAMMPS: `{version}` (`lmp -h`, Debian package, GRANULAR). jaxdamp {jd_version}.\n")
     w(f"System: preset `{PRESET}` — cube 8 cm, f = 70 Hz, 300 frictionless steel spheres "
       f"R = {mp0.R * 1e3:g} mm (m = {mp0.mass:.6g} kg each, granulate "
       f"{mp0.mass * 300:.5g} kg), E = {mp0.E:.3g} Pa, ν = {mp0.nu:g}, ε = 0.75 at 1 m/s "
-      f"(A = {mp0.A:.6g} s), walls of the same material. {s['transient']} transient periods, then "
-      f"{s['periods']} analysed periods; both codes start from the same settled bed "
-      "(jaxdamp's settling) and use the same dt (jaxdamp's `params.dt` per amplitude).\n")
+      f"(A = {mp0.A:.6g} s), walls of the same material. {s['transient'] + s['periods']} "
+      f"periods per run, of which the first {s['transient']} are always discarded.\n")
+    w(f"**Replicates.** R = {s['replicates']} independently poured beds per amplitude: bed k is "
+      f"settled by jaxdamp with `numerics.seed` = {', '.join(str(x) for x in seeds)} "
+      "(`jaxdamp.analysis.stats.replicate_seed`: an independently jittered lattice, settled "
+      "anew), and that same settled bed is the initial state of both codes, which use the same "
+      "dt (jaxdamp's `params.dt` per amplitude). The comparison is therefore **paired**: per "
+      "bed, the difference LAMMPS − jaxdamp of the two codes' mean dissipation per period over "
+      "one common window; across beds, the mean ± SE of these differences and the Student-t "
+      "95 % interval (R − 1 degrees of freedom). The beds are independent of each other; the "
+      "two codes on one bed are not. The unpaired Welch 95 % interval of the two codes' bed "
+      "means is given alongside.\n")
+    w("**Window and stationarity.** Per bed, the start of the steady state is detected by MSER "
+      "(`jaxdamp.analysis.stats.mser`, never before the transient periods, searched up to half "
+      "the run) on each code's per-period dissipation; the window common to both codes starts at "
+      "the later of the two (`stats.shared_window`) and runs to the end. A bed counts only if "
+      "both series are stationary (the MSER minimum lies inside the search range).\n")
     w("## Mapping (jaxdamp → LAMMPS)\n")
     w("| quantity | jaxdamp | LAMMPS input |\n| --- | --- | --- |")
     w(f"| grain–grain | k_n = (4/3) E* sqrt(R/2) = {mp0.k_pp:.6g} N m^-3/2, γ_n = 1.5 A k_n = "
@@ -870,7 +1097,7 @@ def write_outputs(out, cases, checks, closure, s, version, command, elapsed, che
       "wall: E_w/(2(1-ν)) with E_w = E/(1+ν) |")
     w("| tangential | none (μ = 0, γ_s = 0) | `tangential linear_nohistory 0 0` |")
     w("| clipping | F_n = max(0, ·) | `limit_damping` (pair and walls) |")
-    dts = ", ".join(f"{r['dt']:.6g} s ({r['A'] * 100:g} cm)" for r in rows)
+    dts = ", ".join(f"{cases[A]['mp'].dt:.6g} s ({A * 100:g} cm)" for A in amps)
     w(f"| time step | params.dt | same: {dts} |")
     w("| drive | walls move, z = A cos ωt | box frame: static walls, `fix gravity` with "
       "g_eff = g − A ω² cos(ω t) |")
@@ -911,53 +1138,87 @@ def write_outputs(out, cases, checks, closure, s, version, command, elapsed, che
       f"{', '.join(fmt(x, 3) for x in closure['D'][1:])} J at the period boundaries, "
       f"{closure['relative'] * 100:.2g} % of the largest |ΔE| "
       f"({max(abs(x - closure['E'][0]) for x in closure['E']):.4g} J) and "
-      f"{max(abs(x) for x in closure['D']) / cases[closure['amplitude']]['d_lammps'].mean():.1e} "
+      f"{max(abs(x) for x in closure['D']) / table[closure['amplitude']]['ml']:.1e} "
       "of the damped bed's dissipation per period at that amplitude.\n")
-    w("## Dissipation per period\n")
-    w("Mean ± standard deviation over the analysed periods (in brackets: standard error of the "
-      "mean, std/sqrt(N) inflated by sqrt((1+ρ)/(1-ρ)) where the lag-1 autocorrelation ρ of the "
-      "per-period series is positive). E_d = E / E_max, E_max = 4 m A_d² ω² (SPEC §4), energy "
-      "per period (not power).\n")
-    w("| A_d [cm] | E_max [J] | LAMMPS [J] | jaxdamp [J] | LAMMPS − jaxdamp | E_d LAMMPS | E_d jaxdamp |")
-    w("| --- | --- | --- | --- | --- | --- | --- |")
-    for r in rows:
-        w(f"| {r['A'] * 100:g} | {r['e_max']:.4g} | {r['ml']:.4g} ± {r['sl']:.3g} ({r['el']:.2g}) | "
-          f"{r['mj']:.4g} ± {r['sj']:.3g} ({r['ej']:.2g}) | {r['diff']:+.3g} J ({r['rel'] * 100:+.2f} %; "
-          f"{abs(r['diff']) / r['comb'] if r['comb'] > 0 else float('nan'):.2g} combined s.e.) | "
-          f"{r['ml'] / r['e_max']:.4f} | {r['mj'] / r['e_max']:.4f} |")
-    w("\nBoth codes start from the same bed, but the bed is chaotic: the per-period series "
-      "decorrelate, so the comparison is statistical. Cross-correlation of the two codes' "
-      "per-period values, the number of leading analysed periods that agree within 1 %, and "
-      "each series' lag-1 autocorrelation (near 0: the periods are nearly independent and "
-      "std/sqrt(N) is a fair uncertainty of the mean; clearly positive: slow fluctuations, the "
-      "standard error is inflated accordingly):\n")
-    w("| A_d [cm] | cross-correlation | leading periods within 1 % | lag-1 LAMMPS | lag-1 jaxdamp |")
+    w("## Dissipation per period across beds\n")
+    w("Per amplitude, over the R beds: each code's mean ± SE (s/sqrt(R)) of the beds' window "
+      "means, the paired difference LAMMPS − jaxdamp (mean ± SE of the per-bed differences, "
+      "[Student-t 95 % half-width]), its share of jaxdamp's mean, the unpaired Welch 95 % "
+      "interval of the two codes' bed means, and E_d = E / E_max (E_max = 4 m A_d² ω², SPEC §4; "
+      "energy per period, not power) ± SE.\n")
+    w("| A_d [cm] | beds (stationary) | E_max [J] | LAMMPS [J] | jaxdamp [J] | LAMMPS − jaxdamp, paired [J] | "
+      "in % of jaxdamp | Welch 95 % (unpaired) [J] | E_d LAMMPS | E_d jaxdamp | interval |")
+    w("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    for A in amps:
+        r = table[A]
+        w(f"| {A * 100:g} | {r['R']} ({r['n']}) | {r['e_max']:.4g} | {r['ml']:.4g} ± {r['sel']:.2g} | "
+          f"{r['mj']:.4g} ± {r['sej']:.2g} | {r['d']:+.3g} ± {r['sed']:.2g} [± {r['hw']:.2g}] | "
+          f"{r['rel'] * 100:+.2f} ± {r['rel_hw'] * 100:.2f} % | {r['welch_d']:+.3g} ± {r['welch_hw']:.2g} | "
+          f"{r['ml'] / r['e_max']:.4f} ± {r['sel'] / r['e_max']:.2g} | "
+          f"{r['mj'] / r['e_max']:.4f} ± {r['sej'] / r['e_max']:.2g} | "
+          + ("contains 0" if r["agree"] else "excludes 0") + " |")
+    w("\nSpread between beds against one run's error: the standard deviation of the beds' means "
+      "(what a single run's mean scatters by) next to the mean within-run standard error of one "
+      "bed's window mean (std over periods / sqrt(N), inflated by sqrt((1+ρ)/(1-ρ)) for a positive "
+      "lag-1 autocorrelation ρ):\n")
+    w("| A_d [cm] | LAMMPS: std of bed means [J] | LAMMPS: within-run SE [J] | "
+      "jaxdamp: std of bed means [J] | jaxdamp: within-run SE [J] |")
     w("| --- | --- | --- | --- | --- |")
-    for r in rows:
-        w(f"| {r['A'] * 100:g} | {r['corr']:.3f} | {r['first_apart']} of {s['periods']} | "
-          f"{r['lag_l']:.2f} | {r['lag_j']:.2f} |")
-    w("\nOther observables:\n")
-    for r in rows:
-        w(f"- {r['A'] * 100:g} cm: phase-averaged centre-of-mass height (50 phase bins, analysed "
-          f"periods) differs between the codes by at most {r['zcm_diff'] * 1e3:.2f} mm "
-          f"(its swing over a period: {r['zcm_span'] * 1e3:.1f} mm); dissipation during the "
-          f"{s['transient']} transient periods {r['transient_l']:.4g} J (LAMMPS) vs "
-          f"{r['transient_j']:.4g} J (jaxdamp); mean dissipation per period in the first / "
-          f"second half of the analysed periods {r['halves_l'][0]:.4g} / {r['halves_l'][1]:.4g} J "
-          f"(LAMMPS), {r['halves_j'][0]:.4g} / {r['halves_j'][1]:.4g} J (jaxdamp); largest "
-          f"elastic energy at a LAMMPS period boundary {r['el_max']:.3g} J (included in the "
-          "balance).")
-    w("\nWall times (stepping only; both on one core of a shared 2-core machine):\n")
-    w("| A_d [cm] | dt [s] | steps | LAMMPS [s] | LAMMPS loop [s] | LAMMPS [µs/step] | "
+    for A in amps:
+        r = table[A]
+        w(f"| {A * 100:g} | {r['sdl']:.3g} | {r['within_l']:.3g} | {r['sdj']:.3g} | "
+          f"{r['within_j']:.3g} |")
+    w(f"\n(With R = {s['replicates']} beds the standard deviation of the bed means is itself "
+      "uncertain by tens of percent.)\n")
+    w("## Per bed\n")
+    w("Window: the periods n of the common window (period n is [(n−1)T, nT]; in brackets the "
+      "first steady period detected in LAMMPS' / jaxdamp's series) and their number. Means ± standard deviation over the window's "
+      "periods (in brackets: the within-run standard error as above). Cross-correlation of the "
+      "two codes' per-period values, the number of leading window periods that agree within "
+      "1 %, and each series' lag-1 autocorrelation: the bed is chaotic, so the two codes' "
+      "trajectories decorrelate and the comparison of one bed is statistical.\n")
+    w("| A_d [cm] | seed | window (starts L / J) | stationary | LAMMPS [J] | jaxdamp [J] | "
+      "LAMMPS − jaxdamp [J] | / combined within-run SE | cross-corr. | leading within 1 % | "
+      "lag-1 L / J |")
+    w("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    for A in amps:
+        for x in table[A]["beds"]:
+            w(f"| {A * 100:g} | {x['seed']} | {x['start'] + 1}–{x['start'] + x['kept']} "
+              f"({x['start_l'] + 1} / {x['start_j'] + 1}), {x['kept']} | "
+              f"{'yes' if x['stationary'] else 'NO'} | "
+              f"{x['ml']:.4g} ± {x['sl']:.3g} ({x['el']:.2g}) | "
+              f"{x['mj']:.4g} ± {x['sj']:.3g} ({x['ej']:.2g}) | {x['diff']:+.3g} "
+              f"({x['rel'] * 100:+.2f} %) | "
+              f"{abs(x['diff']) / x['comb'] if x['comb'] > 0 else float('nan'):.2g} | "
+              f"{x['corr']:.3f} | {x['first_apart']} of {x['kept']} | "
+              f"{x['lag_l']:.2f} / {x['lag_j']:.2f} |")
+    w("\nOther observables per bed: largest difference between the codes of the phase-averaged "
+      "centre-of-mass height (50 phase bins, window) and its swing over a period; dissipation "
+      f"during the first {s['transient']} periods; mean dissipation per period in the first / "
+      "second half of the window; largest elastic energy at a LAMMPS period boundary (included "
+      "in the balance).\n")
+    w("| A_d [cm] | seed | z_cm difference [mm] | z_cm swing [mm] | transient L / J [J] | "
+      "halves LAMMPS [J] | halves jaxdamp [J] | elastic max [J] |")
+    w("| --- | --- | --- | --- | --- | --- | --- | --- |")
+    for A in amps:
+        for x in table[A]["beds"]:
+            w(f"| {A * 100:g} | {x['seed']} | {x['zcm_diff'] * 1e3:.2f} | {x['zcm_span'] * 1e3:.1f} | "
+              f"{x['transient_l']:.4g} / {x['transient_j']:.4g} | {x['halves_l'][0]:.4g} → "
+              f"{x['halves_l'][1]:.4g} | {x['halves_j'][0]:.4g} → {x['halves_j'][1]:.4g} | "
+              f"{x['el_max']:.3g} |")
+    w("\nWall times (stepping only; both on one core of a shared 2-core machine; a bed read back "
+      "from `raw/beds` keeps the times of the run that made it):\n")
+    w("| A_d [cm] | seed | dt [s] | steps | LAMMPS [s] | LAMMPS loop [s] | LAMMPS [µs/step] | "
       "jaxdamp stepping [s] | jaxdamp [µs/step] | jaxdamp incl. settling + compile [s] | "
       "jaxdamp balance error | jaxdamp max abs(residual) [J] | jaxdamp residual per period [J] |")
-    w("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
-    for r in rows:
-        w(f"| {r['A'] * 100:g} | {r['dt']:.5g} | {r['steps']} | {r['wall_l']:.1f} | {r['loop_l']:.1f} | "
-          f"{r['us_l']:.1f} | {r['wall_j']:.1f} | {r['us_j']:.1f} | {r['elapsed_j']:.1f} | "
-          f"{r['balance']:.2g} | {r['residual']:.3g} | {r['resid_rate']:+.3g} "
-          f"({r['resid_rate'] / r['mj'] * 100:+.2g} % of its dissipation) |")
-    w("\nLAMMPS wall time includes its input parsing, the 70 one-period `run` segments and the "
+    w("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
+    for A in amps:
+        for x in table[A]["beds"]:
+            w(f"| {A * 100:g} | {x['seed']} | {x['dt']:.5g} | {x['steps']} | {x['wall_l']:.1f} | "
+              f"{x['loop_l']:.1f} | {x['us_l']:.1f} | {x['wall_j']:.1f} | {x['us_j']:.1f} | "
+              f"{x['elapsed_j']:.1f} | {x['balance']:.2g} | {x['residual']:.3g} | "
+              f"{x['resid_rate']:+.3g} ({x['resid_rate'] / x['mj'] * 100:+.2g} % of its dissipation) |")
+    w("\nLAMMPS wall time includes its input parsing, the one-period `run` segments and the "
       "snapshot writes; 'loop' is the sum of LAMMPS' own loop times. jaxdamp stepping is "
       "`summary['wall_time']` (chunks only; samples every T/500 here, which costs extra "
       "host round trips with the native engine); its balance error is the runner's "
@@ -965,26 +1226,42 @@ def write_outputs(out, cases, checks, closure, s, version, command, elapsed, che
       "period: final residual E − E0 + losses − input divided by the simulated periods (a "
       "steady drift, positive: the loss channels plus the energy change exceed the input). "
       "LAMMPS' dissipation is defined by its energy balance, so it has no such residual; its "
-      "accounting closes to the closure test above.")
-    w("\nFigure: `figure.png` — dissipation per period and E_d vs A_d for both codes (error bars "
-      "±1 std over periods), the per-period series of both codes, and the phase-averaged "
-      "centre-of-mass height of the bed above the floor over the analysed periods.\n")
+      "accounting closes to the closure test above."
+      + ("" if all(x["settled"] for A in amps for x in table[A]["beds"]) else
+         f" {sum(not x['settled'] for A in amps for x in table[A]['beds'])} of "
+         f"{sum(len(table[A]['beds']) for A in amps)} beds did not meet jaxdamp's settling "
+         "criterion (fastest grain below `numerics.settle_speed`) within the settle time: "
+         "fastest grain at the end of settling "
+         f"{min(x['max_speed'] for A in amps for x in table[A]['beds']):.2g}–"
+         f"{max(x['max_speed'] for A in amps for x in table[A]['beds']):.2g} m/s; both codes "
+         "start from that same state, so the comparison is unaffected, and the transient "
+         "periods are discarded."))
+    w("\nFigure: `figure.png` — top: dissipation per period (mean ± 95 % over beds, dots: each "
+      "bed), E_d (± SE over beds) and the paired difference LAMMPS − jaxdamp in % (dots: each "
+      "bed, bar: paired 95 % interval); bottom: the per-period series of both codes and the "
+      f"phase-averaged centre-of-mass height above the floor for the bed of seed {seeds[0]}, and "
+      "the spread of the bed means against one run's standard error.\n")
     w("## Verdict\n")
     w(VERDICT_PLACEHOLDER)
     w("")
-    w("Data: `data.h5` (per amplitude: per-period dissipation of both codes, LAMMPS cumulative "
-      "input work / mechanical energy / dissipation at the boundaries, thermo series; mapping "
-      "and checks as JSON attributes). LAMMPS inputs, logs and snapshots: `raw/` (git-ignored).")
+    w("Data: `data.h5` (per amplitude: the across-bed estimates as attributes, per-bed means, "
+      "seeds, windows, stationarity; per bed: the per-period dissipation of both codes, LAMMPS "
+      "cumulative input work / mechanical energy / dissipation at the boundaries; the thermo "
+      f"series of the bed of seed {seeds[0]}; "
+      "mapping and checks as JSON attributes). LAMMPS inputs, logs and snapshots, and every bed's "
+      "results (`raw/beds/*.npz`, reused by a re-run with the same settings): `raw/` "
+      "(git-ignored).")
     text = "\n".join(L) + "\n"
-    text = text.replace(VERDICT_PLACEHOLDER, verdict(rows, s, checks))
+    text = text.replace(VERDICT_PLACEHOLDER, verdict(table, amps, s, checks))
     with open(os.path.join(out, "summary.md"), "w") as fh:
         fh.write(text)
+    return table
 
 
 VERDICT_PLACEHOLDER = "@@VERDICT@@"
 
 
-def verdict(rows, s, checks) -> str:
+def verdict(table, amps, s, checks) -> str:
     out = []
     pair_ok = all(abs(r["restitution"] / r["ref_restitution"] - 1) < 1e-3 for r in checks["pair"])
     wall_ok = all(abs(r["restitution"] / r["ref_restitution"] - 1) < 1e-3 for r in checks["wall"])
@@ -994,40 +1271,29 @@ def verdict(rows, s, checks) -> str:
                   "within 0.1 % of Hertz once the wall-modulus bug is compensated)."
                   if pair_ok and wall_ok and static_ok else
                   "only partly — see the check tables above (a check missed 0.1 %)."))
-    for r in rows:
-        within_std = abs(r["diff"]) <= max(r["sl"], r["sj"])
-        within_se = abs(r["diff"]) <= 2 * r["comb"]
+    for A in amps:
+        r = table[A]
         out.append(
-            f"- A_d = {r['A'] * 100:g} cm: LAMMPS − jaxdamp = {r['diff']:+.3g} J "
-            f"({r['rel'] * 100:+.2f} % of jaxdamp's {r['mj']:.4g} J); period-to-period std "
-            f"{r['sl']:.3g} J (LAMMPS) / {r['sj']:.3g} J (jaxdamp), combined standard error of "
-            f"the difference of the means {r['comb']:.2g} J: "
-            + ("within" if within_std else "OUTSIDE") + " the run-to-run spread (1 std), "
-            + ("within" if within_se else "OUTSIDE") + " 2 combined standard errors"
-            + (f" (slow fluctuations: lag-1 autocorrelation {r['lag_l']:.2f} / {r['lag_j']:.2f}, "
-               f"half-window means {r['halves_l'][0]:.4g} → {r['halves_l'][1]:.4g} J and "
-               f"{r['halves_j'][0]:.4g} → {r['halves_j'][1]:.4g} J: the mean of "
-               f"{s['periods']} periods depends on the realisation more than at the other "
-               "amplitudes)." if max(r["lag_l"], r["lag_j"]) > 0.3 else "."))
-    if all(abs(r["diff"]) <= 2 * r["comb"] for r in rows):
-        worst = max(2 * r["comb"] / r["mj"] for r in rows)
-        same = [r for r in rows if r["corr"] > 0.9]
-        out.append(f"- Overall: agreement within the statistical resolution of "
-                   f"{s['periods']} periods at every amplitude; the resolution (2 combined "
-                   f"standard errors) is at most {worst * 100:.2g} % of the dissipation, so a "
-                   "systematic difference between the codes larger than that is excluded."
-                   + (" Where the per-period series are decorrelated, a difference far below the "
-                      "standard error is luck of the draw, not a sharper result."
-                      if len(same) < len(rows) else "")
-                   + (" At " + ", ".join(f"{r['A'] * 100:g} cm" for r in same)
-                      + " the two codes still follow the same trajectory (per-period "
-                      "cross-correlation > 0.9, same initial bed): there the close match reflects "
-                      "the same dynamics step by step, not independent statistics." if same else ""))
+            f"- A_d = {A * 100:g} cm ({r['n']} of {r['R']} beds stationary): LAMMPS "
+            f"{r['ml']:.4g} ± {r['sel']:.2g} J, jaxdamp {r['mj']:.4g} ± {r['sej']:.2g} J per "
+            f"period; paired difference LAMMPS − jaxdamp {r['d']:+.3g} ± {r['hw']:.2g} J "
+            f"(95 %; {r['rel'] * 100:+.2f} ± {r['rel_hw'] * 100:.2f} % of jaxdamp's mean): "
+            + ("the interval contains 0 — no difference between the codes is resolved."
+               if r["agree"] else
+               "the interval EXCLUDES 0 — the codes differ, a finding to explain (mapping, "
+               "integrator, accounting), not to tune.")
+            + f" Welch (unpaired): {r['welch_d']:+.3g} ± {r['welch_hw']:.2g} J.")
+    if all(table[A]["agree"] for A in amps):
+        worst = max(table[A]["rel_hw"] for A in amps)
+        out.append(f"- Overall: at every amplitude the paired 95 % interval of the difference "
+                   f"contains 0 ({s['replicates']} beds each); its half-width, at most "
+                   f"{worst * 100:.2g} % of the dissipation, bounds a systematic difference "
+                   "between the codes.")
     else:
-        out.append("- Overall: at least one amplitude disagrees beyond 2 combined standard "
-                   "errors — a finding to explain (mapping, integrator, accounting), not to tune.")
+        out.append("- Overall: at least one amplitude's paired 95 % interval excludes 0.")
     if s["periods"] < 10:
-        out.append(f"- Quick mode: {s['periods']} periods only — the spread estimates are rough.")
+        out.append(f"- Quick mode: {s['periods']} periods per window only — the estimates are "
+                   "rough.")
     return "\n".join(out)
 
 

@@ -228,6 +228,41 @@ def test_design_starts_and_variables_quick(tmp_path):
     assert "## B. Three design variables" in (tmp_path / "summary.md").read_text()
 
 
+@pytest.mark.skipif(__import__("shutil").which("lmp") is None,
+                    reason="LAMMPS (`lmp`) is not on PATH; apt-get install lammps")
+def test_lammps_crosscheck_quick(tmp_path):
+    """The LAMMPS cross-check at test size (3 cm, 2 + 3 periods, 2 beds, ~30 s): the mapping
+    checks pass, each bed (its own seed) is run by both codes from the same settled state, the
+    paired difference LAMMPS − jaxdamp has a finite 95 % interval over the beds; a re-run reuses
+    every bed from raw/beds; data, figure and summary carry the replicates."""
+    import h5py
+
+    lc = _load("lammps_crosscheck")
+    res = lc.main(["--quick", "--out", str(tmp_path), "--no-progress"])
+    assert all(abs(r["restitution"] / r["ref_restitution"] - 1) < 1e-3
+               for r in res["checks"]["pair"] + res["checks"]["wall"])
+    beds = res["cases"][0.03]["beds"]
+    assert [b["seed"] for b in beds] == [0, 1] and not any(b["reused"] for b in beds)
+    assert not np.array_equal(beds[0]["jd"]["bed_r"], beds[1]["jd"]["bed_r"])  # two beds
+    r = res["table"][0.03]
+    assert r["R"] == 2 and r["n"] == 2
+    assert np.isfinite(r["sed"]) and r["hw"] > r["sed"] > 0  # t_{0.975, 1} = 12.7
+    assert r["d"] == pytest.approx(np.mean([x["diff"] for x in r["beds"]]))
+    assert 0.7 < r["ml"] / r["e_max"] < 0.95 and 0.7 < r["mj"] / r["e_max"] < 0.95
+    assert abs(r["rel"]) < 0.05  # the codes agree within 5 % even over 3 periods
+    again = lc.main(["--quick", "--out", str(tmp_path), "--no-progress"])
+    assert all(b["reused"] for b in again["cases"][0.03]["beds"])
+    assert again["table"][0.03]["d"] == r["d"]
+    with h5py.File(tmp_path / "data.h5") as h:
+        g = h["A_3cm"]
+        assert list(g["seed"][()]) == [0, 1] and g["difference_per_bed"].shape == (2,)
+        assert g.attrs["difference_ci95"] == pytest.approx(r["hw"])
+        assert g["bed_1/lammps/dissipation_per_period"].shape == (5,)
+    text = (tmp_path / "summary.md").read_text()
+    assert "R = 2 independently poured beds" in text and "paired" in text
+    assert (tmp_path / "figure.png").stat().st_size > 10_000
+
+
 def test_binary_mixtures_quick(tmp_path):
     """The 2023 paper's families at test size (σ = 0.5, 2 amplitudes, 1 + 2 periods, 2 beds):
     every family runs, the class builders' conserved quantities hold in the runs, the energy balance
