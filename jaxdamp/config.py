@@ -272,6 +272,12 @@ class Numerics:
       engine: ``"auto"`` (the compiled CPU kernel of :mod:`jaxdamp.engine.native` when JAX runs on
         the CPU, else pure JAX), ``"jax"`` or ``"native"``. Both compute the same step;
         gradients always use JAX.
+      precision: ``"float64"`` (default) or ``"float32"``: the floating-point type the JAX
+        engine evaluates the contact laws in (for accelerators, where float32 is much faster).
+        The state, the integration, each contact's overlap and normal, and every sum of
+        energies and powers stay float64; docs/physics.md §3 gives what float32 costs in
+        accuracy. ``"float32"`` runs on the JAX engine (``"auto"`` picks it; the native
+        kernel is float64 only).
     """
 
     dt: float | None = None
@@ -289,6 +295,7 @@ class Numerics:
     settle_speed: float = 5e-3
     settle_drag: float = 20.0
     engine: str = "auto"
+    precision: str = "float64"
 
 
 @dataclass(frozen=True)

@@ -259,6 +259,13 @@ def validate(config: Config) -> Config:
         )
     if num.engine not in ("auto", "jax", "native"):
         raise ConfigError(f"numerics.engine = {num.engine!r}: expected 'auto', 'jax' or 'native'")
+    if num.precision not in ("float64", "float32"):
+        raise ConfigError(f"numerics.precision = {num.precision!r}: expected 'float64' or "
+                          "'float32'")
+    if num.precision == "float32" and num.engine == "native":
+        raise ConfigError("numerics.precision = 'float32' runs on the JAX engine only (the "
+                          "native kernel computes in float64): set numerics.engine = 'jax' or "
+                          "'auto'")
     if num.engine == "native":
         from jaxdamp.engine import native
 

@@ -53,8 +53,25 @@ def start(cfg: Config, r, v, w=None, z=0.0, zd=0.0, dt=None, **param_changes):
     return model, pb, b.states, b.nbrs
 
 
-#: The two implementations of the step (``numerics.engine``); physics tests run on both.
-ENGINES = ("jax", "native")
+#: The implementations of the step the physics tests run on: the two engines
+#: (``numerics.engine``) and the JAX engine with its contact laws in float32
+#: (``numerics.precision = "float32"``, :func:`engine_model`).
+ENGINES = ("jax", "native", "float32")
+
+
+def engine_model(model, engine: str):
+    """``(model, engine)`` for a test's ``engine`` of :data:`ENGINES`: ``"float32"`` is the JAX
+    engine with ``model.precision = "float32"``."""
+    if engine == "float32":
+        return dataclasses.replace(model, precision="float32"), "jax"
+    return model, engine
+
+
+def engine_overrides(engine: str) -> list[str]:
+    """Configuration overrides selecting a test's ``engine`` of :data:`ENGINES`."""
+    if engine == "float32":
+        return ["numerics.engine='jax'", "numerics.precision='float32'"]
+    return [f"numerics.engine='{engine}'"]
 
 
 def run_steps(model, pb, st, nbrs, n_records, record_every, engine="jax"):
@@ -67,7 +84,8 @@ def run_steps(model, pb, st, nbrs, n_records, record_every, engine="jax"):
 def advance(model, st, nbrs, pb, n_records, record_every, engine="jax", on_realloc=None):
     """One driver chunk from given states and lists (no non-finite check: tests may blow
     up on purpose): ``(batch, records)``."""
-    b = driver.Batch(model, pb, st, nbrs, driver.resolve_engine(engine), 1.5)
+    model, engine = engine_model(model, engine)
+    b = driver.Batch(model, pb, st, nbrs, driver.resolve_engine(engine, model.precision), 1.5)
     return driver.advance(b, n_records, record_every, on_realloc=on_realloc, check=False)
 
 

@@ -51,10 +51,26 @@ def test_grains_that_do_not_fit_the_box():
         (["grains.0.material.restitution=0.8"], r"either gamma_n .* or restitution"),
         (["numerics.analysis_window=0"], r"numerics\.analysis_window"),
         (["system='orbit'"], r"system = 'orbit'"),
+        (["numerics.precision='float16'"], r"numerics\.precision = 'float16': expected"),
+        (["numerics.precision='float32'", "numerics.engine='native'"],
+         r"numerics\.precision = 'float32' runs on the JAX engine only"),
     ],
 )
 def test_invalid_values_name_the_parameter(over, match):
     _err(over, match)
+
+
+def test_float32_precision_runs_on_the_jax_engine():
+    """``numerics.precision = 'float32'`` reaches the model, and ``auto`` resolves to the JAX
+    engine for it (the native kernel is float64 only)."""
+    from jaxdamp.engine.simulate import resolve_engine
+    from jaxdamp.physics.model import build
+
+    cfg = apply_overrides(presets.get("sanchez2012-optimal"), ["numerics.precision='float32'"])
+    assert build(validate(cfg))[0].precision == "float32"
+    assert resolve_engine("auto", "float32") == "jax"
+    with pytest.raises(ValueError, match="native kernel computes in float64"):
+        resolve_engine("native", "float32")
 
 
 def test_time_step_above_collision_limit():

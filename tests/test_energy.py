@@ -4,7 +4,7 @@ import math
 
 import numpy as np
 import pytest
-from helpers import ENGINES, config, run_steps, start
+from helpers import ENGINES, config, engine_overrides, run_steps, start
 
 from jaxdamp.cases import presets
 from jaxdamp.config import Material, Primary, apply_overrides
@@ -106,7 +106,7 @@ def test_energy_balance_closes_in_driven_damper(system, engine):
     damper (40 grains, friction and collisions) on the primary (S1) and in a driven box (S2)."""
     cfg = presets.get("sanchez2012-optimal")
     over = ["grains.0.count=40", "box.Lz=0.06", "numerics.duration=0.2",
-            "numerics.chunk=0.1", "numerics.settle_time=0.3", f"numerics.engine='{engine}'"]
+            "numerics.chunk=0.1", "numerics.settle_time=0.3", *engine_overrides(engine)]
     if system == "driven":
         over += ["system='driven'", "drive.amplitude=0.004", "frequency=20"]
     cfg = apply_overrides(cfg, over)

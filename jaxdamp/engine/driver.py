@@ -147,7 +147,8 @@ def start(model: Model, params: Params, r, v, w, q, z, zd, t: float = 0.0, *,
     if e_start is not None:
         states = dataclasses.replace(states, e_start=jnp.asarray(e_start, jnp.float64))
     nbrs = _allocate(model, states, params, multiplier)
-    return _placed(Batch(model, params, states, nbrs, resolve_engine(engine), multiplier, place))
+    engine = resolve_engine(engine, model.precision)
+    return _placed(Batch(model, params, states, nbrs, engine, multiplier, place))
 
 
 def attach(model: Model, params: Params, states: State, *, engine: str = "auto",
@@ -155,7 +156,8 @@ def attach(model: Model, params: Params, states: State, *, engine: str = "auto",
     """A batch around existing (batched) states: neighbour lists allocated for them (with at
     least ``at_least`` neighbours per grain)."""
     nbrs = _allocate(model, states, params, multiplier, at_least)
-    return _placed(Batch(model, params, states, nbrs, resolve_engine(engine), multiplier, place))
+    engine = resolve_engine(engine, model.precision)
+    return _placed(Batch(model, params, states, nbrs, engine, multiplier, place))
 
 
 def grow(batch: Batch) -> Batch:
@@ -173,7 +175,8 @@ def restore(model: Model, params: Params, arrays: dict, *, engine: str = "auto",
     states, nbrs = arrays_to_state(arrays)
     if states.t.ndim == 0:  # a single system's checkpoint
         states, nbrs = batched(states), batched(nbrs)
-    return _placed(Batch(model, params, states, nbrs, resolve_engine(engine), multiplier, place))
+    engine = resolve_engine(engine, model.precision)
+    return _placed(Batch(model, params, states, nbrs, engine, multiplier, place))
 
 
 def checkpoint(batch: Batch, systems: int | None = None) -> dict:

@@ -26,15 +26,20 @@ from jaxdamp.physics.model import Model, Params, State
 ENGINES = ("auto", "jax", "native")
 
 
-def resolve_engine(engine: str) -> str:
+def resolve_engine(engine: str, precision: str = "float64") -> str:
     """``"auto"`` is the compiled CPU engine (:mod:`jaxdamp.engine.native`) when JAX runs on the CPU
-    and numba is installed, else the pure-JAX engine."""
+    and numba is installed, else the pure-JAX engine; with ``precision = "float32"``
+    (``numerics.precision``) always the JAX engine (the native kernel is float64)."""
     if engine not in ENGINES:
         raise ValueError(f"engine = {engine!r}: expected one of {ENGINES}")
+    if engine == "native" and precision != "float64":
+        raise ValueError(f"engine = 'native' with precision = {precision!r}: the native kernel "
+                         "computes in float64; use the JAX engine")
     if engine == "auto":
         from jaxdamp.engine import native
 
-        return "native" if native.AVAILABLE and jax.default_backend() == "cpu" else "jax"
+        native_ok = native.AVAILABLE and jax.default_backend() == "cpu" and precision == "float64"
+        return "native" if native_ok else "jax"
     return engine
 
 
@@ -52,7 +57,7 @@ def chunk_fn(model: Model, n_records: int, record_every: int, remat: bool = Fals
     the native chunk advances every local shard in its own host thread and puts the results
     back on the shards' devices.
     """
-    if resolve_engine(engine) == "native":
+    if resolve_engine(engine, model.precision) == "native":
         return _native_chunk(model, n_records, record_every, sharding)
     block = _jax_block(model, record_every)
     if remat:

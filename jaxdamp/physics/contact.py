@@ -102,6 +102,18 @@ def mix(a: float, b: float, rule: str) -> float:
     raise ValueError(f"mixing rule {rule!r}: expected 'arithmetic', 'harmonic' or 'geometric'")
 
 
+#: ``numerics.precision`` values: the floating-point type the JAX engine evaluates the contact
+#: laws in. The state, the geometry of a contact (its overlap and normal) and every sum of
+#: energies and powers stay float64.
+PRECISIONS = {"float64": jnp.float64, "float32": jnp.float32}
+
+
+def force_dtype(model):
+    """The dtype of the JAX engine's contact-law arithmetic for ``model``
+    (:attr:`jaxdamp.physics.model.Model.precision`)."""
+    return PRECISIONS[getattr(model, "precision", "float64")]
+
+
 def safe_sqrt(x, mask):
     """``sqrt(x)`` where ``mask``, else 0, with finite gradients everywhere."""
     return jnp.where(mask, jnp.sqrt(jnp.where(mask, x, 1.0)), 0.0)

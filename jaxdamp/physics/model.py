@@ -62,6 +62,8 @@ class Model:
       dofs: degrees of freedom of the primary structure (S1; 1 for the 1-DOF primary and for
         S2): more than one selects the structure's matrix equations
         (:mod:`jaxdamp.physics.structure`).
+      precision: ``numerics.precision``, the floating-point type of the JAX engine's contact
+        laws (:data:`jaxdamp.physics.contact.PRECISIONS`): ``"float64"`` or ``"float32"``.
     """
 
     n: int
@@ -71,6 +73,7 @@ class Model:
     skin: float
     species: tuple[int, ...] = ()
     dofs: int = 1
+    precision: str = "float64"
 
     def species_slices(self) -> tuple[slice, ...]:
         """Index range of every species in the grain arrays (at least one, possibly empty)."""
@@ -260,6 +263,7 @@ def build(config: Config, radii: np.ndarray | None = None) -> tuple[Model, Param
         n=n, system=config.system, law=config.contact_law, cutoff=2.0 * r_max + skin, skin=skin,
         species=tuple(int(sp.count) for sp in config.grains),
         dofs=len(structure["s_r"]) if structure else 1,
+        precision=config.numerics.precision,
     )
     prim = config.primary
     shock = config.shock if config.system == "primary" else None

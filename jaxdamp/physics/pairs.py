@@ -17,7 +17,7 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
-from jaxdamp.physics.contact import GAMMA_S, LAWS, MU, Vec, contact_force
+from jaxdamp.physics.contact import GAMMA_S, LAWS, MU, Vec, contact_force, force_dtype
 
 #: Where padding entries of the neighbour list point: far away, so they never touch.
 _GHOST = 1.0e6
@@ -48,6 +48,8 @@ def pair_forces(r, v, w, idx, p, model) -> PairForces:
         zero = jnp.zeros_like(r)
         return PairForces(zero, zero, jnp.zeros(()), jnp.zeros(()), jnp.zeros(()))
 
+    lo = force_dtype(model)
+
     def own(x):  # (N,) -> (N, 1): grain i's value against each of its neighbours
         return x[:, None]
 
@@ -57,31 +59,37 @@ def pair_forces(r, v, w, idx, p, model) -> PairForces:
     def pair_vec(a, fill=0.0):  # own minus other, per component
         return Vec(*(own(a[:, k]) - other(a[:, k], fill) for k in range(3)))
 
+    # geometry in the state's precision: the overlap is a small difference of large numbers
     dr = pair_vec(r, _GHOST)
-    R_i, R_j = own(p.radius), other(p.radius)
     dist = jnp.sqrt(dr.dot(dr))  # > 0: grains never coincide, padding is far away
-    xi = R_i + R_j - dist
+    radius = p.radius
+    xi = (own(radius) - dist + other(radius)).astype(lo)
     nrm = dr.scale(1.0 / dist)
+    nrm = Vec(*(c.astype(lo) for c in nrm))
+    # the contact law in the force precision (``numerics.precision``)
+    radius, mass, v, w = (x.astype(lo) for x in (radius, p.mass, v, w))
+    R_i, R_j = own(radius), other(radius)
 
     # padding has R_j = m_j = 0; give it R* = m* = 1 so that square roots have finite gradients
     real = R_j > 0
     r_eff = jnp.where(real, R_i * R_j / (R_i + R_j), 1.0)
-    m_i, m_j = own(p.mass), other(p.mass)
+    m_i, m_j = own(mass), other(mass)
     m_eff = jnp.where(real, m_i * m_j / (m_i + m_j), 1.0)
     law = LAWS[model.law]
-    row = _rows(p.pair_table, model.species_index(), idx)
+    row = _rows(p.pair_table.astype(lo), model.species_index(), idx)
     stiffness, damping = law.pair_jax(row, r_eff, m_eff)
-    Rw = p.radius[:, None] * w
+    Rw = radius[:, None] * w
     spin = Vec(*(own(Rw[:, k]) + other(Rw[:, k]) for k in range(3)))
 
     c = contact_force(law, xi, nrm, pair_vec(v), spin, R_i, stiffness, damping,
                       row[..., GAMMA_S], row[..., MU])
+    hi = r.dtype
     return PairForces(
-        force=c.force.sum(axis=1).stack(),
-        torque=c.torque.sum(axis=1).stack(),
-        elastic_energy=0.5 * c.elastic_energy.sum(),
-        normal_loss=0.5 * c.normal_loss.sum(),
-        friction_loss=0.5 * c.friction_loss.sum(),
+        force=c.force.sum(axis=1).stack().astype(hi),
+        torque=c.torque.sum(axis=1).stack().astype(hi),
+        elastic_energy=0.5 * c.elastic_energy.astype(hi).sum(),
+        normal_loss=0.5 * c.normal_loss.astype(hi).sum(),
+        friction_loss=0.5 * c.friction_loss.astype(hi).sum(),
     )
 
 

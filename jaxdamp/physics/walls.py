@@ -14,7 +14,7 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
-from jaxdamp.physics.contact import GAMMA_S, LAWS, MU, Vec, contact_force
+from jaxdamp.physics.contact import GAMMA_S, LAWS, MU, Vec, contact_force, force_dtype
 
 #: Inward unit normals of floor, lid, x=0, x=Lx, y=0, y=Ly (pointing from the wall to a grain).
 _NORMALS = np.array(
@@ -60,31 +60,34 @@ def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
     dist = jnp.stack(
         (floor, p.Lz - floor, x, p.Lx - x, y, p.Ly - y), axis=-1
     )
-    R = p.radius[:, None]
-    xi = R - dist
+    hi, lo = r.dtype, force_dtype(model)
+    xi = (p.radius[:, None] - dist).astype(lo)  # the overlap in the state's precision
+    R = p.radius[:, None].astype(lo)
     law = LAWS[model.law]
-    if p.wall_table.shape[0] == 1:
-        row = p.wall_table[0]  # (F,): one species
+    table = p.wall_table.astype(lo)
+    if table.shape[0] == 1:
+        row = table[0]  # (F,): one species
     else:
-        row = p.wall_table[jnp.asarray(model.species_index())][:, None, :]  # (N, 1, F)
-    stiffness, damping = law.pair_jax(row, R, p.mass[:, None])
-    normals = Vec(*(jnp.asarray(_NORMALS[:, k]) for k in range(3)))  # (6,) each
+        row = table[jnp.asarray(model.species_index())][:, None, :]  # (N, 1, F)
+    stiffness, damping = law.pair_jax(row, R, p.mass[:, None].astype(lo))
+    normals = Vec(*(jnp.asarray(_NORMALS[:, k], lo) for k in range(3)))  # (6,) each
     # the walls move with e zd_box
-    v_rel = Vec(v[:, 0:1] - p.ex * zd_box, v[:, 1:2] - p.ey * zd_box, v[:, 2:3] - p.ez * zd_box)
-    Rw = p.radius[:, None] * w
+    v_rel = Vec(*((v[:, k:k + 1] - e * zd_box).astype(lo)
+                  for k, e in enumerate((p.ex, p.ey, p.ez))))
+    Rw = R * w.astype(lo)
     spin = Vec(Rw[:, 0:1], Rw[:, 1:2], Rw[:, 2:3])
     c = contact_force(law, xi, normals, v_rel, spin, R, stiffness, damping, row[..., GAMMA_S],
                       row[..., MU])
 
-    fz = c.force.z  # (N, 6): force of wall on grain
+    f = Vec(*(x.astype(hi) for x in c.force))  # (N, 6): force of wall on grain
     return WallForces(
-        force=c.force.sum(axis=1).stack(),
-        torque=c.torque.sum(axis=1).stack(),
-        box_z=-(p.ex * c.force.x.sum() + p.ey * c.force.y.sum() + p.ez * fz.sum()),
-        floor_lid_z=-(fz[:, FLOOR] + fz[:, LID]).sum(),
+        force=f.sum(axis=1).stack(),
+        torque=c.torque.sum(axis=1).stack().astype(hi),
+        box_z=-(p.ex * f.x.sum() + p.ey * f.y.sum() + p.ez * f.z.sum()),
+        floor_lid_z=-(f.z[:, FLOOR] + f.z[:, LID]).sum(),
         n_floor=c.touching[:, FLOOR].sum(),
         n_lid=c.touching[:, LID].sum(),
-        elastic_energy=c.elastic_energy.sum(),
-        normal_loss=c.normal_loss.sum(),
-        friction_loss=c.friction_loss.sum(),
+        elastic_energy=c.elastic_energy.astype(hi).sum(),
+        normal_loss=c.normal_loss.astype(hi).sum(),
+        friction_loss=c.friction_loss.astype(hi).sum(),
     )

@@ -139,7 +139,8 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
     pb = jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *params)
     P = len(configs)
     sharding, padded = _mesh_sharding(P) if shard else (None, P)
-    engine = resolve_engine(base.numerics.engine)  # native: one kernel call per shard
+    # native: one kernel call per shard
+    engine = resolve_engine(base.numerics.engine, base.numerics.precision)
     pb_s = _pad_and_shard(pb, padded, sharding)
     drive = dict(engine=engine, multiplier=base.numerics.capacity_multiplier,
                  place=lambda tree: _pad_and_shard(tree, padded, sharding))
