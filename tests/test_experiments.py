@@ -462,3 +462,21 @@ def test_decay_vs_sine_quick(tmp_path):
     assert "Resonant points (cycle at" in text and "ζ_g = ΔW/(2πKZ²)" in text
     assert "cycle at X_k:" in text
     assert (tmp_path / "figure.png").stat().st_size > 10_000
+
+
+def test_gap_minimum_quick(tmp_path):
+    """F7 on a fine scan, test-sized (60 grains, 3 heights × 2 beds × 0.3 s): Z per height and
+    bed, both minimum models per bed, no verdict where a bed's minimum is not bracketed;
+    data, figure and summary written. The quadratic model's vertex is exact on a parabola."""
+    mod = _load("gap_minimum")
+    x = np.array([0.105, 0.11, 0.115, 0.12, 0.1225])
+    assert mod.quadratic_vertex(x, 3.0 + (x - 0.113) ** 2) == pytest.approx(0.113, rel=1e-9)
+    assert np.isnan(mod.quadratic_vertex(x, -(x - 0.113) ** 2))
+    r = mod.main(["--quick", "--out", str(tmp_path), "--no-progress"])
+    assert r["Z"].shape == (3, 2) and np.all(np.isfinite(r["Z"])) and np.all(r["Z"] > 0)
+    assert r["local"]["values"].shape == (2,)
+    if r["local_at_edge"]:
+        assert r["local"]["contains_thesis"] is None
+    text = (tmp_path / "summary.md").read_text()
+    assert "Minimum of Z over Lz per bed" in text and "Verdict:" in text
+    assert (tmp_path / "figure.png").stat().st_size > 10_000 and (tmp_path / "data.h5").exists()
