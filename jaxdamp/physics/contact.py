@@ -111,7 +111,7 @@ PRECISIONS = {"float64": jnp.float64, "float32": jnp.float32}
 def force_dtype(model):
     """The dtype of the JAX engine's contact-law arithmetic for ``model``
     (:attr:`jaxdamp.physics.model.Model.precision`)."""
-    return PRECISIONS[getattr(model, "precision", "float64")]
+    return PRECISIONS[model.precision]
 
 
 def safe_sqrt(x, mask):

@@ -63,7 +63,7 @@ def pair_forces(r, v, w, idx, p, model) -> PairForces:
     dr = pair_vec(r, _GHOST)
     dist = jnp.sqrt(dr.dot(dr))  # > 0: grains never coincide, padding is far away
     radius = p.radius
-    xi = (own(radius) - dist + other(radius)).astype(lo)
+    xi = (own(radius) + other(radius) - dist).astype(lo)
     nrm = dr.scale(1.0 / dist)
     nrm = Vec(*(c.astype(lo) for c in nrm))
     # the contact law in the force precision (``numerics.precision``)
