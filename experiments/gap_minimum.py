@@ -33,7 +33,7 @@ import numpy as np
 import scaffold
 
 from jaxdamp.analysis.response import parabolic_extremum
-from jaxdamp.analysis.stats import t_quantile
+from jaxdamp.analysis.stats import across
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.physics.model import primary_frequency
@@ -57,14 +57,12 @@ def quadratic_vertex(x, y) -> float:
 
 
 def interval(values) -> dict:
-    v = np.asarray(values, float)
-    v = v[np.isfinite(v)]
-    n = len(v)
-    m = float(v.mean()) if n else np.nan
-    se = float(v.std(ddof=1) / np.sqrt(n)) if n > 1 else np.nan
-    half = t_quantile(0.975, n - 1) * se if n > 1 else np.nan
-    return dict(values=np.asarray(values, float), mean=m, se=se, lo=m - half, hi=m + half,
-                n=n, contains_thesis=bool(abs(THESIS_LZ - m) <= half) if n > 1 else None)
+    """The beds' optima as mean ± SE and Student-t 95 % interval (:func:`stats.across`, NaN
+    beds left out) and whether the interval contains 0.1225 m."""
+    e = across(values)
+    return dict(values=np.asarray(values, float), mean=e.mean, se=e.se, lo=e.mean - e.ci95,
+                hi=e.mean + e.ci95, n=e.n,
+                contains_thesis=bool(abs(THESIS_LZ - e.mean) <= e.ci95) if e.n > 1 else None)
 
 
 def compute(quick: bool, log, ctx):

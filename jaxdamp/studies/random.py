@@ -39,8 +39,8 @@ class RandomResult:
     ``segments``) and ``a_rms`` the base's RMS acceleration [m/s²] from the spectrum,
     ``y_rms`` ``(R,)`` each realisation's RMS of the relative displacement ``z - u`` [m],
     ``z_rms`` ``(R,)`` of ``z`` [m] (``z`` the displacement of the degree of freedom ``dof``,
-    the structure's numbering; the box's by default), ``start`` ``(R,)`` the detected start of the stationary
-    record [s] and ``stationary`` ``(R,)``; ``period`` the excitation's period ``1/Δf`` [s];
+    the structure's numbering; the box's by default), ``start`` ``(R,)`` the detected start
+    of the stationary record [s] and ``stationary`` ``(R,)``; ``period`` the excitation's period ``1/Δf`` [s];
     ``sweep`` the :class:`jaxdamp.studies.grid.SweepResult` (records, configuration, file)."""
 
     scales: np.ndarray
