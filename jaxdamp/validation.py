@@ -41,6 +41,21 @@ CONTACT_LAWS = ("hertz", "linear")
 #: Grain–wall damping conventions (``Config.wall_damping``).
 WALL_DAMPING = ("mixed", "calibrated")
 
+#: The engines (``numerics.engine``; :func:`jaxdamp.engine.simulate.resolve_engine`).
+ENGINES = ("auto", "jax", "native")
+#: The contact laws' floating-point types (``numerics.precision``;
+#: :data:`jaxdamp.physics.contact.PRECISIONS`, checked equal by the tests).
+PRECISIONS = ("float64", "float32")
+
+
+def engine_precision_error(engine: str, precision: str) -> str | None:
+    """Why ``engine`` cannot run at ``precision``, or ``None``: the native kernel computes in
+    float64 (the one statement of the rule, for configurations and for direct calls)."""
+    if engine == "native" and precision != "float64":
+        return (f"numerics.precision = {precision!r} runs on the JAX engine only (the native "
+                "kernel computes in float64): set numerics.engine = 'jax' or 'auto'")
+    return None
+
 
 #: Most lines a random base motion may have (``(f_n - f_1)/resolution``): every line costs a
 #: cosine and a sine per time step.
@@ -257,15 +272,13 @@ def validate(config: Config) -> Config:
         raise ConfigError(
             f"numerics.capacity_multiplier = {num.capacity_multiplier}: must be ≥ 1"
         )
-    if num.engine not in ("auto", "jax", "native"):
-        raise ConfigError(f"numerics.engine = {num.engine!r}: expected 'auto', 'jax' or 'native'")
-    if num.precision not in ("float64", "float32"):
-        raise ConfigError(f"numerics.precision = {num.precision!r}: expected 'float64' or "
-                          "'float32'")
-    if num.precision == "float32" and num.engine == "native":
-        raise ConfigError("numerics.precision = 'float32' runs on the JAX engine only (the "
-                          "native kernel computes in float64): set numerics.engine = 'jax' or "
-                          "'auto'")
+    if num.engine not in ENGINES:
+        raise ConfigError(f"numerics.engine = {num.engine!r}: expected one of {ENGINES}")
+    if num.precision not in PRECISIONS:
+        raise ConfigError(f"numerics.precision = {num.precision!r}: expected one of "
+                          f"{PRECISIONS}")
+    if (why := engine_precision_error(num.engine, num.precision)) is not None:
+        raise ConfigError(why)
     if num.engine == "native":
         from jaxdamp.engine import native
 

@@ -271,3 +271,11 @@ def test_validation_names_the_contact_laws_of_the_physics():
     from jaxdamp.validation import CONTACT_LAWS
 
     assert CONTACT_LAWS == tuple(LAWS)
+
+
+def test_validation_names_the_precisions_of_the_physics():
+    """validation.PRECISIONS (checked without importing JAX) lists the contact laws' types."""
+    from jaxdamp.physics.contact import PRECISIONS as TYPES
+    from jaxdamp.validation import PRECISIONS
+
+    assert PRECISIONS == tuple(TYPES)

@@ -69,7 +69,8 @@ def test_float32_precision_runs_on_the_jax_engine():
     cfg = apply_overrides(presets.get("sanchez2012-optimal"), ["numerics.precision='float32'"])
     assert build(validate(cfg))[0].precision == "float32"
     assert resolve_engine("auto", "float32") == "jax"
-    with pytest.raises(ValueError, match="native kernel computes in float64"):
+    with pytest.raises(ValueError, match=r"numerics\.precision = 'float32' runs on the JAX "
+                                         "engine only"):
         resolve_engine("native", "float32")
 
 

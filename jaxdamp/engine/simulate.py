@@ -23,7 +23,7 @@ from jaxdamp.physics.energy import record
 from jaxdamp.physics.integrate import box_frame, initial_state, step
 from jaxdamp.physics.model import Model, Params, State
 
-ENGINES = ("auto", "jax", "native")
+from jaxdamp.validation import ENGINES, engine_precision_error
 
 
 def resolve_engine(engine: str, precision: str = "float64") -> str:
@@ -32,9 +32,8 @@ def resolve_engine(engine: str, precision: str = "float64") -> str:
     (``numerics.precision``) always the JAX engine (the native kernel is float64)."""
     if engine not in ENGINES:
         raise ValueError(f"engine = {engine!r}: expected one of {ENGINES}")
-    if engine == "native" and precision != "float64":
-        raise ValueError(f"engine = 'native' with precision = {precision!r}: the native kernel "
-                         "computes in float64; use the JAX engine")
+    if (why := engine_precision_error(engine, precision)) is not None:
+        raise ValueError(why)
     if engine == "auto":
         from jaxdamp.engine import native
 
