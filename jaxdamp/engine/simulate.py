@@ -22,7 +22,6 @@ from jaxdamp.engine import neighbors as nb
 from jaxdamp.physics.energy import record
 from jaxdamp.physics.integrate import box_frame, initial_state, step
 from jaxdamp.physics.model import Model, Params, State
-
 from jaxdamp.validation import ENGINES, engine_precision_error
 
 
