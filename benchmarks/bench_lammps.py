@@ -211,6 +211,12 @@ def run_lammps(path: str, copies: int = 1, mpi: int = 1) -> list[float]:
     return [loop_time(p.communicate()[0]) for p in procs]
 
 
+def lammps_us(path: str, steps: int, copies: int = 1, mpi: int = 1) -> float:
+    """µs per system-step of ``copies`` LAMMPS runs of ``steps`` steps at once (each on
+    ``mpi`` processes): the slowest copy's loop time over all copies' steps."""
+    return max(run_lammps(path, copies=copies, mpi=mpi)) / (copies * steps) * 1e6
+
+
 # ------------------------------------------------------------------------------- main
 
 
@@ -261,11 +267,11 @@ def main(argv=None):
                     return wall / (n * 32) * 1e6
                 measure("jaxdamp JAX engine, batch 32", jx)
             measure("LAMMPS, 1 process",
-                    lambda: run_lammps(path)[0] / args.steps * 1e6)
+                    lambda: lammps_us(path, args.steps))
             measure("LAMMPS, 2 processes at once (aggregate)",
-                    lambda: max(run_lammps(path, copies=2)) / (2 * args.steps) * 1e6)
+                    lambda: lammps_us(path, args.steps, copies=2))
             measure("LAMMPS, 1 bed on 2 MPI processes",
-                    lambda: run_lammps(path, mpi=2)[0] / args.steps * 1e6)
+                    lambda: lammps_us(path, args.steps, mpi=2))
         med = {k: float(np.median(v)) for k, v in rows.items()}
         print(f"\n{name} bed ({model.n} grains, dt = {float(params.dt):.3g} s, "
               f"{args.steps} steps per measurement, {args.rounds} rounds; busiest load before "

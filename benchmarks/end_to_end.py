@@ -115,11 +115,11 @@ def lammps_rates(beds, steps: int, rounds: int, quiet) -> dict:
         got = {"x2": [], "one": [], "mpi2": []}
         for _ in range(rounds):
             quiet()
-            got["x2"].append(max(bl.run_lammps(path, copies=2)) / (2 * steps) * 1e6)
+            got["x2"].append(bl.lammps_us(path, steps, copies=2))
             quiet()
-            got["one"].append(bl.run_lammps(path)[0] / steps * 1e6)
+            got["one"].append(bl.lammps_us(path, steps))
             quiet()
-            got["mpi2"].append(bl.run_lammps(path, mpi=2)[0] / steps * 1e6)
+            got["mpi2"].append(bl.lammps_us(path, steps, mpi=2))
         rates[name] = {k: float(np.median(v)) for k, v in got.items()}
     return rates
 
