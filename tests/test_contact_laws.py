@@ -157,6 +157,12 @@ def test_rotation_jax_equals_scalar_small_and_large_angles():
     got = np.array([integrate.rotate_scalar(*q[i], *w[i], dt) for i in range(n)])
     np.testing.assert_allclose(got, ref, rtol=0, atol=1e-14)
     np.testing.assert_allclose(got[0], q[0], rtol=0, atol=1e-15)
+    # quaternions off the unit sphere (|q|² - 1 beyond 1e-8): the kernel's renormalisation
+    # leaves its series for the exact 1/sqrt and still lands on the JAX form's unit result
+    for scale in (1.3, 1.0 + 1e-6, 1.0 - 1e-6):
+        ref = np.asarray(integrate.rotate(jnp.asarray(scale * q), jnp.asarray(w), dt))
+        got = np.array([integrate.rotate_scalar(*(scale * q[i]), *w[i], dt) for i in range(n)])
+        np.testing.assert_allclose(got, ref, rtol=0, atol=1e-14)
 
 
 def test_body_force_primary_and_excitation_jax_equal_scalar():
