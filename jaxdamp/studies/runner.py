@@ -59,30 +59,46 @@ def schedule(config: Config, dt: float) -> Schedule:
     return Schedule(dt, record_every, per_chunk, n_chunks)
 
 
-def initial_box_position(config: Config, grain_mass: float) -> float:
-    """Box position along the excitation axis at t = 0: the primary's static equilibrium under
-    the bed's weight (its component along the axis) plus its initial displacement
-    ``primary.z0`` and, with random base motion, the empty structure's steady response
-    (:func:`jaxdamp.physics.excitation.random_start`) (S1), or the drive's starting point
-    ``A_d`` (S2). For a multi-DOF structure the box's entry of :func:`initial_structure`."""
-    if config.system == "primary" and config.structure is not None:
-        return float(initial_structure(config, grain_mass)[0][0])
-    if config.system == "primary":
-        from jaxdamp.physics.model import excitation_axis
+def initial_structure(config: Config, grain_mass: float) -> tuple[np.ndarray, np.ndarray]:
+    """Positions [m] and velocities [m/s] ``(dofs,)`` of the structure at t = 0 in the engines'
+    order (the box first, :func:`jaxdamp.physics.structure.order`).
 
+    S1: the static equilibrium under the bed's weight (its component along the excitation
+    axis, ``grain_mass`` [kg]) on the box's degree of freedom, plus the box's ``primary.z0``,
+    ``primary.v0`` and, with random base motion, the empty structure's steady response
+    (:func:`jaxdamp.physics.excitation.random_start`). S2: the drive's starting point ``A_d``
+    at rest (the top of ``A_d cos ωt``)."""
+    if config.system != "primary":
+        return np.array([config.drive.amplitude]), np.array([0.0])
+    from jaxdamp.physics.model import excitation_axis
+
+    weight = grain_mass * config.gravity * float(excitation_axis(config)[2])
+    xs, vs = random_start(config)
+    if config.structure is None:  # the 1-DOF primary
         K = config.primary.K
-        weight = grain_mass * config.gravity * float(excitation_axis(config)[2])
-        return (-weight / K if K > 0 else 0.0) + config.primary.z0 + random_start(config)[0][0]
-    return config.drive.amplitude
+        return (np.array([(-weight / K if K > 0 else 0.0) + config.primary.z0 + xs[0]]),
+                np.array([config.primary.v0 + vs[0]]))
+    from jaxdamp.physics.structure import order, static_offset
+
+    x = static_offset(config, -weight) + xs
+    v = vs.copy()
+    a = config.structure.attach
+    x[a] += config.primary.z0
+    v[a] += config.primary.v0
+    o = order(config)
+    return x[o], v[o]
+
+
+def initial_box_position(config: Config, grain_mass: float) -> float:
+    """The box's position along the excitation axis at t = 0 [m]: the box's entry of
+    :func:`initial_structure`."""
+    return float(initial_structure(config, grain_mass)[0][0])
 
 
 def initial_box_velocity(config: Config) -> float:
-    """Box velocity at t = 0: the primary's ``v0`` plus the random start's velocity (S1), or
-    the drive's (0 at the start of ``A_d cos ωt``, S2)."""
-    if config.system != "primary":
-        return 0.0
-    return config.primary.v0 + random_start(config)[1][config.structure.attach
-                                                       if config.structure else 0]
+    """The box's velocity at t = 0 [m/s]: the box's entry of :func:`initial_structure` (it does
+    not depend on the bed's mass)."""
+    return float(initial_structure(config, 0.0)[1][0])
 
 
 def bed_with_box(config: Config, r, box_position: float) -> np.ndarray:
@@ -91,30 +107,6 @@ def bed_with_box(config: Config, r, box_position: float) -> np.ndarray:
     from jaxdamp.physics.model import excitation_axis
 
     return np.asarray(r) + excitation_axis(config) * box_position
-
-
-def initial_structure(config: Config, grain_mass: float) -> tuple[np.ndarray, np.ndarray]:
-    """Positions and velocities ``(dofs,)`` of the primary structure at t = 0 in the engines'
-    order (the box first, :func:`jaxdamp.physics.structure.order`): the static equilibrium
-    under the bed's weight on the box's degree of freedom, the box's ``primary.z0``,
-    ``primary.v0``, and the random start; ``([z], [z'])`` of :func:`initial_box_position`,
-    :func:`initial_box_velocity` for the 1-DOF primary and S2."""
-    if config.system != "primary" or config.structure is None:
-        return (np.array([initial_box_position(config, grain_mass)]),
-                np.array([initial_box_velocity(config)]))
-    from jaxdamp.physics.model import excitation_axis
-    from jaxdamp.physics.structure import order, static_offset
-
-    weight = grain_mass * config.gravity * float(excitation_axis(config)[2])
-    x0 = static_offset(config, -weight)
-    xs, vs = random_start(config)
-    a = config.structure.attach
-    x = x0 + xs
-    v = vs.copy()
-    x[a] += config.primary.z0
-    v[a] += config.primary.v0
-    o = order(config)
-    return x[o], v[o]
 
 
 @dataclass
