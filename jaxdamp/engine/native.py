@@ -42,15 +42,15 @@ import numpy as np
 from jaxdamp.physics.contact import FASTMATH, GAMMA_S, MU, contact_scalar, pair_scalar
 from jaxdamp.physics.energy import record_row
 from jaxdamp.physics.excitation import base_motion_scalar, drive_motion_scalar
-from jaxdamp.physics.structure import acceleration_scalar as structure_acceleration_scalar
-from jaxdamp.physics.structure import energy_scalar as structure_energy_scalar
-from jaxdamp.physics.structure import powers_scalar as structure_powers_scalar
 from jaxdamp.physics.integrate import (
     body_force_scalar,
     primary_acceleration_scalar,
     primary_powers_scalar,
     rotate_scalar,
 )
+from jaxdamp.physics.structure import acceleration_scalar as structure_acceleration_scalar
+from jaxdamp.physics.structure import energy_scalar as structure_energy_scalar
+from jaxdamp.physics.structure import powers_scalar as structure_powers_scalar
 
 # numba's OpenMP threads spin between parallel regions by default; a spinning thread took the
 # second core from the single system it was waiting beside (13.4 -> 9.4 µs per step of the

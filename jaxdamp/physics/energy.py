@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
-from jaxdamp.physics.contact import scalar_form
 from jaxdamp.physics import structure
+from jaxdamp.physics.contact import scalar_form
 from jaxdamp.physics.excitation import base_motion
 from jaxdamp.physics.model import CH, N_CHANNELS, Model, Params, State
 

@@ -41,11 +41,15 @@ Example::
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import jax.numpy as jnp
 import numpy as np
 
 from jaxdamp.physics.contact import scalar_form
+
+if TYPE_CHECKING:  # annotations only: the model module imports this one
+    from jaxdamp.physics.model import Params
 
 
 def psd_at(psd, f) -> np.ndarray:

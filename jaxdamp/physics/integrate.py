@@ -27,9 +27,9 @@ from typing import NamedTuple
 
 import jax.numpy as jnp
 
+from jaxdamp.physics import structure
 from jaxdamp.physics.contact import safe_norm, scalar_form
 from jaxdamp.physics.energy import mechanical_energy
-from jaxdamp.physics import structure
 from jaxdamp.physics.excitation import base_motion, drive_motion
 from jaxdamp.physics.model import N_CHANNELS, Model, Params, State
 from jaxdamp.physics.pairs import pair_forces

@@ -44,7 +44,6 @@ from __future__ import annotations
 
 import math
 
-import jax.numpy as jnp
 import numpy as np
 
 from jaxdamp.physics.contact import scalar_form
