@@ -31,7 +31,9 @@ system-step; "aggregate" = the wall time of the whole batch over systems × step
 Rounds are interleaved (every configuration once per round) and each measurement waits until
 the machine is quiet (``/proc/stat``: less than 5 % of the cores busy over 0.5 s); the median
 over rounds is reported with the spread. The ratios printed are the issue's: native batched
-against two LAMMPS processes, native single system against LAMMPS on two MPI processes.
+against two LAMMPS processes, native single system against LAMMPS on two MPI processes; each
+as the ratio of the medians and round by round (a round's LAMMPS against the same round's
+jaxdamp, seconds apart: this host's speed drifts by tens of percent between rounds).
 """
 
 from __future__ import annotations
@@ -286,10 +288,24 @@ def main(argv=None):
             "jaxdamp native, batch 1"]
         ratios["native single / LAMMPS 1 process"] = (med["LAMMPS, 1 process"]
                                                       / med["jaxdamp native, batch 1"])
+        # the same ratios round by round (each round's LAMMPS against the same round's
+        # jaxdamp, measured seconds apart): this host's speed drifts between rounds
+        pairs = {f"native batch {B} / LAMMPS x2": ("LAMMPS, 2 processes at once (aggregate)",
+                                                  f"jaxdamp native, batch {B}")
+                 for B in args.batches}
+        pairs["native single / LAMMPS on 2 MPI processes"] = (
+            "LAMMPS, 1 bed on 2 MPI processes", "jaxdamp native, batch 1")
+        pairs["native single / LAMMPS 1 process"] = ("LAMMPS, 1 process",
+                                                     "jaxdamp native, batch 1")
+        per_round = {k: [a / b for a, b in zip(rows[num], rows[den], strict=True)]
+                     for k, (num, den) in pairs.items()}
         for k, v in ratios.items():
-            print(f"  throughput ratio {k}: {v:.2f}")
+            r = per_round[k]
+            print(f"  throughput ratio {k}: {v:.2f} (of the medians; round by round "
+                  f"{float(np.median(r)):.2f} [{min(r):.2f}, {max(r):.2f}])")
         results[name] = dict(n=model.n, dt=float(params.dt), steps=args.steps, runs=rows,
-                             median=med, ratios=ratios, max_load=max(loads))
+                             median=med, ratios=ratios, ratios_per_round=per_round,
+                             max_load=max(loads))
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(dict(lammps=version, machine=platform.machine(), cores=os.cpu_count(),
