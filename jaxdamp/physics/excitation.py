@@ -41,15 +41,11 @@ Example::
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 import jax.numpy as jnp
 import numpy as np
 
 from jaxdamp.physics.contact import scalar_form
-
-if TYPE_CHECKING:  # annotations only: the model module imports this one
-    from jaxdamp.physics.model import Params
 
 
 def psd_at(psd, f) -> np.ndarray:
@@ -178,7 +174,7 @@ def base_motion_scalar(t, U, omega, lines, shock_a, shock_t0, shock_T):
     return u, ud
 
 
-def drive_motion(t, p: Params):
+def drive_motion(t, p):
     """Box position ``z_offset + A_d cos Ωt`` [m], velocity [m/s], acceleration [m/s²] of S2."""
     ph = p.omega * t
     c, s = jnp.cos(ph), jnp.sin(ph)
