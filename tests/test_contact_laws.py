@@ -164,6 +164,22 @@ def test_rotation_jax_equals_scalar_small_and_large_angles():
         got = np.array([integrate.rotate_scalar(*(scale * q[i]), *w[i], dt) for i in range(n)])
         np.testing.assert_allclose(got, ref, rtol=0, atol=1e-14)
 
+    # the branch-free series form the kernel runs over all grains: equal to the JAX form where
+    # it says its series hold, and it says so exactly where rotate_scalar takes both series
+    for scale in (1.0, 1.3, 1.0 + 1e-6):
+        qs = scale * q
+        out = [integrate.rotate_series_scalar(*qs[i], *w[i], dt) for i in range(n)]
+        ok = np.array([o[4] for o in out])
+        h2 = 0.25 * dt * dt * (w * w).sum(axis=1)
+        if scale == 1.0:
+            np.testing.assert_array_equal(ok, h2 < integrate.ROTATE_H2)
+            assert ok.sum() >= n // 2 - 1
+        else:
+            assert not ok.any()  # off the sphere: the exact renormalisation is needed
+        ref = np.asarray(integrate.rotate(jnp.asarray(qs), jnp.asarray(w), dt))
+        got = np.array([o[:4] for o in out])
+        np.testing.assert_allclose(got[ok], ref[ok], rtol=0, atol=1e-14)
+
 
 def test_body_force_primary_and_excitation_jax_equal_scalar():
     """Gravity with the settling drag, the primary's acceleration and powers, the base and the
