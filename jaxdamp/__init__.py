@@ -9,7 +9,8 @@ the bottom layer up (a module imports only from its own layer or below):
 
 * :mod:`jaxdamp.config`, :mod:`jaxdamp.validation` — what to simulate: a validated tree of
   frozen dataclasses (SI units); :mod:`jaxdamp.cases` — the sources' presets and the
-  binary-mixture builders.
+  binary-mixture builders; :mod:`jaxdamp.interrupt` — Ctrl-C as a request acted on at safe
+  points (between chunks), so that nothing is half written.
 * :mod:`jaxdamp.physics` — the physics once for both engines: contact laws (JAX and scalar
   forms side by side, registered by name), pair and wall mappings, excitation, the
   velocity-Verlet step, energies and records, restitution calibration, configuration → arrays.

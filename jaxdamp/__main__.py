@@ -1,7 +1,5 @@
 """``python -m jaxdamp``: the command line (same as the ``jaxdamp`` script)."""
 
-import sys
+from jaxdamp.cli import entry
 
-from jaxdamp.cli import main
-
-sys.exit(main())
+entry()

@@ -16,8 +16,17 @@ MIXING = ("arithmetic", "harmonic", "geometric")
 _DENSEST = math.pi / (3.0 * math.sqrt(2.0))
 
 
+def _number(value) -> bool:
+    """A real number (``True``/``False`` are not, although Python counts them as ints)."""
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _integer(value) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
 def _positive(value, name, allow_zero=False):
-    ok = isinstance(value, (int, float)) and math.isfinite(value)
+    ok = _number(value) and math.isfinite(value)
     ok = ok and (value >= 0 if allow_zero else value > 0)
     if not ok:
         limit = "≥ 0" if allow_zero else "> 0"
@@ -26,7 +35,7 @@ def _positive(value, name, allow_zero=False):
 
 def _material(mat: Material, name: str, grain: bool) -> None:
     _positive(mat.E, f"{name}.E")
-    if not (isinstance(mat.nu, (int, float)) and 0.0 <= mat.nu < 0.5):
+    if not (_number(mat.nu) and 0.0 <= mat.nu < 0.5):
         raise ConfigError(f"{name}.nu = {mat.nu!r}: Poisson ratio must be in [0, 0.5)")
     if grain:
         _positive(mat.density, f"{name}.density")
@@ -73,7 +82,7 @@ def _random(rnd) -> None:
                           "[[5, 0.01], [30, 0.01]] for a flat band 5–30 Hz")
     for i, (f, S) in enumerate(rows):
         for name, v in (("f", f), ("S", S)):
-            if not (isinstance(v, (int, float)) and math.isfinite(v)):
+            if not (_number(v) and math.isfinite(v)):
                 raise ConfigError(f"random.psd[{i}] = {[f, S]!r}: {name} must be a finite "
                                   "number")
         if f < 0:
@@ -95,7 +104,7 @@ def _random(rnd) -> None:
     if fs[-1] < rnd.resolution:
         raise ConfigError(f"random.psd: the band ends at {fs[-1]} Hz, below the first line "
                           f"(random.resolution = {rnd.resolution} Hz)")
-    if rnd.seed is not None and not (isinstance(rnd.seed, int) and rnd.seed >= 0):
+    if rnd.seed is not None and not (_integer(rnd.seed) and rnd.seed >= 0):
         raise ConfigError(f"random.seed = {rnd.seed!r}: must be an integer ≥ 0 (or absent: "
                           "the bed's numerics.seed)")
 
@@ -181,12 +190,55 @@ def _structure(s) -> None:
             _vector(s.modal_masses, "structure.modal_masses", n, positive=True)
     for name in ("attach", "force_dof"):
         v = getattr(s, name)
-        if not (isinstance(v, int) and 0 <= v < n):
+        if not (_integer(v) and 0 <= v < n):
             raise ConfigError(f"structure.{name} = {v!r}: must be a degree of freedom 0..{n - 1}")
     if s.influence is not None:
         _vector(s.influence, "structure.influence", n)
-    if not (isinstance(s.force, (int, float)) and math.isfinite(s.force)):
+    if not (_number(s.force) and math.isfinite(s.force)):
         raise ConfigError(f"structure.force = {s.force!r}: must be a finite number [N]")
+
+
+def periodic(config: Config) -> bool:
+    """Whether ``config`` is driven at ``frequency`` (a harmonic base motion of the primary, or
+    a driven box), so that its per-cycle quantities and amplitudes mean something."""
+    if config.system == "driven":
+        return config.drive is not None and config.drive.amplitude > 0
+    return (config.system == "primary" and config.primary is not None
+            and config.primary.U > 0 and config.random is None and config.shock is None)
+
+
+def _schedule(config: Config) -> None:
+    """The run's sampling against its length and its drive: a sample interval within a chunk
+    and within the run; with a periodic drive, samples that resolve it (≥ 20 per period) and a
+    run of at least one whole period (the analysis window of per-cycle quantities)."""
+    num = config.numerics
+    if num.record_dt > num.chunk:
+        raise ConfigError(f"numerics.record_dt = {num.record_dt} s: the sample interval must not "
+                          f"exceed numerics.chunk = {num.chunk} s (a chunk holds whole samples)")
+    if num.record_dt > num.duration:
+        raise ConfigError(f"numerics.record_dt = {num.record_dt} s: the sample interval must not "
+                          f"exceed the run, numerics.duration = {num.duration} s")
+    if periodic(config) and num.record_dt > 1.0 / (20.0 * config.frequency):
+        f = config.frequency
+        raise ConfigError(
+            f"numerics.record_dt = {num.record_dt} s: the samples must resolve the drive at "
+            f"frequency = {f:g} Hz, record_dt ≤ 1/(20 f) = {1.0 / (20.0 * f):.4g} s")
+
+
+def check_periods(config: Config, frequency: float | None = None) -> None:
+    """Refuse a periodically driven run shorter than one drive period (at ``frequency``, by
+    default ``config.frequency``): its amplitude and per-cycle quantities would be
+    extrapolated from part of a cycle. The commands that print them (``run``, ``frf``) call
+    this; the library lets shorter runs through (tests of the dynamics use them), and its
+    summaries then cover the whole run."""
+    f = config.frequency if frequency is None else frequency
+    num = config.numerics
+    if periodic(config) and num.duration < 1.0 / f:
+        raise ConfigError(
+            f"numerics.duration = {num.duration:g} s is shorter than one drive period "
+            f"(1/f = {1.0 / f:.4g} s at frequency = {f:g} Hz): amplitudes and per-cycle "
+            "quantities need at least one whole period — raise numerics.duration (--duration) "
+            "or the frequency")
 
 
 def validate(config: Config) -> Config:
@@ -223,7 +275,7 @@ def validate(config: Config) -> Config:
 
     d = config.direction
     if not (isinstance(d, tuple) and len(d) == 3
-            and all(isinstance(x, (int, float)) and math.isfinite(x) for x in d)
+            and all(_number(x) and math.isfinite(x) for x in d)
             and math.hypot(*d) > 0):
         raise ConfigError(f"direction = {d!r}: the excitation axis must be three finite numbers "
                           "(x, y, z), not all zero, e.g. [0, 0, 1] (vertical) or [1, 0, 0]")
@@ -233,11 +285,15 @@ def validate(config: Config) -> Config:
         pr = config.primary
         _positive(pr.M, "primary.M")
         _positive(pr.K, "primary.K", allow_zero=True)
+        if config.structure is None and pr.K == 0:
+            raise ConfigError("primary.K = 0: must be > 0 — without a spring the primary has no "
+                              "static equilibrium: the box drifts under the bed's weight and a "
+                              "drift would be reported as an amplitude")
         _positive(pr.C, "primary.C", allow_zero=True)
         _positive(pr.U, "primary.U", allow_zero=True)
         for name in ("z0", "v0"):
             value = getattr(pr, name)
-            if not (isinstance(value, (int, float)) and math.isfinite(value)):
+            if not (_number(value) and math.isfinite(value)):
                 raise ConfigError(f"primary.{name} = {value!r}: must be a finite number")
         if config.random is not None:
             _random(config.random)
@@ -245,7 +301,7 @@ def validate(config: Config) -> Config:
             _structure(config.structure)
         if config.shock is not None:
             sh = config.shock
-            if not (isinstance(sh.peak, (int, float)) and math.isfinite(sh.peak)):
+            if not (_number(sh.peak) and math.isfinite(sh.peak)):
                 raise ConfigError(f"shock.peak = {sh.peak!r}: must be a finite number [m/s²]")
             _positive(sh.duration, "shock.duration")
             _positive(sh.start, "shock.start", allow_zero=True)
@@ -268,6 +324,7 @@ def validate(config: Config) -> Config:
     _positive(num.settle_drag, "numerics.settle_drag", allow_zero=True)
     if not 0.0 < num.analysis_window <= 1.0:
         raise ConfigError(f"numerics.analysis_window = {num.analysis_window}: must be in (0, 1]")
+    _schedule(config)
     if num.capacity_multiplier < 1.0:
         raise ConfigError(
             f"numerics.capacity_multiplier = {num.capacity_multiplier}: must be ≥ 1"
@@ -284,13 +341,13 @@ def validate(config: Config) -> Config:
 
         if not native.AVAILABLE:
             raise ConfigError("numerics.engine = 'native' needs numba (pip install numba)")
-    if not isinstance(num.seed, int) or num.seed < 0:
+    if not _integer(num.seed) or num.seed < 0:
         raise ConfigError(f"numerics.seed = {num.seed!r}: must be a non-negative integer")
 
     volume = 0.0
     for i, sp in enumerate(config.grains):
         name = f"grains.{i}"
-        if not isinstance(sp.count, int) or sp.count < 0:
+        if not _integer(sp.count) or sp.count < 0:
             raise ConfigError(f"{name}.count = {sp.count!r}: must be a non-negative integer")
         _positive(sp.radius, f"{name}.radius")
         if not 0.0 <= sp.radius_spread < 1.0:
@@ -366,7 +423,7 @@ def _validate_impact(config: Config) -> Config:
                           "model (S3) starts at rest; free decay runs on the DEM (system "
                           "'primary')")
     _positive(im.mass, "impactor.mass")
-    if not (isinstance(im.restitution, (int, float)) and 0.0 <= im.restitution <= 1.0):
+    if not (_number(im.restitution) and 0.0 <= im.restitution <= 1.0):
         raise ConfigError(f"impactor.restitution = {im.restitution!r}: must be in [0, 1]")
     _positive(im.gap, "impactor.gap")
     if im.method not in ("event", "smooth"):
@@ -374,7 +431,7 @@ def _validate_impact(config: Config) -> Config:
     _positive(im.stick_speed, "impactor.stick_speed")
     _positive(im.contact_time, "impactor.contact_time")
     _positive(im.smooth_width, "impactor.smooth_width")
-    if not (isinstance(im.steps_per_contact, (int, float)) and im.steps_per_contact >= 5):
+    if not (_number(im.steps_per_contact) and im.steps_per_contact >= 5):
         raise ConfigError(f"impactor.steps_per_contact = {im.steps_per_contact!r}: must be ≥ 5")
     w = 2.0 * math.pi * config.frequency
     if pr.C == 0:

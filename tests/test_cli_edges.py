@@ -14,7 +14,7 @@ import pytest
 from jaxdamp.cli import main
 
 SMALL_RUN = ["--preset", "sanchez2012-optimal", "--set", "grains.0.count=8",
-             "--set", "numerics.duration=0.05", "--set", "numerics.settle_time=0.01",
+             "--set", "numerics.duration=0.07", "--set", "numerics.settle_time=0.01",
              "--no-progress"]
 
 

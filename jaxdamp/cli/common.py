@@ -18,12 +18,15 @@ def _number(kind, least, strict):
         except ValueError:
             what = "an integer" if kind is int else "a number"
             raise argparse.ArgumentTypeError(f"{text!r} is not {what}") from None
-        if not math.isfinite(v) or (v <= least if strict else v < least):
+        if least is None and not math.isfinite(v):
+            raise argparse.ArgumentTypeError(f"{text}: must be a finite number")
+        if least is not None and (not math.isfinite(v) or (v <= least if strict else v < least)):
             raise argparse.ArgumentTypeError(
                 f"{text}: must be {'>' if strict else '≥'} {least:g}")
         return v
 
-    parse.__name__ = f"{'positive' if strict else 'non-negative'} {kind.__name__}"
+    parse.__name__ = ("finite number" if least is None else
+                      f"{'positive' if strict else 'non-negative'} {kind.__name__}")
     return parse
 
 
@@ -31,6 +34,8 @@ def _number(kind, least, strict):
 positive_int = _number(int, 0, True)
 nonnegative_int = _number(int, 0, False)
 positive_float = _number(float, 0.0, True)
+#: argparse type of a real option of any sign (a time, a phase): ``nan`` and ``±inf`` refused.
+finite_float = _number(float, None, False)
 
 
 class OutputError(ConfigError):
@@ -60,46 +65,67 @@ def check_outputs(paths, overwrite: bool = False, keep=(), resumable=(),
       it is in ``keep`` (a checkpoint the command continues, e.g. ``--resume``), and must then
       be writable; for a file in ``resumable`` the message also suggests ``--resume``.
 
-    Raises :class:`OutputError` naming the file and the flag; nothing is created or changed."""
-    import tempfile
+    Every path that passes is then claimed for this process (:func:`jaxdamp.io.claims.claim`,
+    held to the end of the command): a second process given the same output is refused here,
+    before either computes, instead of truncating the file the first one writes.
+
+    Raises :class:`OutputError` (or :class:`~jaxdamp.io.claims.FileBusy`) naming the file and
+    the flag; nothing is created or changed."""
+    from jaxdamp.io import claims
 
     keep = {os.path.abspath(os.fspath(k)) for k in keep if k is not None}
     resumable = {os.path.abspath(os.fspath(k)) for k in resumable if k is not None}
-    seen = set()
-    for path in paths:
-        if path is None:
-            continue
-        path = os.fspath(path)
-        full = os.path.abspath(path)
-        if full in seen:
-            continue
-        seen.add(full)
-        folder = os.path.dirname(full)
-        shown = os.path.dirname(path) or "."
-        if new_folders:
-            while not os.path.exists(folder) and os.path.dirname(folder) != folder:
-                folder = os.path.dirname(folder)
-            shown = folder
-        if not os.path.exists(folder):
-            raise OutputError(f"{path}: the folder {shown}/ does not exist (create it first)")
-        if not os.path.isdir(folder):
-            raise OutputError(f"{path}: {shown} is not a folder")
-        if os.path.isdir(full):
-            raise OutputError(f"{path} is a folder; name a file to write")
-        try:
-            with tempfile.TemporaryFile(dir=folder):
-                pass
-        except OSError as err:
-            raise OutputError(f"{path}: cannot write into the folder {shown}/ "
-                              f"({err.strerror or err})") from None
-        if os.path.lexists(full):
-            if full not in keep and not overwrite:
-                raise OutputError(
-                    f"{path} already exists; give --overwrite to replace it"
-                    + (" or --resume to continue its checkpoint" if full in resumable else "")
-                    + " (it was left untouched)")
-            if not os.access(full, os.W_OK):
-                raise OutputError(f"{path} exists and is not writable")
+    taken = []
+    try:
+        for path in paths:
+            if path is None or claims.held(path) and os.path.abspath(path) in taken:
+                continue
+            path = os.fspath(path)
+            _check_folder(path, new_folders)
+            if not claims.held(path):  # before the existence check: a file being written by
+                claims.claim(path)     # another process is named as such
+                taken.append(os.path.abspath(path))
+            _check_existing(path, overwrite, keep, resumable)
+    except BaseException:
+        for full in taken:
+            claims.release(full)
+        raise
+
+
+def _check_folder(path: str, new_folders: bool) -> None:
+    import tempfile
+
+    full = os.path.abspath(path)
+    folder = os.path.dirname(full)
+    shown = os.path.dirname(path) or "."
+    if new_folders:
+        while not os.path.exists(folder) and os.path.dirname(folder) != folder:
+            folder = os.path.dirname(folder)
+        shown = folder
+    if not os.path.exists(folder):
+        raise OutputError(f"{path}: the folder {shown}/ does not exist (create it first)")
+    if not os.path.isdir(folder):
+        raise OutputError(f"{path}: {shown} is not a folder")
+    if os.path.isdir(full):
+        raise OutputError(f"{path} is a folder; name a file to write")
+    try:
+        with tempfile.TemporaryFile(dir=folder):
+            pass
+    except OSError as err:
+        raise OutputError(f"{path}: cannot write into the folder {shown}/ "
+                          f"({err.strerror or err})") from None
+
+
+def _check_existing(path: str, overwrite: bool, keep: set, resumable: set) -> None:
+    full = os.path.abspath(path)
+    if os.path.lexists(full):
+        if full not in keep and not overwrite:
+            raise OutputError(
+                f"{path} already exists; give --overwrite to replace it"
+                + (" or --resume to continue its checkpoint" if full in resumable else "")
+                + " (it was left untouched)")
+        if not os.access(full, os.W_OK):
+            raise OutputError(f"{path} exists and is not writable")
 
 
 def resume_or_overwrite(args) -> list:
@@ -161,9 +187,15 @@ def print_steady(steady: dict, keys=("amplitude", "granular_loss_per_cycle", "ph
     start = np.atleast_1d(a["start"]).ravel()
     ok = np.atleast_1d(a["stationary"]).ravel()
     R = len(start)
+    if not ok.any():
+        print(f"steady state: not detected in {'the run' if R == 1 else f'any of {R} replicates'}"
+              " (MSER on per-period amplitude and dissipation): it is too short or still "
+              "drifting, so the numbers above are a fixed window, not a steady state — "
+              "lengthen --duration (numerics.duration) for one")
+        return
     print(f"steady state detected (MSER on per-period amplitude and dissipation) in "
           f"{int(ok.sum())} of {R} replicate(s); starts at t = "
-          + ", ".join(f"{t:.3g}" if k else "never" for t, k in zip(start, ok)) + " s")
+          + ", ".join(f"{t:.3g} s" if k else "(not stationary)" for t, k in zip(start, ok)))
     for k in keys:
         e = steady[k]
         bse = np.atleast_1d(e["batch_se"]).ravel()

@@ -43,13 +43,14 @@ EPILOG_RUN = textwrap.dedent(
 
 
 def cmd_run(args) -> int:
-    from jaxdamp.validation import validate
+    from jaxdamp.validation import check_periods, validate
 
     cfg = run_config(args)
     R = replicates(args)
     check_outputs([args.out], args.overwrite, keep=resume_or_overwrite(args),
                   resumable=[args.out])
     validate(cfg)
+    check_periods(cfg)
     from jaxdamp.studies.runner import run
 
     if R > 1:  # R independent beds in one batch: a sweep of one point (sweep file layout)

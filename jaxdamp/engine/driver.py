@@ -40,6 +40,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxdamp import interrupt
 from jaxdamp.engine import neighbors as nb
 from jaxdamp.engine.simulate import chunk_fn, init_states, resolve_engine
 from jaxdamp.physics.integrate import box_frame
@@ -276,10 +277,8 @@ def run_chunks(batch: Batch, chunks: range, records_per_chunk: int, record_every
                 batch, recs = advance(batch, records_per_chunk, record_every, systems=systems,
                                       on_realloc=on_realloc)
                 if on_chunk is not None:
-                    with _interrupt_deferred() as asked:  # never half a chunk in the file
+                    with interrupt.held():  # never half a chunk in the file
                         on_chunk(k, batch, recs)
-                    if asked():
-                        raise KeyboardInterrupt
                 if bar is not None:
                     bar.update(1)
                     bar.set_postfix(t=f"{float(recs['t'][0, -1]):.3f}s")
@@ -299,44 +298,14 @@ def run_chunks(batch: Batch, chunks: range, records_per_chunk: int, record_every
 
 def call_chunk(fn, *args):
     """``fn(*args)`` for a chunk function of :func:`jaxdamp.engine.simulate.chunk_fn`, with
-    Ctrl-C held until it returns, then raised as ``KeyboardInterrupt``.
+    Ctrl-C held until it returns, then raised as ``KeyboardInterrupt`` (:mod:`jaxdamp.interrupt`).
 
     A chunk cannot be stopped midway anyway (XLA and the numba kernel only return to Python
     at its end), and a ``KeyboardInterrupt`` raised inside a host callback (the native engine
     spends nearly all of a chunk in one) would reach the caller wrapped in a runtime error by
     JAX, no longer a Ctrl-C."""
-    with _interrupt_deferred() as asked:
-        out = fn(*args)
-    if asked():
-        raise KeyboardInterrupt
-    return out
-
-
-class _interrupt_deferred:
-    """Hold Ctrl-C while a chunk is written (samples, checkpoint): a SIGINT then only sets a
-    flag (``asked()``), acted on after the write. No-op outside the main thread and where
-    SIGINT is ignored (a background job without job control)."""
-
-    def __enter__(self):
-        import signal
-        import threading
-
-        self._flag = False
-        self._old = None
-        if (threading.current_thread() is threading.main_thread()
-                and signal.getsignal(signal.SIGINT) is not signal.SIG_IGN):  # respect nohup & co
-            self._old = signal.signal(signal.SIGINT, self._note)
-        return lambda: self._flag
-
-    def _note(self, signum, frame):
-        self._flag = True
-
-    def __exit__(self, *exc):
-        import signal
-
-        if self._old is not None:
-            signal.signal(signal.SIGINT, self._old)
-        return False
+    with interrupt.held():
+        return fn(*args)
 
 
 def run_for(batch: Batch, seconds: float, pieces: int = 1, check: bool = True) -> Batch:

@@ -33,7 +33,7 @@ Two builders list the same pairs, entry for entry (``tests/test_large_beds.py``)
   small beds the JAX engine is for. It replaced jax-md's dense all-pairs list (cell lists off),
   the one part of jax-md the project used; that removed 51 packages and 432 MB from the
   install and a 6–15 s import (``benchmarks/install_size.py``, ``benchmarks/RESULTS.md``).
-  With jax-md installed, ``tests/test_neighbors.py`` still compares the two.
+  ``tests/test_neighbors.py`` checks both builders against a brute-force list of all pairs.
 
 The compiled CPU engine (:mod:`jaxdamp.engine.native`) builds its own cell lists.
 """

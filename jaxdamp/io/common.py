@@ -1,10 +1,13 @@
 """What every jaxdamp file shares: attributes with provenance, datasets with units, appendable
-datasets, and the steady-state estimates group. (The checkpoint form of a state is the
+datasets, the steady-state estimates group, and the safety of every resumable file: its
+checkpoint replaced whole (:func:`write_checkpoint`), room checked before each chunk
+(:func:`ensure_space`), damage found before a resume (:func:`damaged_series`). (The checkpoint form of a state is the
 driver's: :func:`jaxdamp.engine.driver.checkpoint`.)"""
 
 from __future__ import annotations
 
 import json
+import os
 import time
 
 import numpy as np
@@ -74,3 +77,123 @@ def write_steady(h5, steady: dict, replicates: int, units) -> None:
         for f, v in fields.items():
             d = g.create_dataset(f, data=np.asarray(v))
             d.attrs["units"] = "s" if f == "start" else "1" if f in ("n", "stationary") else units(q)
+
+
+def has_checkpoint(path) -> bool:
+    """Whether ``path`` is a readable jaxdamp file with a ``/checkpoint`` to continue from
+    (run and sweep files)."""
+    import h5py
+
+    try:
+        with h5py.File(path, "r") as h5:
+            return "checkpoint" in h5
+    except OSError:
+        return False
+
+
+class DiskFull(OSError):
+    """The disk holding an output file has no room for the next chunk."""
+
+    def __str__(self) -> str:
+        return self.strerror or super().__str__()
+
+
+#: Room kept free beyond a chunk's estimated size (HDF5 metadata, the checkpoint rewritten
+#: beside the old one before the old one is dropped).
+SPACE_MARGIN = 1 << 18
+
+
+def ensure_space(path, nbytes: int) -> None:
+    """Raise :class:`DiskFull` unless the disk holding ``path`` has room for ``nbytes`` of
+    new data (counted twice: HDF5 does not reuse a dropped checkpoint's space at once) plus
+    :data:`SPACE_MARGIN`. Checked before each chunk is written, so that a full disk stops a
+    run between chunks, never in the middle of an HDF5 write (where it leaves the file with
+    holes that read back as zeros)."""
+    import errno
+    import shutil
+
+    from jaxdamp.engine.budget import size
+
+    folder = os.path.dirname(os.path.abspath(os.fspath(path)))
+    free = shutil.disk_usage(folder).free
+    need = 2 * int(nbytes) + SPACE_MARGIN
+    if free < need:
+        raise DiskFull(errno.ENOSPC,
+                       f"the disk holding {path} is full: {size(free)} free, the next chunk "
+                       f"needs about {size(need)}; the file keeps every chunk finished before "
+                       "it — free some space, then continue it (--resume, or for `efficiency` "
+                       "the same command)")
+
+
+def write_checkpoint(h5, arrays: dict, attrs: dict) -> None:
+    """Replace ``/checkpoint`` with ``arrays`` (exact copies) and ``attrs``, never leaving the
+    file without a whole one: the samples written before it are flushed first, the new
+    checkpoint is written and flushed beside the old (``/checkpoint.new``), and only then
+    renamed over it."""
+    h5.flush()
+    if "checkpoint.new" in h5:
+        del h5["checkpoint.new"]
+    g = h5.create_group("checkpoint.new")
+    for k, v in arrays.items():
+        g.create_dataset(k, data=np.asarray(v))
+    for k, v in attrs.items():
+        g.attrs[k] = v
+    h5.flush()
+    if "checkpoint" in h5:
+        del h5["checkpoint"]
+    h5.move("checkpoint.new", "checkpoint")
+    h5.flush()
+
+
+def damaged_series(t, n: int) -> str | None:
+    """Why the first ``n`` sampled times ``t`` (a run's or a point's) cannot be the samples
+    of a run — missing, not finite, or not increasing (a disk that filled or bytes overwritten
+    leave holes that read back as zeros or garbage) — or ``None`` when they can."""
+    t = np.asarray(t)
+    if t.shape[-1] < n:
+        return f"its checkpoint counts {n} samples but the file holds {t.shape[-1]}"
+    t = t[..., :n]
+    if not np.isfinite(t).all():
+        return "its sampled times are not all finite"
+    if n > 1 and not (np.diff(t, axis=-1) > 0).all():
+        k = int(np.argmax(~(np.diff(t, axis=-1) > 0).reshape(-1, n - 1).all(axis=0))) + 1
+        return f"its sampled times stop increasing at sample {k}"
+    return None
+
+
+#: The checkpoint fields that must be finite in any state a run can continue from.
+KINEMATICS = ("state/r", "state/v", "state/w", "state/q", "state/z", "state/zd")
+
+
+def damaged_checkpoint(arrays: dict) -> str | None:
+    """Why checkpoint ``arrays`` cannot be a state to continue from (a kinematic field
+    missing or not finite), or ``None``."""
+    for k in KINEMATICS:
+        if k not in arrays:
+            return f"its checkpoint lacks {k}"
+        if not np.isfinite(np.asarray(arrays[k], dtype=float)).all():
+            return f"its checkpoint's {k} is not finite"
+    return None
+
+
+def damaged_message(path, why: str) -> str:
+    """The one-line refusal to continue a damaged file."""
+    return (f"--resume: {path} is damaged ({why}); it cannot be continued — start it again "
+            "with --overwrite (a disk that filled while it was written, or bytes overwritten, "
+            "leave such holes)")
+
+
+def stop_file(f, message: str) -> None:
+    """Mark an open run or sweep file (``set_status``, ``close``) as stopped with
+    ``message`` after an error of its disk, as far as the disk still allows; the claim on it
+    is released whatever happens. Its last whole checkpoint is what a resume continues."""
+    try:
+        f.set_status("stopped", message)
+    except Exception:  # noqa: BLE001 - the disk that failed may refuse this too
+        pass
+    try:
+        f.close()
+    except Exception:  # noqa: BLE001
+        from jaxdamp.io import claims
+
+        claims.release(f.path)

@@ -26,18 +26,26 @@ import h5py
 import numpy as np
 
 from jaxdamp.config import Config
+from jaxdamp.io import claims
 from jaxdamp.io.common import append as _append
 from jaxdamp.io.common import stamp
+from jaxdamp.io.common import write_checkpoint as _write_checkpoint
 
 FORMAT = "jaxdamp-run/1"
 
 
 class RunFile:
-    """A run file open for writing (single system)."""
+    """A run file open for writing (single system), claimed by this process while open
+    (:mod:`jaxdamp.io.claims`: a second writer is refused before it can truncate it)."""
 
     def __init__(self, path: str, mode: str = "a"):
         self.path = path
-        self.h5 = h5py.File(path, mode)
+        claims.claim(path)
+        try:
+            self.h5 = h5py.File(path, mode)
+        except BaseException:
+            claims.release(path)
+            raise
 
     # -- creation -------------------------------------------------------------------------
     @classmethod
@@ -97,15 +105,9 @@ class RunFile:
 
     # -- checkpoint --------------------------------------------------------------------------
     def write_checkpoint(self, arrays: dict, attrs: dict) -> None:
-        """Store ``arrays`` (exact float64/int copies) and ``attrs`` under ``/checkpoint``."""
-        if "checkpoint" in self.h5:
-            del self.h5["checkpoint"]
-        g = self.h5.create_group("checkpoint")
-        for k, v in arrays.items():
-            g.create_dataset(k, data=np.asarray(v))
-        for k, v in attrs.items():
-            g.attrs[k] = v
-        self.h5.flush()
+        """Store ``arrays`` (exact float64/int copies) and ``attrs`` under ``/checkpoint``,
+        after the samples before it are flushed (:func:`jaxdamp.io.common.write_checkpoint`)."""
+        _write_checkpoint(self.h5, arrays, attrs)
 
     def read_checkpoint(self) -> tuple[dict, dict] | None:
         if "checkpoint" not in self.h5:
@@ -132,7 +134,10 @@ class RunFile:
         self.h5.flush()
 
     def close(self):
-        self.h5.close()
+        try:
+            self.h5.close()
+        finally:
+            claims.release(self.path)
 
 
 def read_config(path: str) -> Config:

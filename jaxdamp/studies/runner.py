@@ -18,13 +18,21 @@ from dataclasses import dataclass
 import jax.numpy as jnp
 import numpy as np
 
+from jaxdamp import interrupt
 from jaxdamp.analysis import stats
 from jaxdamp.analysis.response import analysis_start, steady_state_summary
 from jaxdamp.config import Config, ConfigError, is_stored
-from jaxdamp.engine import driver
+from jaxdamp.engine import budget, driver
 from jaxdamp.engine.driver import SimulationDiverged  # noqa: F401  (re-exported: runs raise it)
 from jaxdamp.engine.packing import SettledBed, settle
 from jaxdamp.io import RunFile, write_steady
+from jaxdamp.io.common import (
+    damaged_checkpoint,
+    damaged_message,
+    damaged_series,
+    ensure_space,
+    stop_file,
+)
 from jaxdamp.physics.excitation import random_start
 from jaxdamp.physics.model import State, build, grain_species
 from jaxdamp.validation import validate
@@ -49,14 +57,29 @@ class Schedule:
 
 
 def schedule(config: Config, dt: float) -> Schedule:
-    """Sampling every ``record_dt`` (rounded to whole steps), chunks of ``chunk`` seconds
-    (rounded to whole samples), and whole chunks covering ``duration`` (rounded up, but a
-    shortfall below 1 % of a chunk from rounding the sampling is accepted)."""
+    """Sampling every ``record_dt`` (rounded to whole steps), chunks of ``chunk`` seconds — or
+    of the whole ``duration`` when that is shorter — (rounded to whole samples), and whole
+    chunks covering ``duration`` (rounded up, but a shortfall below 1 % of a chunk from
+    rounding the sampling is accepted). :func:`schedule_note` says when the run so made is
+    not the duration asked for."""
     num = config.numerics
     record_every = max(1, int(round(num.record_dt / dt)))
-    per_chunk = max(1, int(round(num.chunk / (record_every * dt))))
+    chunk = min(num.chunk, num.duration)
+    per_chunk = max(1, int(round(chunk / (record_every * dt))))
     n_chunks = max(1, int(math.ceil(num.duration / (per_chunk * record_every * dt) - 0.01)))
     return Schedule(dt, record_every, per_chunk, n_chunks)
+
+
+def schedule_note(config: Config, sched: Schedule) -> str | None:
+    """A one-line note when the simulated time of ``sched`` differs from
+    ``numerics.duration`` by more than 1 % (whole samples and whole chunks), else ``None``."""
+    asked = config.numerics.duration
+    if abs(sched.duration - asked) <= 0.01 * asked:
+        return None
+    return (f"note: numerics.duration = {asked:.6g} s is run as {sched.n_chunks} whole "
+            f"chunk(s) of {sched.chunk_steps * sched.dt:.6g} s = {sched.duration:.6g} s "
+            f"(whole samples of {sched.record_every * sched.dt:.4g} s; numerics.chunk and "
+            "numerics.record_dt set the grain)")
 
 
 def initial_structure(config: Config, grain_mass: float) -> tuple[np.ndarray, np.ndarray]:
@@ -109,6 +132,24 @@ def bed_with_box(config: Config, r, box_position: float) -> np.ndarray:
     return np.asarray(r) + excitation_axis(config) * box_position
 
 
+def batch_budget(config: Config, model, sched: Schedule, systems: int = 1,
+                 out: str | None = None, snapshots: int = 0):
+    """The :class:`jaxdamp.engine.budget.Budget` of ``systems`` systems of ``config`` on
+    schedule ``sched``: settling and the run, every sample kept (a sample holds 24 scalars,
+    4 per species and one per structural degree of freedom, in float64)."""
+    from jaxdamp.engine import budget
+    from jaxdamp.engine.simulate import resolve_engine
+
+    num = config.numerics
+    steps = int(num.settle_time / sched.dt) + sched.n_chunks * sched.chunk_steps
+    return budget.estimate(
+        systems=systems, grains=model.n, steps=steps,
+        samples=sched.n_chunks * sched.records_per_chunk,
+        sample_bytes=8 * (24 + 4 * len(config.grains) + model.dofs),
+        engine=resolve_engine(num.engine, num.precision), snapshots=snapshots,
+        out=out is not None)
+
+
 @dataclass
 class RunResult:
     """What :func:`run` returns: the output path (or ``None``), the summary scalars (fixed
@@ -155,6 +196,12 @@ def run(
             "jaxdamp.s3.impact.simulate(config) from Python")
     model, params = build(config)
     sched = schedule(config, float(params.dt))
+    if (note := schedule_note(config, sched)) is not None:
+        say(note)
+    if not resume:
+        budget.check(batch_budget(config, model, sched, 1, out,
+                                  sched.n_chunks if snapshots else 0), out, say)
+    interrupt.check()
     t_window = analysis_start(config, sched.duration)
     params = dataclasses.replace(params, t_window=jnp.asarray(t_window))
     pb = driver.batched(params)
@@ -181,8 +228,15 @@ def run(
             rf.close()
             raise ConfigError(f"--resume: {out} has no checkpoint (the run never finished a chunk)")
         arrays, attrs = ck
-        batch = driver.restore(model, pb, arrays, **engine)
         start_chunk = int(attrs["chunk"])
+        series = rf.h5["series"]
+        why = damaged_checkpoint(arrays) or (
+            damaged_series(series["t"][()] if "t" in series else np.zeros(0),
+                           int(attrs["n_records"])))
+        if why is not None:
+            rf.close()
+            raise ConfigError(damaged_message(out, why))
+        batch = driver.restore(model, pb, arrays, **engine)
         rf.truncate(int(attrs["n_records"]), int(attrs["n_snapshots"]))
         s = rf.h5["settle"]
         bed = SettledBed(s["r0"][()], None, None, None, float(s.attrs["bed_height"]),
@@ -213,6 +267,9 @@ def run(
         if out is not None:
             rf = RunFile.create(out, config, radii, masses, grain_species(config), bed,
                                 extra_attrs={"dt": sched.dt, "duration": sched.duration})
+            # resumable from its first moment: the settled start is checkpoint 0
+            rf.write_checkpoint({k: v[0] for k, v in driver.checkpoint(batch, 1).items()},
+                                {"chunk": 0, "n_records": 0, "n_snapshots": 0})
 
     all_recs: list[dict] = []
     if rf is not None and start_chunk > 0:
@@ -225,15 +282,16 @@ def run(
         recs = {k: v[0] for k, v in recs.items()}
         all_recs.append(recs)
         if rf is not None:
+            ck = {k: v[0] for k, v in driver.checkpoint(batch, 1).items()}  # one system
+            ensure_space(out, sum(np.asarray(v).nbytes for v in (*recs.values(), *ck.values()))
+                         + (np.asarray(batch.states.r[0]).nbytes * 7 // 3 if snapshots else 0))
             rf.append_records(recs)
             if snapshots:
                 rf.append_snapshot(float(batch.states.t[0]), batch.states.r[0],
                                    batch.states.q[0])
             rf.write_checkpoint(
-                {k: v[0] for k, v in driver.checkpoint(batch, 1).items()},  # one system
-                {"chunk": chunk + 1, "n_records": rf.n_records(),
-                 "n_snapshots": rf.h5["snapshots"]["t"].shape[0] if snapshots else 0},
-            )
+                ck, {"chunk": chunk + 1, "n_records": rf.n_records(),
+                     "n_snapshots": rf.h5["snapshots"]["t"].shape[0] if snapshots else 0})
 
     def diverged(e):
         if rf is not None:
@@ -248,11 +306,16 @@ def run(
 
     wall0 = time.perf_counter()
     stop = sched.n_chunks if max_chunks is None else min(sched.n_chunks, start_chunk + max_chunks)
-    batch = driver.run_chunks(
-        batch, range(start_chunk, stop), sched.records_per_chunk, sched.record_every,
-        on_chunk=keep, on_diverged=diverged, on_realloc=realloc, on_interrupt=interrupted,
-        total=sched.n_chunks,
-        progress=f"{config.name} f={config.frequency:g} Hz" if progress else None)
+    try:
+        batch = driver.run_chunks(
+            batch, range(start_chunk, stop), sched.records_per_chunk, sched.record_every,
+            on_chunk=keep, on_diverged=diverged, on_realloc=realloc, on_interrupt=interrupted,
+            total=sched.n_chunks,
+            progress=f"{config.name} f={config.frequency:g} Hz" if progress else None)
+    except OSError as err:  # the disk filled (or went away): keep what the file holds
+        if rf is not None:
+            stop_file(rf, str(err))
+        raise
     steps_done = (stop - start_chunk) * sched.chunk_steps
     wall = time.perf_counter() - wall0
 

@@ -28,12 +28,14 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxdamp import interrupt
 from jaxdamp.analysis import stats
 from jaxdamp.analysis.response import analysis_start, steady_state_summary
 from jaxdamp.config import Config, ConfigError
-from jaxdamp.engine import driver
+from jaxdamp.engine import budget, driver
 from jaxdamp.engine.packing import settle_many
 from jaxdamp.engine.simulate import resolve_engine
+from jaxdamp.io.common import ensure_space, stop_file
 from jaxdamp.io.sweepfile import SweepFile, holds
 from jaxdamp.physics.model import build, config_dt, grain_radii
 from jaxdamp.studies.grid import (
@@ -43,7 +45,13 @@ from jaxdamp.studies.grid import (
     grid_shape,
     replicate_configs,
 )
-from jaxdamp.studies.runner import bed_with_box, initial_structure, schedule
+from jaxdamp.studies.runner import (
+    batch_budget,
+    bed_with_box,
+    initial_structure,
+    schedule,
+    schedule_note,
+)
 
 
 def _mesh_sharding(batch: int):
@@ -84,6 +92,15 @@ def reuse_or_run(config: Config, axes: dict, out: str, **kwargs) -> SweepResult:
                  resume=holds(out, config, axes, kwargs.get("replicates", 1)), **kwargs)
 
 
+def impact_budget(config: Config, points: int, out=None):
+    """The :class:`jaxdamp.engine.budget.Budget` of an S3 sweep of ``points`` points: every
+    point's samples (16 float64 scalars each) held until the end, about 6 µs of wall per
+    sample (30 points of the thesis' 13 s in about 10 s)."""
+    samples = int(config.numerics.duration / config.numerics.record_dt) + 1
+    return budget.estimate(systems=points, grains=0, steps=samples, samples=samples,
+                           sample_bytes=128, seconds_per_step=6e-6, out=out is not None)
+
+
 def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = False,
           progress: bool = True, echo=print, shard: bool = True,
           max_chunks: int | None = None, snapshots: int = 0,
@@ -117,16 +134,25 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
             raise ConfigError(f"replicates = {replicates}: the single-particle model (S3) is "
                               "deterministic, one realisation is exact (use replicates = 1)")
 
+        budget.check(impact_budget(config, math.prod(grid_shape(axes)), out), out, echo)
         return impact.sweep(config, axes, out=out, progress=progress, echo=echo)
     say = echo or (lambda *a, **k: None)
     grid = grid_configs(config, axes)
     R = int(replicates)
+    if not (resume and out and os.path.exists(out)):  # sized before any system is built
+        first = grid[0]
+        sched0 = schedule(first, config_dt(first, grain_radii(first)))
+        budget.check(batch_budget(first, build(first)[0], sched0, len(grid) * R, out,
+                                  snapshots), out, say)
+    interrupt.check()
     configs = replicate_configs(grid, R)
     base = configs[0]
     radii = grain_radii(base)
     dt = min(config_dt(c, radii) for c in configs)
     sched = schedule(dataclasses.replace(
         base, numerics=dataclasses.replace(base.numerics, dt=dt)), dt)
+    if (note := schedule_note(base, sched)) is not None:
+        say(note)
     built = [build(c, radii) for c in configs]
     model = built[0][0]
     for (m, _), c in zip(built, configs):
@@ -186,10 +212,12 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
             v0.append(bed.v), w0.append(bed.w), q0.append(bed.q), z0.append(x), zd0.append(xd)
         batch = driver.start(model, pb, np.stack(r0), np.stack(v0), np.stack(w0), np.stack(q0),
                              np.stack(z0), np.stack(zd0), **drive).replace(params=pb_s)
+        start_arrays = driver.checkpoint(batch, P) if out else None  # a collective
         if out and writer:
             sf = SweepFile.create(out, config, axes, configs, dt, sched.duration, engine, R,
                                   devices=len(jax.devices()))
             sf.write_settle([beds[k] for k in keys], [c.numerics.settle_speed for c in configs])
+            sf.write_checkpoint(start_arrays, 0, 0.0)  # resumable from the settled start
 
     wall0 = time.perf_counter()
     mem: dict = {}
@@ -199,6 +227,7 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
         if out:  # gathered by every process (a collective across hosts), written by one
             arrays = driver.checkpoint(batch, P)
         if sf is not None:
+            ensure_space(out, sum(np.asarray(v).nbytes for v in (*recs.values(), *arrays.values())))
             sf.append_records(recs)
             sf.write_checkpoint(arrays, chunk + 1, wall_before + time.perf_counter() - wall0)
         if chunk >= sched.n_chunks - snapshots:
@@ -218,10 +247,15 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
             sf.close()
 
     stop = sched.n_chunks if max_chunks is None else min(sched.n_chunks, start_chunk + max_chunks)
-    batch = driver.run_chunks(
-        batch, range(start_chunk, stop), sched.records_per_chunk, sched.record_every, systems=P,
-        on_chunk=keep, on_diverged=diverged, on_interrupt=interrupted, total=sched.n_chunks,
-        progress=f"sweep of {P} systems" if progress else None)
+    try:
+        batch = driver.run_chunks(
+            batch, range(start_chunk, stop), sched.records_per_chunk, sched.record_every,
+            systems=P, on_chunk=keep, on_diverged=diverged, on_interrupt=interrupted,
+            total=sched.n_chunks, progress=f"sweep of {P} systems" if progress else None)
+    except OSError as err:  # the disk filled (or went away): keep what the file holds
+        if sf is not None:
+            stop_file(sf, str(err))
+        raise
     if stop < sched.n_chunks:
         if sf is not None:
             sf.set_status("partial")

@@ -1,0 +1,357 @@
+"""Nothing lost, nothing meaningless: one writer per output (two real processes), a disk that
+fills (an injected shortfall, and a real tmpfs), Ctrl-C from the first line of `main` (SIGINT
+in a child at several moments of start-up), damaged files refused on resume, batches sized
+before compute, and the physical sanity limits of a run's schedule."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+import h5py
+import numpy as np
+import pytest
+
+from jaxdamp import interrupt
+from jaxdamp.cli import main
+from jaxdamp.config import ConfigError
+from jaxdamp.io import claims
+
+# a run of a few seconds: 8 grains, one period of the thesis' 15.16 Hz in 7 chunks
+TINY = ["--preset", "sanchez2012-optimal", "--set", "grains.0.count=8",
+        "--set", "numerics.duration=0.07", "--set", "numerics.chunk=0.01",
+        "--set", "numerics.settle_time=0.01", "--no-progress"]
+
+
+def _child(argv, **kw):
+    """``jaxdamp argv`` in a child with SIGINT as at a terminal (not ignored, even when the
+    tests run as a background job)."""
+    return subprocess.Popen([sys.executable, "-m", "jaxdamp", *argv], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+                            **kw)
+
+
+# -- one writer per output -------------------------------------------------------------------
+
+HOLD = ("import sys, time; from jaxdamp.io import claims; claims.claim(sys.argv[1]); "
+        "print('held', flush=True); time.sleep(60)")
+
+
+def test_a_claimed_output_is_refused_before_compute_and_a_dead_holder_blocks_nobody(
+        tmp_path, capsys):
+    out = tmp_path / "same.h5"
+    holder = subprocess.Popen([sys.executable, "-c", HOLD, str(out)], stdout=subprocess.PIPE,
+                              text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        t0 = time.perf_counter()
+        assert main(["run", *TINY, "--out", str(out)]) == 2
+        err = capsys.readouterr().err.strip()
+        assert time.perf_counter() - t0 < 5.0  # before JAX, settling or any file
+        assert len(err.splitlines()) == 1 and "Traceback" not in err, err
+        assert f"{out} is being written by another jaxdamp process (pid {holder.pid}" in err
+        assert not out.exists()
+        # --overwrite and --resume do not get past it either
+        assert main(["run", *TINY, "--out", str(out), "--overwrite"]) == 2
+        assert "being written by another" in capsys.readouterr().err
+    finally:
+        holder.kill()
+        holder.wait()
+    assert claims.lock_path(out) and os.path.exists(claims.lock_path(out))  # left by the kill
+    claims.claim(out)  # the kernel dropped the dead holder's lock: claimed again at once
+    assert claims.held(out)
+    claims.release(out)
+    assert not os.path.exists(claims.lock_path(out)) and not claims.held(out)
+
+
+def test_claims_are_counted_within_a_process(tmp_path):
+    out = tmp_path / "x.h5"
+    claims.claim(out)
+    claims.claim(out)  # the writer's claim on top of the command's: never blocks itself
+    claims.release(out)
+    assert claims.held(out)
+    claims.release(out)
+    assert not claims.held(out)
+
+
+@pytest.mark.long
+def test_two_jobs_on_one_output_one_refused_the_other_intact(tmp_path):
+    """Two real `jaxdamp run` processes started together on one --out (the battery's F15): one
+    is refused in one line before computing, the other finishes and its file opens whole."""
+    out = tmp_path / "same.h5"
+    procs = [_child(["run", *TINY, "--out", str(out)]) for _ in range(2)]
+    results = [(p.wait(timeout=600), p.communicate()[1]) for p in procs]
+    codes = sorted(code for code, _ in results)
+    assert codes == [0, 2], results
+    err = next(e for code, e in results if code == 2)
+    assert "is being written by another jaxdamp process" in err and "Traceback" not in err
+    with h5py.File(out, "r") as h:
+        assert h.attrs["status"] == "finished"
+        assert np.all(np.diff(h["series/t"][()]) > 0)
+    assert not os.path.exists(claims.lock_path(out))
+
+
+# -- a disk that fills -----------------------------------------------------------------------
+
+def _small_config():
+    import helpers
+
+    from jaxdamp.config import Primary
+
+    return helpers.config(n=6, system="primary", gravity=9.81, frequency=15.0,
+                          primary=Primary(M=2.0, K=2e4, C=5.0, U=1e-3),
+                          duration=0.04, chunk=0.005, record_dt=2.5e-4, settle_time=0.01)
+
+
+def test_a_full_disk_stops_between_chunks_and_the_file_resumes_bit_identically(
+        tmp_path, monkeypatch):
+    """The disk's free space is made to run out after 3 chunks (injected): the run stops with
+    one DiskFull error before writing the 4th chunk, the file is marked 'stopped' and holds 3
+    whole chunks and their checkpoint; with room again, --resume ends exactly where an
+    uninterrupted run ends."""
+    from jaxdamp.io.common import DiskFull
+    from jaxdamp.studies.runner import run
+
+    cfg = _small_config()
+    ref = run(cfg, out=str(tmp_path / "ref.h5"), progress=False, echo=None)
+    real = shutil.disk_usage
+    calls = {"n": 0}
+
+    def filling(path):
+        calls["n"] += 1
+        total, used, free = real(path)
+        # 1: the batch's size check; 2-4: chunks 1-3 have room; then 100 kB are left
+        return type(real(path))(total, used, free if calls["n"] <= 4 else 100_000)
+
+    out = tmp_path / "full.h5"
+    monkeypatch.setattr(shutil, "disk_usage", filling)
+    with pytest.raises(DiskFull, match=r"the disk holding .*full\.h5 is full: 100 kB free"):
+        run(cfg, out=str(out), progress=False, echo=None)
+    monkeypatch.setattr(shutil, "disk_usage", real)
+    assert not claims.held(out)
+    with h5py.File(out, "r") as h:
+        assert h.attrs["status"] == "stopped" and "is full" in h.attrs["message"]
+        assert int(h["checkpoint"].attrs["chunk"]) == 3
+        assert h["series/t"].shape[0] == int(h["checkpoint"].attrs["n_records"]) == 60
+    res = run(cfg, out=str(out), resume=True, progress=False, echo=None)
+    for k in ref.records:
+        np.testing.assert_array_equal(res.records[k], ref.records[k], err_msg=k)
+    with h5py.File(out, "r") as h:
+        assert h.attrs["status"] == "finished"
+
+
+def test_a_run_file_is_resumable_from_its_settled_start(tmp_path):
+    """The checkpoint is written with the file (chunk 0): a run stopped before its first chunk
+    finished is continued, not lost."""
+    from jaxdamp.studies.runner import run
+
+    cfg = _small_config()
+    out = tmp_path / "r.h5"
+    assert run(cfg, out=str(out), progress=False, echo=None, max_chunks=0) is not None
+    with h5py.File(out, "r") as h:
+        assert int(h["checkpoint"].attrs["chunk"]) == 0 and h.attrs["status"] == "partial"
+    ref = run(cfg, progress=False, echo=None)
+    res = run(cfg, out=str(out), resume=True, progress=False, echo=None)
+    np.testing.assert_array_equal(res.records["z_box"], ref.records["z_box"])
+
+
+def test_resume_refuses_a_damaged_file_in_one_line(tmp_path):
+    """Holes left by a full disk (zeros) or overwritten bytes are found before a resume."""
+    from jaxdamp.studies.runner import run
+
+    cfg = _small_config()
+    out = tmp_path / "d.h5"
+    run(cfg, out=str(out), progress=False, echo=None, max_chunks=3)
+    with h5py.File(out, "a") as h:
+        h["series/t"][-10:] = 0.0  # what a failed write reads back as
+    with pytest.raises(ConfigError, match=r"is damaged \(its sampled times stop increasing "
+                                          r"at sample 50\)"):
+        run(cfg, out=str(out), resume=True, progress=False, echo=None)
+    with h5py.File(out, "a") as h:
+        h["series/t"][-10:] = np.arange(50, 60) * 2.5e-4 + 2.5e-4
+        h["checkpoint/state/r"][0, 0] = np.nan
+    with pytest.raises(ConfigError, match=r"checkpoint's state/r is not finite"):
+        run(cfg, out=str(out), resume=True, progress=False, echo=None)
+
+
+def _tmpfs(path, size):
+    os.makedirs(path, exist_ok=True)
+    done = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}", "tmpfs", str(path)],
+                          capture_output=True, text=True)
+    return done.returncode == 0
+
+
+@pytest.mark.long
+def test_a_real_full_tmpfs_gives_one_line_and_a_file_that_resumes(tmp_path):
+    """The battery's F06/F07 on a real file system of 500 kB: exit 2 with one line (no
+    segfault, no HDF5 tracebacks), the file keeps its whole chunks; on a larger disk --resume
+    finishes with the energy balance of an uninterrupted run."""
+    disk = tmp_path / "disk"
+    if not _tmpfs(disk, "500k"):
+        pytest.skip("mounting a tmpfs needs root (CI runs as root)")
+    try:
+        out = disk / "full.h5"
+        argv = ["run", "--preset", "sanchez2012-optimal", "--quick", "--no-progress",
+                "--set", "numerics.duration=1.5", "--out", str(out)]
+        p = _child(argv)  # F07: refused before compute, the file's size estimated
+        _, err = p.communicate(timeout=600)
+        assert p.returncode == 2 and not out.exists(), err
+        assert err.strip().count("\n") == 0 and "its disk has" in err, err
+        p = _child(["--no-size-check", *argv])  # F06: the disk fills during the run
+        _, err = p.communicate(timeout=600)
+        assert p.returncode == 2, err
+        assert err.strip().count("\n") == 0 and "Traceback" not in err, err
+        assert "is full" in err and "--resume" in err
+        with h5py.File(out, "r") as h:
+            assert h.attrs["status"] == "stopped" and "checkpoint" in h
+        subprocess.run(["mount", "-o", "remount,size=16m", str(disk)], check=True)
+        p = _child(argv + ["--resume"])
+        text, err = p.communicate(timeout=600)
+        assert p.returncode == 0, err
+        ref = tmp_path / "ref.h5"
+        p = _child(argv[:-1] + [str(ref)])
+        ref_text, err = p.communicate(timeout=600)
+        assert p.returncode == 0, err
+        line = [x for x in text.splitlines() if x.startswith("energy balance error")][0]
+        ref_line = [x for x in ref_text.splitlines() if x.startswith("energy balance error")][0]
+        assert line.split(";")[0] == ref_line.split(";")[0]
+    finally:
+        subprocess.run(["umount", str(disk)], capture_output=True)
+
+
+# -- Ctrl-C ----------------------------------------------------------------------------------
+
+def test_ctrl_c_is_a_request_acted_on_at_the_next_safe_point():
+    interrupt.install()
+    try:
+        os.kill(os.getpid(), signal.SIGINT)  # lands anywhere: only noted
+        time.sleep(0.05)
+        assert interrupt.asked()
+        with pytest.raises(KeyboardInterrupt):
+            interrupt.check()
+    finally:
+        interrupt.uninstall()
+    assert not interrupt.asked()
+
+
+def test_outside_the_command_line_a_chunk_holds_ctrl_c_until_it_is_done():
+    done = []
+    with pytest.raises(KeyboardInterrupt):
+        with interrupt.held():
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.05)
+            done.append(True)  # the block finishes first
+    assert done == [True]
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+@pytest.mark.long
+def test_ctrl_c_in_the_first_seconds_exits_130_naming_only_files_that_exist(tmp_path):
+    """SIGINT during the imports, JAX's start, settling and the first chunks (the battery's
+    F11): always exit 130 with no traceback and no crash; the message names the output only
+    when it exists, and then with a checkpoint that continues it."""
+    seen = []
+    for delay in (0.15, 0.6, 1.5, 3.0, 6.0):
+        out = tmp_path / f"i{delay}.h5"
+        p = _child(["run", "--preset", "sanchez2012-optimal", "--quick", "--no-progress",
+                    "--out", str(out)])
+        time.sleep(delay)
+        p.send_signal(signal.SIGINT)
+        _, err = p.communicate(timeout=300)
+        assert p.returncode == 130, (delay, err)
+        assert "Traceback" not in err and "Exception ignored" not in err, (delay, err)
+        last = err.strip().splitlines()[-1]
+        if out.exists():
+            assert "--resume" in last and f"{out} keeps every finished chunk" in last, last
+            with h5py.File(out, "r") as h:
+                assert h.attrs["status"] == "interrupted" and "checkpoint" in h
+        else:
+            assert f"interrupted before {out} was written (nothing to resume)" in last, last
+        seen.append(out.exists())
+        assert not os.path.exists(claims.lock_path(out))
+    assert not seen[0]  # the earliest is before the file exists
+
+
+# -- sizes checked up front ------------------------------------------------------------------
+
+@pytest.mark.parametrize("argv, what", [
+    (["run", "--preset", "sanchez2012-optimal", "--quick", "--replicates", "100000"],
+     "100000 systems × 250 grains"),
+    (["frf", "--preset", "sanchez2012-impact", "--n", "100000"], "100000 systems"),
+])
+def test_a_batch_larger_than_memory_is_refused_before_compute(argv, what, capsys):
+    t0 = time.perf_counter()
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert time.perf_counter() - t0 < 30
+    assert len(err.splitlines()) == 1 and "Traceback" not in err, err
+    assert "this batch needs about" in err and what in err and "--no-size-check" in err, err
+
+
+def test_the_estimate_follows_its_model_and_the_measured_peak():
+    """Memory per system of the thesis bed over the quick run (4000 samples): the model gives
+    3.1 MB; measured peak RSS of `run --quick --replicates 32` against `--replicates 1`:
+    (645 - 556) MB / 31 = 2.9 MB."""
+    from jaxdamp.engine import budget
+
+    one = budget.estimate(systems=1, grains=250, steps=1, samples=4000, sample_bytes=232)
+    many = budget.estimate(systems=32, grains=250, steps=1, samples=4000, sample_bytes=232)
+    per = (many.memory - one.memory) / 31
+    assert 2.5e6 < per < 3.5e6
+    assert 0.5e9 < one.memory < 0.6e9  # measured 0.556 GB
+    assert budget.size(2.02e12) == "2.02 TB" and budget.duration(7200) == "2 h"
+
+
+def test_a_file_larger_than_its_disk_is_refused(tmp_path, monkeypatch):
+    from jaxdamp.engine import budget
+
+    b = budget.estimate(systems=10, grains=250, steps=1, samples=4000, sample_bytes=232,
+                        out=True)
+    real = shutil.disk_usage
+    monkeypatch.setattr(shutil, "disk_usage",
+                        lambda p: type(real(p))(10**9, 10**9 - 10**6, 10**6))
+    with pytest.raises(ConfigError, match=r"the output needs about 1[0-9.]* MB and its disk has "
+                                          r"1 MB free"):
+        budget.check(b, out=tmp_path / "x.h5")
+    budget.ENFORCE = False
+    try:
+        budget.check(b, out=tmp_path / "x.h5")
+    finally:
+        budget.ENFORCE = True
+
+
+# -- physical sanity of a run's schedule ----------------------------------------------------
+
+@pytest.mark.parametrize("extra, expect", [
+    (["--set", "primary.K=0"], "primary.K = 0: must be > 0"),
+    (["--set", "numerics.record_dt=10"],
+     "numerics.record_dt = 10 s: the sample interval must not exceed numerics.chunk"),
+    (["--frequency", "1e-6"], "is shorter than one drive period (1/f = 1e+06 s"),
+    (["--set", "numerics.record_dt=0.01"], "record_dt ≤ 1/(20 f)"),
+])
+def test_inputs_that_would_print_meaningless_numbers_are_refused(extra, expect, capsys):
+    assert main(["run", "--preset", "sanchez2012-optimal", "--quick", *extra]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and expect in err, err
+
+
+def test_a_duration_of_part_of_a_chunk_runs_as_asked_and_a_rounded_one_says_so():
+    from jaxdamp.cases import presets
+    from jaxdamp.config import apply_overrides
+    from jaxdamp.studies.runner import schedule, schedule_note
+
+    base = presets.get("sanchez2012-optimal")
+    dt = 2.342e-6
+    short = apply_overrides(base, ["numerics.duration=0.07", "numerics.chunk=0.1"])
+    s = schedule(short, dt)
+    assert s.n_chunks == 1 and s.duration == pytest.approx(0.07, rel=0.01)
+    assert schedule_note(short, s) is None
+    odd = apply_overrides(base, ["numerics.duration=0.15", "numerics.chunk=0.1"])
+    s = schedule(odd, dt)
+    assert s.n_chunks == 2
+    assert "numerics.duration = 0.15 s is run as 2 whole chunk(s)" in schedule_note(odd, s)
