@@ -395,7 +395,9 @@ def _listify(x):
 
 
 def _build(cls, data: Any, path: str):
-    """Build dataclass ``cls`` from a (nested) dict, rejecting unknown keys by name."""
+    """Build dataclass ``cls`` from a (nested) dict, rejecting unknown keys by name and
+    true/false where a number or text is expected (:func:`_refuse_bool`). The required keys
+    are there (:func:`from_dict` checks them first, :func:`missing_keys`)."""
     if data is None:
         return None
     if dataclasses.is_dataclass(data):
@@ -411,11 +413,74 @@ def _build(cls, data: Any, path: str):
     kwargs = {}
     for name, value in data.items():
         sub = f"{path}.{name}" if path else name
+        if (cls, name) not in _NESTED and not (cls is Config and name == "grains"):
+            _refuse_bool(known[name], value, sub)  # (a table's own message says "a table")
         kwargs[name] = _convert(cls, name, value, sub)
-    try:
-        return cls(**kwargs)
-    except TypeError as err:  # a required key is missing
-        raise ConfigError(f"{path or 'config'}: {err}") from None
+    return cls(**kwargs)
+
+
+def _refuse_bool(f: dataclasses.Field, value: Any, path: str) -> None:
+    """No setting of a configuration is true/false: TOML's ``true`` is Python's ``bool``, a
+    subclass of ``int``, which would otherwise pass every check of a number as 1 (or 0). The
+    message says what the field holds, from its annotation."""
+    if not _holds_bool(value):
+        return
+    kind = str(f.type)
+    if kind.startswith("int"):
+        rule = "must be a non-negative integer"
+    elif kind.startswith("str"):
+        rule = "must be text in quotes, not true/false"
+    elif kind.startswith("tuple"):
+        rule = "must hold numbers, not true/false"
+    else:
+        rule = "must be a number, not true/false"
+    raise ConfigError(f"{path} = {value!r}: {rule}")
+
+
+def _holds_bool(value: Any) -> bool:
+    if isinstance(value, bool):
+        return True
+    return isinstance(value, (list, tuple)) and any(_holds_bool(v) for v in value)
+
+
+def _required(cls) -> list[str]:
+    """The fields of dataclass ``cls`` without a default (a configuration must give them)."""
+    return [f.name for f in fields(cls)
+            if f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING]
+
+
+def missing_keys(data: Any, cls=None, path: str = "") -> list[str]:
+    """The dotted keys a configuration dict ``data`` lacks (or sets to none) that have no
+    default, in nested tables too (``["system", "box.Lz", "grains.0.material.E"]``); what is
+    not a table here is left to :func:`_build`'s messages."""
+    cls = Config if cls is None else cls
+    if not isinstance(data, dict):
+        return []
+    out = [f"{path}.{n}" if path else n for n in _required(cls) if data.get(n) is None]
+    for name, value in data.items():
+        sub = f"{path}.{name}" if path else name
+        if (cls, name) in _NESTED:
+            out += missing_keys(value, _NESTED[(cls, name)], sub)
+        elif cls is Config and name == "grains":
+            species = [value] if isinstance(value, dict) else value
+            if isinstance(species, (list, tuple)):
+                for i, sp in enumerate(species):
+                    out += missing_keys(sp, Species, f"{sub}.{i}")
+    return out
+
+
+#: The required keys of a whole configuration in the project's words (docs/physics.md §1).
+_TOP_KEYS = {
+    "system": 'system ("primary", "driven" or "impact")',
+    "frequency": "frequency [Hz]",
+    "grains": "the grains ([[grains]] tables: count, radius, [grains.material])",
+    "box": "the box ([box] table: Lx, Ly, Lz [m])",
+}
+
+
+def _missing_words(missing: list[str]) -> str:
+    words = [_TOP_KEYS.get(k, k) for k in missing]
+    return words[0] if len(words) == 1 else ", ".join(words[:-1]) + " and " + words[-1]
 
 
 _NESTED = {
@@ -444,12 +509,20 @@ def _convert(cls, name: str, value: Any, path: str):
     if cls is Config and name == "grains":
         if isinstance(value, dict):
             value = [value]
+        if not isinstance(value, (list, tuple)):
+            raise ConfigError(f"grains = {value!r}: expected a list of species tables "
+                              "([[grains]] in TOML; [] for an empty box)")
         return tuple(_build(Species, v, f"{path}.{i}") for i, v in enumerate(value))
     return value
 
 
 def from_dict(data: dict[str, Any]) -> Config:
-    """Build a :class:`Config` from a nested dict (e.g. parsed TOML or stored JSON)."""
+    """Build a :class:`Config` from a nested dict (e.g. parsed TOML or stored JSON); a
+    :class:`ConfigError` names every required key it lacks (:func:`missing_keys`)."""
+    missing = missing_keys(data)
+    if missing:
+        raise ConfigError(f"the configuration lacks {_missing_words(missing)} (required, no "
+                          "default)")
     return _build(Config, data, "")
 
 
@@ -473,7 +546,9 @@ def load_toml(path: str, base: Config | None = None) -> Config:
     """Read a TOML file. With ``base``, the file's keys override ``base`` (partial files OK).
 
     A file that is missing, unreadable, not UTF-8 text or not valid TOML raises
-    :class:`ConfigError` naming the file (and the line and column of a syntax error)."""
+    :class:`ConfigError` naming the file (and the line and column of a syntax error); so does
+    a file without ``base`` that lacks required keys (naming them, and how to start from a
+    preset instead)."""
     try:
         with open(path, "rb") as fh:
             data = tomllib.load(fh)
@@ -490,6 +565,14 @@ def load_toml(path: str, base: Config | None = None) -> Config:
     except tomllib.TOMLDecodeError as err:
         raise ConfigError(f"configuration file {path}: TOML syntax error: {err}") from None
     if base is None:
+        missing = missing_keys(data)
+        if missing:
+            raise ConfigError(
+                f"configuration file {path}: with no preset it must hold a whole "
+                f"configuration, and it lacks {_missing_words(missing)}; give --preset NAME "
+                f"together with --config {path} (the file's keys then override the preset's), "
+                "or start a whole file from a preset: jaxdamp presets --show NAME > my.toml "
+                "(the names: jaxdamp presets)")
         return from_dict(data)
     return from_dict(_deep_merge(base.to_dict(), data))
 

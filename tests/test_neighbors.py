@@ -83,44 +83,50 @@ def test_batch_rebuild_is_shared_and_lists_stay_complete():
             assert close <= set(idx[i][idx[i] < n])
 
 
-def test_traced_build_lists_what_jax_md_lists():
-    """The JAX engine's in-loop build (plain JAX, all pairs) lists the same pairs in the same
-    order, with the same overflow flags, as jax-md's dense all-pairs list it replaced (cell
-    lists off, the gap metric on (x, y, z, R) points): a mixture in a gas and a dense state,
-    at a capacity that fits and one that overflows. Skipped where jax-md is not installed
-    (it is no longer a dependency)."""
-    partition = pytest.importorskip("jax_md.partition")
-    import warnings
+def _all_pairs_lists(positions, radius, skin, capacity):
+    """The dense lists by their definition, from every pair in numpy (independent of both
+    builders' metric and compaction): pair ``(i, j)``, ``i != j``, is listed when the grains'
+    surfaces are closer than the skin plus the margin, ``|r_i - r_j| - R_i - R_j <
+    (1 + margin) skin``; each row holds its first ``capacity`` neighbours in increasing ``j``,
+    padded with ``N``; a system overflows when a grain has more."""
+    b, n, _ = positions.shape
+    idx = np.full((b, n, capacity), n, np.int64)
+    overflow = np.zeros(b, bool)
+    for k in range(b):
+        x = positions[k]
+        gap = np.linalg.norm(x[:, None] - x[None], axis=-1) - radius[:, None] - radius[None]
+        listed = (gap < (1 + nb._MARGIN) * skin) & ~np.eye(n, dtype=bool)
+        for i in range(n):
+            js = np.flatnonzero(listed[i])
+            overflow[k] |= len(js) > capacity
+            idx[k, i, : min(len(js), capacity)] = js[:capacity]
+    return idx, overflow
 
-    import jax
-    import jax.numpy as jnp
 
+def test_both_builders_list_every_pair_within_the_skin():
+    """Both builders (host cell lists at allocation, the traced all-pairs build in the JAX
+    engine) list exactly the pairs of :func:`_all_pairs_lists`, in the same order, with the
+    same overflow flags: a mixture (size-aware cutoff) in a gas and in a dense state, at a
+    capacity that fits and at one that overflows. (Before jax-md was dropped, the traced
+    build was compared with jax-md's dense list here; this reference needs no jax-md.)"""
     from jaxdamp.cases import presets
-    from jaxdamp.physics.model import build
 
     mix = presets.family("varela2023-b", 0.5)
     m, p = build(mix)
     rng = np.random.default_rng(3)
-    pos = jnp.asarray(rng.uniform(0, [mix.box.Lx, mix.box.Ly, 0.03], (2, m.n, 3))
-                      * np.array([[[1, 1, 1]], [[1, 1, 0.4]]]))
-    points = nb._with_radius(m, pos, p.radius)
-    fns = partition.neighbor_list(nb._gap_metric(m), box=1.0,
-                                  r_cutoff=m.cutoff + nb._MARGIN * m.skin, dr_threshold=0.0,
-                                  capacity_multiplier=1.0, disable_cell_list=True,
-                                  format=partition.Dense)
-    full = nb.capacity(nb.allocate(m, pos, 1.0, radius=p.radius))
+    pos = rng.uniform(0, [mix.box.Lx, mix.box.Ly, 0.03], (2, m.n, 3)) * np.array(
+        [[[1, 1, 1]], [[1, 1, 0.4]]])
+    radius = np.asarray(p.radius)
+    assert radius.min() < radius.max()  # two sizes: the cutoff depends on the pair
+    full = nb.capacity(nb.allocate(m, jnp.asarray(pos), 1.0, radius=p.radius))
     for cap in (full, 3):
-        template = partition.NeighborList(
-            idx=jnp.full((m.n, cap), m.n, jnp.int32), reference_position=jnp.zeros((m.n, 4)),
-            error=partition.PartitionError(jnp.zeros((), jnp.uint8)), cell_list_capacity=None,
-            max_occupancy=cap, format=partition.Dense, cell_size=None, cell_list_fn=None,
-            update_fn=fns.update)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", FutureWarning)
-            ref = [fns.update(q, template) for q in points]
-        ours = nb._build(m, cap, pos, nb._radius_array(m, pos, p.radius))
-        for b, r in enumerate(ref):
-            np.testing.assert_array_equal(np.asarray(ours.idx[b]), np.asarray(r.idx))
-            assert bool(ours.overflow[b]) == bool(r.did_buffer_overflow > 0)
-        assert bool(np.asarray(ours.overflow).all()) == (cap == 3)
-    assert jax.numpy.sum(ours.idx < m.n) > 0
+        ref_idx, ref_overflow = _all_pairs_lists(pos, radius, m.skin, cap)
+        host = nb._dense(m, cap, nb._with_radius(m, jnp.asarray(pos), p.radius))
+        traced = nb._build(m, cap, jnp.asarray(pos), nb._radius_array(m, jnp.asarray(pos),
+                                                                        p.radius))
+        for idx, overflow in (host, (traced.idx, traced.overflow)):
+            np.testing.assert_array_equal(np.asarray(idx), ref_idx)
+            np.testing.assert_array_equal(np.asarray(overflow), ref_overflow)
+        assert ref_overflow.tolist() == [cap == 3] * 2  # fits / overflows in both
+        if cap == full:  # it lists pairs, more of them in the dense state
+            assert (ref_idx[1] < m.n).sum() > (ref_idx[0] < m.n).sum() > 0

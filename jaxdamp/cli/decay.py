@@ -73,29 +73,34 @@ def register(sub) -> None:
         "characteristic curve ζ(Z), f(Z), mean ± SE over the beds.",
         epilog=textwrap.dedent("""\
             examples:
-              jaxdamp decay --preset sanchez2012-optimal --quick --out decay.h5
+              jaxdamp decay --preset sanchez2012-optimal --quick --z0 0.02 --out decay.h5
               jaxdamp decay --preset sanchez2012-optimal --z0 0.01,0.03 --duration 4 \\
                             --replicates 3 --out decay.h5
             The HDF5 holds the sweep (/records per test and bed, the configuration) and /decay:
             per-cycle ζ, Z, f of every bed and the mean curves with their SE."""),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("--preset")
-    p.add_argument("--config", metavar="FILE")
-    p.add_argument("--set", action="append", metavar="KEY=VALUE")
+    p.add_argument("--preset", help="a named reference case with a primary (S1; list: "
+                   "`jaxdamp presets`)")
+    p.add_argument("--config", metavar="FILE", help="TOML configuration (overrides the preset)")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="override one value by dotted key (repeatable), e.g. primary.C=0")
     p.add_argument("--z0", metavar="Z1,Z2,...",
                    help="initial displacement(s) of the primary from equilibrium [m] "
                         "(one test each; default 0, then --v0 is needed)")
     p.add_argument("--v0", type=float, default=0.0,
                    help="initial velocity of the primary [m/s] (an impulse; default 0)")
-    p.add_argument("--duration", type=positive_float, help="simulated time per test [s]")
+    p.add_argument("--duration", type=positive_float, metavar="S",
+                   help="simulated time per test [s] (default: numerics.duration; 1 with "
+                        "--quick)")
     p.add_argument("--replicates", type=positive_int, metavar="R",
                    help="independent beds per test, in the same batch (default 1)")
-    p.add_argument("--out", metavar="FILE.h5")
+    p.add_argument("--out", metavar="FILE.h5",
+                   help="sweep file with the /decay analysis (default: none)")
     p.add_argument("--png", metavar="FILE.png",
                    help="figure (default: next to --out; written with or without --out)")
     p.add_argument("--quick", action="store_true", help="1 s of decay, short settling")
     p.add_argument("--resume", action="store_true", help="continue --out from its checkpoint")
     add_overwrite(p, resume=True)
-    p.add_argument("--no-progress", action="store_true")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_decay)

@@ -198,8 +198,10 @@ def register(sub) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     ef.add_argument("--preset", help="varela2023-reference|a|b|c or any driven-box preset")
-    ef.add_argument("--config", metavar="FILE")
-    ef.add_argument("--set", action="append", metavar="KEY=VALUE")
+    ef.add_argument("--config", metavar="FILE", help="TOML configuration (overrides the preset)")
+    ef.add_argument("--set", action="append", metavar="KEY=VALUE",
+                    help="override one value by dotted key (repeatable), e.g. "
+                         "grains.0.material.mu=0.2")
     ef.add_argument("--sigma", metavar="S1,S2,...", help="size ratio(s) of the mixture, in (0, 1]")
     ef.add_argument("--amplitude", metavar="A0:A1:N|A1,A2,...",
                     help="drive amplitudes [m] (default 0.02:0.04:9; quick 0.02,0.03,0.04)")
@@ -212,5 +214,5 @@ def register(sub) -> None:
     ef.add_argument("--replicates", type=positive_int, metavar="R",
                     help="independent beds per amplitude in the same batch (default 1): <E_d> "
                          "gets mean ± standard error over them")
-    ef.add_argument("--no-progress", action="store_true")
+    ef.add_argument("--no-progress", action="store_true", help="no progress bar")
     ef.set_defaults(func=cmd_efficiency)

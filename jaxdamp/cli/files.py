@@ -3,10 +3,19 @@
 from __future__ import annotations
 
 import argparse
+import math
 import textwrap
 
-from jaxdamp.cli.common import add_overwrite, check_outputs, positive_int, to_toml
+from jaxdamp.cli.common import (
+    add_overwrite,
+    check_outputs,
+    finite_float,
+    positive_int,
+    to_toml,
+)
 from jaxdamp.config import ConfigError
+
+
 
 
 def cmd_presets(args) -> int:
@@ -42,6 +51,24 @@ PLOT_KINDS = {
 }
 
 
+#: The family of file (:data:`jaxdamp.io.describe.FAMILIES`) each kind of plot draws.
+PLOT_FILES = {"band": "jaxdamp-run", "energy": "jaxdamp-run", "frf": "jaxdamp-sweep",
+              "snapshot": "jaxdamp-run", "poincare": "jaxdamp-run"}
+
+
+def _plots_of_files() -> str:
+    """``"band, energy, snapshot and poincare draw run files; frf draws sweep files"``."""
+    from jaxdamp.io.describe import FAMILIES
+
+    parts = []
+    for family in dict.fromkeys(PLOT_FILES.values()):
+        kinds = [k for k, f in PLOT_FILES.items() if f == family]
+        noun = FAMILIES[family][0].split(" (")[0].removeprefix("a ")
+        parts.append((", ".join(kinds[:-1]) + " and " + kinds[-1] if len(kinds) > 1
+                      else kinds[0]) + (" draw " if len(kinds) > 1 else " draws ") + noun + "s")
+    return "; ".join(parts)
+
+
 def cmd_plot(args) -> int:
     import os
 
@@ -49,10 +76,15 @@ def cmd_plot(args) -> int:
     out = args.out or f"{stem}_{args.kind}.png"
     if args.kind == "frf" and (args.t0 is not None or args.t1 is not None):
         raise ConfigError("--t0/--t1 do not apply to --kind frf (a sweep's FRF has no time axis)")
+    from jaxdamp.io.describe import file_family, what_file
     from jaxdamp.io.export import open_output
 
-    with open_output(args.file):  # a missing or non-HDF5 input is named first
-        pass
+    with open_output(args.file) as h5:  # a missing or non-HDF5 input is named first
+        family, what = file_family(h5), what_file(h5)
+    if family not in PLOT_FILES.values():
+        raise ConfigError(f"{args.file} is {what}: no --kind of jaxdamp plot draws it "
+                          f"({_plots_of_files()}); `jaxdamp info {args.file}` shows what it "
+                          "holds")
     check_outputs([out], args.overwrite)
     from jaxdamp import figures
 
@@ -102,8 +134,10 @@ def register(sub) -> None:
     pr.add_argument("--show", metavar="NAME", help="print the full configuration of a preset")
     pr.set_defaults(func=cmd_presets)
 
-    i = sub.add_parser("info", help="summarise a run file")
-    i.add_argument("file")
+    i = sub.add_parser("info", help="summarise any file jaxdamp writes (run, sweep, optimiser "
+                                    "log)")
+    i.add_argument("file", metavar="FILE.h5",
+                   help="a run, sweep or optimiser file (HDF5) written by jaxdamp")
     i.set_defaults(func=cmd_info)
 
     pl = sub.add_parser(
@@ -125,15 +159,17 @@ def register(sub) -> None:
     pl.add_argument("file", metavar="FILE.h5", help="run file or sweep file")
     pl.add_argument("--kind", required=True, choices=list(PLOT_KINDS), help="which figure")
     pl.add_argument("--out", metavar="FILE.png", help="output image (default: FILE_<kind>.png)")
-    pl.add_argument("--t0", type=float, metavar="S", help="start of the time window [s] "
+    pl.add_argument("--t0", type=finite_float, metavar="S", help="start of the time window [s] "
                     "(band: default the last few drive periods; energy, poincare: the whole run)")
-    pl.add_argument("--t1", type=float, metavar="S", help="end of the time window [s]")
+    pl.add_argument("--t1", type=finite_float, metavar="S",
+                    help="end of the time window [s] (default: the end of the run)")
     pl.add_argument("--frame", type=int, default=-1, metavar="K",
                     help="snapshot index for --kind snapshot (default -1, the last)")
     pl.add_argument("--color", choices=["species", "height"], default="species",
                     help="grain colour for snapshot: species, or height above the floor")
-    pl.add_argument("--phase", type=float, default=0.0, metavar="RAD",
-                    help="poincare: section phase within the drive period (0 = drive maximum)")
+    pl.add_argument("--phase", type=finite_float, default=0.0, metavar="RAD",
+                    help="poincare: section phase within the drive period [rad] (default 0, "
+                         "the drive's maximum)")
     add_overwrite(pl)
     pl.set_defaults(func=cmd_plot)
 
@@ -158,12 +194,17 @@ def register(sub) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     ex.add_argument("file", metavar="FILE.h5", help="run file (jaxdamp run --out)")
-    ex.add_argument("--format", required=True, choices=["xyz", "vtk", "gif", "mp4"])
+    ex.add_argument("--format", required=True, choices=["xyz", "vtk", "gif", "mp4"],
+                    help="what to write: xyz (OVITO, ASE), vtk (ParaView), gif or mp4 (an "
+                         "animation); see formats below")
     ex.add_argument("--out", metavar="PATH", help="output file (.xyz, .pvd, .gif, .mp4; "
                     "default: next to FILE)")
-    ex.add_argument("--every", type=positive_int, default=1, metavar="K", help="every K-th snapshot")
-    ex.add_argument("--fps", type=positive_int, default=10, help="frames per second (gif, mp4)")
+    ex.add_argument("--every", type=positive_int, default=1, metavar="K",
+                    help="every K-th snapshot (default 1: all)")
+    ex.add_argument("--fps", type=positive_int, default=10,
+                    help="frames per second of gif, mp4 (default 10)")
     ex.add_argument("--color", choices=["species", "height"], default="species",
-                    help="grain colour in animations")
+                    help="grain colour in animations: species (default), or height above the "
+                         "floor")
     add_overwrite(ex)
     ex.set_defaults(func=cmd_export)

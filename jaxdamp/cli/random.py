@@ -101,28 +101,39 @@ def register(sub) -> None:
         "set with --set shock.peak=... --set shock.duration=... (see docs/physics.md §1).",
         epilog=textwrap.dedent("""\
             examples:
-              jaxdamp random --preset sanchez2012-optimal --psd 5:0.5,30:0.5 --duration 6 \\
-                             --replicates 3 --scale 1,4 --out random.h5
+              jaxdamp random --preset sanchez2012-random --out random.h5
+                  the preset's spectrum: 2 (m/s²)²/Hz over 5–30 Hz, 12 s
+              jaxdamp random --preset sanchez2012-optimal --psd 5:0.5,30:0.5 --resolution 0.5 \\
+                             --duration 8 --replicates 3 --scale 1,4 --out random.h5
               jaxdamp random --config my_damper.toml --resolution 0.25 --out random.h5
-              jaxdamp random --preset sanchez2012-chain --dof 0 --out lower_mass.h5
+                  my_damper.toml with a [random] table (psd = [[5, 0.5], [30, 0.5]])
+              jaxdamp random --preset sanchez2012-chain --psd 5:0.5,30:0.5 --duration 8 \\
+                             --dof 0 --out lower_mass.h5
             --psd gives breakpoints f:S (f [Hz], S the base acceleration density
-            [(m/s²)²/Hz], linear between, zero outside). The HDF5 holds the sweep (/records
-            per level and realisation, the configuration) and /random: H1, |H1| ± SE,
-            coherence, densities, RMS per realisation."""),
+            [(m/s²)²/Hz], linear between, zero outside); a preset without a [random] table
+            needs it. --duration must hold two periods 1/DF (8 s at the default 0.25 Hz): one
+            for the transient, one to analyse. The HDF5 holds the sweep (/records per level
+            and realisation, the configuration) and /random: H1, |H1| ± SE, coherence,
+            densities, RMS per realisation."""),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("--preset")
-    p.add_argument("--config", metavar="FILE")
-    p.add_argument("--set", action="append", metavar="KEY=VALUE")
+    p.add_argument("--preset", help="a named reference case (list: `jaxdamp presets`); "
+                   "sanchez2012-random has a spectrum, the others need --psd")
+    p.add_argument("--config", metavar="FILE", help="TOML configuration (overrides the preset)")
+    p.add_argument("--set", action="append", metavar="KEY=VALUE",
+                   help="override one value by dotted key (repeatable), e.g. random.scale=2")
     p.add_argument("--psd", metavar="F:S,F:S,...",
-                   help="base acceleration density breakpoints (sets random.psd)")
+                   help="base acceleration density breakpoints f [Hz] : S [(m/s²)²/Hz], e.g. "
+                        "5:0.5,30:0.5 (sets random.psd; default: the configuration's)")
     p.add_argument("--resolution", type=positive_float, metavar="DF",
                    help="line spacing [Hz] (random.resolution; the record is cut into periods "
                         "1/DF, default 0.25 Hz)")
     p.add_argument("--scale", metavar="S1,S2,...",
-                   help="levels: factors on the density (RMS ∝ √scale), one test each")
-    p.add_argument("--duration", type=positive_float,
-                   help="simulated time per test [s] (≥ 2 periods 1/DF)")
+                   help="levels: factors on the density (RMS ∝ √scale), one test each "
+                        "(default: random.scale, 1)")
+    p.add_argument("--duration", type=positive_float, metavar="S",
+                   help="simulated time per test [s] (≥ 2 periods 1/DF; default: "
+                        "numerics.duration)")
     p.add_argument("--replicates", type=positive_int, metavar="R",
                    help="independent realisations per level, in the same batch (default 1)")
     p.add_argument("--dof", type=int, metavar="I",
@@ -130,10 +141,11 @@ def register(sub) -> None:
                         "numbering) whose response z is analysed; default the box's "
                         "(structure.attach). Every degree of freedom is in the records "
                         "(z_box, y_dofs)")
-    p.add_argument("--out", metavar="FILE.h5")
+    p.add_argument("--out", metavar="FILE.h5",
+                   help="sweep file with the /random analysis (default: none)")
     p.add_argument("--png", metavar="FILE.png",
                    help="figure (default: next to --out; written with or without --out)")
     p.add_argument("--resume", action="store_true", help="continue --out from its checkpoint")
     add_overwrite(p, resume=True)
-    p.add_argument("--no-progress", action="store_true")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_random)
