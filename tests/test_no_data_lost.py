@@ -355,3 +355,46 @@ def test_a_duration_of_part_of_a_chunk_runs_as_asked_and_a_rounded_one_says_so()
     s = schedule(odd, dt)
     assert s.n_chunks == 2
     assert "numerics.duration = 0.15 s is run as 2 whole chunk(s)" in schedule_note(odd, s)
+
+
+# -- damaged and foreign files ------------------------------------------------------------
+
+def test_resume_names_a_foreign_truncated_or_missing_file_before_jax(tmp_path, capsys):
+    from jaxdamp.studies.runner import run
+
+    notes = tmp_path / "notes.txt"
+    notes.write_text("hello\n")
+    good = tmp_path / "good.h5"
+    run(_small_config(), out=str(good), progress=False, echo=None, max_chunks=1)
+    cut = tmp_path / "cut.h5"
+    cut.write_bytes(good.read_bytes()[:4000])
+    cases = [(notes, "notes.txt: not an HDF5 file"), (cut, "cut.h5: not an HDF5 file"),
+             (tmp_path / "none.h5", "no file at"),
+             (good, "`jaxdamp run --replicates --resume` continues a sweep file")]
+    for path, expect in cases:
+        argv = ["run", "--preset", "sanchez2012-optimal", "--quick", "--resume", "--out", str(path)]
+        if path == good:
+            argv += ["--replicates", "2"]
+        assert main(argv) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and err.startswith("jaxdamp: error: --resume: "), err
+        assert expect in err, err
+
+
+def test_info_plot_and_export_see_a_file_whose_bytes_were_overwritten(tmp_path, capsys):
+    """The battery's F16: random bytes in the middle of a run file. HDF5 keeps no checksums
+    here, so the samples are checked for sense: `info` warns, `plot` and `export` refuse."""
+    from jaxdamp.studies.runner import run
+
+    path = tmp_path / "r.h5"
+    run(_small_config(), out=str(path), progress=False, echo=None)
+    with h5py.File(path, "a") as h:
+        h["series/z_box"][5:9] = np.frombuffer(b"\xff\xfe" * 16, dtype=np.float64)  # NaNs
+    assert main(["info", str(path)]) == 0
+    assert "WARNING: this file is damaged: non-finite or impossible values in z_box" in \
+        capsys.readouterr().out
+    for argv in (["plot", str(path), "--kind", "energy", "--out", str(tmp_path / "e.png")],
+                 ["export", str(path), "--format", "xyz", "--out", str(tmp_path / "e.xyz")]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert "is damaged" in err and "nothing drawn or exported" in err, err

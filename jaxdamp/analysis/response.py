@@ -1,12 +1,19 @@
-"""Steady-state quantities of a run and the analytic response of the primary system."""
+"""Steady-state quantities of a run and the analytic response of the primary system.
+
+Importing it does not import JAX (the FRF fit and its rule, :func:`fit_failure`, serve the file
+commands too); :func:`steady_state_summary` imports the physics when it is called.
+"""
 
 from __future__ import annotations
+
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from jaxdamp.config import Config
-from jaxdamp.physics.energy import granular_loss
-from jaxdamp.physics.model import CH, CHANNELS, State
+
+if TYPE_CHECKING:
+    from jaxdamp.physics.model import State
 
 
 def frf_amplitude(f, M, K, C, U):
@@ -76,14 +83,34 @@ def grain_force_coefficients(t, z_box, force, f, t_start=None) -> dict:
 RESIDUALS = ("relative", "absolute")
 
 
+#: Fitted parameters of the FRF fit, and the least number of frequencies that determines them
+#: with a residual variance left to estimate their errors (``len(FIT_PARAMETERS) + 1``).
+FIT_PARAMETERS = ("M_ef", "C_ef")
+FIT_MIN_POINTS = len(FIT_PARAMETERS) + 1
+#: Largest relative standard error of a fitted parameter that is still a result: at ``SE/value
+#: > 1/2`` the ≈ 95 % interval ``value ± 2 SE`` contains 0, so the data cannot tell the
+#: parameter from zero (nor from twice its value) — the number does not say what it seems to.
+FIT_MAX_RELATIVE_SE = 0.5
+#: Below these a fitted value sits on its lower bound 0 (``M_ef, C_ef ≥ 0`` are constrained): the
+#: optimiser stopped against the wall, not at a minimum (e.g. ``C_ef = 5.9e-10`` N s/m).
+FIT_AT_BOUND = {"M_ef": 1e-9, "C_ef": 1e-6}
+FIT_UNITS = {"M_ef": "kg", "C_ef": "N s/m"}
+#: The rule of :func:`fit_failure` in one sentence (printed by ``jaxdamp frf``).
+FIT_RULE = (f"a fit is FAILED, not a result, when it has fewer than {FIT_MIN_POINTS} "
+            "frequencies, a value or its standard error is not finite, a value sits on its "
+            f"bound 0, or a standard error exceeds {100 * FIT_MAX_RELATIVE_SE:g} % of its value")
+
+
 def fit_frf(f, Z, U, K, M0, C0, weights=None, residuals: str = "relative"):
     """Least-squares fit of the analytic FRF to amplitudes ``Z(f)`` with ``U, K`` fixed.
 
     Returns ``(M_ef, C_ef, stderr_M, stderr_C)`` [kg, N s/m]; standard errors from the
-    Jacobian at the optimum and the residual variance. ``residuals`` (:data:`RESIDUALS`):
-    ``"relative"`` (``Z_model/Z - 1``, so that the resonance does not swamp the flanks) or
-    ``"absolute"`` (``(Z_model - Z)/U``). The FRF depends on ``C²`` only, so ``C`` is
-    constrained ≥ 0 (else the fit may return the mirror ``-C``).
+    Jacobian at the optimum and the residual variance (NaN when they are not determined: fewer
+    than :data:`FIT_MIN_POINTS` frequencies leave no residual variance, a rank-deficient
+    Jacobian no covariance). ``residuals`` (:data:`RESIDUALS`): ``"relative"``
+    (``Z_model/Z - 1``, so that the resonance does not swamp the flanks) or ``"absolute"``
+    (``(Z_model - Z)/U``). The FRF depends on ``C²`` only, so ``C`` is constrained ≥ 0 (else
+    the fit may return the mirror ``-C``). Whether the fit is a result: :func:`fit_failure`.
     """
     from scipy.optimize import least_squares
 
@@ -101,14 +128,22 @@ def fit_frf(f, Z, U, K, M0, C0, weights=None, residuals: str = "relative"):
 
     sol = least_squares(resid, [M0, C0], x_scale=[M0, max(C0, 1e-3)], method="trf",
                         bounds=([0.0, 0.0], [np.inf, np.inf]))
-    dof = max(len(f) - 2, 1)
-    s2 = float(np.sum(sol.fun**2)) / dof
-    try:
-        cov = np.linalg.inv(sol.jac.T @ sol.jac) * s2
-        err = np.sqrt(np.diag(cov))
-    except np.linalg.LinAlgError:
-        err = np.array([np.nan, np.nan])
-    return float(sol.x[0]), float(sol.x[1]), float(err[0]), float(err[1])
+    return float(sol.x[0]), float(sol.x[1]), *_standard_errors(sol.jac, sol.fun)
+
+
+def _standard_errors(jac, fun) -> tuple[float, float]:
+    """Standard errors ``sqrt(diag((JᵀJ)⁻¹) s²)`` with ``s² = Σ r² / (n − p)``, from the SVD
+    ``J = U S Vᵀ`` (``(JᵀJ)⁻¹ = V S⁻² Vᵀ``, whose diagonal is a sum of squares: never a
+    negative variance); NaN without degrees of freedom or for a rank-deficient ``J``."""
+    n, k = jac.shape
+    if n - k < 1 or not (np.all(np.isfinite(jac)) and np.all(np.isfinite(fun))):
+        return float("nan"), float("nan")
+    _, s, vt = np.linalg.svd(jac, full_matrices=False)
+    if s.min() <= s.max() * max(n, k) * np.finfo(float).eps:
+        return float("nan"), float("nan")
+    s2 = float(np.sum(fun**2)) / (n - k)
+    err = np.sqrt(np.sum((vt / s[:, None]) ** 2, axis=0) * s2)
+    return float(err[0]), float(err[1])
 
 
 def fit_frf_replicates(f, Z, U, K, M0, C0, residuals: str = "relative") -> dict:
@@ -117,10 +152,12 @@ def fit_frf_replicates(f, Z, U, K, M0, C0, residuals: str = "relative") -> dict:
     ``Z``: amplitudes ``(F, R)``, one independent FRF per replicate (column). Every replicate
     is fitted on its own (:func:`fit_frf`); the effective mass and damping are the means of
     the ``R`` fits ± their standard error across replicates ``s/√R`` (NaN for ``R = 1``, then
-    the fit's own Jacobian error is the only figure). Also the fit of the replicate-mean FRF.
+    the fit's own Jacobian error is the only figure). Also the fit of the replicate-mean FRF
+    with its Jacobian errors.
 
     Returns ``{"M_ef", "C_ef", "se_M", "se_C", "M_reps", "C_reps", "M_mean_fit", "C_mean_fit",
-    "fit_se_M", "fit_se_C", "residuals", "replicates"}``.
+    "fit_se_M", "fit_se_C", "residuals", "replicates", "points"}`` (``points``: the number of
+    frequencies). Whether it is a result: :func:`fit_failure`.
     """
     Z = np.asarray(Z, float).reshape(len(f), -1)
     R = Z.shape[1]
@@ -131,7 +168,81 @@ def fit_frf_replicates(f, Z, U, K, M0, C0, residuals: str = "relative") -> dict:
             "se_M": float(se[0]), "se_C": float(se[1]),
             "M_reps": reps[:, 0], "C_reps": reps[:, 1],
             "M_mean_fit": Mm, "C_mean_fit": Cm, "fit_se_M": dM, "fit_se_C": dC,
-            "residuals": residuals, "replicates": R}
+            "residuals": residuals, "replicates": R, "points": len(f)}
+
+
+def fit_uncertainties(fit: dict) -> dict:
+    """The uncertainties of a :func:`fit_frf_replicates` result that :func:`fit_failure` checks,
+    ``{parameter: [(what, value, SE), ...]}``: the mean over replicates with its standard error
+    across them (``R ≥ 2``), and the fit of the (replicate-mean) FRF with its Jacobian error
+    (the only one for ``R = 1``)."""
+    R = int(fit.get("replicates", 1))
+    out = {}
+    for name, rep, mean_fit, jac in (("M_ef", "se_M", "M_mean_fit", "fit_se_M"),
+                                     ("C_ef", "se_C", "C_mean_fit", "fit_se_C")):
+        rows = [(f"SE over R = {R} replicates", fit[name], fit[rep])] if R >= 2 else []
+        if jac in fit:
+            rows.append(("fit error" + (" of the mean FRF" if R >= 2 else ""),
+                         fit.get(mean_fit, fit[name]), fit[jac]))
+        out[name] = rows
+    return out
+
+
+def fit_failure(fit: dict) -> str:
+    """Why an FRF fit (:func:`fit_frf_replicates`) is not a result, in words, or ``""`` when it
+    is one. The one rule for every FRF fit (either weighting): ``jaxdamp frf`` prints, stores
+    (``/fit/ok``, ``/fit/failure``) and draws by it. A fit FAILED when, checked in this order:
+
+    1. it has no degrees of freedom: fewer than :data:`FIT_MIN_POINTS` frequencies for the
+       two parameters (the curve then passes through the points and its error is unknown);
+    2. a fitted value (the mean, or any replicate's) is not finite;
+    3. a fitted value (the mean, or any replicate's) stopped on its bound 0
+       (:data:`FIT_AT_BOUND`): the optimiser hit the wall, not a minimum;
+    4. an uncertainty (:func:`fit_uncertainties`: the SE across replicates for ``R ≥ 2``, and
+       the Jacobian error of the fit) is not finite;
+    5. an uncertainty exceeds :data:`FIT_MAX_RELATIVE_SE` (50 %) of its value: the ≈ 95 %
+       interval ``± 2 SE`` then reaches 0 — the data do not determine the parameter.
+
+    >>> why = fit_failure({"M_ef": 2.6, "C_ef": 8.1, "fit_se_M": 0.1, "fit_se_C": 6e5,
+    ...                    "points": 9})
+    >>> why.split(": ")[0], why.split(", ")[0].split(": ")[1]
+    ('C_ef = 8.1 ± 6e+05 N s/m (fit error)', 'its standard error is 7.4e+04 times the value')
+    """
+    n = fit.get("points")
+    if n is not None and n < FIT_MIN_POINTS:
+        return (f"no degrees of freedom: {n} frequenc{'y' if n == 1 else 'ies'} for "
+                f"{len(FIT_PARAMETERS)} parameters, need at least {FIT_MIN_POINTS}")
+    reps = {"M_ef": fit.get("M_reps", []), "C_ef": fit.get("C_reps", [])}
+    for key in FIT_PARAMETERS:
+        if not np.isfinite(fit[key]):
+            return f"{key} = {fit[key]} is not finite"
+        v = np.append(np.atleast_1d(np.asarray(reps[key], float)), fit[key])
+        if not np.all(np.isfinite(v)):
+            return f"a replicate's {key} is not finite"
+        if np.any(v < FIT_AT_BOUND[key]):
+            return (f"{key} stopped on its bound 0 ({float(v.min()):.2g}): the fit did not "
+                    "converge")
+    rows = [(key, *row) for key, rr in fit_uncertainties(fit).items() for row in rr]
+    for key, what, value, se in rows:
+        if not np.isfinite(se):
+            return f"the uncertainty of {key} ({what}) is not finite ({se})"
+    for key, what, value, se in rows:
+        if se > FIT_MAX_RELATIVE_SE * abs(value):
+            ratio = se / abs(value)
+            size = f"{100 * ratio:.0f} % of" if ratio < 10 else f"{ratio:.2g} times"
+            return (f"{key} = {value:.4g} ± {se:.2g} {FIT_UNITS[key]} ({what}): its standard "
+                    f"error is {size} the value, above the limit of "
+                    f"{100 * FIT_MAX_RELATIVE_SE:g} % — not determined by the data")
+    return ""
+
+
+def replicate_mean(values):
+    """Mean over the last axis (the replicates) of ``values`` and its standard error across
+    them ``s/√R``; the error is ``None`` for ``R = 1``."""
+    values = np.asarray(values, float)
+    R = values.shape[-1]
+    se = values.std(axis=-1, ddof=1) / np.sqrt(R) if R >= 2 else None
+    return values.mean(axis=-1), se
 
 
 def parabolic_extremum(x, y, kind: str = "max") -> tuple[float, float, int]:
@@ -274,6 +385,9 @@ def steady_state_summary(config: Config, records: dict, final: State, t_window: 
     * ``balance_error``: the largest |energy-balance residual| over the run divided by the
       final ``|input| + losses`` [-].
     """
+    from jaxdamp.physics.energy import granular_loss
+    from jaxdamp.physics.model import CH, CHANNELS
+
     summary: dict = {}
     units: dict = {}
     if not records:

@@ -4,8 +4,8 @@ Side effects (files, printing) live here and in the studies; heavy imports (JAX)
 inside the commands, after the configuration is built and every output file is checked, so
 ``--help``, configuration errors and file errors answer at once.
 
-Errors reach the user as one line (exit 2 for bad input and files, 3 for a run that went
-non-finite, 130 for Ctrl-C); anything else is a bug, reported in one line naming the exception,
+Errors reach the user as one line (exit 2 for bad input, files and a full disk, 3 for a run
+that went non-finite or an optimisation that FAILED, 130 for Ctrl-C); anything else is a bug, reported in one line naming the exception,
 with its full traceback under ``jaxdamp --debug COMMAND ...``."""
 
 from __future__ import annotations

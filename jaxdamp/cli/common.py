@@ -42,6 +42,23 @@ class OutputError(ConfigError):
     """An output file cannot be written, or would replace an existing file."""
 
 
+def add_config_options(parser, preset: str = "a named reference case (list: `jaxdamp presets`)",
+                       example: str = "box.Lz=0.1") -> None:
+    """The options that build a command's configuration (:func:`command_config`): ``--preset``
+    (its help: ``preset``), ``--config``, ``--set`` (its example: ``example``)."""
+    parser.add_argument("--preset", help=preset)
+    parser.add_argument("--config", metavar="FILE",
+                        help="TOML configuration (its keys override the preset's)")
+    parser.add_argument("--set", action="append", metavar="KEY=VALUE",
+                        help=f"override one value by dotted key (repeatable), e.g. {example}")
+
+
+def add_no_progress(parser) -> None:
+    """``--no-progress``: no progress bars (logs, batch jobs)."""
+    parser.add_argument("--no-progress", action="store_true",
+                        help="no progress bars (for logs and batch jobs)")
+
+
 def add_overwrite(parser, resume: bool = False) -> None:
     """The ``--overwrite`` flag of a command that writes files (with ``resume``: the command
     also has ``--resume``, which keeps its checkpoint file instead)."""
@@ -135,7 +152,34 @@ def resume_or_overwrite(args) -> list:
         raise ConfigError("--resume continues the file and --overwrite replaces it: give one")
     if getattr(args, "resume", False) and not args.out:
         raise ConfigError("--resume needs --out FILE.h5 (the file to continue)")
-    return [args.out] if getattr(args, "resume", False) else []
+    if not getattr(args, "resume", False):
+        return []
+    _check_resumable(args)
+    return [args.out]
+
+
+def _check_resumable(args) -> None:
+    """The file ``--resume`` continues exists, is HDF5 (not cut short) and of the family the
+    command writes — a run file for ``run``, a sweep file for ``run --replicates`` and the
+    sweeps — else one line naming it (before JAX)."""
+    from jaxdamp.io.describe import FAMILIES, file_family, what_file
+    from jaxdamp.io.export import open_output
+
+    out = args.out
+    if not os.path.exists(out):
+        raise ConfigError(f"--resume: no file at {out!r} to continue (run without --resume to "
+                          "start it)")
+    single = args.command == "run" and (getattr(args, "replicates", None) or 1) == 1
+    family = "jaxdamp-run" if single else "jaxdamp-sweep"
+    try:
+        with open_output(out) as h5:
+            have, what = file_family(h5), what_file(h5)
+    except ConfigError as err:
+        raise ConfigError(f"--resume: {err}") from None
+    if have != family:
+        raise ConfigError(f"--resume: {out} is {what}; `jaxdamp {args.command}"
+                          + (" --replicates" if args.command == "run" and not single else "")
+                          + f" --resume` continues {FAMILIES[family][0].split(' (')[0]}")
 
 
 def say_written(*paths) -> None:
@@ -213,14 +257,18 @@ def replicates(args) -> int:
     return R
 
 
-def float_list(text, option: str = "") -> list[float]:
-    """``"1,2.5,3"`` -> ``[1.0, 2.5, 3.0]``; otherwise a one-line error naming ``option``."""
+def float_list(text, option: str = "", what: str = "numbers", example: str = "1,2.5") -> list[float]:
+    """``"1,2.5,3"`` -> ``[1.0, 2.5, 3.0]``; otherwise (not numbers, or none at all) a one-line
+    error naming ``option``: "expected a comma-separated list of ``what``, e.g. ``example``"."""
+    where = f"{option} {text!r}: " if option else ""
+    wanted = f"{where}expected a comma-separated list of {what}, e.g. {example}"
     try:
-        return [float(x) for x in text.split(",") if x.strip()]
+        values = [float(x) for x in text.split(",") if x.strip()]
     except ValueError:
-        where = f"{option} {text!r}: " if option else ""
-        raise ConfigError(f"{where}expected a comma-separated list of numbers, got "
-                          f"{text!r}") from None
+        raise ConfigError(wanted) from None
+    if not values:
+        raise ConfigError(wanted)
+    return values
 
 
 def to_toml(data: dict, prefix: str = "") -> str:

@@ -6,6 +6,8 @@ import argparse
 import textwrap
 
 from jaxdamp.cli.common import (
+    add_config_options,
+    add_no_progress,
     add_overwrite,
     check_outputs,
     command_config,
@@ -80,11 +82,8 @@ def register(sub) -> None:
             per-cycle ζ, Z, f of every bed and the mean curves with their SE."""),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("--preset", help="a named reference case with a primary (S1; list: "
-                   "`jaxdamp presets`)")
-    p.add_argument("--config", metavar="FILE", help="TOML configuration (overrides the preset)")
-    p.add_argument("--set", action="append", metavar="KEY=VALUE",
-                   help="override one value by dotted key (repeatable), e.g. primary.C=0")
+    add_config_options(p, "a named reference case with a primary (S1; list: `jaxdamp presets`)",
+                       "primary.C=0")
     p.add_argument("--z0", metavar="Z1,Z2,...",
                    help="initial displacement(s) of the primary from equilibrium [m] "
                         "(one test each; default 0, then --v0 is needed)")
@@ -102,5 +101,5 @@ def register(sub) -> None:
     p.add_argument("--quick", action="store_true", help="1 s of decay, short settling")
     p.add_argument("--resume", action="store_true", help="continue --out from its checkpoint")
     add_overwrite(p, resume=True)
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_no_progress(p)
     p.set_defaults(func=cmd_decay)

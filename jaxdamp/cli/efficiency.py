@@ -6,6 +6,8 @@ import argparse
 import textwrap
 
 from jaxdamp.cli.common import (
+    add_config_options,
+    add_no_progress,
     add_overwrite,
     base_config,
     check_outputs,
@@ -197,11 +199,8 @@ def register(sub) -> None:
             <out>.png (<E_d>/m vs A_d), <out>_phase.png, <out>_snapshots.png."""),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    ef.add_argument("--preset", help="varela2023-reference|a|b|c or any driven-box preset")
-    ef.add_argument("--config", metavar="FILE", help="TOML configuration (overrides the preset)")
-    ef.add_argument("--set", action="append", metavar="KEY=VALUE",
-                    help="override one value by dotted key (repeatable), e.g. "
-                         "grains.0.material.mu=0.2")
+    add_config_options(ef, "varela2023-reference|a|b|c or any driven-box preset",
+                       "grains.0.material.mu=0.2")
     ef.add_argument("--sigma", metavar="S1,S2,...", help="size ratio(s) of the mixture, in (0, 1]")
     ef.add_argument("--amplitude", metavar="A0:A1:N|A1,A2,...",
                     help="drive amplitudes [m] (default 0.02:0.04:9; quick 0.02,0.03,0.04)")
@@ -214,5 +213,5 @@ def register(sub) -> None:
     ef.add_argument("--replicates", type=positive_int, metavar="R",
                     help="independent beds per amplitude in the same batch (default 1): <E_d> "
                          "gets mean ± standard error over them")
-    ef.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_no_progress(ef)
     ef.set_defaults(func=cmd_efficiency)

@@ -3,19 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import math
 import textwrap
 
-from jaxdamp.cli.common import (
-    add_overwrite,
-    check_outputs,
-    finite_float,
-    positive_int,
-    to_toml,
-)
+from jaxdamp.cli.common import add_overwrite, check_outputs, finite_float, positive_int, to_toml
 from jaxdamp.config import ConfigError
-
-
 
 
 def cmd_presets(args) -> int:
@@ -81,6 +72,7 @@ def cmd_plot(args) -> int:
 
     with open_output(args.file) as h5:  # a missing or non-HDF5 input is named first
         family, what = file_family(h5), what_file(h5)
+        refuse_damaged(args.file, h5)
     if family not in PLOT_FILES.values():
         raise ConfigError(f"{args.file} is {what}: no --kind of jaxdamp plot draws it "
                           f"({_plots_of_files()}); `jaxdamp info {args.file}` shows what it "
@@ -103,6 +95,17 @@ def cmd_plot(args) -> int:
     return 0
 
 
+def refuse_damaged(path, h5) -> None:
+    """Refuse (one line) to draw or export the open run file ``h5`` when it is damaged
+    (:func:`jaxdamp.io.runfile.damage`): what came out of it would be garbage."""
+    from jaxdamp.io.describe import file_family
+    from jaxdamp.io.runfile import damage
+
+    if file_family(h5) == "jaxdamp-run" and (why := damage(h5)) is not None:
+        raise ConfigError(f"{path} is damaged ({why}): nothing drawn or exported from it "
+                          "(`jaxdamp info` shows what it holds)")
+
+
 def cmd_export(args) -> int:
     import os
 
@@ -114,6 +117,10 @@ def cmd_export(args) -> int:
             raise ConfigError(f"--out {out}: --format {args.format} writes a .{args.format} file")
     check_outputs(planned_outputs(args.file, args.format, args.out, args.every), args.overwrite,
                   new_folders=True)
+    from jaxdamp.io.export import open_output
+
+    with open_output(args.file) as h5:
+        refuse_damaged(args.file, h5)
     if args.format in ("gif", "mp4"):
         from jaxdamp.figures import animate
 

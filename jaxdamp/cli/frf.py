@@ -6,6 +6,8 @@ import argparse
 import textwrap
 
 from jaxdamp.cli.common import (
+    add_config_options,
+    add_no_progress,
     add_overwrite,
     check_outputs,
     command_config,
@@ -33,15 +35,16 @@ def cmd_frf(args) -> int:
                           "apply to a multi-DOF [structure]; use jaxdamp random (H1 at the box) "
                           "or jaxdamp run, whose records hold every degree of freedom (y_dofs)")
     impact = cfg.system == "impact"  # S3: one particle of mass impactor.mass, gap impactor.gap
-    if args.frequencies:
-        freqs = float_list(args.frequencies, "--frequencies")
+    if args.frequencies is not None:
+        freqs = float_list(args.frequencies, "--frequencies", "frequencies [Hz]", "12,15,18")
     else:
         n = args.n if args.n is not None else (6 if args.quick else 30)
         if not 0 < args.fmin < args.fmax:
             raise ConfigError(f"--fmin {args.fmin} / --fmax {args.fmax}: need 0 < fmin < fmax")
         freqs = list(np.linspace(args.fmin, args.fmax, n))
-    if any(f <= 0 for f in freqs):
-        raise ConfigError(f"--frequencies: every frequency must be > 0 Hz, got {freqs}")
+    if not all(0 < f < float("inf") for f in freqs):  # NaN fails too
+        raise ConfigError(f"--frequencies: every frequency must be a finite number > 0 Hz, got "
+                          f"{freqs}")
     axes = {"frequency": freqs}
     lz = float_list(args.lz, "--lz") if args.lz else None
     if lz:
@@ -50,12 +53,21 @@ def cmd_frf(args) -> int:
     png = args.png or (args.out.rsplit(".", 1)[0] + ".png" if args.out else None)
     check_outputs([args.out, png], args.overwrite, keep=resume_or_overwrite(args),
                   resumable=[args.out])
+    from jaxdamp.validation import check_periods
+
+    check_periods(cfg, min(freqs))  # every point covers a whole drive period
 
     import h5py
 
-    from jaxdamp.analysis.response import RESIDUALS, fit_frf_replicates
+    from jaxdamp.analysis.response import (
+        FIT_RULE,
+        RESIDUALS,
+        fit_failure,
+        fit_frf_replicates,
+        replicate_mean,
+    )
     from jaxdamp.figures import frf_figure, save
-    from jaxdamp.io.sweepfile import fit_failure, write_fit
+    from jaxdamp.io.sweepfile import write_fit
     from jaxdamp.physics.model import grain_mass
     from jaxdamp.studies.grid import steady_or_window
     from jaxdamp.studies.sweep import sweep
@@ -80,39 +92,29 @@ def cmd_frf(args) -> int:
                   "— run longer (--duration)")
     else:  # S3: deterministic, one realisation
         Zr = res.summary["amplitude"].reshape(len(freqs), L, 1)
-    Z = Zr.mean(axis=-1)
-    Z_se = Zr.std(axis=-1, ddof=1) / np.sqrt(R) if R >= 2 else None
+    Z, Z_se = replicate_mean(Zr)
+    order = [args.residuals] + [w for w in RESIDUALS if w != args.residuals]
     fits, failures, lines, fit_all = [], [], [], {w: [] for w in RESIDUALS}
     for j in range(L):
         for w in RESIDUALS:
             fit_all[w].append(fit_frf_replicates(freqs, Zr[:, j], p.U, p.K, M0=p.M,
                                                  C0=max(p.C, 1.0), residuals=w))
         fr = fit_all[args.residuals][j]
-        other = fit_all[next(w for w in RESIDUALS if w != args.residuals)][j]
-        why, why_other = fit_failure(fr), fit_failure(other)
+        why = fit_failure(fr)
         fits.append(None if why else (fr["M_ef"], fr["C_ef"]))
         failures.append(why)
         label = (f"Lz = {lz[j]:g} m" if lz else f"gap = {cfg.impactor.gap:g} m" if impact
                  else f"Lz = {cfg.box.Lz:g} m")
         k = int(np.argmax(Z[:, j]))
-        err = ((lambda e: f"± {e:.2g} (SE over R = {R})") if R >= 2 else
-               (lambda e: f"± {e:.2g} (fit error, R = 1)"))
-        eM = fr["se_M"] if R >= 2 else fr["fit_se_M"]
-        eC = fr["se_C"] if R >= 2 else fr["fit_se_C"]
-        head = f"{label}: peak Z/U = {Z[k, j] / p.U:.4g} at {freqs[k]:.4g} Hz; "
-        if why:
-            main = f"{args.residuals} fit FAILED ({why}): no M_ef, C_ef; "
-        else:
-            main = (f"{args.residuals} fit M_ef = {fr['M_ef']:.4g} {err(eM)} kg, "
-                    f"C_ef = {fr['C_ef']:.4g} {err(eC)} N s/m (C_ef/C = {fr['C_ef'] / p.C:.3g}); ")
-        second = (f"{other['residuals']} fit FAILED ({why_other})" if why_other else
-                  f"{other['residuals']} fit: M_ef = {other['M_ef']:.4g}, "
-                  f"C_ef = {other['C_ef']:.4g}")
-        lines.append(head + main + second)
+        lines.append(f"{label}: peak Z/U = {Z[k, j] / p.U:.4g} at {freqs[k]:.4g} Hz; "
+                     + "; ".join(_fit_text(fit_all[w][j], p.C) for w in order))
     print("\n".join(lines))
+    if not all(fit_failure(f) for fl in fit_all.values() for f in fl):
+        print("(± : " + (f"SE over R = {R} replicates" if R >= 2 else
+                         "the fit's standard error, R = 1") + ")")
     if any(failures):
-        print(f"warning: the {args.residuals} FRF fit failed for {sum(map(bool, failures))} of "
-              f"{L} curve(s): not a result (flagged in /fit/ok, not drawn); more frequencies "
+        print(f"warning: the {args.residuals} FRF fit FAILED for {sum(map(bool, failures))} of "
+              f"{L} curve(s) ({FIT_RULE}): flagged in /fit/ok, not drawn; more frequencies "
               "around the resonance (--fmin/--fmax/--n) or replicates usually help")
     m_p = cfg.impactor.mass if impact else grain_mass(cfg)
     if args.out:
@@ -130,6 +132,23 @@ def cmd_frf(args) -> int:
     return 0
 
 
+def _fit_text(fit: dict, C: float) -> str:
+    """One weighting's FRF fit for the printed summary: ``M_ef``, ``C_ef`` as mean ± SE
+    (:func:`jaxdamp.analysis.stats.format_estimate`; the fit's own error for ``R = 1``), or
+    FAILED with the reason (:func:`jaxdamp.analysis.response.fit_failure`)."""
+    from jaxdamp.analysis.response import fit_failure
+    from jaxdamp.analysis.stats import format_estimate
+
+    why = fit_failure(fit)
+    if why:
+        return f"{fit['residuals']} fit FAILED ({why}): no M_ef, C_ef"
+    R = int(fit["replicates"])
+    eM, eC = (fit["se_M"], fit["se_C"]) if R >= 2 else (fit["fit_se_M"], fit["fit_se_C"])
+    return (f"{fit['residuals']} fit M_ef = {format_estimate(fit['M_ef'], eM, R, 'kg')}, "
+            f"C_ef = {format_estimate(fit['C_ef'], eC, R, 'N s/m')}"
+            + (f", C_ef/C = {fit['C_ef'] / C:.3g}" if C > 0 else ""))
+
+
 def register(sub) -> None:
     """Add the subcommand(s) to the ``jaxdamp`` parser."""
     fr = sub.add_parser(
@@ -144,19 +163,22 @@ def register(sub) -> None:
               jaxdamp frf --preset sanchez2012-optimal --frequencies 12,14,15.16,17 \\
                           --lz 0.06,0.09,0.1225 --out lz.h5
             The HDF5 holds /summary/<name> arrays shaped (frequencies, Lz), /records (samples
-            per point), /axes, /fit (M_ef, C_ef per Lz) and a checkpoint (--resume)."""),
+            per point), /axes, /fit (M_ef, C_ef per Lz) and a checkpoint (--resume).
+            A fit that is not a result (too few frequencies, a value on its bound 0, an error
+            not finite or above half its value) is printed as FAILED with the reason, flagged
+            in /fit/ok and /fit/failure, and not drawn."""),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    fr.add_argument("--preset")
-    fr.add_argument("--config", metavar="FILE")
-    fr.add_argument("--set", action="append", metavar="KEY=VALUE")
+    add_config_options(fr, "a named reference case (list: `jaxdamp presets`); "
+                       "sanchez2012-impact runs the single-particle model (S3)")
     fr.add_argument("--fmin", type=positive_float, default=5.0, help="lowest frequency [Hz] (default 5)")
     fr.add_argument("--fmax", type=positive_float, default=25.0, help="highest frequency [Hz] (default 25)")
     fr.add_argument("--n", type=positive_int, help="number of frequencies (default 30; 6 with --quick)")
     fr.add_argument("--frequencies", metavar="F1,F2,...", help="explicit list of frequencies [Hz]")
     fr.add_argument("--lz", metavar="LZ1,LZ2,...", help="second axis: box heights [m]")
     fr.add_argument("--duration", type=positive_float, help="simulated time per point [s]")
-    fr.add_argument("--out", metavar="FILE.h5")
+    fr.add_argument("--out", metavar="FILE.h5",
+                    help="sweep file to write (default: none; the PNG goes beside it)")
     fr.add_argument("--png", metavar="FILE.png",
                     help="figure (default: next to --out; written with or without --out)")
     fr.add_argument("--quick", action="store_true", help="6 frequencies, 0.5 s each")
@@ -169,5 +191,5 @@ def register(sub) -> None:
                     help="FRF-fit weighting that is reported first and drawn: relative "
                          "(Z_model/Z - 1, default) or absolute ((Z_model - Z)/U, dominated by "
                          "the resonance, as the thesis describes); both are stored in /fit")
-    fr.add_argument("--no-progress", action="store_true")
+    add_no_progress(fr)
     fr.set_defaults(func=cmd_frf)

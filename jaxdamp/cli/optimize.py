@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import math
 import textwrap
 
 from jaxdamp.cli.common import (
+    add_config_options,
+    add_no_progress,
     add_overwrite,
     check_outputs,
     command_config,
@@ -16,21 +19,37 @@ from jaxdamp.cli.common import (
 from jaxdamp.config import ConfigError, apply_overrides
 
 
+def band_option(text: str | None, objective: str) -> tuple | None:
+    """The ``--band`` frequencies [Hz]: ``None`` when not given; refused (one line naming the
+    option) when empty, not numbers, not finite and > 0, or given to another objective."""
+    if text is None:
+        return None
+    if objective != "band":
+        raise ConfigError(f"--band applies to --objective band (this run optimises "
+                          f"{objective}); give --frequency for a single-frequency objective")
+    what, example = "frequencies [Hz], each a finite number > 0", "--band 14,15.16,16"
+    values = float_list(text, "--band", what, example)
+    if not all(0 < v < math.inf for v in values):
+        raise ConfigError(f"--band {text!r}: expected a comma-separated list of {what}, "
+                          f"e.g. {example}")
+    return tuple(values)
+
+
 def cmd_optimize(args) -> int:
     import json
-    import math
 
     cfg = command_config(args)
+    band = band_option(args.band, args.objective)
     check_outputs([args.out], args.overwrite)
 
     import h5py
     import numpy as np
 
     from jaxdamp.design import Objective, adaptive_scan, make_problem, optimize, trust_region
+    from jaxdamp.design.status import EXIT_FAILED
     from jaxdamp.design.surrogate import descend, propose
     from jaxdamp.io import optimisation as optimisation_file
 
-    band = tuple(float_list(args.band, "--band")) if args.band else None
     objective = Objective(args.objective, frequency=args.frequency, band=band)
     impact = cfg.system == "impact"
     names = tuple(v.strip() for v in (args.vars or "Lz").split(",") if v.strip())
@@ -50,9 +69,10 @@ def cmd_optimize(args) -> int:
     if args.budget is not None and args.budget <= 0:
         raise ConfigError(f"--budget {args.budget}: must be > 0 simulated system-seconds")
     over = dict(lr=args.lr, max_iter=args.max_iter, duration=args.duration)
-    if not impact:
+    if not impact:  # bars of settling and of every DEM batch; the gradient method has its own
         over.update(estimator=args.estimator, h=args.h,
-                    replicates=args.replicates if args.estimator == "steady" else None)
+                    replicates=args.replicates if args.estimator == "steady" else None,
+                    progress=not args.no_progress and method != "gradient")
     elif args.replicates not in (None, 1):
         raise ConfigError("--replicates: the single-particle model (S3) is deterministic")
     prob, s = make_problem(cfg, objective, quick=args.quick, **over)
@@ -87,16 +107,30 @@ def cmd_optimize(args) -> int:
           f"[{lo:.4g}, {hi:.4g}] m by {method}" + (f", {R} replicates per point" if R > 1 else ""))
     progress = not args.no_progress
     sim_extra = 0.0
+    unit = objective.unit
     if method == "gradient":
         x0 = 0.07 if x0 is None and not impact else x0
         x0 = prob.from_lz(0.07) if x0 is None else x0
         res = optimize(prob, x0, lr=s["lr"], decay=s["decay"], max_iter=s["max_iter"],
                        xtol=s["xtol"], lo=lo, hi=hi, out=args.out, progress=progress,
                        config_json=cfg.to_json(), budget=args.budget)
-        opt, sim = res.optimum, res.sim_seconds
-        x_best = res.x_average
-        print(f"{len(res.history['x'])} iterates ({res.reason}); average of the last iterates "
-              f"{var} = {x_best:.5g} m")
+        opt, sim, status = res.optimum, res.sim_seconds, res.status
+        g = res.history["gradient"]
+        last = float(g[np.isfinite(g)][-1]) if np.isfinite(g).any() else None
+        if status.converged:
+            x = res.design
+            value = (f"{objective.kind} = {res.value:.5g} {unit}" if x == res.x else
+                     f"(the average of the last iterates; {objective.kind} at the last = "
+                     f"{res.value:.5g} ± {res.history['objective_se'][-1]:.2g} {unit})")
+            print(f"optimum Lz = {prob.to_lz(x):.5g} m"
+                  + (f" ({var} = {x:.5g} m)" if var != "Lz" else "") + f": {value}; "
+                  f"converged after {status.iterations} iterations: {status.reason}")
+        else:
+            print(_not_an_optimum(status, prob, objective, res.best, last))
+        if opt is not None:
+            print(f"response surface of every evaluation: Lz = {prob.to_lz(opt.x):.5g} m"
+                  + _interval(prob, opt) + f", fitted {objective.kind} = {opt.value:.5g} "
+                  f"{unit}" + ("" if opt.interior else " (not interior: an extrapolation)"))
     else:
         if method == "trust" and x0 is None:
             p = propose(prob.config, objective, prob.bed_height, lo, hi)
@@ -107,33 +141,38 @@ def cmd_optimize(args) -> int:
         elif method == "trust":  # from the user's start: exact-gradient descent on S3
             p = descend(prob.config, objective, prob.bed_height, x0, lo, hi)
             sim_extra = p["sim_seconds"]
-            print(f"S3 surrogate from Lz0 = {x0:.5g} m: optimum Lz = {p['lz']:.5g} m after "
-                  f"{p['iterates']} exact-gradient iterates ({p['fallbacks']} without a stable "
-                  f"orbit, central differences of long averages there; {p['reason']}; "
-                  f"{sim_extra:.3g} simulated s of the single-particle model)")
+            st = p["status"]
+            print(f"S3 surrogate from Lz0 = {x0:.5g} m: "
+                  + (f"optimum Lz = {p['lz']:.5g} m" if st.converged else
+                     f"{st.headline()}, best iterate Lz = {p['lz']:.5g} m")
+                  + f" after {p['iterates']} exact-gradient iterates ({p['fallbacks']} without "
+                  f"a stable orbit, central differences of long averages there; {st.reason}; "
+                  f"{sim_extra:.3g} simulated s of the single-particle model); the DEM search "
+                  "starts there")
             x0 = p["lz"]
         echo = print if progress else None
         if method == "trust":
             sr = trust_region(prob, x0, lo, hi, echo=echo)
         else:
             sr = adaptive_scan(prob, lo, hi, echo=echo)
-        opt, sim = sr.optimum, sr.sim_seconds
-        x_best = opt.x
+        opt, sim, status = sr.optimum, sr.sim_seconds, sr.status
         if args.out:
             optimisation_file.write_search(args.out, cfg, objective, prob, sr, method, sim)
-    if opt is not None:
-        ci = (f" [{prob.to_lz(opt.lo):.5g}, {prob.to_lz(opt.hi):.5g}] m (95 %, jackknife over "
-              f"{opt.replicates} replicates)" if opt.replicates > 1 else " (no replicates: no interval)")
-        print(f"optimum Lz = {prob.to_lz(opt.x):.5g} m{ci}; fitted {objective.kind} = "
-              f"{opt.value:.5g} {objective.unit}")
-        if not opt.interior or min(abs(opt.x - lo), abs(opt.x - hi)) < 1e-9:
-            print(f"warning: no interior optimum of {objective.kind} on the feasible range — it "
-                  "lies on (or beyond) a bound; widen --lo/--hi or choose another objective")
-    else:
-        g = res.history["gradient"][-1] if method == "gradient" and len(res.history["x"]) else math.nan
-        print(f"optimum Lz = {prob.to_lz(x_best):.5g} m ({var} = {x_best:.5g} m); "
-              f"{objective.kind} = {res.value:.5g} {objective.unit}, last gradient {g:.3g} "
-              f"(exact: no interval)")
+        if status.converged:
+            print(f"optimum Lz = {prob.to_lz(opt.x):.5g} m{_interval(prob, opt)}; fitted "
+                  f"{objective.kind} = {opt.value:.5g} {unit}; converged after "
+                  f"{status.iterations} rounds: {status.reason}")
+            if not opt.interior or min(abs(opt.x - lo), abs(opt.x - hi)) < 1e-9:
+                print(f"warning: no interior optimum of {objective.kind} on the feasible range "
+                      "— it lies on (or beyond) a bound; widen --lo/--hi or choose another "
+                      "objective")
+        else:
+            best = None
+            if np.isfinite(sr.mean).any():
+                k = int(np.nanargmax(sr.mean) if objective.maximise else np.nanargmin(sr.mean))
+                best = {"x": float(sr.x[k]), "value": float(sr.mean[k]),
+                        "value_se": float(sr.se[k])}
+            print(_not_an_optimum(status, prob, objective, best, None, "best evaluated point"))
     model = "single-particle" if impact else "DEM"
     print(f"cost: {sim:.4g} simulated {model} system-seconds"
           + (f", plus {sim_extra:.3g} s of the single-particle surrogate (a point mass: "
@@ -154,9 +193,39 @@ def cmd_optimize(args) -> int:
                     {"lz": prob.to_lz(opt.x), "lo": prob.to_lz(opt.lo), "hi": prob.to_lz(opt.hi),
                      "se": opt.se, "interior": bool(opt.interior), "replicates": opt.replicates,
                      "sim_seconds": sim, "surrogate_sim_seconds": sim_extra,
-                     "method": method})
+                     "method": method, "status": status.state})
         print(f"wrote {args.out}")
-    return 0
+    return EXIT_FAILED if status.failed else 0
+
+
+def _interval(prob, opt) -> str:
+    """`` [lo, hi] m (95 %, jackknife over R replicates)`` of a response-surface optimum."""
+    if opt.replicates > 1:
+        return (f" [{prob.to_lz(opt.lo):.5g}, {prob.to_lz(opt.hi):.5g}] m (95 %, jackknife over "
+                f"{opt.replicates} replicates)")
+    return " (no replicates: no interval)"
+
+
+def _not_an_optimum(status, prob, objective, best, gradient, what="best iterate") -> str:
+    """The line of a result that is not an optimum (:class:`jaxdamp.design.status.Status`):
+    ``NOT CONVERGED after N iterations (reason; last gradient g); best iterate …`` or
+    ``FAILED: reason; …``."""
+    from jaxdamp.analysis.stats import format_estimate
+
+    var, unit = prob.variable, objective.unit
+    grad = "" if gradient is None else f"; last gradient {gradient:.3g} {unit} per m"
+    if best is None:
+        where = "no iterate with a finite objective"
+    else:
+        R = getattr(prob, "R", 1)
+        value = (format_estimate(best["value"], best["value_se"], R, unit)
+                 if best["value_se"] > 0 else f"{best['value']:.5g} {unit}")
+        where = (f"{what} Lz = {prob.to_lz(best['x']):.5g} m"
+                 + (f" ({var} = {best['x']:.5g} m)" if var != "Lz" else "")
+                 + f": {objective.kind} = {value}")
+    if status.failed:
+        return f"FAILED: {status.reason}{grad}; before it, {where} — not an optimum"
+    return f"{status.headline()} ({status.reason}{grad}); {where} — not an optimum"
 
 
 def _cmd_design(args, cfg, objective, names) -> int:
@@ -167,6 +236,7 @@ def _cmd_design(args, cfg, objective, names) -> int:
     from jaxdamp.design import DEFAULTS
     from jaxdamp.design.space import DesignProblem, DesignSpace, parse_bounds
     from jaxdamp.design.spsa import random_search, spsa
+    from jaxdamp.design.status import EXIT_FAILED
     from jaxdamp.io import optimisation as optimisation_file
 
     if cfg.system != "primary":
@@ -222,19 +292,31 @@ def _cmd_design(args, cfg, objective, names) -> int:
                    max_iter=s["max_iter"],
                    budget=budget, seed=cfg.numerics.seed, progress=not args.no_progress)
         design, found = res.x_average, "average of the last iterates"
-        print(f"{len(res.history['u'])} iterates ({res.reason})")
     else:
         budget = budget or s["max_iter"] * per_iter
         res = random_search(prob, budget, replicates=s["replicates"], seed=cfg.numerics.seed)
         design, found = np.asarray(res.best["x"]), "best of the Latin hypercube"
         print(f"{len(res.X)} designs × {s['replicates']} beds in one batch")
+    status = res.status
+    fmt = lambda x: ", ".join(f"{n} = {v:.5g}{(' ' + u) if u else ''}"
+                              for n, v, u in zip(names, x, [v.unit for v in space.variables]))
     search_cost = prob.sim_seconds
+    if status.failed:
+        print(f"FAILED: {status.reason} — no design to confirm")
+        if args.out:
+            optimisation_file.write_design(args.out, cfg, objective, prob, method, res, None,
+                                           dict(s, budget=budget, x0=list(map(float, x0))))
+            print(f"wrote {args.out}")
+        return EXIT_FAILED
+    if status.converged:
+        print(f"optimum ({found}): {fmt(design)}; converged after {status.iterations} "
+              f"iterations: {status.reason}")
+    else:
+        print(f"{status.headline()} ({status.reason}); {found}: {fmt(design)} — not an "
+              "optimum")
     R = s["confirm"]
     conf = prob.evaluate(np.stack([design, x0]), R)  # fresh beds: no winner's curse
     conf.update(X=np.stack([design, x0]), labels=["found", "start"])
-    fmt = lambda x: ", ".join(f"{n} = {v:.5g}{(' ' + u) if u else ''}"
-                              for n, v, u in zip(names, x, [v.unit for v in space.variables]))
-    print(f"design ({found}): {fmt(design)}")
     print(f"confirmed on {R} fresh beds (95 %): {objective.kind} = {conf['mean'][0]:.5g} ± "
           f"{conf['ci95'][0]:.2g} {objective.unit}; at the start ({fmt(x0)}): "
           f"{conf['mean'][1]:.5g} ± {conf['ci95'][1]:.2g}")
@@ -299,12 +381,20 @@ def register(sub) -> None:
 
             output: the optimum with its interval (jackknife over replicates of the response
             surface), whether it is interior, and the simulated system-seconds; --out writes
-            an HDF5 log (schema in docs/output.md)."""),
+            an HDF5 log (schema in docs/output.md) with the status (attribute convergence).
+
+            status (one rule, jaxdamp/design/status.py): "optimum" only when the search
+            converged — an exact gradient puts the stationary point within xtol (Newton step
+            with the secant curvature), an estimated one is not significant against its
+            standard error for 3 iterates, or the design sits on a bound with the objective
+            improving beyond it (scan, trust: the response surface locates an interior
+            optimum, or the best value is on a bound). Otherwise "NOT CONVERGED after N
+            iterations (why); best iterate ..." (exit status 0; a random search is always a
+            sample, not converged), or "FAILED: why" for a non-finite objective, e.g. no stable
+            periodic orbit (exit status 3)."""),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    op.add_argument("--preset", help="sanchez2012-optimal (DEM) or sanchez2012-impact (S3), ...")
-    op.add_argument("--config", metavar="FILE")
-    op.add_argument("--set", action="append", metavar="KEY=VALUE")
+    add_config_options(op, "sanchez2012-optimal (DEM) or sanchez2012-impact (S3), ...")
     op.add_argument("--objective", choices=["damping", "amplitude", "band", "dissipation"],
                     default="damping", help="what to optimise (default damping, C_eq)")
     op.add_argument("--frequency", type=positive_float, metavar="HZ",
@@ -347,5 +437,5 @@ def register(sub) -> None:
     add_overwrite(op)
     op.add_argument("--quick", action="store_true",
                     help="small settings for a demo (S3 ~30 s; DEM 2 replicates, 0.6 s runs)")
-    op.add_argument("--no-progress", action="store_true")
+    add_no_progress(op)
     op.set_defaults(func=cmd_optimize)

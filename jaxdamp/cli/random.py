@@ -6,6 +6,8 @@ import argparse
 import textwrap
 
 from jaxdamp.cli.common import (
+    add_config_options,
+    add_no_progress,
     add_overwrite,
     check_outputs,
     command_config,
@@ -117,11 +119,9 @@ def register(sub) -> None:
             densities, RMS per realisation."""),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    p.add_argument("--preset", help="a named reference case (list: `jaxdamp presets`); "
-                   "sanchez2012-random has a spectrum, the others need --psd")
-    p.add_argument("--config", metavar="FILE", help="TOML configuration (overrides the preset)")
-    p.add_argument("--set", action="append", metavar="KEY=VALUE",
-                   help="override one value by dotted key (repeatable), e.g. random.scale=2")
+    add_config_options(p, "a named reference case (list: `jaxdamp presets`); "
+                       "sanchez2012-random has a spectrum, the others need --psd",
+                       "random.scale=2")
     p.add_argument("--psd", metavar="F:S,F:S,...",
                    help="base acceleration density breakpoints f [Hz] : S [(m/s²)²/Hz], e.g. "
                         "5:0.5,30:0.5 (sets random.psd; default: the configuration's)")
@@ -147,5 +147,5 @@ def register(sub) -> None:
                    help="figure (default: next to --out; written with or without --out)")
     p.add_argument("--resume", action="store_true", help="continue --out from its checkpoint")
     add_overwrite(p, resume=True)
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_no_progress(p)
     p.set_defaults(func=cmd_random)

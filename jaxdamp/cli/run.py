@@ -6,6 +6,8 @@ import argparse
 import textwrap
 
 from jaxdamp.cli.common import (
+    add_config_options,
+    add_no_progress,
     add_overwrite,
     check_outputs,
     positive_float,
@@ -90,10 +92,7 @@ def register(sub) -> None:
         description="Settle the grains, drive the system at one frequency and record it.",
         epilog=EPILOG_RUN, formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    r.add_argument("--preset", help="a named reference case (list: `jaxdamp presets`)")
-    r.add_argument("--config", metavar="FILE", help="TOML configuration (overrides the preset)")
-    r.add_argument("--set", action="append", metavar="KEY=VALUE",
-                   help="override one value by dotted key (repeatable), e.g. box.Lz=0.1")
+    add_config_options(r)
     r.add_argument("--frequency", type=positive_float, metavar="HZ", help="excitation frequency f [Hz]")
     r.add_argument("--duration", type=positive_float, metavar="S", help="simulated time after settling [s]")
     r.add_argument("--seed", type=int, help="seed of radii and lattice jitter")
@@ -106,5 +105,5 @@ def register(sub) -> None:
                    help="independent beds (seeds seed..seed+R-1) run in one batch (default 1); "
                         "steady-state numbers get mean ± standard error over them and the file "
                         "is a sweep file of one point")
-    r.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_no_progress(r)
     r.set_defaults(func=cmd_run)

@@ -8,8 +8,11 @@ iterates (iterate averaging: the noise of an estimated gradient averages out) wi
 replicated problems, a confidence interval from the response surface of every evaluation
 (:func:`jaxdamp.design.surface.quadratic_optimum`).
 
-An estimate that is not finite (e.g. the orbit method finding no stable periodic orbit) stops
-the optimiser with the reason.
+Every result carries its :class:`~jaxdamp.design.status.Status` by the one convergence rule
+(:mod:`jaxdamp.design.status`): converged (stationary, or on a bound with the objective
+improving beyond it), NOT CONVERGED (the iteration cap, the budget, or a learning rate that
+decayed below the step tolerance) or FAILED (an estimate that is not finite, e.g. the orbit
+method finding no stable periodic orbit: the optimiser stops there with the reason).
 """
 
 from __future__ import annotations
@@ -23,6 +26,14 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxdamp.config import ConfigError
+from jaxdamp.design.status import (
+    CONVERGED,
+    FAILED,
+    NOT_CONVERGED,
+    ConvergenceRule,
+    Status,
+    non_finite,
+)
 from jaxdamp.io import optimisation as optimisation_file
 
 
@@ -33,7 +44,11 @@ class OptimizeResult:
     ``sim_seconds`` simulated system-seconds in total, ``wall`` [s], ``path`` the log file;
     ``x_average`` the mean of the last ``average`` iterates; ``optimum`` the response-surface
     optimum with its interval (:class:`~jaxdamp.design.surface.Optimum`) for problems that
-    pool their evaluations (``None`` otherwise)."""
+    pool their evaluations (``None`` otherwise); ``status`` by the convergence rule
+    (:class:`~jaxdamp.design.status.Status`; its reason is ``reason``); ``best`` the iterate
+    with the best finite objective ``{"x", "value", "value_se", "iterate"}`` (``None``
+    without one); ``design`` the answer: the converged (last) iterate for an exact gradient,
+    ``x_average`` for an estimated one (averaging removes the gradient's noise)."""
 
     x: float
     lz: float
@@ -45,6 +60,9 @@ class OptimizeResult:
     path: str | None
     x_average: float = math.nan
     optimum: object = None
+    status: Status | None = None
+    best: dict | None = None
+    design: float = math.nan
 
 
 
@@ -64,10 +82,14 @@ def optimize(problem, x0: float, lr: float = 0.01, decay: float = 0.9, max_iter:
     long second-moment memory then freezes the steps before the first moment has turned)
     with learning rate ``lr·decay^k`` [m]; after each
     update the iterate is projected onto ``[lo, hi]`` (default ``problem.bounds()``). Stops
-    when ``max_iter`` iterates were evaluated, when the last ``patience`` steps were all below
-    ``xtol`` [m], or when for ``patience`` consecutive iterates the gradient was not
-    significant, ``|g| < se_factor·SE(g)`` (noisy estimators only). Objectives marked
-    maximise are maximised. Writes every iterate to ``out`` (HDF5, ``docs/output.md``).
+    when an iterate meets the convergence rule (:class:`~jaxdamp.design.status.ConvergenceRule`
+    with ``xtol``, ``patience``, ``se_factor``: converged), when an estimate is not finite
+    (FAILED), or NOT CONVERGED: after ``max_iter`` iterates, before an evaluation would exceed
+    the budget, or once the learning rate decayed below ``xtol`` [m] and the last ``patience``
+    steps were all below it (the iterate can no longer move). Small steps alone are no
+    evidence of convergence: Adam's steps shrink while its momentum turns. Objectives marked
+    maximise are maximised.
+    Writes every iterate and the status to ``out`` (HDF5, ``docs/output.md``).
     """
     import optax
 
@@ -90,10 +112,14 @@ def optimize(problem, x0: float, lr: float = 0.01, decay: float = 0.9, max_iter:
 
         bar = tqdm(total=max_iter, unit="it", desc=f"optimise {problem.variable}")
     t_start = time.perf_counter()
-    state, sim_total, reason = None, 0.0, f"max_iter = {max_iter} reached"
+    rule = ConvergenceRule(lo, hi, xtol, problem.objective.maximise, patience=patience,
+                           se_factor=se_factor, names=(problem.variable,), unit="m")
+    state, sim_total = None, 0.0
+    outcome, reason = NOT_CONVERGED, f"max_iter = {max_iter} reached"
     last_cost = 0.0
-    small_steps = noisy = 0
-    best = None  # (x, value, se) of the best iterate so far, for the progress bar
+    small_steps = 0
+    best = None  # the iterate with the best finite objective so far
+    exact = True  # every gradient so far exact (standard error 0)
     try:
         for k in range(max_iter):
             if budget is not None and k > 0 and sim_total + last_cost > budget:
@@ -102,62 +128,80 @@ def optimize(problem, x0: float, lr: float = 0.01, decay: float = 0.9, max_iter:
             est, state = problem.evaluate(x, state)
             sim_total += est.sim_seconds
             last_cost = est.sim_seconds
-            if not (np.isfinite(est.value) and np.isfinite(est.grad)):
+            if non_finite([est.value, est.grad]):
                 why = est.extra.get("reason", "")
+                outcome = FAILED
                 reason = (f"non-finite objective or gradient at {problem.variable} = {x:.6g}"
                           + (f": {why}" if why else ""))
                 optimisation_file.log(h5, hist, x, problem, est, 0.0, float(sched(k)), t_start, sim_total)
                 break
-            updates, opt_state = opt.update(jnp.asarray(sign * est.grad), opt_state)
-            x_new = float(np.clip(x + float(updates), lo, hi))
-            step = x_new - x
-            optimisation_file.log(h5, hist, x, problem, est, step, float(sched(k)), t_start, sim_total)
-            if best is None or (est.value > best[1]) == problem.objective.maximise:
-                best = (x, est.value, est.value_se)
+            exact = exact and est.grad_se == 0
+            if best is None or (est.value > best["value"]) == problem.objective.maximise:
+                best = {"x": x, "value": est.value, "value_se": est.value_se, "iterate": k}
+            converged = rule.check(x, est.grad, est.grad_se)
+            if converged:
+                optimisation_file.log(h5, hist, x, problem, est, 0.0, float(sched(k)), t_start,
+                                      sim_total)
+                outcome, reason = CONVERGED, converged
+            else:
+                updates, opt_state = opt.update(jnp.asarray(sign * est.grad), opt_state)
+                x_new = float(np.clip(x + float(updates), lo, hi))
+                step = x_new - x
+                optimisation_file.log(h5, hist, x, problem, est, step, float(sched(k)), t_start,
+                                      sim_total)
             if bar is not None:
                 bar.update(1)
-                ci = f"±{1.96 * best[2]:.2g}" if np.isfinite(best[2]) and best[2] > 0 else ""
+                ci = (f"±{1.96 * best['value_se']:.2g}"
+                      if np.isfinite(best["value_se"]) and best["value_se"] > 0 else "")
                 bar.set_postfix({problem.variable: f"{x:.5f}",
-                                 "best": f"{best[1]:.4g}{ci} at {best[0]:.5f}",
+                                 "best": f"{best['value']:.4g}{ci} at {best['x']:.5f}",
                                  "grad": f"{est.grad:.3g}±{est.grad_se:.2g}"})
             if echo:
                 echo(f"{k:3d} {problem.variable} = {x:.6f} m  objective = {est.value:.6g} "
                      f"± {est.value_se:.2g}  gradient = {est.grad:.5g} ± {est.grad_se:.2g}")
-            small_steps = small_steps + 1 if abs(step) < xtol else 0
-            noisy = noisy + 1 if abs(est.grad) <= se_factor * est.grad_se else 0
-            x = x_new
-            if small_steps >= patience:
-                reason = f"{patience} steps below xtol = {xtol:g} m"
+            if converged:
                 break
-            if noisy >= patience:
-                reason = (f"gradient not significant (|g| < {se_factor:g}·SE) for {patience} "
-                          "iterates")
+            small_steps = small_steps + 1 if abs(step) < xtol else 0
+            x = x_new
+            if small_steps >= patience and float(sched(k)) < xtol:
+                reason = (f"the learning rate decayed to {float(sched(k)):.2g} m, below xtol = "
+                          f"{xtol:g} m, before the convergence rule was met")
                 break
     finally:
         if bar is not None:
             bar.close()
     hist = {k: np.asarray(v) for k, v in hist.items()}
-    # the result: the last iterate (x after the final update is not evaluated)
-    x_final = float(hist["x"][-1]) if len(hist["x"]) else x
-    x_avg = float(np.mean(hist["x"][-average:])) if len(hist["x"]) else x
+    n_it = len(hist["x"])
+    status = Status(outcome, reason, n_it)
+    # the result: the last iterate (x after the final update is not evaluated); the average
+    # of the last finite iterates
+    finite = np.isfinite(hist["objective"]) if n_it else np.zeros(0, bool)
+    x_final = float(hist["x"][-1]) if n_it else x
+    x_avg = float(np.mean(hist["x"][finite][-average:])) if finite.any() else x
     optimum = None
-    if hasattr(problem, "pooled") and len(hist["x"]):
+    if hasattr(problem, "pooled") and finite.any():
         optimum = problem.pooled(x_avg)
     res = OptimizeResult(x=x_final, lz=float(problem.to_lz(x_final)),
-                         value=float(hist["objective"][-1]) if len(hist["x"]) else float("nan"),
+                         value=float(hist["objective"][-1]) if n_it else float("nan"),
                          history=hist, reason=reason, sim_seconds=sim_total,
                          wall=time.perf_counter() - t_start, path=out, x_average=x_avg,
-                         optimum=optimum)
+                         optimum=optimum, status=status, best=best,
+                         design=(math.nan if outcome == FAILED else x_final if exact
+                                 else x_avg))
     if h5 is not None:
         h5.attrs["status"] = "finished"
         h5.attrs["reason"] = reason
         result = {"x": res.x, "lz": res.lz, "objective": res.value, "x_average": x_avg,
-                  "sim_seconds": res.sim_seconds, "wall_time": res.wall,
-                  "iterations": len(hist["x"])}
+                  "design": res.design, "sim_seconds": res.sim_seconds,
+                  "wall_time": res.wall, "iterations": n_it}
+        if best is not None:
+            result.update(best_x=best["x"], best_objective=best["value"],
+                          best_iterate=best["iterate"])
         if optimum is not None:
             result.update(optimum=optimum.x, optimum_lo=optimum.lo, optimum_hi=optimum.hi,
                           optimum_se=optimum.se, optimum_interior=bool(optimum.interior))
         h5.attrs["result"] = json.dumps(result)
+        optimisation_file.write_status(h5, status)
         h5.close()
     return res
 

@@ -13,7 +13,12 @@ replicate in one batch) and the response surface of :mod:`jaxdamp.design.surface
   and the radius halved once the optimum lies inside the stencil; it stops when the interval is
   narrower than ``tol`` or the radius below ``min_radius``.
 
-Both report the optimum, its interval, every evaluated point and the simulated system-seconds.
+Both report the optimum, its interval, every evaluated point, the simulated system-seconds
+and the status by the convergence rule (:mod:`jaxdamp.design.status`): converged when the
+response surface locates an interior optimum (scan; trust region: narrower than ``tol``, or
+inside the stencil at the smallest radius) or the best value sits on a bound with no interior
+optimum; FAILED on a value that is not finite; NOT CONVERGED otherwise (the trust region's
+round cap, a scan's quadratic without an interior optimum).
 """
 
 from __future__ import annotations
@@ -24,6 +29,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from jaxdamp.design.status import CONVERGED, FAILED, NOT_CONVERGED, Status, non_finite
 from jaxdamp.design.surface import Optimum, quadratic_optimum
 
 
@@ -42,7 +48,8 @@ class SearchResult:
     """``optimum`` (:class:`~jaxdamp.design.surface.Optimum`, design variable [m]); ``x``,
     ``mean``, ``se`` ``(n,)`` and ``J`` ``(n, R)``: every evaluated point in evaluation order;
     ``sim_seconds`` simulated system-seconds; ``wall`` [s]; ``at_bound``: the best point lies on
-    a bound of the range (no interior optimum found there); ``rounds``: per-round log."""
+    a bound of the range (no interior optimum found there); ``rounds``: per-round log;
+    ``status`` (:class:`~jaxdamp.design.status.Status`, iterations = rounds)."""
 
     optimum: Optimum
     x: np.ndarray
@@ -54,6 +61,7 @@ class SearchResult:
     at_bound: bool
     method: str
     rounds: list = field(default_factory=list)
+    status: Status | None = None
 
 
 class _Pool:
@@ -90,10 +98,23 @@ class _Pool:
         return x[sel][order], J[sel][order]
 
 
-def _result(pool, opt, t0, at_bound, method, rounds):
+def _result(pool, opt, t0, at_bound, method, rounds, state, reason):
     x, m, se, J = pool.arrays()
+    if non_finite([J]) or opt is None or non_finite([opt.x, opt.value]):
+        bad = x[~np.all(np.isfinite(J), axis=1)]
+        var = getattr(pool.problem, "variable", "x")
+        state, reason = FAILED, (f"non-finite objective at {var} = "
+                                 + ", ".join(f"{v:.5g}" for v in bad) + " m" if len(bad) else
+                                 "the response surface is not finite")
     return SearchResult(opt, x, m, se, J, pool.sim, time.perf_counter() - t0, at_bound, method,
-                        rounds)
+                        rounds, Status(state, reason, max(len(rounds), 1)))
+
+
+def _bound_reason(problem, opt, lo, hi) -> str:
+    side = "lower" if abs(opt.x - lo) <= abs(opt.x - hi) else "upper"
+    return (f"{problem.variable} on its {side} bound {lo if side == 'lower' else hi:.5g} m "
+            "with no interior optimum: the objective improves up to the bound (a constrained "
+            "optimum)")
 
 
 def adaptive_scan(problem, lo: float, hi: float, n_coarse: int = 6, n_fine: int = 4,
@@ -106,6 +127,8 @@ def adaptive_scan(problem, lo: float, hi: float, n_coarse: int = 6, n_fine: int 
     grid = np.linspace(lo, hi, n_coarse)
     pool.add(grid)
     x, m, _, _ = pool.arrays()
+    if non_finite([m]):
+        return _result(pool, None, t0, False, "adaptive scan", [], FAILED, "")
     k = int(np.argmax(m) if maximise else np.argmin(m))
     at_bound = k in (0, len(grid) - 1)
     a, b = grid[max(k - 1, 0)], grid[min(k + 1, len(grid) - 1)]
@@ -118,9 +141,19 @@ def adaptive_scan(problem, lo: float, hi: float, n_coarse: int = 6, n_fine: int 
     fine = np.linspace(a, b, n_fine + 2)[1:-1]
     pool.add(fine)
     rounds.append(dict(points=list(map(float, fine))))
+    if non_finite([pool.arrays()[1]]):
+        return _result(pool, None, t0, at_bound, "adaptive scan", rounds, FAILED, "")
     xs, J = pool.within(a, b)
     opt = quadratic_optimum(xs, J, maximise)
-    return _result(pool, opt, t0, at_bound, "adaptive scan", rounds)
+    if opt.interior:
+        state, reason = CONVERGED, (f"interior optimum of the quadratic through the "
+                                    f"{len(xs)} points of the bracket [{a:.5g}, {b:.5g}] m")
+    elif at_bound:
+        state, reason = CONVERGED, _bound_reason(problem, opt, lo, hi)
+    else:
+        state, reason = NOT_CONVERGED, ("the quadratic through the bracket has no interior "
+                                        "optimum (wrong curvature or vertex outside)")
+    return _result(pool, opt, t0, at_bound, "adaptive scan", rounds, state, reason)
 
 
 def trust_region(problem, x0: float, lo: float, hi: float, radius: float = 0.01,
@@ -142,9 +175,12 @@ def trust_region(problem, x0: float, lo: float, hi: float, radius: float = 0.01,
     pool = _Pool(problem)
     x, r = float(np.clip(x0, lo, hi)), float(radius)
     rounds, opt, at_bound = [], None, False
+    state, reason = NOT_CONVERGED, f"max_rounds = {max_rounds} reached"
     for it in range(max_rounds):
         c = float(np.clip(x, lo + r, hi - r)) if hi - lo > 2 * r else 0.5 * (lo + hi)
         pool.add([c - r, c, c + r])
+        if non_finite([pool.arrays()[1]]):
+            return _result(pool, opt, t0, at_bound, "trust region", rounds, FAILED, "")
         xs, J = pool.within(c - 2 * r, c + 2 * r)
         opt = quadratic_optimum(xs, J, maximise)
         move = float(np.clip(opt.x, c - 2 * r, c + 2 * r)) if opt.interior else (
@@ -161,14 +197,21 @@ def trust_region(problem, x0: float, lo: float, hi: float, radius: float = 0.01,
         inside = opt.interior and abs(opt.x - c) <= r
         x = float(np.clip(move, lo, hi))
         if inside and opt.halfwidth <= tol:
+            state, reason = CONVERGED, (
+                f"the optimum's 95 % interval half-width {opt.halfwidth:.2g} m is within "
+                f"tol = {tol:g} m, inside the stencil" if opt.replicates >= 2 else
+                "the optimum lies inside the stencil (one realisation: no interval)")
             break
         if inside:
             r *= 0.5
             if r < min_radius:
+                state, reason = CONVERGED, (f"the optimum lies inside the stencil at the "
+                                            f"smallest radius (< {min_radius:g} m)")
                 break
         if at_bound and not opt.interior:
+            state, reason = CONVERGED, _bound_reason(problem, opt, lo, hi)
             break
     xs, J = pool.within(x - 2 * r, x + 2 * r)
     if len(xs) >= 3:
         opt = quadratic_optimum(xs, J, maximise)
-    return _result(pool, opt, t0, at_bound, "trust region", rounds)
+    return _result(pool, opt, t0, at_bound, "trust region", rounds, state, reason)

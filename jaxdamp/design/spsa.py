@@ -20,8 +20,12 @@ averages, with its standard error across pairs.
 **The optimiser** :func:`spsa` — Adam (optax, decaying learning rate) on ``ĝ`` in ``u``, each
 iterate projected onto the feasible set shrunk by ``c`` (every perturbation stays feasible);
 the design it returns is the average of the last iterates (iterate averaging removes the
-gradient noise that Adam's steps carry). It stops at ``max_iter`` iterates or before an
-iteration would exceed the ``budget`` of simulated system-seconds.
+gradient noise that Adam's steps carry). It runs ``max_iter`` iterates, or stops before an
+iteration would exceed the ``budget`` of simulated system-seconds, or FAILED on a non-finite
+estimate; the result is converged when its last iterate meets the convergence rule
+(:class:`~jaxdamp.design.status.ConvergenceRule` in ``u``: every component of the gradient
+not significant for ``patience`` iterates, or on its bound with the objective improving
+beyond it), NOT CONVERGED otherwise.
 
 **The baseline** :func:`random_search` — a Latin hypercube of designs, each on ``R`` beds, in
 one batch, and the best mean. Both results should be confirmed on fresh beds
@@ -62,6 +66,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from jaxdamp.design.objectives import Estimate
+from jaxdamp.design.status import (
+    CONVERGED,
+    FAILED,
+    NOT_CONVERGED,
+    ConvergenceRule,
+    Status,
+    non_finite,
+)
 
 #: Fields of one SPSA iterate in :attr:`SPSAResult.history`.
 HISTORY = ("u", "x", "value", "value_se", "grad", "grad_se", "sim_seconds", "wall")
@@ -95,7 +107,8 @@ class SPSAResult:
     """``x_average`` the design (average of the last iterates; physical units, in the order
     of ``names``), ``u_average`` the same in normalised coordinates; ``history``
     ``{field: array}`` per iterate (:data:`HISTORY`); ``best`` the iterate with the best
-    objective estimate ``{"x", "value", "ci95"}``; ``sim_seconds``; ``reason``; ``wall``."""
+    objective estimate ``{"x", "value", "ci95"}``; ``sim_seconds``; ``reason``; ``wall``;
+    ``status`` (:class:`~jaxdamp.design.status.Status`, its reason is ``reason``)."""
 
     names: tuple
     x_average: np.ndarray
@@ -106,12 +119,14 @@ class SPSAResult:
     reason: str
     wall: float
     settings: dict = field(default_factory=dict)
+    status: Status | None = None
 
 
 def spsa(problem, x0, pairs: int = 4, c: float = 0.08,
          lr: float = 0.08, decay: float = 0.92, max_iter: int = 10, budget: float | None = None,
          average: int = 3, seed: int = 0, b1: float = 0.7, b2: float = 0.9,
-         progress: bool = True, echo=None) -> SPSAResult:
+         progress: bool = True, echo=None, patience: int = 3, se_factor: float = 1.0,
+         xtol: float = 1e-3) -> SPSAResult:
     """Adam on replicated SPSA gradients from ``x0`` (module doc).
 
     Args:
@@ -125,6 +140,8 @@ def spsa(problem, x0, pairs: int = 4, c: float = 0.08,
       average: iterates averaged for the design.
       seed: of the random directions (the beds' seeds come from the problem).
       progress: a bar showing the best objective so far ± its 95 % interval.
+      patience, se_factor, xtol: of the convergence rule (``xtol`` in normalised coordinates:
+        the distance to a bound that counts as on it).
     """
     import jax.numpy as jnp
     import optax
@@ -147,6 +164,10 @@ def spsa(problem, x0, pairs: int = 4, c: float = 0.08,
     hist = {k: [] for k in HISTORY}
     per_iter = 2 * pairs * problem.cost_per_system()
     spent, reason, best = 0.0, f"max_iter = {max_iter} reached", None
+    outcome, converged = NOT_CONVERGED, ""
+    rule = ConvergenceRule(np.full(space.dim, c), np.full(space.dim, 1.0 - c), xtol,
+                           problem.objective.maximise, patience=patience, se_factor=se_factor,
+                           names=space.names)
     tq = math.nan if pairs < 2 else t_quantile(0.975, pairs - 1)
     bar = None
     if progress:
@@ -161,8 +182,11 @@ def spsa(problem, x0, pairs: int = 4, c: float = 0.08,
                 break
             est = spsa_gradient(problem, u, pairs, c, rng)
             spent += est.sim_seconds
-            if not (np.isfinite(est.value) and np.all(np.isfinite(est.grad))):
-                reason = f"non-finite objective or gradient at {space.to_x(u)}"
+            if non_finite([est.value, est.grad]):
+                outcome = FAILED
+                reason = ("non-finite objective or gradient at "
+                          + ", ".join(f"{n} = {v:.5g}" for n, v in zip(space.names,
+                                                                      space.to_x(u))))
                 break
             x = space.to_x(u)
             for key, val in zip(HISTORY, (u, x, est.value, est.value_se, est.grad,
@@ -180,28 +204,35 @@ def spsa(problem, x0, pairs: int = 4, c: float = 0.08,
             if echo:
                 echo(f"{k:3d} " + ", ".join(f"{n} = {v:.5g}" for n, v in zip(space.names, x))
                      + f"  objective = {est.value:.5g} ± {est.value_se:.2g}")
+            converged = rule.check(u, est.grad, est.grad_se)
             upd, state = opt.update(jnp.asarray(sign * est.grad), state)
             u = space.project(u + np.asarray(upd), shrink=c)
     finally:
         if bar is not None:
             bar.close()
     hist = {k: np.asarray(v) for k, v in hist.items()}
-    if not len(hist["u"]):
+    if outcome != FAILED and len(hist["u"]) and converged:
+        outcome, reason = CONVERGED, converged
+    if not len(hist["u"]) and outcome != FAILED:
         raise ConfigError(f"spsa: no iterate fits the budget ({budget} s; one iterate costs "
                           f"{per_iter:.3g} simulated system-seconds)")
-    u_avg = space.project(hist["u"][-average:].mean(axis=0), shrink=c)
+    u_avg = (space.project(hist["u"][-average:].mean(axis=0), shrink=c) if len(hist["u"])
+             else u)
     return SPSAResult(space.names, space.to_x(u_avg), u_avg, hist, best, spent, reason,
                       time.perf_counter() - t0,
                       dict(pairs=pairs, c=c, lr=lr,
                            decay=decay, max_iter=max_iter, budget=budget, average=average,
-                           seed=seed, b1=b1, b2=b2))
+                           seed=seed, b1=b1, b2=b2, patience=patience, se_factor=se_factor,
+                           xtol=xtol),
+                      Status(outcome, reason, len(hist["u"])))
 
 
 @dataclass
 class RandomSearchResult:
     """``X`` ``(n, d)`` the designs, ``mean``, ``se`` ``(n,)`` and ``J`` ``(n, R)`` their
     replicated objective; ``best`` the best mean's design ``{"x", "value", "ci95"}``;
-    ``sim_seconds``."""
+    ``sim_seconds``; ``status``: a sample is not a converged search — NOT CONVERGED (FAILED
+    when no design has a finite mean)."""
 
     names: tuple
     X: np.ndarray
@@ -210,6 +241,7 @@ class RandomSearchResult:
     J: np.ndarray
     best: dict
     sim_seconds: float
+    status: Status | None = None
 
 
 def latin_hypercube(n: int, d: int, rng) -> np.ndarray:
@@ -232,8 +264,17 @@ def random_search(problem, budget: float, replicates: int = 2, seed: int = 0) ->
     U = np.array([space.project(u) for u in latin_hypercube(n, space.dim, rng)])
     X = space.to_x(U)
     ev = problem.evaluate(X, replicates)
-    k = int(np.argmax(ev["mean"]) if problem.objective.maximise else np.argmin(ev["mean"]))
-    best = {"x": X[k].tolist(), "value": float(ev["mean"][k]), "ci95": float(ev["ci95"][k]),
+    mean = np.asarray(ev["mean"], float)
+    if not np.isfinite(mean).any():
+        k, status = 0, Status(FAILED, f"no design of the {n} has a finite objective", 1)
+    else:
+        k = int(np.nanargmax(mean) if problem.objective.maximise else np.nanargmin(mean))
+        bad = int((~np.isfinite(mean)).sum())
+        status = Status(NOT_CONVERGED, f"a sample of {n} designs (Latin hypercube, one batch): "
+                        "no convergence test, its best mean is a candidate"
+                        + (f"; {bad} design(s) with a non-finite objective left out" if bad
+                           else ""), 1)
+    best = {"x": X[k].tolist(), "value": float(mean[k]), "ci95": float(ev["ci95"][k]),
             "index": k}
     return RandomSearchResult(space.names, X, ev["mean"], ev["se"], ev["J"], best,
-                              ev["sim_seconds"])
+                              ev["sim_seconds"], status)

@@ -47,7 +47,8 @@ class SteadyProblem:
       duration: simulated time per system and evaluation [s] (transient + steady part; the
         transient's end is detected).
       margin: the lowest feasible ``Lz`` is the highest settled bed plus ``margin`` [m].
-      progress: progress bars of the sweeps.
+      progress: progress bars of the settling and of every evaluation's sweep (tqdm, as the
+        runs', :func:`jaxdamp.engine.driver.run_chunks`).
     """
 
     variable = "Lz"
@@ -78,7 +79,9 @@ class SteadyProblem:
         cfgs = replicate_configs([self.config], self.R)
         model, _ = build(self.config)
         t0 = time.perf_counter()
-        settled = settle_many(cfgs, model, [build(c)[1] for c in cfgs])
+        settled = settle_many(cfgs, model, [build(c)[1] for c in cfgs],
+                              progress=(f"settling {len(cfgs)} bed(s) of {model.n} grains"
+                                        if progress and model.n else None))
         self.settle_wall = time.perf_counter() - t0
         self.beds.update({geometry_key(c): b for c, b in zip(cfgs, settled)})
         self.bed_height = max(b.height for b in settled)

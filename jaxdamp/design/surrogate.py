@@ -61,7 +61,9 @@ def descend(config: Config, objective: Objective, h_bed: float, lz0: float, lo: 
     ``gradient="orbit", fallback=True``), within ``[lo, hi]`` [m].
 
     Returns ``{"lz", "iterates", "fallbacks" (iterates without a stable orbit), "reason",
-    "sim_seconds"}``."""
+    "status" (:class:`~jaxdamp.design.status.Status`), "sim_seconds"}``: ``lz`` is the
+    optimiser's design (:attr:`~jaxdamp.design.optimizer.OptimizeResult.design`), or its best
+    iterate when it did not converge."""
     from jaxdamp.config import apply_overrides
     from jaxdamp.design import DEFAULTS
     from jaxdamp.design.optimizer import optimize
@@ -74,6 +76,7 @@ def descend(config: Config, objective: Objective, h_bed: float, lz0: float, lo: 
     prob = S3Problem(cfg, objective, duration=s["duration"], h_bed=h_bed, fallback=True)
     res = optimize(prob, lz0 - h_bed, lr=s["lr"], decay=s["decay"], max_iter=s["max_iter"],
                    xtol=s["xtol"], lo=lo - h_bed, hi=hi - h_bed, progress=False)
-    return {"lz": float(res.x_average + h_bed), "iterates": len(res.history["x"]),
-            "fallbacks": prob.fallbacks, "reason": res.reason,
+    x = res.design if res.status.converged or res.best is None else res.best["x"]
+    return {"lz": float(x + h_bed), "iterates": len(res.history["x"]),
+            "fallbacks": prob.fallbacks, "reason": res.reason, "status": res.status,
             "sim_seconds": prob.sim_seconds}

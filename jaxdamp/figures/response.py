@@ -44,8 +44,8 @@ def frf_figure(f, Z, lz_values, primary, grain_mass, fits=None, title="", model=
       ``[None]``; primary: :class:`jaxdamp.config.Primary`; grain_mass [kg];
       fits: optional ``[(M_ef, C_ef), ...]`` per Lz, drawn dotted (``None`` entries: none).
       failures: optional reasons per Lz why its fit failed (``""``: it did not;
-        :func:`jaxdamp.io.sweepfile.fit_failure`): a failed fit is not drawn, the legend says
-        "fit failed" instead.
+        :func:`jaxdamp.analysis.response.fit_failure`): a failed fit is not drawn, the legend
+        says "fit failed" instead.
       model: legend label of the simulated points (``"DEM"``, ``"S3"``).
       Z_se: optional standard errors of ``Z`` across replicates [m], ``(F, L)``: error bars
         of ± 2 SE.
@@ -83,31 +83,53 @@ def frf_figure(f, Z, lz_values, primary, grain_mass, fits=None, title="", model=
 
 def frf_from_file(h5_or_path):
     """:func:`frf_figure` of a sweep file: amplitude ratio Z/U versus frequency, one curve per
-    ``box.Lz``, with the fitted FRFs when ``/fit`` is present."""
+    ``box.Lz``, with the fitted FRFs when ``/fit`` is present (those flagged as failed in
+    ``/fit/failure`` are not drawn). The amplitudes are those ``jaxdamp frf`` fitted: per
+    replicate the steady mean where the run became stationary, else its fixed window
+    (:func:`jaxdamp.studies.grid.steady_or_window`); with replicates, their mean ± 2 SE."""
+    from types import SimpleNamespace
+
+    from jaxdamp.analysis.response import replicate_mean
     from jaxdamp.config import from_json
     from jaxdamp.physics.model import grain_mass
+    from jaxdamp.studies.grid import steady_or_window
 
     h5, close = open_file(h5_or_path)
     try:
         require(h5, "the FRF figure", "sweep", ("summary/amplitude",))
         axes = json.loads(h5.attrs["axes"])
+        R = int(axes.pop("replicates", h5.attrs.get("replicates", 1)))
+        layout = axes.pop("layout", "grid")
         keys = list(axes)
         if "frequency" not in keys:
             raise OutputFileError(f"{h5.filename}: the FRF figure needs a sweep over 'frequency'; "
                                   f"this one sweeps {', '.join(keys)}")
+        if layout != "grid":
+            raise OutputFileError(f"{h5.filename}: the FRF figure needs a grid sweep; this one "
+                                  f"is a list of {layout}")
         cfg = from_json(h5.attrs["base_config"])
         if cfg.system != "primary":
             raise OutputFileError(f"{h5.filename}: the FRF figure needs an S1 sweep (system "
                                   f"'primary'); this one is {cfg.system!r}")
-        f = np.asarray(axes["frequency"], float)
-        Z = np.asarray(h5["summary/amplitude"][()], float).reshape([len(axes[k]) for k in keys])
-        if keys[0] != "frequency":
-            Z = Z.T
-        Z = Z.reshape(len(f), -1)
         other = [k for k in keys if k != "frequency"]
         if other and other[0] != "box.Lz":
             raise OutputFileError(f"{h5.filename}: the FRF figure draws one curve per box.Lz; "
                                   f"this sweep's second axis is {other[0]!r}")
+        f = np.asarray(axes["frequency"], float)
+        shape = [len(axes[k]) for k in keys]
+        if "steady/amplitude/values" in h5 and "replicate_summary/amplitude" in h5:
+            stored = SimpleNamespace(
+                steady={"amplitude": {k: h5[f"steady/amplitude/{k}"][()]
+                                      for k in ("values", "stationary")}},
+                replicate_summary={"amplitude": h5["replicate_summary/amplitude"][()]})
+            Zr = np.asarray(steady_or_window(stored, "amplitude")[0], float)
+        else:  # no per-replicate data: the fixed-window mean
+            Zr = np.asarray(h5["summary/amplitude"][()], float)
+        Zr = Zr.reshape(shape + [-1])
+        if keys[0] != "frequency":
+            Zr = np.swapaxes(Zr, 0, 1)
+        Zr = Zr.reshape(len(f), -1, Zr.shape[-1])
+        Z, Z_se = replicate_mean(Zr)
         lz = [float(x) for x in axes["box.Lz"]] if other else [None]
         fits = failures = None
         if "fit/M_ef" in h5 and "fit/C_ef" in h5:
@@ -116,9 +138,11 @@ def frf_from_file(h5_or_path):
                 failures = [w.decode() if isinstance(w, bytes) else str(w)
                             for w in h5["fit/failure"][()]]
         order = np.argsort(f)
-        title = f"{cfg.name}: {os.path.basename(h5.filename)}, N = {cfg.n_grains} grains"
+        title = (f"{cfg.name}: {os.path.basename(h5.filename)}, N = {cfg.n_grains} grains"
+                 + (f", mean of R = {R} beds ± 2 SE" if R > 1 else ""))
         return frf_figure(f[order], Z[order], lz, cfg.primary, grain_mass(cfg), fits,
-                          title=title, failures=failures)
+                          title=title, failures=failures,
+                          Z_se=None if Z_se is None else Z_se[order])
     finally:
         if close:
             h5.close()

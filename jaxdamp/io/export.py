@@ -37,9 +37,6 @@ import numpy as np
 
 from jaxdamp.config import ConfigError
 
-RUN_FORMAT = "jaxdamp-run/"
-SWEEP_FORMAT = "jaxdamp-sweep/"
-
 
 class OutputFileError(ConfigError):
     """An output file is missing, of the wrong kind, or lacks what a figure/export needs."""
@@ -58,20 +55,12 @@ def open_output(path) -> h5py.File:
 
 
 def file_kind(h5: h5py.File) -> str:
-    """``'run'`` (``jaxdamp run``), ``'sweep'`` (``jaxdamp frf`` / ``sweep``) or ``'unknown'``."""
-    fmt = str(h5.attrs.get("format", ""))
-    if fmt.startswith(RUN_FORMAT):
-        return "run"
-    if fmt.startswith(SWEEP_FORMAT):
-        return "sweep"
-    return "unknown"
+    """``'run'`` (``jaxdamp run``), ``'sweep'`` (``jaxdamp frf`` / ``sweep``), ``'optimize'``
+    (an optimiser log) or ``'unknown'``: the family of :data:`jaxdamp.io.describe.FAMILIES`."""
+    from jaxdamp.io.describe import file_family
 
-
-_KIND_TEXT = {
-    "run": "a run file (jaxdamp run --out FILE.h5)",
-    "sweep": "a sweep file (jaxdamp frf --out FILE.h5)",
-    "unknown": "not a jaxdamp output file (no 'format' attribute jaxdamp-run/… or jaxdamp-sweep/…)",
-}
+    family = file_family(h5)
+    return family.removeprefix("jaxdamp-") if family else "unknown"
 
 
 def require(h5: h5py.File, what: str, kind: str, paths=()) -> None:
@@ -79,8 +68,10 @@ def require(h5: h5py.File, what: str, kind: str, paths=()) -> None:
     ``paths`` (with at least one row). ``what`` names the figure or export in the message."""
     have = file_kind(h5)
     if have != kind:
-        raise OutputFileError(f"{h5.filename}: {what} needs {_KIND_TEXT[kind]}, but this is "
-                              f"{_KIND_TEXT[have]}")
+        from jaxdamp.io.describe import FAMILIES, what_file
+
+        raise OutputFileError(f"{h5.filename}: {what} needs {FAMILIES['jaxdamp-' + kind][0]}, "
+                              f"but this is {what_file(h5)}")
     missing = [p for p in paths if p not in h5 or h5[p].shape[:1] == (0,)]
     if missing:
         status = h5.attrs.get("status", "?")

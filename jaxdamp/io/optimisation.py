@@ -58,6 +58,16 @@ def log(h5, hist, x, problem, est, step, lr, t_start, sim_total):
 
 
 
+def write_status(h5, status) -> None:
+    """The result's status by the convergence rule (:class:`jaxdamp.design.status.Status`):
+    root attributes ``convergence`` (``converged``, ``not converged`` or ``failed``),
+    ``convergence_reason`` (why, in words) and ``iterations``. (``status`` stays the file's
+    own: ``running`` or ``finished``.)"""
+    h5.attrs["convergence"] = status.state
+    h5.attrs["convergence_reason"] = status.reason
+    h5.attrs["iterations"] = int(status.iterations)
+
+
 def write_search(path, cfg, objective, prob, sr, method, sim) -> None:
     """HDF5 log of a scan or trust-region search (``docs/output.md``)."""
     with h5py.File(path, "w") as h:
@@ -75,6 +85,7 @@ def write_search(path, cfg, objective, prob, sr, method, sim) -> None:
                                  ("values", sr.J, objective.unit)):
             g.create_dataset(name, data=data).attrs["units"] = unit
         h.attrs["sim_seconds"] = sim
+        write_status(h, sr.status)
 
 
 
@@ -95,6 +106,7 @@ def write_design(path, cfg, objective, problem, method, result, confirm, setting
         h.attrs["settings"] = json.dumps(settings)
         h.attrs["status"] = "finished"
         h.attrs["sim_seconds"] = problem.sim_seconds
+        write_status(h, result.status)
         ev = h.create_group("evaluations")  # every system the search ran
         X = np.concatenate([e["X"] for e in problem.history])
         for name, data, unit in (
@@ -106,6 +118,8 @@ def write_design(path, cfg, objective, problem, method, result, confirm, setting
             it = h.create_group("iterations")
             for k, v in result.history.items():
                 it.create_dataset(k, data=v)
+        if confirm is None:  # a failed search: nothing to confirm
+            return
         c = h.create_group("confirmation")
         for k in ("X", "mean", "ci95", "J"):
             c.create_dataset(k, data=np.asarray(confirm[k], float)).attrs["units"] = (
@@ -124,7 +138,13 @@ def describe_lines(h, path: str) -> list[str]:
              + ", ".join(f"{f:.4g}" for f in obj.get("frequencies", [])) + f" Hz over {var}"
              + (f" by {h.attrs['method']}" if "method" in h.attrs else " by gradient (optax)")
              + f"; status {h.attrs.get('status')}"]
-    if "reason" in h.attrs:
+    if "convergence" in h.attrs:
+        state = str(h.attrs["convergence"])
+        n = int(h.attrs.get("iterations", 0))
+        lines.append(f"  convergence: {state if state == 'converged' else state.upper()} "
+                     f"({n} iteration{'' if n == 1 else 's'}): "
+                     f"{h.attrs.get('convergence_reason', '')}")
+    elif "reason" in h.attrs:
         lines.append(f"  stopped: {h.attrs['reason']}")
     for key in ("optimum", "result"):
         if key in h.attrs:

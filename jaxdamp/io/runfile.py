@@ -28,7 +28,7 @@ import numpy as np
 from jaxdamp.config import Config
 from jaxdamp.io import claims
 from jaxdamp.io.common import append as _append
-from jaxdamp.io.common import stamp
+from jaxdamp.io.common import damaged_series, stamp
 from jaxdamp.io.common import write_checkpoint as _write_checkpoint
 
 FORMAT = "jaxdamp-run/1"
@@ -172,6 +172,8 @@ def describe_lines(h, path: str) -> list[str]:
                          + ", ".join(sorted(h["series"])))
     if "snapshots" in h and "t" in h["snapshots"]:
         lines.append(f"  {h['snapshots/t'].shape[0]} snapshots")
+    if (why := damage(h)) is not None:
+        lines.append(f"  WARNING: this file is damaged: {why}; its numbers cannot be trusted")
     if "summary" in h and len(h["summary"].attrs):
         units = json.loads(h["summary"].attrs.get("units", "{}"))
         lines.append("  summary:")
@@ -179,3 +181,27 @@ def describe_lines(h, path: str) -> list[str]:
             if k != "units":
                 lines.append(f"    {k} = {v} {units.get(k, '')}".rstrip())
     return lines
+
+
+#: Larger than any physical value a run file holds in SI units (metres, joules, newtons).
+IMPOSSIBLE = 1e100
+
+
+def damage(h) -> str | None:
+    """Why the open run file ``h`` cannot hold the samples of a run — its sampled times not
+    increasing (:func:`jaxdamp.io.common.damaged_series`: a disk that filled leaves zeros), or
+    series with non-finite or impossibly large values (overwritten bytes; HDF5 keeps no
+    checksums here) — or ``None``."""
+    g = h.get("series")
+    if g is None or "t" not in g:
+        return None
+    n = g["t"].shape[0]
+    if h.attrs.get("status") == "diverged":
+        return damaged_series(g["t"][()], n)  # its last samples may be non-finite: the reason
+    bad = [k for k, ds in g.items()
+           if ds.dtype.kind == "f" and ds.size
+           and not (np.isfinite(v := ds[()]).all() and np.abs(v).max() < IMPOSSIBLE)]
+    why = damaged_series(g["t"][()], n)
+    if bad:
+        why = (why + "; " if why else "") + "non-finite or impossible values in " + ", ".join(bad)
+    return why

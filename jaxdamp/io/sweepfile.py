@@ -27,8 +27,18 @@ import os
 import h5py
 import numpy as np
 
+from jaxdamp.analysis.response import FIT_MAX_RELATIVE_SE, fit_failure
 from jaxdamp.config import is_stored
-from jaxdamp.io.common import put, stamp, write_steady
+from jaxdamp.io import claims
+from jaxdamp.io.common import (
+    damaged_checkpoint,
+    damaged_message,
+    damaged_series,
+    put,
+    stamp,
+    write_checkpoint,
+    write_steady,
+)
 
 FORMAT = "jaxdamp-sweep/1"
 SNAPSHOT_UNITS = {"r": "m", "v": "m/s", "z_box": "m"}
@@ -60,15 +70,26 @@ def holds(path: str, config, axes: dict, replicates: int = 1) -> bool:
 
 
 class SweepFile:
-    """A sweep file open for writing."""
+    """A sweep file open for writing, claimed by this process while open
+    (:mod:`jaxdamp.io.claims`)."""
 
     def __init__(self, h5: h5py.File):
         self.h5 = h5
+        self.path = h5.filename
+
+    @staticmethod
+    def _open(path: str, mode: str) -> h5py.File:
+        claims.claim(path)
+        try:
+            return h5py.File(path, mode)
+        except BaseException:
+            claims.release(path)
+            raise
 
     @classmethod
     def create(cls, path: str, config, axes: dict, configs: list, dt: float, duration: float,
                engine: str, replicates: int = 1, devices: int = 1) -> "SweepFile":
-        h5 = h5py.File(path, "w")
+        h5 = cls._open(path, "w")
         stamp(h5, FORMAT, base_config=config.to_json(), axes=axes_json(axes, replicates),
               replicates=int(replicates), configs=json.dumps([c.to_json() for c in configs]),
               dt=float(dt), duration=float(duration), engine=engine, devices=int(devices),
@@ -98,8 +119,17 @@ class SweepFile:
     def resume(cls, path: str, config, axes: dict, replicates: int, records_per_chunk: int):
         """Open ``path`` to continue the sweep: ``(file, checkpoint arrays, chunk, compute time
         so far)``; samples after the checkpoint are dropped. Refuses a different sweep."""
+        from jaxdamp.config import ConfigError
+
         arrays, chunk, wall = cls.checkpoint_of(path, config, axes, replicates)
-        h5 = h5py.File(path, "a")
+        with h5py.File(path, "r") as h5:
+            n = chunk * records_per_chunk
+            why = (damaged_series(h5["records/t"][()], n) if "t" in h5["records"]
+                   else f"its checkpoint counts {n} samples but the file holds none" if n
+                   else None)
+        if why is not None:
+            raise ConfigError(damaged_message(path, why))
+        h5 = cls._open(path, "a")
         for ds in h5["records"].values():
             ds.resize(chunk * records_per_chunk, axis=1)
         return cls(h5), arrays, chunk, wall
@@ -122,6 +152,8 @@ class SweepFile:
             arrays = {}
             g.visititems(lambda n, o: arrays.__setitem__(n, o[()])
                          if isinstance(o, h5py.Dataset) else None)
+        if (why := damaged_checkpoint(arrays)) is not None:
+            raise ConfigError(damaged_message(path, why))
         return arrays, chunk, wall
 
     # -- while running --------------------------------------------------------------------
@@ -141,14 +173,10 @@ class SweepFile:
                 g[k][:, n0:] = v
 
     def write_checkpoint(self, arrays: dict, chunk: int, wall_time: float) -> None:
-        if "checkpoint" in self.h5:
-            del self.h5["checkpoint"]
-        ck = self.h5.create_group("checkpoint")
-        for k, v in arrays.items():
-            ck.create_dataset(k, data=v)
-        ck.attrs["chunk"] = chunk
+        """``/checkpoint`` after ``chunk`` chunks, written whole after the samples before it
+        (:func:`jaxdamp.io.common.write_checkpoint`)."""
         self.h5.attrs["wall_time"] = wall_time
-        self.h5.flush()
+        write_checkpoint(self.h5, arrays, {"chunk": chunk})
 
     def append_snapshot(self, t: float, per_point: dict) -> None:
         """Append the batch's ``r``, ``v`` ``(P, N, 3)`` and ``z_box`` ``(P,)`` at time ``t``
@@ -212,12 +240,10 @@ class SweepFile:
         self.set_status("finished")
 
     def close(self) -> None:
-        self.h5.close()
-
-
-#: Below these the FRF fit sits on its lower bound (M_ef, C_ef ≥ 0 are constrained): the
-#: optimiser stopped against the wall, not at a minimum (e.g. C_ef = 5.9e-10 N s/m).
-_AT_BOUND = {"M_ef": 1e-9, "C_ef": 1e-6}
+        try:
+            self.h5.close()
+        finally:
+            claims.release(self.path)
 
 
 def perturb_checkpoint(path: str, grain: int, delta: float, chunk: int, flag: str,
@@ -237,50 +263,30 @@ def perturb_checkpoint(path: str, grain: int, delta: float, chunk: int, flag: st
         h.attrs["twin"] = note
 
 
-def fit_failure(fit: dict) -> str:
-    """Why an FRF fit (:func:`jaxdamp.analysis.response.fit_frf_replicates`) is not a result,
-    or ``""`` when it is one. A fit fails when a fitted value or its uncertainty (the standard
-    error over replicates for ``R ≥ 2``, the fit's own Jacobian error for ``R = 1``) is not
-    finite, or when a fit (of the mean or of any replicate) stopped on the bound 0 of ``M_ef``
-    or ``C_ef`` — it did not converge to an interior minimum."""
-    R = int(fit.get("replicates", 1))
-    err = ("se_M", "se_C") if R >= 2 else ("fit_se_M", "fit_se_C")
-    for key in ("M_ef", "C_ef"):
-        if not np.isfinite(fit[key]):
-            return f"{key} = {fit[key]} is not finite"
-    values = {"M_ef": np.append(np.atleast_1d(fit.get("M_reps", [])), fit["M_ef"]),
-              "C_ef": np.append(np.atleast_1d(fit.get("C_reps", [])), fit["C_ef"])}
-    for key, v in values.items():
-        if not np.all(np.isfinite(v)):
-            return f"a replicate's {key} is not finite"
-        if np.any(v < _AT_BOUND[key]):
-            return (f"{key} stopped on its bound 0 ({float(v.min()):.2g}): the fit did not "
-                    "converge")
-    for key, name in zip(err, ("M_ef", "C_ef")):
-        if not np.isfinite(fit[key]):
-            return f"the uncertainty of {name} is not finite ({fit[key]})"
-    return ""
-
-
 def write_fit(h5, fits: dict, used: str) -> None:
     """``/fit`` of an FRF sweep file: ``M_ef``, ``C_ef`` (the ``used`` weighting), their
-    standard errors across replicates ``se_M_ef``, ``se_C_ef``, the fit of the mean FRF,
-    ``ok`` (bool: the fit is a result, :func:`fit_failure`) and ``failure`` (why not, ``""``
-    when ok), and ``<weighting>/...`` for every weighting
-    (:data:`jaxdamp.analysis.response.RESIDUALS`), one entry per ``Lz``. The group's attribute
-    ``failed`` counts the failed fits of the ``used`` weighting; the values of a failed fit are
-    kept as computed, for diagnosis only."""
+    standard errors across replicates ``se_M_ef``, ``se_C_ef``, the fit of the mean FRF
+    ``M_ef_of_mean``, ``C_ef_of_mean`` with its Jacobian errors ``fit_se_M_ef``,
+    ``fit_se_C_ef``, ``ok`` (bool: the fit is a result by the one rule,
+    :func:`jaxdamp.analysis.response.fit_failure`) and ``failure`` (why not, ``""`` when ok),
+    and ``<weighting>/...`` for every weighting (:data:`jaxdamp.analysis.response.RESIDUALS`),
+    one entry per ``Lz``. The group's attribute ``failed`` counts the failed fits of the
+    ``used`` weighting, ``max_relative_se`` states the rule's limit; the values of a failed fit
+    are kept as computed, for diagnosis only."""
     if "fit" in h5:
         del h5["fit"]
     g = h5.create_group("fit")
     g.attrs["residuals"] = used
     g.attrs["replicates"] = int(fits[used][0]["replicates"])
+    g.attrs["max_relative_se"] = FIT_MAX_RELATIVE_SE
 
     def fill(grp, fl):
         for name, key, unit in (("M_ef", "M_ef", "kg"), ("C_ef", "C_ef", "N s/m"),
                                 ("se_M_ef", "se_M", "kg"), ("se_C_ef", "se_C", "N s/m"),
                                 ("M_ef_of_mean", "M_mean_fit", "kg"),
-                                ("C_ef_of_mean", "C_mean_fit", "N s/m")):
+                                ("C_ef_of_mean", "C_mean_fit", "N s/m"),
+                                ("fit_se_M_ef", "fit_se_M", "kg"),
+                                ("fit_se_C_ef", "fit_se_C", "N s/m")):
             put(grp, name, np.array([f[key] for f in fl]), unit)
         why = [fit_failure(f) for f in fl]
         put(grp, "ok", np.array([not w for w in why]), "1")

@@ -66,6 +66,7 @@ import time
 
 import numpy as np
 
+from jaxdamp import interrupt
 from jaxdamp.config import Config, ConfigError
 from jaxdamp.s3.common import CHANNELS, RECORD_UNITS, SUMMARY_UNITS, ImpactRun, _check
 from jaxdamp.s3.event import simulate_event
@@ -108,12 +109,15 @@ def sweep(config: Config, axes: dict, out: str | None = None, progress: bool = T
 
             bar = tqdm(total=len(configs), unit="point", desc="impact model (event-driven)")
         runs = []
-        for c in configs:
-            runs.append(simulate_event(c))
+        try:
+            for c in configs:
+                interrupt.check()  # a safe point between points (Ctrl-C: nothing is written)
+                runs.append(simulate_event(c))
+                if bar is not None:
+                    bar.update(1)
+        finally:
             if bar is not None:
-                bar.update(1)
-        if bar is not None:
-            bar.close()
+                bar.close()
         dt = 0.0
     wall = time.perf_counter() - wall0
     shape = grid_shape(axes)

@@ -132,20 +132,21 @@ def bed_with_box(config: Config, r, box_position: float) -> np.ndarray:
     return np.asarray(r) + excitation_axis(config) * box_position
 
 
-def batch_budget(config: Config, model, sched: Schedule, systems: int = 1,
-                 out: str | None = None, snapshots: int = 0):
+def batch_budget(config: Config, sched: Schedule, systems: int = 1, out: str | None = None,
+                 snapshots: int = 0):
     """The :class:`jaxdamp.engine.budget.Budget` of ``systems`` systems of ``config`` on
     schedule ``sched``: settling and the run, every sample kept (a sample holds 24 scalars,
-    4 per species and one per structural degree of freedom, in float64)."""
-    from jaxdamp.engine import budget
+    4 per species and one per structural degree of freedom, in float64). Needs nothing built."""
     from jaxdamp.engine.simulate import resolve_engine
 
     num = config.numerics
+    s = config.structure
+    dofs = 1 if s is None else len(s.M if s.M is not None else s.frequencies)
     steps = int(num.settle_time / sched.dt) + sched.n_chunks * sched.chunk_steps
     return budget.estimate(
-        systems=systems, grains=model.n, steps=steps,
+        systems=systems, grains=config.n_grains, steps=steps,
         samples=sched.n_chunks * sched.records_per_chunk,
-        sample_bytes=8 * (24 + 4 * len(config.grains) + model.dofs),
+        sample_bytes=8 * (24 + 4 * len(config.grains) + dofs),
         engine=resolve_engine(num.engine, num.precision), snapshots=snapshots,
         out=out is not None)
 
@@ -199,8 +200,8 @@ def run(
     if (note := schedule_note(config, sched)) is not None:
         say(note)
     if not resume:
-        budget.check(batch_budget(config, model, sched, 1, out,
-                                  sched.n_chunks if snapshots else 0), out, say)
+        budget.check(batch_budget(config, sched, 1, out, sched.n_chunks if snapshots else 0),
+                     out, say)
     interrupt.check()
     t_window = analysis_start(config, sched.duration)
     params = dataclasses.replace(params, t_window=jnp.asarray(t_window))

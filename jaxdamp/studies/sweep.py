@@ -142,8 +142,7 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
     if not (resume and out and os.path.exists(out)):  # sized before any system is built
         first = grid[0]
         sched0 = schedule(first, config_dt(first, grain_radii(first)))
-        budget.check(batch_budget(first, build(first)[0], sched0, len(grid) * R, out,
-                                  snapshots), out, say)
+        budget.check(batch_budget(first, sched0, len(grid) * R, out, snapshots), out, say)
     interrupt.check()
     configs = replicate_configs(grid, R)
     base = configs[0]
