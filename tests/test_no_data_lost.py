@@ -108,6 +108,7 @@ def _small_config():
                           duration=0.04, chunk=0.005, record_dt=2.5e-4, settle_time=0.01)
 
 
+@pytest.mark.long
 def test_a_full_disk_stops_between_chunks_and_the_file_resumes_bit_identically(
         tmp_path, monkeypatch):
     """The disk's free space is made to run out after 3 chunks (injected): the run stops with
@@ -145,6 +146,7 @@ def test_a_full_disk_stops_between_chunks_and_the_file_resumes_bit_identically(
         assert h.attrs["status"] == "finished"
 
 
+@pytest.mark.long
 def test_a_run_file_is_resumable_from_its_settled_start(tmp_path):
     """The checkpoint is written with the file (chunk 0): a run stopped before its first chunk
     finished is continued, not lost."""

@@ -122,6 +122,9 @@ def interrupted_message(args, words) -> str:
     continues = getattr(args, "resume", False)
     if not continues and not claims.changed(out):
         return f"jaxdamp: interrupted before {out} was replaced; it was left as it was"
+    if _is_optimiser_log(out):
+        return (f"jaxdamp: interrupted; {out} keeps the iterates so far (status 'running'); a "
+                "search does not resume: run the command again with --overwrite")
     if not has_checkpoint(out):
         return (f"jaxdamp: interrupted before the first chunk was finished: {out} holds no "
                 "checkpoint to continue; run the command again with --overwrite")
@@ -136,13 +139,28 @@ def interrupted_message(args, words) -> str:
             f"Continue with: {again}")
 
 
+def _is_optimiser_log(path) -> bool:
+    import h5py
+
+    from jaxdamp.io.describe import file_family
+
+    try:
+        with h5py.File(path, "r") as h5:
+            return file_family(h5) == "jaxdamp-optimize"
+    except OSError:
+        return False
+
+
 def entry() -> None:
     """The console script: :func:`main`, then an exit that skips the interpreter's teardown
     after an error or Ctrl-C (XLA's and numba's threads may still be alive then, and a
     teardown under them can crash after the message was printed; every file was closed or
     flushed by then)."""
     code = main()
-    if code == 0:
+    if code == 0:  # the work is done and written: a Ctrl-C now cannot lose anything
+        import signal
+
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
         sys.exit(0)
     try:
         sys.stdout.flush()

@@ -92,12 +92,14 @@ class Budget:
 
 def estimate(*, systems: int, grains: int, steps: int, samples: int, sample_bytes: int,
              engine: str = "native", snapshots: int = 0, out: bool = False,
-             seconds_per_step: float | None = None) -> Budget:
+             seconds_per_step: float | None = None,
+             record_copies: int = RECORD_COPIES) -> Budget:
     """The :class:`Budget` of ``systems`` systems of ``grains`` grains advanced ``steps`` steps
     (settling included) and sampled ``samples`` times of ``sample_bytes`` each (see the module
     docstring for the model). ``seconds_per_step``: the wall time of one step of one system
-    where the grain-step rate does not apply (the S3 model)."""
-    per_system = (RECORD_COPIES * samples * sample_bytes + grains * GRAIN_BYTES
+    where the grain-step rate does not apply (the S3 model); ``record_copies``: copies of the
+    samples held at once where :data:`RECORD_COPIES` does not apply."""
+    per_system = (record_copies * samples * sample_bytes + grains * GRAIN_BYTES
                   + (grains * grains * PAIR_BYTES if engine == "jax" else 0))
     memory = BASE_MEMORY + systems * per_system
     file = (FILE_OVERHEAD * systems * (samples * sample_bytes + snapshots * grains * 56

@@ -94,11 +94,14 @@ def reuse_or_run(config: Config, axes: dict, out: str, **kwargs) -> SweepResult:
 
 def impact_budget(config: Config, points: int, out=None):
     """The :class:`jaxdamp.engine.budget.Budget` of an S3 sweep of ``points`` points: every
-    point's samples (16 float64 scalars each) held until the end, about 6 µs of wall per
-    sample (30 points of the thesis' 13 s in about 10 s)."""
+    point's samples held until the end — measured 6 MB per point of the thesis' 13.12 s at
+    peak (`frf --preset sanchez2012-impact --n 100000`: 10.8 GB after 1 800 points), i.e.
+    one copy of its 16 float64 scalars per sample — and about 6 µs of wall per sample (30
+    points in about 10 s)."""
     samples = int(config.numerics.duration / config.numerics.record_dt) + 1
     return budget.estimate(systems=points, grains=0, steps=samples, samples=samples,
-                           sample_bytes=128, seconds_per_step=6e-6, out=out is not None)
+                           sample_bytes=128, record_copies=1, seconds_per_step=6e-6,
+                           out=out is not None)
 
 
 def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = False,
