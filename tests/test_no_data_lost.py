@@ -400,3 +400,17 @@ def test_info_plot_and_export_see_a_file_whose_bytes_were_overwritten(tmp_path, 
         assert main(argv) == 2
         err = capsys.readouterr().err
         assert "is damaged" in err and "nothing drawn or exported" in err, err
+
+
+def test_a_cold_native_kernel_is_announced_before_it_compiles(monkeypatch):
+    """The first use after an install compiles the kernel (about a minute on 2 cores, with the
+    first bar still at 0 %): said before, not after."""
+    from jaxdamp.engine import native
+
+    if not native.AVAILABLE:
+        pytest.skip("numba is not installed")
+    assert native.compile_note("jax") is None
+    monkeypatch.setattr(native.os.path, "exists", lambda path: False)
+    assert "compiling the native kernel once" in native.compile_note("native")
+    monkeypatch.setattr(native.os.path, "exists", lambda path: True)
+    assert native.compile_note("native") is None

@@ -780,3 +780,19 @@ def advance_packed(model, state_packed, params_packed, state_layout, param_layou
            offsets(param_layout, PARAM_FIELDS), int(table[0]), int(table[2]),
            int(shapes["lines"][0]), int(shapes["s_r"][0]), model.species_index().astype(np.int64), bounds, rec)
     return st, rec
+
+
+def compile_note(engine: str) -> str | None:
+    """A one-line note when ``engine`` is ``"native"`` and the kernel has no on-disk cache yet
+    (the first use after an install or an update compiles it: about a minute on 2 cores, during
+    which the first progress bar cannot move), else ``None``."""
+    if engine != "native" or not AVAILABLE:
+        return None
+    try:
+        cached = os.path.exists(_advance._cache._cache_file._index_path)  # numba internals
+    except AttributeError:
+        return None
+    if cached:
+        return None
+    return ("compiling the native kernel once (about a minute on 2 cores; cached for later "
+            "runs) — the first progress bar starts after it")

@@ -22,9 +22,10 @@ from jaxdamp import interrupt
 from jaxdamp.analysis import stats
 from jaxdamp.analysis.response import analysis_start, steady_state_summary
 from jaxdamp.config import Config, ConfigError, is_stored
-from jaxdamp.engine import budget, driver
+from jaxdamp.engine import budget, driver, native
 from jaxdamp.engine.driver import SimulationDiverged  # noqa: F401  (re-exported: runs raise it)
 from jaxdamp.engine.packing import SettledBed, settle
+from jaxdamp.engine.simulate import resolve_engine
 from jaxdamp.io import RunFile, write_steady
 from jaxdamp.io.common import (
     damaged_checkpoint,
@@ -137,7 +138,6 @@ def batch_budget(config: Config, sched: Schedule, systems: int = 1, out: str | N
     """The :class:`jaxdamp.engine.budget.Budget` of ``systems`` systems of ``config`` on
     schedule ``sched``: settling and the run, every sample kept (a sample holds 24 scalars,
     4 per species and one per structural degree of freedom, in float64). Needs nothing built."""
-    from jaxdamp.engine.simulate import resolve_engine
 
     num = config.numerics
     s = config.structure
@@ -246,6 +246,9 @@ def run(
         say(f"resuming {out} at chunk {start_chunk}/{sched.n_chunks} "
             f"(t = {float(batch.states.t[0]):.6g} s)")
     else:
+        if (note := native.compile_note(resolve_engine(config.numerics.engine,
+                                                        config.numerics.precision))):
+            say(note)
         t0 = time.perf_counter()
         bed = settle(config, model, params,
                      progress=f"settling {model.n} grains" if progress and model.n else None)

@@ -32,7 +32,7 @@ from jaxdamp import interrupt
 from jaxdamp.analysis import stats
 from jaxdamp.analysis.response import analysis_start, steady_state_summary
 from jaxdamp.config import Config, ConfigError
-from jaxdamp.engine import budget, driver
+from jaxdamp.engine import budget, driver, native
 from jaxdamp.engine.packing import settle_many
 from jaxdamp.engine.simulate import resolve_engine
 from jaxdamp.io.common import ensure_space, stop_file
@@ -191,6 +191,8 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
         first = {k: i for i, k in reversed(list(enumerate(keys))) if k not in beds}
         order = sorted(first.values())  # one new bed per geometry, all settled in one batch
         if order:
+            if (note := native.compile_note(engine)):
+                say(note)
             settled = settle_many([configs[i] for i in order], model,
                                   [built[i][1] for i in order],
                                   progress=(f"settling {len(order)} bed(s) of {model.n} grains"
