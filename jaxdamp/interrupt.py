@@ -42,9 +42,12 @@ def _main_thread() -> bool:
 def install() -> None:
     """Make Ctrl-C a request (see the module docstring) for the rest of the process. A no-op
     outside the main thread and where SIGINT is ignored (``nohup``, a background job without
-    job control)."""
+    job control). Installing again keeps a Ctrl-C already asked for (the script installs
+    before its imports, :func:`jaxdamp.cli.main` again on its first line)."""
     global _installed, _asked
     if not _main_thread() or signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        return
+    if _installed and signal.getsignal(signal.SIGINT) is _on_sigint:
         return
     _asked = 0
     signal.signal(signal.SIGINT, _on_sigint)
