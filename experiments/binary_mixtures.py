@@ -355,8 +355,7 @@ def figures(out, runs, classes):
             frames.append((f"t/T = {t * f:.2f}: {cap}", r.snapshots["r"][row, j],
                            r.snapshots["z_box"][row, j]))
         rows.append((f"{'reference' if run is ref else 'class a, ' + plot_label(run)}, A_d = 3 cm",
-                     frames, grain_radii(r.config), grain_species(r.config),
-                     (r.config.box.Lx, r.config.box.Ly, r.config.box.Lz)))
+                     frames, grain_radii(r.config), grain_species(r.config), r.config))
     save(snapshot_grid_figure(rows, "driven box at 70 Hz"), os.path.join(out, "snapshots.png"))
 
 

@@ -602,6 +602,15 @@ def parse_value(text: str) -> Any:
         return text
 
 
+def get_path(config: Config, key: str) -> Any:
+    """The value at dotted ``key`` of ``config`` (``"box.Lz"``, ``"grains.0.radius"``), as
+    :func:`apply_overrides` names it."""
+    node: Any = config
+    for part in key.split("."):
+        node = node[int(part)] if isinstance(node, (list, tuple)) else getattr(node, part)
+    return node
+
+
 def apply_overrides(config: Config, overrides: list[str] | dict[str, Any]) -> Config:
     """Apply dotted-key overrides such as ``box.Lz=0.1225`` or ``grains.0.count=100``.
 

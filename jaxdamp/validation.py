@@ -6,6 +6,7 @@ collision time against the time step) import :mod:`jaxdamp.physics` (and with it
 
 from __future__ import annotations
 
+import importlib.util
 import math
 
 from jaxdamp.config import Config, ConfigError, Material
@@ -336,14 +337,14 @@ def validate(config: Config) -> Config:
                           f"{PRECISIONS}")
     if (why := engine_precision_error(num.engine, num.precision)) is not None:
         raise ConfigError(why)
-    if num.engine == "native":
-        from jaxdamp.engine import native
-
-        if not native.AVAILABLE:
-            raise ConfigError("numerics.engine = 'native' needs numba (pip install numba)")
+    if num.engine == "native" and importlib.util.find_spec("numba") is None:
+        raise ConfigError("numerics.engine = 'native' needs numba (pip install numba)")
     if not _integer(num.seed) or num.seed < 0:
         raise ConfigError(f"numerics.seed = {num.seed!r}: must be a non-negative integer")
 
+    from jaxdamp.physics.containers import container
+
+    vessel = container(config)
     volume = 0.0
     for i, sp in enumerate(config.grains):
         name = f"grains.{i}"
@@ -354,21 +355,21 @@ def validate(config: Config) -> Config:
             raise ConfigError(f"{name}.radius_spread = {sp.radius_spread}: must be in [0, 1)")
         _material(sp.material, f"{name}.material", grain=True)
         r_max = sp.radius * (1.0 + sp.radius_spread)
-        for side in ("Lx", "Ly", "Lz"):
-            length = getattr(box, side)
-            if 2.0 * r_max >= length:
-                raise ConfigError(
-                    f"{name}.radius = {sp.radius} (largest {r_max:.4g} m): a grain of diameter "
-                    f"{2 * r_max:.4g} m does not fit box.{side} = {length} m"
-                )
+        grain = (f"{name}.radius = {sp.radius} (largest {r_max:.4g} m): a grain of diameter "
+                 f"{2 * r_max:.4g} m")
+        why = vessel.fit_error(config, 2.0 * r_max, grain)
+        if why is None and 2.0 * r_max >= box.Lz:
+            why = f"{grain} does not fit {vessel.lid_key} = {box.Lz} m"
+        if why is not None:
+            raise ConfigError(why)
         volume += sp.count * 4.0 / 3.0 * math.pi * sp.radius**3
     if volume > 0:
-        height = volume / (_DENSEST * box.Lx * box.Ly)
+        height = volume / (_DENSEST * vessel.base_area(config))
         if height >= box.Lz:
             raise ConfigError(
-                f"box.Lz = {box.Lz} m: the grains cannot fit — even packed at the densest "
-                f"possible fraction {_DENSEST:.3f} they fill {height:.4g} m of the "
-                f"{box.Lx} × {box.Ly} m base"
+                f"{vessel.lid_key} = {box.Lz} m: the grains cannot fit — even packed at the "
+                f"densest possible fraction {_DENSEST:.3f} they fill {height:.4g} m of the "
+                f"{vessel.describe(config)}"
             )
 
     from jaxdamp.physics.contact import LAWS

@@ -24,7 +24,7 @@ def _bed(n, seed=0):
     cfg = apply_overrides(presets.get("sanchez2012-optimal"),
                           {"grains.0.count": n, "box.Lx": side, "box.Ly": side})
     model, params = build(cfg)
-    return model, params, fcc_lattice(np.asarray(params.radius), side, side, seed)
+    return model, params, fcc_lattice(np.asarray(params.radius), cfg, seed)
 
 
 def test_host_lists_are_the_traced_all_pairs_lists():

@@ -13,7 +13,7 @@ from matplotlib import image as mpimg
 
 from jaxdamp import cli, figures
 from jaxdamp.cases import presets
-from jaxdamp.config import apply_overrides
+from jaxdamp.config import apply_overrides, from_json
 from jaxdamp.studies.runner import run
 from jaxdamp.studies.sweep import sweep
 
@@ -128,8 +128,7 @@ def test_every_figure_has_labelled_axes(run_file, sweep_file):
         r, ts = h["snapshots/r"][()], h["snapshots/t"][()]
         zb = np.interp(ts, h["series/t"][()], h["series/z_box"][()])
         radius, species = h["grains/radius"][()], h["grains/species"][()]
-        box = json.loads(h.attrs["config"])["box"]
-    box = (box["Lx"], box["Ly"], box["Lz"])
+        box = from_json(h.attrs["config"])  # the run's configuration: its container is drawn
     rows = [("bed", [(f"t = {ts[k]:.3f} s", r[k], zb[k]) for k in (0, 2, 4)], radius, species,
              box), ("again", [("last", r[-1], zb[-1])], radius, species, box)]
     for fig in (figures.band_from_file(run_file), figures.energy_from_file(run_file),
@@ -147,8 +146,7 @@ def test_snapshot_panels_share_one_drawing_routine(run_file):
     with h5py.File(run_file) as h:
         r = h["snapshots/r"][-1]
         radius, species = h["grains/radius"][()], h["grains/species"][()]
-        box = json.loads(h.attrs["config"])["box"]
-    box = (box["Lx"], box["Ly"], box["Lz"])
+        box = from_json(h.attrs["config"])  # the run's configuration: its container is drawn
     fig = figures.figure((3, 3))
     ax = fig.subplots()
     figures.draw_snapshot(ax, r, radius, species, box, 0.0)

@@ -68,8 +68,7 @@ def efficiency_figures(results, stem, title):
                 frames.append((f"t/T = {t * f:.2f}: {_PHASE_NAMES[q]}", r.snapshots["r"][k, j],
                                r.snapshots["z_box"][k, j]))
             rows.append((f"{lab}, A_d = {r.amplitudes[k] * 100:.3g} cm", frames,
-                         grain_radii(r.config), grain_species(r.config),
-                         (r.config.box.Lx, r.config.box.Ly, r.config.box.Lz)))
+                         grain_radii(r.config), grain_species(r.config), r.config))
     paths.append(save(phase_figure(cases, title), f"{stem}_phase.png"))
     if rows:
         paths.append(save(snapshot_grid_figure(rows, title), f"{stem}_snapshots.png"))

@@ -41,7 +41,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from jaxdamp.config import Config, ConfigError, apply_overrides
+from jaxdamp.config import Config, ConfigError, apply_overrides, get_path
+from jaxdamp.physics.containers import container
 
 
 @dataclass(frozen=True)
@@ -54,18 +55,16 @@ class Variable:
     description: str
 
     def keys(self, config: Config) -> tuple:
+        """The configuration keys this variable sets (the container's lid height, its base —
+        :class:`jaxdamp.physics.containers.Container` — or every species' ``μ``)."""
         if self.name == "Lz":
-            return ("box.Lz",)
+            return (container(config).lid_key,)
         if self.name == "base":
-            return ("box.Lx", "box.Ly")
+            return container(config).base_keys
         return tuple(f"grains.{i}.material.mu" for i in range(len(config.grains)))
 
     def value(self, config: Config) -> float:
-        if self.name == "Lz":
-            return config.box.Lz
-        if self.name == "base":
-            return config.box.Lx
-        return config.grains[0].material.mu
+        return float(get_path(config, self.keys(config)[0]))
 
     def default_range(self, config: Config) -> tuple:
         """Range searched unless told: ``Lz`` 0.07–0.25 m, ``base`` ±25 % of the preset's
@@ -73,7 +72,8 @@ class Variable:
         if self.name == "Lz":
             return 0.07, 0.25
         if self.name == "base":
-            return 0.8 * config.box.Lx, 1.25 * config.box.Lx
+            base = self.value(config)
+            return 0.8 * base, 1.25 * base
         return 0.05, 0.8
 
 
@@ -112,7 +112,7 @@ class DesignSpace:
         self.lo = np.asarray(lo, float)
         self.hi = np.asarray(hi, float)
         self.h_ref = float(h_ref)
-        self.base_ref = float(base_ref or config.box.Lx)
+        self.base_ref = float(base_ref or VARIABLES["base"].value(config))
         self.margin = float(margin)
 
     @classmethod
@@ -238,7 +238,8 @@ class DesignProblem:
         self.sim_seconds += self.settle_time
         self.settle_wall = time.perf_counter() - t0
         self.space = DesignSpace.of(self.config, names, bounds, h_ref=ref.height,
-                                    base_ref=self.config.box.Lx, margin=margin)
+                                    base_ref=VARIABLES["base"].value(self.config),
+                                    margin=margin)
 
     variable = "design"
 

@@ -36,10 +36,12 @@ from __future__ import annotations
 import hashlib
 import math
 import os
+from collections import namedtuple
 
 import numpy as np
 
 from jaxdamp.physics.contact import FASTMATH, GAMMA_S, MU, contact_scalar, pair_scalar
+from jaxdamp.physics.containers import CONTAINERS, MAX_SIDES, normal_scalar, sides_scalar
 from jaxdamp.physics.energy import record_row
 from jaxdamp.physics.excitation import base_motion_scalar, drive_motion_scalar
 from jaxdamp.physics.integrate import (
@@ -49,6 +51,7 @@ from jaxdamp.physics.integrate import (
     rotate_scalar,
     rotate_series_scalar,
 )
+from jaxdamp.physics.model import CH, N_CHANNELS
 from jaxdamp.physics.structure import acceleration_scalar as structure_acceleration_scalar
 from jaxdamp.physics.structure import energy_scalar as structure_energy_scalar
 from jaxdamp.physics.structure import powers_scalar as structure_powers_scalar
@@ -72,10 +75,10 @@ SYSTEMS = {"primary": 0, "driven": 1}
 REBUILD_STEPS = 40
 
 #: The per-system scalar parameters the kernel reads (fields of ``Params``).
-SCALARS = ("Lx", "Ly", "Lz", "gravity", "M", "K", "C", "U", "amplitude", "omega", "z_offset",
+SCALARS = ("Lz", "gravity", "M", "K", "C", "U", "amplitude", "omega", "z_offset",
            "dt", "drag", "t_window", "ex", "ey", "ez")
 #: Fields of ``Params`` the kernel reads, in the order of its parameter offsets.
-PARAM_FIELDS = (("radius", "mass", "inertia", "pair_table", "wall_table") + SCALARS
+PARAM_FIELDS = (("radius", "mass", "inertia", "pair_table", "wall_table", "section") + SCALARS
                 + ("lines", "shock_a", "shock_t0", "shock_T", "s_M", "s_Minv", "s_K", "s_C", "s_r",
                    "s_b"))
 #: Fields of ``State`` the kernel reads and writes, in the order of its state offsets.
@@ -83,18 +86,40 @@ STATE_FIELDS = ("r", "v", "w", "q", "a", "alpha", "z", "zd", "zdd", "t", "z_max"
                 "work", "power", "e_elastic", "f_floor_lid", "f_box", "n_floor", "n_lid",
                 "e_start", "y", "yd", "ydd")
 
+#: The work channels' places (:data:`jaxdamp.physics.model.CHANNELS`, shared with the JAX engine).
+_IN, _PRIM, _PPN, _PPF, _PWN, _PWF, _DRAG = (
+    CH[k] for k in ("input", "primary_damping", "pp_normal", "pp_friction", "pw_normal",
+                    "pw_friction", "drag"))
+
+#: Where each field starts in a packed row (:func:`offsets`), read by name in the kernel.
+StateOffsets = namedtuple("StateOffsets", STATE_FIELDS)
+ParamOffsets = namedtuple("ParamOffsets", PARAM_FIELDS)
+#: The integers that select the kernel's code paths and size its views: the mount
+#: (:data:`SYSTEMS`), the contact law and the container (their ``id``), the contact tables'
+#: species and columns, the random base motion's lines, the structure's degrees of freedom
+#: and the container's section numbers.
+Dims = namedtuple("Dims", ("system", "law", "shape", "n_species", "n_cols", "n_lines", "ndof",
+                           "n_section"))
+
 #: The scalar forms the kernels inline (with the forms they call, from the same modules): a
 #: change to their source files must recompile the cached kernels (numba's cache only watches
 #: the kernel's own file).
-_INLINED = (contact_scalar, pair_scalar, base_motion_scalar, drive_motion_scalar,
+_INLINED = (contact_scalar, pair_scalar, sides_scalar, normal_scalar, base_motion_scalar, drive_motion_scalar,
             body_force_scalar, primary_acceleration_scalar, primary_powers_scalar, rotate_scalar,
             rotate_series_scalar, record_row, structure_acceleration_scalar, structure_energy_scalar,
             structure_powers_scalar)
 
 
 def _source_files() -> tuple[str, ...]:
-    """This module's file and the files defining :data:`_INLINED` (wherever they live)."""
+    """This module's file, the files defining :data:`_INLINED` (wherever they live) and every
+    container module (the scalar dispatch inlines them all)."""
+    import glob
+
+    from jaxdamp.physics import containers
+
     files = {os.path.abspath(__file__)}
+    files.update(os.path.abspath(f) for f in glob.glob(
+        os.path.join(os.path.dirname(containers.__file__), "*.py")))
     for f in _INLINED:
         files.add(os.path.abspath(getattr(f, "py_func", f).__code__.co_filename))
     return tuple(sorted(files))
@@ -278,6 +303,18 @@ if AVAILABLE:
         return (fx, fy, fz, -Ri * (ny * tz - nz * ty), -Ri * (nz * tx - nx * tz),
                 -Ri * (nx * ty - ny * tx), e, ln, lf)
 
+    @_kernel(inline="always")
+    def _side(law, xi, nx, ny, kappa, vx, vy, vz, sx, sy, sz, Ri, mi, row, wki):
+        """Contact with a side wall of inward normal ``(nx, ny, 0)`` and curvature ``kappa``:
+        :func:`_wall` with the grain's plane-wall constants ``wki``, or for a curved wall the
+        constants at its effective radius (:func:`jaxdamp.physics.containers.effective_radius`),
+        formed where it touches."""
+        if kappa == 0.0:
+            return _wall(law, xi, nx, ny, 0.0, vx, vy, vz, sx, sy, sz, Ri, wki)
+        stiff, damp = pair_scalar(law, row, Ri / (1.0 - Ri * kappa), mi)
+        return _wall(law, xi, nx, ny, 0.0, vx, vy, vz, sx, sy, sz, Ri,
+                     (stiff, damp, row[GAMMA_S], row[MU]))
+
     @_kernel()
     def _pair_forces(law, r, v, rw, R, pi, pj, pc, npairs, F, T):
         """Adds the grain pairs' forces and torques to ``F``, ``T`` (half list: Newton's third
@@ -326,8 +363,7 @@ if AVAILABLE:
         return e_sum, ln_sum, lf_sum
 
     @_kernel()
-    def _advance_one(b, n_records, record_every, system, law, skin, st, pm, so, po, n_species,
-                     n_cols, n_lines, ndof, sid, bounds, rec):
+    def _advance_one(b, n_records, record_every, dims, skin, st, pm, so, po, sid, bounds, rec):
         """Advance system ``b`` of the packed batch by ``n_records × record_every`` steps in
         place, writing a sample after every ``record_every`` steps into ``rec[b]``
         (:func:`jaxdamp.physics.energy.record_row`; ``bounds``: the species' index ranges): row
@@ -348,40 +384,43 @@ if AVAILABLE:
         rotation (:func:`rotate_series_scalar`) over the quaternions held by component during
         the call (``qs``); the walls, the pairs and the sums stay grain by grain."""
         n = sid.shape[0]
-        row = st[b]  # so[k], po[k]: offsets of STATE_FIELDS[k], PARAM_FIELDS[k] in the rows
+        row = st[b]  # so.NAME, po.NAME: where the field NAME starts in the rows
         prow = pm[b]
-        S, F = n_species, n_cols
-        rb = row[so[0]:so[0] + 3 * n].reshape((n, 3))
-        vb = row[so[1]:so[1] + 3 * n].reshape((n, 3))
-        wb = row[so[2]:so[2] + 3 * n].reshape((n, 3))
-        qb = row[so[3]:so[3] + 4 * n].reshape((n, 4))
-        alb = row[so[5]:so[5] + 3 * n].reshape((n, 3))
-        work = row[so[13]:so[13] + 7]
-        power = row[so[14]:so[14] + 7]
-        Rb = prow[po[0]:po[0] + n]
-        mb = prow[po[1]:po[1] + n]
-        Ib = prow[po[2]:po[2] + n]
-        tab = prow[po[3]:po[3] + S * S * F].reshape((S, S, F))
-        wtab = prow[po[4]:po[4] + S * F].reshape((S, F))
-        Lx, Ly, Lz, grav = prow[po[5]], prow[po[6]], prow[po[7]], prow[po[8]]
-        M, K, C, U = prow[po[9]], prow[po[10]], prow[po[11]], prow[po[12]]
-        amp, om, z_off, dt = prow[po[13]], prow[po[14]], prow[po[15]], prow[po[16]]
-        drag, t_win = prow[po[17]], prow[po[18]]
-        ex, ey, ez = prow[po[19]], prow[po[20]], prow[po[21]]  # the excitation axis
-        lines = prow[po[22]:po[22] + 3 * n_lines].reshape((n_lines, 3))
-        sh_a, sh_t0, sh_T = prow[po[23]], prow[po[24]], prow[po[25]]
+        system, law, shape = dims.system, dims.law, dims.shape
+        S, F, n_lines, ndof, n_section = (dims.n_species, dims.n_cols, dims.n_lines, dims.ndof,
+                                          dims.n_section)
+        rb = row[so.r:so.r + 3 * n].reshape((n, 3))
+        vb = row[so.v:so.v + 3 * n].reshape((n, 3))
+        wb = row[so.w:so.w + 3 * n].reshape((n, 3))
+        qb = row[so.q:so.q + 4 * n].reshape((n, 4))
+        alb = row[so.alpha:so.alpha + 3 * n].reshape((n, 3))
+        work = row[so.work:so.work + N_CHANNELS]
+        power = row[so.power:so.power + N_CHANNELS]
+        Rb = prow[po.radius:po.radius + n]
+        mb = prow[po.mass:po.mass + n]
+        Ib = prow[po.inertia:po.inertia + n]
+        tab = prow[po.pair_table:po.pair_table + S * S * F].reshape((S, S, F))
+        wtab = prow[po.wall_table:po.wall_table + S * F].reshape((S, F))
+        Lz, grav = prow[po.Lz], prow[po.gravity]
+        section = prow[po.section:po.section + n_section]  # the container's (containers)
+        M, K, C, U = prow[po.M], prow[po.K], prow[po.C], prow[po.U]
+        amp, om, z_off, dt = prow[po.amplitude], prow[po.omega], prow[po.z_offset], prow[po.dt]
+        drag, t_win = prow[po.drag], prow[po.t_window]
+        ex, ey, ez = prow[po.ex], prow[po.ey], prow[po.ez]  # the excitation axis
+        lines = prow[po.lines:po.lines + 3 * n_lines].reshape((n_lines, 3))
+        sh_a, sh_t0, sh_T = prow[po.shock_a], prow[po.shock_t0], prow[po.shock_T]
         # a multi-DOF structure (ndof > 1): its matrices (box first) and the other DOFs, views
         nd2 = ndof * ndof
-        sM = prow[po[26]:po[26] + nd2].reshape((ndof, ndof))
-        sMinv = prow[po[27]:po[27] + nd2].reshape((ndof, ndof))
-        sK = prow[po[28]:po[28] + nd2].reshape((ndof, ndof))
-        sC = prow[po[29]:po[29] + nd2].reshape((ndof, ndof))
-        sr = prow[po[30]:po[30] + ndof]
-        sb = prow[po[31]:po[31] + ndof]
+        sM = prow[po.s_M:po.s_M + nd2].reshape((ndof, ndof))
+        sMinv = prow[po.s_Minv:po.s_Minv + nd2].reshape((ndof, ndof))
+        sK = prow[po.s_K:po.s_K + nd2].reshape((ndof, ndof))
+        sC = prow[po.s_C:po.s_C + nd2].reshape((ndof, ndof))
+        sr = prow[po.s_r:po.s_r + ndof]
+        sb = prow[po.s_b:po.s_b + ndof]
         ny = ndof - 1
-        yv = row[so[21]:so[21] + ny]
-        ydv = row[so[22]:so[22] + ny]
-        yddv = row[so[23]:so[23] + ny]
+        yv = row[so.y:so.y + ny]
+        ydv = row[so.yd:so.yd + ny]
+        yddv = row[so.ydd:so.ydd + ny]
         y1 = np.empty(ny)
         ydp = np.empty(ny)
         xs = np.empty(ndof)
@@ -395,9 +434,9 @@ if AVAILABLE:
         inv_m = 1.0 / mb
         inv_I = 1.0 / Ib
         ref = np.empty((n, 3))
-        z, zd, zdd, t = row[so[6]], row[so[7]], row[so[8]], row[so[9]]
-        e_start = row[so[20]]
-        zmax, zmin, step = row[so[10]], row[so[11]], row[so[12]]
+        z, zd, zdd, t = row[so.z], row[so.zd], row[so.zdd], row[so.t]
+        e_start = row[so.e_start]
+        zmax, zmin, step = row[so.z_max], row[so.z_min], row[so.step]
         # the skin: at least the model's, wider when grains are fast (a gas), so that a list
         # lasts about REBUILD_STEPS steps at the call's starting speeds (at most 2 R_max); a
         # wider skin lists more pairs but never changes which pairs touch
@@ -423,14 +462,14 @@ if AVAILABLE:
         Tf = np.empty(3 * n)
         r1, vp, rw = r1f.reshape((n, 3)), vpf.reshape((n, 3)), rwf.reshape((n, 3))
         F, T = Ff.reshape((n, 3)), Tf.reshape((n, 3))
-        rf, vf, wf = row[so[0]:so[0] + 3 * n], row[so[1]:so[1] + 3 * n], row[so[2]:so[2] + 3 * n]
-        af, alf = row[so[4]:so[4] + 3 * n], row[so[5]:so[5] + 3 * n]
+        rf, vf, wf = row[so.r:so.r + 3 * n], row[so.v:so.v + 3 * n], row[so.w:so.w + 3 * n]
+        af, alf = row[so.a:so.a + 3 * n], row[so.alpha:so.alpha + 3 * n]
         R3 = np.empty(3 * n)
         im3 = np.empty(3 * n)
         iI3 = np.empty(3 * n)
         for j in range(3 * n):
             R3[j], im3[j], iI3[j] = Rb[j // 3], inv_m[j // 3], inv_I[j // 3]
-        pw = np.empty(7)
+        pw = np.empty(N_CHANNELS)
         # the quaternions by component (double-buffered) and the rotation's angular velocities
         qs = np.empty((4, n))
         qn = np.empty((4, n))
@@ -492,9 +531,9 @@ if AVAILABLE:
                     tx = 0.0
                     ty = 0.0
                     tz = 0.0
-                    # walls: floor, lid, x = 0, x = Lx, y = 0, y = Ly (inward normals), unrolled:
-                    # most grains touch none, so the common path is six compares; box_z sums
-                    # the force on the box along the axis e
+                    # walls: the floor, the lid, then the container's sides (inward normals);
+                    # most grains touch none, so the common path is a compare per wall; box_z
+                    # sums the force on the box along the axis e
                     if floor < Ri:
                         gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
                             law, Ri - floor, 0.0, 0.0, 1.0, wx, wy, wz, sx, sy, sz, Ri, wk[i])
@@ -525,58 +564,23 @@ if AVAILABLE:
                         box_z -= ex * gx + ey * gy + ez * gz
                         floor_lid -= gz
                         n_lid += 1.0
-                    if bx < Ri:
-                        gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
-                            law, Ri - bx, 1.0, 0.0, 0.0, wx, wy, wz, sx, sy, sz, Ri, wk[i])
-                        fx += gx
-                        fy += gy
-                        fz += gz
-                        tx += hx
-                        ty += hy
-                        tz += hz
-                        e_el += e
-                        pw_n += ln
-                        pw_f += lf
-                        box_z -= ex * gx + ey * gy + ez * gz
-                    if Lx - bx < Ri:
-                        gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
-                            law, Ri - (Lx - bx), -1.0, 0.0, 0.0, wx, wy, wz, sx, sy, sz, Ri, wk[i])
-                        fx += gx
-                        fy += gy
-                        fz += gz
-                        tx += hx
-                        ty += hy
-                        tz += hz
-                        e_el += e
-                        pw_n += ln
-                        pw_f += lf
-                        box_z -= ex * gx + ey * gy + ez * gz
-                    if by < Ri:
-                        gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
-                            law, Ri - by, 0.0, 1.0, 0.0, wx, wy, wz, sx, sy, sz, Ri, wk[i])
-                        fx += gx
-                        fy += gy
-                        fz += gz
-                        tx += hx
-                        ty += hy
-                        tz += hz
-                        e_el += e
-                        pw_n += ln
-                        pw_f += lf
-                        box_z -= ex * gx + ey * gy + ez * gz
-                    if Ly - by < Ri:
-                        gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
-                            law, Ri - (Ly - by), 0.0, -1.0, 0.0, wx, wy, wz, sx, sy, sz, Ri, wk[i])
-                        fx += gx
-                        fy += gy
-                        fz += gz
-                        tx += hx
-                        ty += hy
-                        tz += hz
-                        e_el += e
-                        pw_n += ln
-                        pw_f += lf
-                        box_z -= ex * gx + ey * gy + ez * gz
+                    gaps = sides_scalar(shape, bx, by, section)
+                    for k in range(MAX_SIDES):
+                        if gaps[k] < Ri:
+                            nx, nyy, kappa = normal_scalar(shape, k, bx, by, section)
+                            gx, gy, gz, hx, hy, hz, e, ln, lf = _side(
+                                law, Ri - gaps[k], nx, nyy, kappa, wx, wy, wz, sx, sy, sz, Ri,
+                                mb[i], wtab[sid[i]], wk[i])
+                            fx += gx
+                            fy += gy
+                            fz += gz
+                            tx += hx
+                            ty += hy
+                            tz += hz
+                            e_el += e
+                            pw_n += ln
+                            pw_f += lf
+                            box_z -= ex * gx + ey * gy + ez * gz
                     F[i, 0], F[i, 1], F[i, 2] = fx, fy, fz
                     T[i, 0], T[i, 1], T[i, 2] = tx, ty, tz
                 if n > 1 and far:  # a grain moved more than skin/2: list the pairs anew
@@ -598,18 +602,19 @@ if AVAILABLE:
                                                   sC, sr, sb, tmp)
                     zdd1 = acc[0]
                     zd1 = zd + 0.5 * dt * (zdd + zdd1)
-                    pw[0], pw[1] = structure_powers_scalar(xs, xds, u1, ud1, cos1, sK, sC, sr, sb)
+                    pw[_IN], pw[_PRIM] = structure_powers_scalar(xs, xds, u1, ud1, cos1, sK, sC,
+                                                                 sr, sb)
                 elif system == 0:
                     u1, ud1 = base_motion_scalar(t1, U, om, lines, sh_a, sh_t0, sh_T)
                     zdd1 = primary_acceleration_scalar(z1, zdp, u1, ud1, box_z, M, K, C)
                     zd1 = zd + 0.5 * dt * (zdd + zdd1)
-                    pw[0], pw[1] = primary_powers_scalar(z1, zdp, u1, ud1, K, C)
+                    pw[_IN], pw[_PRIM] = primary_powers_scalar(z1, zdp, u1, ud1, K, C)
                 else:
                     zd1 = zdp
-                    pw[0] = -box_z * zdp
-                    pw[1] = 0.0
-                pw[2], pw[3], pw[4], pw[5] = pp_n, pp_f, pw_n, pw_f
-                pw[6] = drag * pdrag
+                    pw[_IN] = -box_z * zdp
+                    pw[_PRIM] = 0.0
+                pw[_PPN], pw[_PPF], pw[_PWN], pw[_PWF] = pp_n, pp_f, pw_n, pw_f
+                pw[_DRAG] = drag * pdrag
                 health = box_z + e_el + pp_n + pp_f + pw_n + pw_f + z1 + zdp + zdd1
                 for i in range(n):
                     # the mid-step angular velocity ω + α dt/2 of the rotation (below)
@@ -651,7 +656,7 @@ if AVAILABLE:
                             vb[i, k] = np.nan
                     zd = np.nan
                     break
-                for c in range(7):
+                for c in range(N_CHANNELS):
                     work[c] = work[c] + 0.5 * dt * (power[c] + pw[c])
                     power[c] = pw[c]
                 if system == 0:
@@ -684,27 +689,25 @@ if AVAILABLE:
         for i in range(n):
             for k in range(4):
                 qb[i, k] = qs[k, i]
-        row[so[6]], row[so[7]], row[so[8]], row[so[9]] = z, zd, zdd, t
-        row[so[10]], row[so[11]], row[so[12]] = zmax, zmin, step
-        row[so[15]], row[so[16]], row[so[17]] = e_el, floor_lid, box_z
-        row[so[18]], row[so[19]] = n_floor, n_lid
+        row[so.z], row[so.zd], row[so.zdd], row[so.t] = z, zd, zdd, t
+        row[so.z_max], row[so.z_min], row[so.step] = zmax, zmin, step
+        row[so.e_elastic], row[so.f_floor_lid], row[so.f_box] = e_el, floor_lid, box_z
+        row[so.n_floor], row[so.n_lid] = n_floor, n_lid
 
     @_kernel(parallel=True)
-    def _advance(n_records, record_every, system, law, skin, st, pm, so, po, n_species, n_cols,
-                 n_lines, ndof, sid, bounds, rec):
+    def _advance(n_records, record_every, dims, skin, st, pm, so, po, sid, bounds, rec):
         """The batch over the cores (OpenMP threads, one system per thread at a time)."""
         for b in prange(st.shape[0]):
-            _advance_one(b, n_records, record_every, system, law, skin, st, pm, so, po,
-                         n_species, n_cols, n_lines, ndof, sid, bounds, rec)
+            _advance_one(b, n_records, record_every, dims, skin, st, pm, so, po, sid, bounds,
+                         rec)
 
     @_kernel(nogil=True)
-    def _advance_serial(n_records, record_every, system, law, skin, st, pm, so, po, n_species,
-                        n_cols, n_lines, ndof, sid, bounds, rec):
+    def _advance_serial(n_records, record_every, dims, skin, st, pm, so, po, sid, bounds, rec):
         """The batch in the calling thread, without the GIL: for sharded chunks, whose host
         threads (one per local shard) call the kernel side by side."""
         for b in range(st.shape[0]):
-            _advance_one(b, n_records, record_every, system, law, skin, st, pm, so, po,
-                         n_species, n_cols, n_lines, ndof, sid, bounds, rec)
+            _advance_one(b, n_records, record_every, dims, skin, st, pm, so, po, sid, bounds,
+                         rec)
 
 
 # -- packing of pytrees (one float64 array per call across the JAX/Python boundary) ---------
@@ -775,10 +778,14 @@ def advance_packed(model, state_packed, params_packed, state_layout, param_layou
     rec = np.empty((st.shape[0], int(n_records), width))
     bounds = np.array([sl.start for sl in model.species_slices()] + [model.n], np.int64)
     kernel = _advance if threads else _advance_serial
-    kernel(int(n_records), int(record_every), SYSTEMS[model.system], LAWS[model.law].id,
-           model.skin, st, pm, offsets(state_layout, STATE_FIELDS),
-           offsets(param_layout, PARAM_FIELDS), int(table[0]), int(table[2]),
-           int(shapes["lines"][0]), int(shapes["s_r"][0]), model.species_index().astype(np.int64), bounds, rec)
+    dims = Dims(system=SYSTEMS[model.system], law=LAWS[model.law].id,
+                shape=CONTAINERS[model.container].id, n_species=int(table[0]),
+                n_cols=int(table[2]), n_lines=int(shapes["lines"][0]),
+                ndof=int(shapes["s_r"][0]), n_section=int(shapes["section"][0]))
+    kernel(int(n_records), int(record_every), dims, model.skin, st, pm,
+           StateOffsets(*offsets(state_layout, STATE_FIELDS)),
+           ParamOffsets(*offsets(param_layout, PARAM_FIELDS)),
+           model.species_index().astype(np.int64), bounds, rec)
     return st, rec
 
 

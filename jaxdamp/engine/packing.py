@@ -18,14 +18,16 @@ import numpy as np
 
 from jaxdamp.config import Config, ConfigError
 from jaxdamp.engine import driver
+from jaxdamp.physics.containers import container
 from jaxdamp.physics.model import Model, Params
 
 #: Lattice spacing is (1 + _GAP) grain diameters; jitter is ± _GAP/2 radii per coordinate.
 _GAP = 0.05
 
 
-def fcc_lattice(radii: np.ndarray, Lx: float, Ly: float, seed: int) -> np.ndarray:
-    """Box-frame positions ``(N, 3)`` [m] on an FCC lattice filling the base from the floor up.
+def fcc_lattice(radii: np.ndarray, config: Config, seed: int) -> np.ndarray:
+    """Box-frame positions ``(N, 3)`` [m] on an FCC lattice filling the container's section
+    from the floor up (:mod:`jaxdamp.physics.containers`: its ``extent`` and ``inside``).
 
     Sites are taken layer by layer; radii are assigned to sites in a seeded random order (a
     mixture starts mixed) and each site is jittered by up to ``±_GAP/2`` of the largest radius.
@@ -33,20 +35,26 @@ def fcc_lattice(radii: np.ndarray, Lx: float, Ly: float, seed: int) -> np.ndarra
     n = len(radii)
     if n == 0:
         return np.zeros((0, 3))
+    vessel = container(config)
     r_max = float(radii.max())
     margin = r_max * (1.0 + _GAP)
     h = 2.0 * r_max * (1.0 + _GAP) / math.sqrt(2.0)  # FCC = even sites of a cubic grid of step h
-    nx = int(math.floor((Lx - 2 * margin) / h)) + 1
-    ny = int(math.floor((Ly - 2 * margin) / h)) + 1
-    if Lx < 2 * margin or Ly < 2 * margin:
-        raise ConfigError(f"box base {Lx} × {Ly} m is too small for grains of radius {r_max}")
+    x0, x1, y0, y1 = vessel.extent(config)
+    nx = int(math.floor((x1 - x0 - 2 * margin) / h)) + 1
+    ny = int(math.floor((y1 - y0 - 2 * margin) / h)) + 1
+    gx = x0 + margin + h * np.arange(max(nx, 0))
+    gy = y0 + margin + h * np.arange(max(ny, 0))
+    ok = vessel.inside(gx[None, :], gy[:, None], margin - 1e-12 * r_max, config)  # (ny, nx)
+    if x1 - x0 < 2 * margin or y1 - y0 < 2 * margin or not ok.any():
+        raise ConfigError(f"{vessel.describe(config)} is too small for grains of radius "
+                          f"{r_max}")
     sites = []
     k = 0
     while len(sites) < n:
         for j in range(ny):
             for i in range(nx):
-                if (i + j + k) % 2 == 0:
-                    sites.append((margin + i * h, margin + j * h, margin + k * h))
+                if (i + j + k) % 2 == 0 and ok[j, i]:
+                    sites.append((x0 + margin + i * h, y0 + margin + j * h, margin + k * h))
         k += 1
         if k > 10 * n + 10:  # nx = ny = 1 gives one site per two layers; never loop forever
             raise ConfigError("could not place the grains on a lattice")
@@ -112,8 +120,7 @@ def settle_many(configs: list[Config], model: Model, params: list[Params],
     settle_model = dataclasses.replace(model, system="driven")
     r0, ps = [], []
     for config, prm in zip(configs, params):
-        r = fcc_lattice(np.asarray(prm.radius), config.box.Lx, config.box.Ly,
-                        config.numerics.seed)
+        r = fcc_lattice(np.asarray(prm.radius), config, config.numerics.seed)
         top = float((r[:, 2] + np.asarray(prm.radius)).max())
         r0.append(r)
         ps.append(dataclasses.replace(

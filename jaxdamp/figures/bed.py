@@ -21,6 +21,7 @@ import numpy as np
 from jaxdamp.figures._files import open_file, run_title
 from jaxdamp.figures.style import FIGSIZE, SPECIES_COLOURS, figure
 from jaxdamp.io.export import OutputFileError, load_snapshots
+from jaxdamp.physics.containers import container
 
 MM = 1e3  # m → mm: every bed drawing is in mm
 COLOURINGS = ("species", "height")
@@ -31,34 +32,28 @@ def _check_colour(color):
         raise OutputFileError(f"color {color!r}: choose 'species' or 'height'")
 
 
-def _box_edges(Lx, Ly, Lz, z0):
-    c = np.array([[x, y, z0 + z] for z in (0, Lz) for y in (0, Ly) for x in (0, Lx)])
-    pairs = [(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7),
-             (0, 4), (1, 5), (2, 6), (3, 7)]
-    return [(c[i], c[j]) for i, j in pairs]
-
-
-def draw_snapshot(ax, r, radius, species, box, z_box=0.0, *, color="species", species_names=(),
-                  zlim=None, clim=None, zoom=1.15, legend=True, fontsize=8):
+def draw_snapshot(ax, r, radius, species, config, z_box=0.0, *, color="species",
+                  species_names=(), zlim=None, clim=None, zoom=1.15, legend=True, fontsize=8):
     """Draw one bed snapshot on ``ax``; returns the height colour map (a
     :class:`matplotlib.cm.ScalarMappable` for a colour bar) or ``None``.
 
     Args:
       r: grain centres ``(N, 3)`` [m] (lab frame); radius ``(N,)`` [m]; species ``(N,)``;
-        box ``(Lx, Ly, Lz)`` [m] with its floor at ``z_box`` [m].
+        ``config`` the run's :class:`~jaxdamp.config.Config`, whose container
+        (:mod:`jaxdamp.physics.containers`) is drawn with its floor at ``z_box`` [m].
       color: ``"species"`` (:data:`jaxdamp.figures.SPECIES_COLOURS`, legend with
         ``species_names`` when ``legend``) or ``"height"`` (of the centre above the floor,
         viridis over ``clim`` [m], default the snapshot's range).
       zlim: 3-D only: the z range [m] (lab frame), default the box.
       zoom: 3-D only: ``set_box_aspect`` zoom.
 
-    On a 3-D axes the view is orthographic in the lab frame, the box a wireframe and each
+    On a 3-D axes the view is orthographic in the lab frame, the container a wireframe and each
     grain a marker whose size on screen is its true diameter; on a 2-D axes it is the x–z side
     view in the box frame (``z − z_box``), grains as circles, large ones drawn first.
     """
     _check_colour(color)
     r, radius, sp = np.asarray(r, float), np.asarray(radius, float), np.asarray(species, int)
-    Lx, Ly, Lz = box
+    Lz = container(config).height(config)
     h = r[:, 2] - z_box
     if clim is None:
         clim = (float(h.min()), float(h.max())) if len(h) else (0.0, Lz)
@@ -74,9 +69,10 @@ def draw_snapshot(ax, r, radius, species, box, z_box=0.0, *, color="species", sp
 
         faces = to_rgba_array([SPECIES_COLOURS[k % len(SPECIES_COLOURS)] for k in sp])
     if getattr(ax, "name", "") == "3d":
-        _draw_3d(ax, r, radius, faces, box, z_box, zlim or (z_box, z_box + Lz), zoom, fontsize)
+        _draw_3d(ax, r, radius, faces, config, z_box, zlim or (z_box, z_box + Lz), zoom,
+                 fontsize)
     else:
-        _draw_side(ax, r, radius, faces, box, z_box, fontsize)
+        _draw_side(ax, r, radius, faces, config, z_box, fontsize)
     if legend and color == "species" and len(sp):
         from matplotlib.lines import Line2D
 
@@ -90,26 +86,28 @@ def draw_snapshot(ax, r, radius, species, box, z_box=0.0, *, color="species", sp
     return mappable
 
 
-def _draw_3d(ax, r, radius, faces, box, z_box, zlim, zoom, fontsize):
+def _draw_3d(ax, r, radius, faces, config, z_box, zlim, zoom, fontsize):
     from mpl_toolkits.mplot3d import proj3d
 
-    Lx, Ly, Lz = box
-    for a, b in _box_edges(Lx, Ly, Lz, z_box):
-        ax.plot(*(np.array([a, b]).T * MM), color="0.35", lw=0.8)
-    ax.set_xlim(0, Lx * MM)
-    ax.set_ylim(0, Ly * MM)
+    vessel = container(config)
+    Lz = vessel.height(config)
+    x0, x1, y0, y1 = vessel.extent(config)
+    for line in vessel.outline(config, z_box):
+        ax.plot(*(np.asarray(line).T * MM), color="0.35", lw=0.8)
+    ax.set_xlim(x0 * MM, x1 * MM)
+    ax.set_ylim(y0 * MM, y1 * MM)
     ax.set_zlim(zlim[0] * MM, zlim[1] * MM)
-    ax.set_box_aspect((Lx, Ly, zlim[1] - zlim[0]), zoom=zoom)
+    ax.set_box_aspect((x1 - x0, y1 - y0, zlim[1] - zlim[0]), zoom=zoom)
     ax.set_proj_type("ortho")
     ax.set_xlabel("x [mm]", fontsize=fontsize)
     ax.set_ylabel("y [mm]", fontsize=fontsize)
     ax.set_zlabel("z [mm] (lab frame)", fontsize=fontsize)
     ax.tick_params(labelsize=fontsize - 1)
-    # marker diameter in points: the vertical box edge (length Lz, foreshortened by cos(elev)
+    # marker diameter in points: a vertical edge (length Lz, foreshortened by cos(elev)
     # in the orthographic view) gives the scale
     fig = ax.figure
     fig.canvas.draw()
-    xs, ys, _ = proj3d.proj_transform(np.array([0.0, 0.0]), np.array([0.0, 0.0]),
+    xs, ys, _ = proj3d.proj_transform(np.array([x0, x0]) * MM, np.array([y0, y0]) * MM,
                                       np.array([z_box, z_box + Lz]) * MM, ax.get_proj())
     p = ax.transData.transform(np.column_stack([xs, ys]))
     pts_per_mm = np.hypot(*(p[1] - p[0])) * 72.0 / fig.dpi / (Lz * MM * np.cos(np.radians(ax.elev)))
@@ -117,18 +115,20 @@ def _draw_3d(ax, r, radius, faces, box, z_box, zlim, zoom, fontsize):
     ax.scatter(*(r.T * MM), s=sizes, c=faces, edgecolors="k", linewidths=0.2, alpha=0.95)
 
 
-def _draw_side(ax, r, radius, faces, box, z_box, fontsize):
+def _draw_side(ax, r, radius, faces, config, z_box, fontsize):
     from matplotlib.collections import PatchCollection
     from matplotlib.patches import Circle, Rectangle
 
-    Lx, _, Lz = box
+    vessel = container(config)
+    Lz = vessel.height(config)
+    x0, x1, _, _ = vessel.extent(config)
     order = np.argsort(-radius)  # small grains drawn last, on top
     circles = [Circle((r[k, 0] * MM, (r[k, 2] - z_box) * MM), radius[k] * MM) for k in order]
     ax.add_collection(PatchCollection(circles, facecolor=faces[order], edgecolor="none",
                                       alpha=0.8))
-    ax.add_patch(Rectangle((0, 0), Lx * MM, Lz * MM, fill=False, lw=1))
-    pad = 0.02 * max(Lx, Lz) * MM
-    ax.set_xlim(-pad, Lx * MM + pad)
+    ax.add_patch(Rectangle((x0 * MM, 0), (x1 - x0) * MM, Lz * MM, fill=False, lw=1))
+    pad = 0.02 * max(x1 - x0, Lz) * MM
+    ax.set_xlim(x0 * MM - pad, x1 * MM + pad)
     ax.set_ylim(-pad, Lz * MM + pad)
     ax.set_aspect("equal")
     ax.set_xlabel("x [mm]", fontsize=fontsize)
@@ -136,23 +136,24 @@ def _draw_side(ax, r, radius, faces, box, z_box, fontsize):
     ax.tick_params(labelsize=fontsize - 1)
 
 
-def snapshot_figure(r, radius, species, box, z_box=0.0, *, color="species", species_names=(),
+def snapshot_figure(r, radius, species, config, z_box=0.0, *, color="species", species_names=(),
                     t=None, zlim=None, title=""):
     """3-D view of the grains (:func:`draw_snapshot`): positions ``r`` (N, 3) [m], ``radius``
-    (N,) [m], ``species`` (N,), box ``(Lx, Ly, Lz)`` [m] with its floor at ``z_box`` [m];
+    (N,) [m], ``species`` (N,), the container of ``config`` with its floor at ``z_box`` [m];
     ``color`` is ``'species'`` or ``'height'`` (height of the centre above the floor)."""
     _check_colour(color)
-    Lx, Ly, Lz = box
+    vessel = container(config)
     fig = figure(FIGSIZE["snapshot"])
     ax = fig.add_axes((0.0, 0.02, 0.8 if color == "height" else 0.97, 0.9), projection="3d")
-    sc = draw_snapshot(ax, r, radius, species, box, z_box, color=color,
+    sc = draw_snapshot(ax, r, radius, species, config, z_box, color=color,
                        species_names=species_names, zlim=zlim)
     if sc is not None:
         fig.colorbar(sc, cax=fig.add_axes((0.8, 0.3, 0.03, 0.4)),
                      label="height of the centre above the floor [mm]")
     head = f"t = {t:.5g} s, " if t is not None else ""
     fig.suptitle((title + "\n" if title else "") + f"{head}{len(radius)} grains; "
-                 f"box {Lx * MM:g} × {Ly * MM:g} × {Lz * MM:g} mm", fontsize=9)
+                 f"{vessel.name}: {vessel.describe(config)}, height "
+                 f"{vessel.height(config) * MM:g} mm", fontsize=9)
     return fig
 
 
@@ -162,7 +163,7 @@ def snapshot_from_file(h5_or_path, frame=-1, color="species"):
     try:
         s = load_snapshots(h5, frames=[frame], what="the snapshot figure")
         cfg = json.loads(h5.attrs["config"])
-        return snapshot_figure(s.r[0], s.radius, s.species, s.box, float(s.z_box[0]),
+        return snapshot_figure(s.r[0], s.radius, s.species, s.config, float(s.z_box[0]),
                                color=color, species_names=s.species_names, t=float(s.t[0]),
                                title=run_title(h5, cfg) + f", snapshot {int(s.frames[0])}")
     finally:
@@ -176,15 +177,17 @@ def snapshot_grid_figure(rows, title=""):
 
     Args:
       rows: ``[(label, [(caption, r (N, 3) [m], z_box [m]), ...], radii (N,) [m], species
-        (N,), box (Lx, Ly, Lz) [m]), ...]``; one row per system, one panel per instant.
+        (N,), config), ...]``; one row per system (``config``: its
+        :class:`~jaxdamp.config.Config`, whose container is drawn), one panel per instant.
     """
     ncol = max(len(r[1]) for r in rows)
     w, h = FIGSIZE["snapshot_panel"]
     fig = figure((w * ncol, h * len(rows)))
     axes = fig.subplots(len(rows), ncol, squeeze=False)
-    for i, (label, frames, radii, species, box) in enumerate(rows):
+    for i, (label, frames, radii, species, config) in enumerate(rows):
         for j, (caption, r, z_box) in enumerate(frames):
-            draw_snapshot(axes[i, j], r, radii, species, box, z_box, legend=False, fontsize=7)
+            draw_snapshot(axes[i, j], r, radii, species, config, z_box, legend=False,
+                          fontsize=7)
             axes[i, j].set_title(f"{label}\n{caption}", fontsize=7)
         for j in range(len(frames), ncol):
             axes[i, j].axis("off")
@@ -219,7 +222,7 @@ def animate(h5_or_path, out, *, every=1, fps=10, color="species", dpi=80) -> str
     finally:
         if close:
             h5.close()
-    Lz = s.box[2]
+    Lz = container(s.config).height(s.config)
     zlim = (float(s.z_box.min()), float(s.z_box.max()) + Lz)
     h = s.r[:, :, 2] - s.z_box[:, None]
     clim = (float(h.min()), float(h.max()))
@@ -229,7 +232,7 @@ def animate(h5_or_path, out, *, every=1, fps=10, color="species", dpi=80) -> str
     with writer.saving(fig, out, dpi):
         for k in range(len(s.t)):
             ax.cla()
-            sc = draw_snapshot(ax, s.r[k], s.radius, s.species, s.box, float(s.z_box[k]),
+            sc = draw_snapshot(ax, s.r[k], s.radius, s.species, s.config, float(s.z_box[k]),
                                color=color, species_names=s.species_names, zlim=zlim,
                                clim=clim, zoom=0.95)
             if k == 0 and sc is not None:

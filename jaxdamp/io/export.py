@@ -13,8 +13,8 @@ Conventions of the written files (SI units, lab frame, as in the run file):
       Lattice="Lx 0 0 0 Ly 0 0 0 Lz" Origin="0 0 z_box" Properties=species:S:1:pos:R:3:radius:R:1:orientation:R:4 Time=t pbc="F F F"
       steel x y z radius qx qy qz qw
 
-  ``Lattice`` and ``Origin`` are the box at the snapshot's time (the box moves with the floor
-  ``z_box``). ``orientation`` is written in OVITO's component order ``(x, y, z, w)``; the run
+  ``Lattice`` and ``Origin`` are the container's bounding box at the snapshot's time (it
+  moves with the floor ``z_box``). ``orientation`` is written in OVITO's component order ``(x, y, z, w)``; the run
   file stores ``(w, x, y, z)``.
 - **legacy VTK** (``<stem>_0000.vtk``, ... one per snapshot): ``DATASET POLYDATA`` with the
   grain centres as ``POINTS`` and ``VERTICES``, dataset field data ``TIME`` and ``z_box``, and
@@ -35,7 +35,8 @@ from dataclasses import dataclass
 import h5py
 import numpy as np
 
-from jaxdamp.config import ConfigError
+from jaxdamp.config import Config, ConfigError, from_json
+from jaxdamp.physics.containers import container
 
 
 class OutputFileError(ConfigError):
@@ -86,8 +87,9 @@ SNAPSHOT_PATHS = ("snapshots/t", "snapshots/r", "snapshots/q", "grains/radius", 
 class Snapshots:
     """Frames of a run file: ``t`` (S,) [s], ``r`` (S, N, 3) [m] lab frame, ``q`` (S, N, 4)
     ``(w, x, y, z)``, ``z_box`` (S,) [m] floor at each frame, ``radius`` (N,) [m], ``species``
-    (N,) index, ``species_names``, box ``Lx, Ly, Lz`` [m], ``frames`` (S,) indices into the
-    file's ``/snapshots``."""
+    (N,) index, ``species_names``, ``config`` the run's configuration (its container:
+    :mod:`jaxdamp.physics.containers`), ``frames`` (S,) indices into the file's
+    ``/snapshots``."""
 
     t: np.ndarray
     r: np.ndarray
@@ -96,7 +98,7 @@ class Snapshots:
     radius: np.ndarray
     species: np.ndarray
     species_names: list
-    box: tuple
+    config: Config
     frames: np.ndarray
     path: str
 
@@ -118,8 +120,7 @@ def load_snapshots(h5: h5py.File, every: int = 1, frames=None, what="snapshots")
                                   f"{n} snapshots (0 … {n - 1}, or -1 for the last)")
         idx = np.where(idx < 0, idx + n, idx)
     t = h5["snapshots/t"][()][idx]
-    cfg = json.loads(h5.attrs["config"])
-    box = (float(cfg["box"]["Lx"]), float(cfg["box"]["Ly"]), float(cfg["box"]["Lz"]))
+    cfg = from_json(h5.attrs["config"])
     if "series/t" in h5 and "series/z_box" in h5 and h5["series/t"].shape[0]:
         z_box = np.interp(t, h5["series/t"][()], h5["series/z_box"][()])
     else:
@@ -128,7 +129,7 @@ def load_snapshots(h5: h5py.File, every: int = 1, frames=None, what="snapshots")
     return Snapshots(
         t=t, r=h5["snapshots/r"][()][idx], q=h5["snapshots/q"][()][idx], z_box=z_box,
         radius=h5["grains/radius"][()], species=h5["grains/species"][()].astype(int),
-        species_names=names, box=box, frames=idx, path=h5.filename,
+        species_names=names, config=cfg, frames=idx, path=h5.filename,
     )
 
 
@@ -144,14 +145,17 @@ XYZ_PROPERTIES = "species:S:1:pos:R:3:radius:R:1:orientation:R:4"
 def write_xyz(s: Snapshots, out) -> str:
     """Write every frame of ``s`` to one extended-XYZ file; returns the path."""
     labels = _species_labels(s)
-    Lx, Ly, Lz = s.box
+    vessel = container(s.config)
+    x0, x1, y0, y1 = vessel.extent(s.config)
+    Lx, Ly, Lz = x1 - x0, y1 - y0, vessel.height(s.config)
     n = len(s.radius)
     os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
     with open(out, "w") as f:
         for k in range(len(s.t)):
             f.write(f"{n}\n")
             f.write(f'Lattice="{Lx:.12g} 0 0 0 {Ly:.12g} 0 0 0 {Lz:.12g}" '
-                    f'Origin="0 0 {s.z_box[k]:.12g}" Properties={XYZ_PROPERTIES} '
+                    f'Origin="{x0:.12g} {y0:.12g} {s.z_box[k]:.12g}" '
+                    f'Properties={XYZ_PROPERTIES} '
                     f'Time={s.t[k]:.12g} pbc="F F F"\n')
             q = s.q[k][:, [1, 2, 3, 0]]  # (w, x, y, z) -> OVITO's (x, y, z, w)
             cols = np.column_stack([s.r[k], s.radius, q])

@@ -26,6 +26,7 @@ import numpy as np
 
 from jaxdamp.config import Config
 from jaxdamp.physics.contact import LAWS, Law, calibrate_wall_row
+from jaxdamp.physics.containers import container
 from jaxdamp.physics.excitation import base_motion, random_lines
 from jaxdamp.physics.structure import internal
 
@@ -64,6 +65,7 @@ class Model:
         (:mod:`jaxdamp.physics.structure`).
       precision: ``numerics.precision``, the floating-point type of the JAX engine's contact
         laws (:data:`jaxdamp.physics.contact.PRECISIONS`): ``"float64"`` or ``"float32"``.
+      container: the container's name (:data:`jaxdamp.physics.containers.CONTAINERS`).
     """
 
     n: int
@@ -74,6 +76,7 @@ class Model:
     species: tuple[int, ...] = ()
     dofs: int = 1
     precision: str = "float64"
+    container: str = "box"
 
     def species_slices(self) -> tuple[slice, ...]:
         """Index range of every species in the grain arrays (at least one, possibly empty)."""
@@ -95,6 +98,8 @@ class Params:
     ``s`` against species ``t``) and ``wall_table`` ``(S, F)`` (species against the walls) hold
     the law's mixed constants in the columns :attr:`jaxdamp.physics.contact.Law.columns` (Hertz:
     ``γ_s`` [kg s^-1 m^-1/2], ``μ`` [-], ``E*`` [Pa], ``γ_n`` [kg s^-1 m^-1/2], ``A`` [s]);
+    ``section`` ``(G,)`` the container's section (:mod:`jaxdamp.physics.containers`; the box:
+    ``(Lx, Ly)`` [m]) and ``Lz`` its inner height, floor to lid [m];
     all else is scalar (per system). ``omega`` = 2πf [rad/s]; ``U`` base amplitude (S1) [m]; ``amplitude`` box amplitude (S2) [m];
     ``z_offset`` box position about which it moves (S2) [m]; ``drag`` settling drag rate [1/s];
     ``t_window`` start of the analysis window [s]; ``ex, ey, ez`` the unit vector of the
@@ -112,8 +117,7 @@ class Params:
     inertia: jnp.ndarray
     pair_table: jnp.ndarray
     wall_table: jnp.ndarray
-    Lx: jnp.ndarray
-    Ly: jnp.ndarray
+    section: jnp.ndarray
     Lz: jnp.ndarray
     gravity: jnp.ndarray
     M: jnp.ndarray
@@ -259,11 +263,12 @@ def build(config: Config, radii: np.ndarray | None = None) -> tuple[Model, Param
     r_max = float(radii.max()) if n else 0.0
     skin = config.numerics.skin * r_max
     structure = internal(config) if config.system == "primary" else None
+    vessel = container(config)
     model = Model(
         n=n, system=config.system, law=config.contact_law, cutoff=2.0 * r_max + skin, skin=skin,
         species=tuple(int(sp.count) for sp in config.grains),
         dofs=len(structure["s_r"]) if structure else 1,
-        precision=config.numerics.precision,
+        precision=config.numerics.precision, container=vessel.name,
     )
     prim = config.primary
     shock = config.shock if config.system == "primary" else None
@@ -274,8 +279,7 @@ def build(config: Config, radii: np.ndarray | None = None) -> tuple[Model, Param
         inertia=f64(0.4 * mass * radii**2),
         pair_table=f64(pair_table),
         wall_table=f64(wall_table),
-        Lx=f64(config.box.Lx),
-        Ly=f64(config.box.Ly),
+        section=f64(vessel.section(config)),
         Lz=f64(config.box.Lz),
         gravity=f64(config.gravity),
         M=f64(prim.M if prim else 1.0),

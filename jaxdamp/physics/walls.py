@@ -1,10 +1,14 @@
-"""Sphere–wall contacts with the six flat walls of the box (docs/physics.md §2).
+"""Sphere–wall contacts with the walls of the container (docs/physics.md §2): how the contact
+law is mapped over a grain's walls.
 
-The box spans ``[0, Lx] × [0, Ly] × [0, Lz]`` shifted by ``e z_box``: it moves rigidly along
-the excitation axis ``e = (ex, ey, ez)`` (``Params``; vertical by default), with velocity
-``e zd_box``. Walls use the same contact law as grain pairs with
-``R* = R_i``, ``m* = m_i`` and the constants of the grain's species against the wall material
-(a row of ``Params.wall_table``, mixed when the model was built).
+The container (:mod:`jaxdamp.physics.containers`, ``model.container``) is a prism: the floor at
+height 0, the lid at ``Lz`` and the side walls of its section, in its frame, shifted by
+``e z_box``: it moves rigidly along the excitation axis ``e = (ex, ey, ez)`` (``Params``;
+vertical by default), with velocity ``e zd_box``. Walls use the same contact law as grain pairs
+with ``m* = m_i``, ``R* = R_i`` for a plane (the container's effective radius for a curved
+wall) and the constants of the grain's species against the wall material (a row of
+``Params.wall_table``, mixed when the model was built). The walls are taken in the order
+floor, lid, then the container's sides.
 """
 
 from __future__ import annotations
@@ -15,11 +19,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxdamp.physics.contact import GAMMA_S, LAWS, MU, Vec, contact_force, force_dtype
+from jaxdamp.physics.containers import CONTAINERS, effective_radius
 
-#: Inward unit normals of floor, lid, x=0, x=Lx, y=0, y=Ly (pointing from the wall to a grain).
-_NORMALS = np.array(
-    [[0, 0, 1], [0, 0, -1], [1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0]], dtype=np.float64
-)
+#: The floor's and the lid's places among a grain's walls (the sides follow).
 FLOOR, LID = 0, 1
 
 
@@ -47,19 +49,18 @@ class WallForces(NamedTuple):
 
 
 def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
-    """Contacts of grains ``(N, 3)`` with the six walls of a box at ``e z_box``.
+    """Contacts of grains ``(N, 3)`` with the walls of a container at ``e z_box``.
 
     Args:
       r, v, w: positions [m], velocities [m/s], angular velocities [rad/s], ``(N, 3)``.
       z_box, zd_box: box position [m] and velocity [m/s] along the axis ``e`` (scalars).
       p: :class:`jaxdamp.physics.model.Params`.
-      model: :class:`jaxdamp.physics.model.Model` (the law and the grains' species).
+      model: :class:`jaxdamp.physics.model.Model` (the law, the container, the species).
     """
-    # Signed distance of each centre to each wall plane, (N, 6).
+    # Signed distance of each centre to each wall, (N, 2 + W): floor, lid, the sides.
     x, y, floor = r[:, 0] - p.ex * z_box, r[:, 1] - p.ey * z_box, r[:, 2] - p.ez * z_box
-    dist = jnp.stack(
-        (floor, p.Lz - floor, x, p.Lx - x, y, p.Ly - y), axis=-1
-    )
+    gaps, (snx, sny), curvature = CONTAINERS[model.container].sides_jax(x, y, p.section)
+    dist = jnp.stack((floor, p.Lz - floor) + tuple(gaps), axis=-1)
     hi, lo = r.dtype, force_dtype(model)
     xi = (p.radius[:, None] - dist).astype(lo)  # the overlap in the state's precision
     R = p.radius[:, None].astype(lo)
@@ -69,8 +70,12 @@ def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
         row = table[0]  # (F,): one species
     else:
         row = table[jnp.asarray(model.species_index())][:, None, :]  # (N, 1, F)
-    stiffness, damping = law.pair_jax(row, R, p.mass[:, None].astype(lo))
-    normals = Vec(*(jnp.asarray(_NORMALS[:, k], lo) for k in range(3)))  # (6,) each
+    R_contact = R
+    if any(k != 0 for k in curvature):  # a curved wall: its own effective radius
+        kappa = np.array((0.0, 0.0) + tuple(curvature), dtype=np.float64)
+        R_contact = effective_radius(R, jnp.asarray(kappa, lo))
+    stiffness, damping = law.pair_jax(row, R_contact, p.mass[:, None].astype(lo))
+    normals = Vec(*_normals(snx, sny, lo))  # (2 + W,) each, or (N, 2 + W) for curved sides
     # the walls move with e zd_box
     v_rel = Vec(*((v[:, k:k + 1] - e * zd_box).astype(lo)
                   for k, e in enumerate((p.ex, p.ey, p.ez))))
@@ -79,7 +84,7 @@ def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
     c = contact_force(law, xi, normals, v_rel, spin, R, stiffness, damping, row[..., GAMMA_S],
                       row[..., MU])
 
-    f = Vec(*(x.astype(hi) for x in c.force))  # (N, 6): force of wall on grain
+    f = Vec(*(x.astype(hi) for x in c.force))  # (N, 2 + W): force of wall on grain
     return WallForces(
         force=f.sum(axis=1).stack(),
         torque=c.torque.sum(axis=1).stack().astype(hi),
@@ -91,3 +96,18 @@ def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
         normal_loss=c.normal_loss.astype(hi).sum(),
         friction_loss=c.friction_loss.astype(hi).sum(),
     )
+
+
+def _normals(snx, sny, dtype):
+    """Inward unit normals ``(nx, ny, nz)`` of floor, lid and the sides (normals ``(nx, ny)``
+    of the container): NumPy constants where the sides are planes, else arrays ``(N, 2 + W)``."""
+    if isinstance(snx, np.ndarray) and isinstance(sny, np.ndarray):
+        nx = np.concatenate(([0.0, 0.0], snx))
+        ny = np.concatenate(([0.0, 0.0], sny))
+        nz = np.concatenate(([1.0, -1.0], np.zeros(len(snx))))
+        return tuple(jnp.asarray(a, dtype) for a in (nx, ny, nz))
+    n = jnp.shape(snx)[0]
+    ends = lambda a, b: jnp.broadcast_to(jnp.asarray([a, b], dtype), (n, 2))  # noqa: E731
+    return (jnp.concatenate([ends(0.0, 0.0), jnp.asarray(snx, dtype)], axis=1),
+            jnp.concatenate([ends(0.0, 0.0), jnp.asarray(sny, dtype)], axis=1),
+            jnp.concatenate([ends(1.0, -1.0), jnp.zeros(jnp.shape(snx), dtype)], axis=1))

@@ -15,6 +15,7 @@ import numpy as np
 
 from jaxdamp.analysis import stats
 from jaxdamp.config import Config, ConfigError, apply_overrides
+from jaxdamp.physics.containers import container
 from jaxdamp.validation import validate
 
 
@@ -93,14 +94,28 @@ def grid_configs(config: Config, axes: dict) -> list[Config]:
             for values in rows]
 
 
+#: What may differ between configurations that share one settled bed (dotted keys of
+#: ``Config.to_dict``): the excitation and the mount (a bed is poured into the container at
+#: rest, its lid lifted: :func:`jaxdamp.engine.packing.settle_many`), the run's length and
+#: sampling, and labels. The container's lid height is free too
+#: (:attr:`jaxdamp.physics.containers.Container.lid_key`). Everything else keys the bed, so a
+#: new field keys it unless it is added here.
+BED_FREE = ("system", "frequency", "primary", "drive", "impactor", "random", "shock",
+            "structure", "direction", "name", "notes", "numerics.duration", "numerics.chunk",
+            "numerics.record_dt", "numerics.analysis_window")
+
+
 def geometry_key(cfg: Config) -> str:
-    """What the settled bed depends on (not Lz, not the excitation)."""
+    """What the settled bed depends on: the configuration without :data:`BED_FREE` and the
+    lid height."""
     d = cfg.to_dict()
-    num = d["numerics"]
-    keep = {k: num[k] for k in ("seed", "stiffness_scale", "skin", "capacity_multiplier",
-                                "settle_time", "settle_speed", "settle_drag", "engine")}
-    return json.dumps([d["grains"], d["box"]["Lx"], d["box"]["Ly"], d["box"]["wall"],
-                       d["gravity"], d["mixing"], keep], sort_keys=True)
+    for key in BED_FREE + (container(cfg).lid_key,):
+        *path, last = key.split(".")
+        node = d
+        for part in path:
+            node = node[part]
+        node.pop(last, None)
+    return json.dumps(d, sort_keys=True)
 
 
 def replicate_configs(grid: list[Config], replicates: int) -> list[Config]:

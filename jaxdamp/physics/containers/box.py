@@ -1,0 +1,93 @@
+"""The rectangular box: a prism of section ``[0, Lx] × [0, Ly]`` (``config.box``).
+
+Its four side walls are planes, ``x = 0``, ``x = Lx``, ``y = 0``, ``y = Ly`` in that order
+(their inward normals ``(1, 0)``, ``(-1, 0)``, ``(0, 1)``, ``(0, -1)``; all flat). The
+section's numbers in ``Params.section`` are ``(Lx, Ly)``.
+
+Example::
+
+    >>> from jaxdamp.cases import presets
+    >>> from jaxdamp.physics.containers import container
+    >>> box = container(presets.get("sanchez2012-optimal"))
+    >>> box.name, [round(float(v), 4) for v in box.section(presets.get("sanchez2012-optimal"))]
+    ('box', [0.0402, 0.0402])
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from jaxdamp.physics.contact import scalar_form
+
+#: Inward unit normals ``(nx, ny)`` of the side walls x=0, x=Lx, y=0, y=Ly.
+NORMALS = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])
+
+
+def section(config) -> np.ndarray:
+    """``Params.section`` of the box: ``(Lx, Ly)`` [m]."""
+    return np.array([config.box.Lx, config.box.Ly], dtype=np.float64)
+
+
+def sides_jax(bx, by, section):
+    """Distances ``(N, 4)`` [m] from grain centres ``(bx, by)`` (box frame) to the side walls,
+    their inward normals (constants ``(4,)``) and curvatures (all flat)."""
+    gaps = (bx, section[0] - bx, by, section[1] - by)
+    return gaps, (NORMALS[:, 0], NORMALS[:, 1]), (0.0, 0.0, 0.0, 0.0)
+
+
+@scalar_form
+def sides_scalar(x, y, s0, s1):
+    """Scalar form of :func:`sides_jax`'s distances, for one grain: a tuple of 4."""
+    return x, s0 - x, y, s1 - y
+
+
+@scalar_form
+def normal_scalar(k, x, y, s0, s1):
+    """Inward normal ``(nx, ny)`` and curvature of side wall ``k`` at ``(x, y)``."""
+    if k == 0:
+        return 1.0, 0.0, 0.0
+    if k == 1:
+        return -1.0, 0.0, 0.0
+    if k == 2:
+        return 0.0, 1.0, 0.0
+    return 0.0, -1.0, 0.0
+
+
+def extent(config) -> tuple[float, float, float, float]:
+    """The section's bounding rectangle ``(x0, x1, y0, y1)`` [m]."""
+    return 0.0, float(config.box.Lx), 0.0, float(config.box.Ly)
+
+
+def inside(x, y, margin: float, config) -> np.ndarray:
+    """Whether points ``(x, y)`` lie at least ``margin`` inside every side wall."""
+    b = config.box
+    return (x >= margin) & (x <= b.Lx - margin) & (y >= margin) & (y <= b.Ly - margin)
+
+
+def base_area(config) -> float:
+    """Area of the section (the floor) [m²]."""
+    return float(config.box.Lx * config.box.Ly)
+
+
+def fit_error(config, diameter: float, name: str) -> str | None:
+    """Why a grain of ``diameter`` [m] (``name`` and radius text) does not fit across the
+    section, or ``None``."""
+    for side in ("Lx", "Ly"):
+        length = getattr(config.box, side)
+        if diameter >= length:
+            return f"{name} does not fit box.{side} = {length} m"
+    return None
+
+
+def describe(config) -> str:
+    """The section in words: ``"0.04 × 0.04 m base"``."""
+    return f"{config.box.Lx} × {config.box.Ly} m base"
+
+
+def outline(config, z0: float = 0.0) -> list[np.ndarray]:
+    """The cavity's edges as 3-D polylines [m] (lab frame, floor at ``z0``): the 12 edges."""
+    Lx, Ly, Lz = config.box.Lx, config.box.Ly, config.box.Lz
+    c = np.array([[x, y, z0 + z] for z in (0, Lz) for y in (0, Ly) for x in (0, Lx)])
+    edges = [(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7), (0, 4), (1, 5),
+             (2, 6), (3, 7)]
+    return [c[[a, b]] for a, b in edges]
