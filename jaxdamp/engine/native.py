@@ -33,6 +33,7 @@ stays the reference; ``tests/test_native.py`` checks that both agree.
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import math
 import os
@@ -44,17 +45,10 @@ from jaxdamp.physics.contact import FASTMATH, GAMMA_S, MU, contact_scalar, pair_
 from jaxdamp.physics.containers import CONTAINERS, MAX_SIDES, normal_scalar, sides_scalar
 from jaxdamp.physics.energy import record_row
 from jaxdamp.physics.excitation import base_motion_scalar, drive_motion_scalar
-from jaxdamp.physics.integrate import (
-    body_force_scalar,
-    primary_acceleration_scalar,
-    primary_powers_scalar,
-    rotate_scalar,
-    rotate_series_scalar,
-)
-from jaxdamp.physics.model import CH, N_CHANNELS
+from jaxdamp.physics.integrate import body_force_scalar, rotate_scalar, rotate_series_scalar
+from jaxdamp.physics.model import CH, N_CHANNELS, Params, State
+from jaxdamp.physics.mounts import DRIVEN, energy_scalar, mount_of, predict_scalar, respond_scalar
 from jaxdamp.physics.structure import acceleration_scalar as structure_acceleration_scalar
-from jaxdamp.physics.structure import energy_scalar as structure_energy_scalar
-from jaxdamp.physics.structure import powers_scalar as structure_powers_scalar
 
 # numba's OpenMP threads spin between parallel regions by default; a spinning thread took the
 # second core from the single system it was waiting beside (13.4 -> 9.4 µs per step of the
@@ -68,23 +62,15 @@ try:
 except ImportError:  # pragma: no cover - numba is a dependency; keep the JAX engine usable
     AVAILABLE = False
 
-SYSTEMS = {"primary": 0, "driven": 1}
 #: Steps a neighbour list should last at the grains' speeds: the native kernel widens the skin
 #: for fast grains (``_advance_one``); measured on the 2023 reference box at 3 cm, it cut the
 #: rebuilds from 7 to ~2 per 100 steps (benchmarks/RESULTS.md).
 REBUILD_STEPS = 40
 
-#: The per-system scalar parameters the kernel reads (fields of ``Params``).
-SCALARS = ("Lz", "gravity", "M", "K", "C", "U", "amplitude", "omega", "z_offset",
-           "dt", "drag", "t_window", "ex", "ey", "ez")
-#: Fields of ``Params`` the kernel reads, in the order of its parameter offsets.
-PARAM_FIELDS = (("radius", "mass", "inertia", "pair_table", "wall_table", "section") + SCALARS
-                + ("lines", "shock_a", "shock_t0", "shock_T", "s_M", "s_Minv", "s_K", "s_C", "s_r",
-                   "s_b"))
-#: Fields of ``State`` the kernel reads and writes, in the order of its state offsets.
-STATE_FIELDS = ("r", "v", "w", "q", "a", "alpha", "z", "zd", "zdd", "t", "z_max", "z_min", "step",
-                "work", "power", "e_elastic", "f_floor_lid", "f_box", "n_floor", "n_lid",
-                "e_start", "y", "yd", "ydd")
+#: Fields of ``Params`` and ``State`` in the kernel's packed rows (all of them), read by name.
+PARAM_FIELDS = tuple(f.name for f in dataclasses.fields(Params))
+STATE_FIELDS = tuple(f.name for f in dataclasses.fields(State))
+_DRIVEN = DRIVEN.id
 
 #: The work channels' places (:data:`jaxdamp.physics.model.CHANNELS`, shared with the JAX engine).
 _IN, _PRIM, _PPN, _PPF, _PWN, _PWF, _DRAG = (
@@ -95,19 +81,19 @@ _IN, _PRIM, _PPN, _PPF, _PWN, _PWF, _DRAG = (
 StateOffsets = namedtuple("StateOffsets", STATE_FIELDS)
 ParamOffsets = namedtuple("ParamOffsets", PARAM_FIELDS)
 #: The integers that select the kernel's code paths and size its views: the mount
-#: (:data:`SYSTEMS`), the contact law and the container (their ``id``), the contact tables'
+#: (:data:`jaxdamp.physics.mounts.MOUNTS`), the contact law and the container (their ``id``), the contact tables'
 #: species and columns, the random base motion's lines, the structure's degrees of freedom
 #: and the container's section numbers.
-Dims = namedtuple("Dims", ("system", "law", "shape", "n_species", "n_cols", "n_lines", "ndof",
+Dims = namedtuple("Dims", ("mount", "law", "shape", "n_species", "n_cols", "n_lines", "ndof",
                            "n_section"))
 
 #: The scalar forms the kernels inline (with the forms they call, from the same modules): a
 #: change to their source files must recompile the cached kernels (numba's cache only watches
 #: the kernel's own file).
-_INLINED = (contact_scalar, pair_scalar, sides_scalar, normal_scalar, base_motion_scalar, drive_motion_scalar,
-            body_force_scalar, primary_acceleration_scalar, primary_powers_scalar, rotate_scalar,
-            rotate_series_scalar, record_row, structure_acceleration_scalar, structure_energy_scalar,
-            structure_powers_scalar)
+_INLINED = (contact_scalar, pair_scalar, sides_scalar, normal_scalar, base_motion_scalar,
+            drive_motion_scalar, body_force_scalar, predict_scalar, respond_scalar,
+            energy_scalar, rotate_scalar, rotate_series_scalar, record_row,
+            structure_acceleration_scalar)
 
 
 def _source_files() -> tuple[str, ...]:
@@ -367,16 +353,17 @@ if AVAILABLE:
         """Advance system ``b`` of the packed batch by ``n_records × record_every`` steps in
         place, writing a sample after every ``record_every`` steps into ``rec[b]``
         (:func:`jaxdamp.physics.energy.record_row`; ``bounds``: the species' index ranges): row
-        ``st[b]`` holds its state (the fields :data:`STATE_FIELDS` at offsets ``so``), row
-        ``pm[b]`` its parameters (:data:`PARAM_FIELDS` at offsets ``po``; contact tables of
-        ``n_species`` species and ``n_cols`` columns; ``n_lines`` lines of the random base
-        motion; ``ndof`` degrees of freedom of the primary structure), ``sid`` the grains'
-        species.
+        ``st[b]`` holds its state (the field NAME of ``State`` at ``so.NAME``), row ``pm[b]``
+        its parameters (of ``Params`` at ``po.NAME``); ``dims`` (:data:`Dims`) selects the
+        mount, the law and the container and sizes the views; ``sid`` the grains' species.
 
-        A step is two passes over the grains and one over the listed pairs: (1) the
-        velocity-Verlet predictor, gravity and drag, the six walls, the drag power and the
-        displacement since the last list build (rebuilt from the predicted positions when a
-        grain moved more than ``skin / 2``); (2) the pairs; (3) the primary and the corrector,
+        The skeleton of :func:`jaxdamp.physics.integrate.step` in loops: the mount
+        (:mod:`jaxdamp.physics.mounts`) predicts the box, then two passes over the grains and
+        one over the listed pairs: (1) the velocity-Verlet predictor, gravity and drag, the
+        floor, the lid and the container's sides (:mod:`jaxdamp.physics.containers`), the drag
+        power and the displacement since the last list build (rebuilt from the predicted
+        positions when a grain moved more than ``skin / 2``); (2) the pairs; (3) the mount's
+        response to the grains' force and the corrector,
         with the finite-check of the new accelerations, then the rotation. Divisions by mass and
         inertia are multiplications by reciprocals computed once per call. The arithmetic
         without branches runs in loops that compile to SIMD code: the predictor and the
@@ -386,7 +373,8 @@ if AVAILABLE:
         n = sid.shape[0]
         row = st[b]  # so.NAME, po.NAME: where the field NAME starts in the rows
         prow = pm[b]
-        system, law, shape = dims.system, dims.law, dims.shape
+        mount, law, shape = dims.mount, dims.law, dims.shape
+        prescribed = mount == _DRIVEN
         S, F, n_lines, ndof, n_section = (dims.n_species, dims.n_cols, dims.n_lines, dims.ndof,
                                           dims.n_section)
         rb = row[so.r:so.r + 3 * n].reshape((n, 3))
@@ -403,20 +391,10 @@ if AVAILABLE:
         wtab = prow[po.wall_table:po.wall_table + S * F].reshape((S, F))
         Lz, grav = prow[po.Lz], prow[po.gravity]
         section = prow[po.section:po.section + n_section]  # the container's (containers)
-        M, K, C, U = prow[po.M], prow[po.K], prow[po.C], prow[po.U]
-        amp, om, z_off, dt = prow[po.amplitude], prow[po.omega], prow[po.z_offset], prow[po.dt]
+        dt = prow[po.dt]
         drag, t_win = prow[po.drag], prow[po.t_window]
         ex, ey, ez = prow[po.ex], prow[po.ey], prow[po.ez]  # the excitation axis
-        lines = prow[po.lines:po.lines + 3 * n_lines].reshape((n_lines, 3))
-        sh_a, sh_t0, sh_T = prow[po.shock_a], prow[po.shock_t0], prow[po.shock_T]
-        # a multi-DOF structure (ndof > 1): its matrices (box first) and the other DOFs, views
-        nd2 = ndof * ndof
-        sM = prow[po.s_M:po.s_M + nd2].reshape((ndof, ndof))
-        sMinv = prow[po.s_Minv:po.s_Minv + nd2].reshape((ndof, ndof))
-        sK = prow[po.s_K:po.s_K + nd2].reshape((ndof, ndof))
-        sC = prow[po.s_C:po.s_C + nd2].reshape((ndof, ndof))
-        sr = prow[po.s_r:po.s_r + ndof]
-        sb = prow[po.s_b:po.s_b + ndof]
+        # a multi-DOF structure (ndof > 1): the other DOFs (views) and scratch of its size
         ny = ndof - 1
         yv = row[so.y:so.y + ny]
         ydv = row[so.yd:so.yd + ny]
@@ -425,7 +403,7 @@ if AVAILABLE:
         ydp = np.empty(ny)
         xs = np.empty(ndof)
         xds = np.empty(ndof)
-        acc = np.empty(ndof)
+        acc = np.zeros(ndof)  # (z'', y''): y'' stays 0 where the mount does not move y
         tmp = np.empty(ndof)
         pi = np.empty(4 * n + 16, np.int64)  # grown by _pairs when a bed lists more
         pj = np.empty(4 * n + 16, np.int64)
@@ -487,14 +465,10 @@ if AVAILABLE:
             imp1 = 0.0
             for _ in range(record_every):
                 t1 = t + dt
-                if system == 0:
-                    z1 = z + dt * zd + hdt2 * zdd
-                    zdp = zd + dt * zdd
-                    for j in range(ny):
-                        y1[j] = yv[j] + dt * ydv[j] + hdt2 * yddv[j]
-                        ydp[j] = ydv[j] + dt * yddv[j]
-                else:
-                    z1, zdp, zdd1 = drive_motion_scalar(t1, z_off, amp, om)
+                z1, zdp = predict_scalar(mount, t1, dt, z, zd, zdd, prow, po)
+                for j in range(ny):
+                    y1[j] = yv[j] + dt * ydv[j] + hdt2 * yddv[j]
+                    ydp[j] = ydv[j] + dt * yddv[j]
                 # pass 1: predictor, body force, walls, drag power, displacement since the build
                 e_el = 0.0
                 pw_n = 0.0
@@ -589,30 +563,10 @@ if AVAILABLE:
                 # pass 2: the grain pairs
                 pp_e, pp_n, pp_f = _pair_forces(law, r1, vp, rw, Rb, pi, pj, pc, npairs, F, T)
                 e_el += pp_e
-                # pass 3: the primary, rotation and corrector
-                if system == 0 and ndof > 1:
-                    u1, ud1 = base_motion_scalar(t1, U, om, lines, sh_a, sh_t0, sh_T)
-                    cos1 = math.cos(om * t1)
-                    xs[0] = z1
-                    xds[0] = zdp
-                    for j in range(ny):
-                        xs[j + 1] = y1[j]
-                        xds[j + 1] = ydp[j]
-                    structure_acceleration_scalar(acc, xs, xds, u1, ud1, box_z, cos1, sMinv, sK,
-                                                  sC, sr, sb, tmp)
-                    zdd1 = acc[0]
-                    zd1 = zd + 0.5 * dt * (zdd + zdd1)
-                    pw[_IN], pw[_PRIM] = structure_powers_scalar(xs, xds, u1, ud1, cos1, sK, sC,
-                                                                 sr, sb)
-                elif system == 0:
-                    u1, ud1 = base_motion_scalar(t1, U, om, lines, sh_a, sh_t0, sh_T)
-                    zdd1 = primary_acceleration_scalar(z1, zdp, u1, ud1, box_z, M, K, C)
-                    zd1 = zd + 0.5 * dt * (zdd + zdd1)
-                    pw[_IN], pw[_PRIM] = primary_powers_scalar(z1, zdp, u1, ud1, K, C)
-                else:
-                    zd1 = zdp
-                    pw[_IN] = -box_z * zdp
-                    pw[_PRIM] = 0.0
+                # pass 3: the mount, rotation and corrector
+                zdd1, pw[_IN], pw[_PRIM] = respond_scalar(mount, t1, z1, zdp, y1, ydp, box_z,
+                                                          prow, po, n_lines, xs, xds, acc, tmp)
+                zd1 = zdp if prescribed else zd + 0.5 * dt * (zdd + zdd1)
                 pw[_PPN], pw[_PPF], pw[_PWN], pw[_PWF] = pp_n, pp_f, pw_n, pw_f
                 pw[_DRAG] = drag * pdrag
                 health = box_z + e_el + pp_n + pp_f + pw_n + pw_f + z1 + zdp + zdd1
@@ -659,11 +613,10 @@ if AVAILABLE:
                 for c in range(N_CHANNELS):
                     work[c] = work[c] + 0.5 * dt * (power[c] + pw[c])
                     power[c] = pw[c]
-                if system == 0:
-                    for j in range(ny):
-                        ydv[j] = ydv[j] + 0.5 * dt * (yddv[j] + acc[j + 1])
-                        yddv[j] = acc[j + 1]
-                        yv[j] = y1[j]
+                for j in range(ny):
+                    ydv[j] = ydv[j] + 0.5 * dt * (yddv[j] + acc[j + 1])
+                    yddv[j] = acc[j + 1]
+                    yv[j] = y1[j]
                 z, zd, zdd, t = z1, zd1, zdd1, t1
                 if t1 >= t_win:
                     zmax = max(zmax, z1)
@@ -671,18 +624,7 @@ if AVAILABLE:
                 step += 1
                 imp0 += floor_lid
                 imp1 += box_z
-            e_prim = 0.0
-            if system == 0:
-                u_t = base_motion_scalar(t, U, om, lines, sh_a, sh_t0, sh_T)[0]
-                if ndof > 1:
-                    xs[0] = z
-                    xds[0] = zd
-                    for j in range(ny):
-                        xs[j + 1] = yv[j]
-                        xds[j + 1] = ydv[j]
-                    e_prim = structure_energy_scalar(xs, xds, u_t, sM, sK, sr)
-                else:
-                    e_prim = 0.5 * M * zd * zd + 0.5 * K * (z - u_t) * (z - u_t)
+            e_prim = energy_scalar(mount, t, z, zd, yv, ydv, prow, po, n_lines, xs, xds)
             record_row(rec[b, k_rec], t, z, zd, yv, e_prim, rb, vb, wb, mb, Ib, Rb, grav, Lz, ez,
                        e_el, e_start, imp0 / record_every, imp1 / record_every, n_floor, n_lid,
                        work, bounds)
@@ -715,16 +657,12 @@ if AVAILABLE:
 
 def layout(tree):
     """``[(field, shape without batch axis, dtype)]`` of a batched pytree dataclass."""
-    import dataclasses
-
     return [(f.name, tuple(getattr(tree, f.name).shape[1:]), getattr(tree, f.name).dtype)
             for f in dataclasses.fields(tree)]
 
 
 def pack(tree):
     """Batched pytree dataclass -> ``(B, total)`` float64 JAX array (integers exactly < 2^53)."""
-    import dataclasses
-
     import jax.numpy as jnp
 
     leaves = [getattr(tree, f.name) for f in dataclasses.fields(tree)]
@@ -735,8 +673,6 @@ def pack(tree):
 
 def unpack_like(packed, tree):
     """Inverse of :func:`pack` in JAX, with ``tree`` giving shapes and dtypes."""
-    import dataclasses
-
     import jax.numpy as jnp
 
     out, k = {}, 0
@@ -778,7 +714,7 @@ def advance_packed(model, state_packed, params_packed, state_layout, param_layou
     rec = np.empty((st.shape[0], int(n_records), width))
     bounds = np.array([sl.start for sl in model.species_slices()] + [model.n], np.int64)
     kernel = _advance if threads else _advance_serial
-    dims = Dims(system=SYSTEMS[model.system], law=LAWS[model.law].id,
+    dims = Dims(mount=mount_of(model).id, law=LAWS[model.law].id,
                 shape=CONTAINERS[model.container].id, n_species=int(table[0]),
                 n_cols=int(table[2]), n_lines=int(shapes["lines"][0]),
                 ndof=int(shapes["s_r"][0]), n_section=int(shapes["section"][0]))

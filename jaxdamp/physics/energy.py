@@ -13,10 +13,9 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
-from jaxdamp.physics import structure
 from jaxdamp.physics.contact import scalar_form
-from jaxdamp.physics.excitation import base_motion
 from jaxdamp.physics.model import CH, N_CHANNELS, Model, Params, State
+from jaxdamp.physics.mounts import mount_of
 
 
 def grain_energies(st: State, p: Params):
@@ -28,16 +27,9 @@ def grain_energies(st: State, p: Params):
 
 
 def primary_energy(st: State, p: Params, model: Model):
-    """Kinetic + spring energy of the primary [J] (0 for S2; a multi-DOF structure's by
-    :func:`jaxdamp.physics.structure.energy`)."""
-    if model.system != "primary":
-        return jnp.zeros(())
-    u, _ = base_motion(st.t, p)
-    if model.dofs > 1:
-        x = jnp.concatenate([jnp.reshape(st.z, (1,)), st.y])
-        xd = jnp.concatenate([jnp.reshape(st.zd, (1,)), st.yd])
-        return structure.energy(x, xd, u, p)
-    return 0.5 * p.M * st.zd**2 + 0.5 * p.K * (st.z - u) ** 2
+    """Mechanical energy of the box's mount [J] (:mod:`jaxdamp.physics.mounts`: the primary's
+    kinetic + spring energy, a structure's, 0 for a prescribed motion)."""
+    return mount_of(model).energy(st.z, st.zd, st.y, st.yd, st.t, p)
 
 
 def mechanical_energy(st: State, p: Params, model: Model):

@@ -8,15 +8,17 @@ One step from ``t`` to ``t + dt``::
     v(t+dt)  = v + (a + a(t+dt)) dt/2
     q(t+dt)  = exp(ω_mid dt / 2) ⊗ q, renormalised      ω_mid = ω + α dt/2
 
-The box either follows the primary system of S1, ``M z'' = -C(z'-u') - K(z-u) + F_gz`` with
-``u = U cos Ωt`` (``z = 0`` is the empty box's static equilibrium), or the prescribed motion of
-S2, ``z = z_offset + A_d cos Ωt``. Work channels (:data:`jaxdamp.physics.model.CHANNELS`) are
-integrated with the trapezoid rule over the powers at consecutive force evaluations.
+The box moves as its mount says (:mod:`jaxdamp.physics.mounts`: the primary system of S1,
+a multi-DOF structure, or the prescribed motion of S2): the mount predicts the box's position
+and velocity, gives its acceleration from the grains' force and its powers and energy; a
+prescribed motion's velocity is the drive's, an integrated one's is velocity Verlet's. Work
+channels (:data:`jaxdamp.physics.model.CHANNELS`) are integrated with the trapezoid rule over
+the powers at consecutive force evaluations.
 
-The pieces the native kernel (:mod:`jaxdamp.engine.native`) shares are defined here once: the body
-force (gravity and settling drag), the primary's acceleration and powers (pure arithmetic: one
-function serves JAX arrays and, compiled, the kernel's scalars) and the quaternion rotation
-(JAX form :func:`rotate`, scalar form :func:`rotate_scalar` side by side).
+The pieces the native kernel (:mod:`jaxdamp.engine.native`) shares are defined here once: the
+body force (gravity and settling drag: pure arithmetic, one function serves JAX arrays and,
+compiled, the kernel's scalars) and the quaternion rotation (JAX form :func:`rotate`, scalar
+form :func:`rotate_scalar` side by side).
 """
 
 from __future__ import annotations
@@ -27,11 +29,10 @@ from typing import NamedTuple
 
 import jax.numpy as jnp
 
-from jaxdamp.physics import structure
 from jaxdamp.physics.contact import safe_norm, scalar_form
 from jaxdamp.physics.energy import mechanical_energy
-from jaxdamp.physics.excitation import base_motion, drive_motion
 from jaxdamp.physics.model import N_CHANNELS, Model, Params, State
+from jaxdamp.physics.mounts import mount_of
 from jaxdamp.physics.pairs import pair_forces
 from jaxdamp.physics.walls import wall_forces
 
@@ -74,56 +75,15 @@ def body_force(m, vx, vy, vz, gravity, drag):
     return -m * drag * vx, -m * drag * vy, m * (-gravity - drag * vz)
 
 
-def primary_acceleration(z, zd, u, ud, box_z, M, K, C):
-    """``z'' = (-C (z' - u') - K (z - u) + F_gz) / M`` [m/s²] of the primary (S1), with the
-    base at ``u`` [m], ``u'`` [m/s] and the grains' force on the box ``F_gz`` [N]."""
-    return (-C * (zd - ud) - K * (z - u) + box_z) / M
-
-
-def primary_powers(z, zd, u, ud, K, C):
-    """Power of the base on the primary through spring and damper,
-    ``-u' (K (z - u) + C (z' - u'))``, and the loss in the damper ``C (z' - u')²`` [W]."""
-    return -ud * (K * (z - u) + C * (zd - ud)), C * (zd - ud) * (zd - ud)
-
-
 body_force_scalar = scalar_form(body_force)
-primary_acceleration_scalar = scalar_form(primary_acceleration)
-primary_powers_scalar = scalar_form(primary_powers)
 
 
-def _powers(fo: Forces, z, zd, t, v_pred, p: Params, model: Model, y=None, yd=None):
-    """Channel powers [W] at one force evaluation (see :data:`jaxdamp.physics.model.CHANNELS`);
-    ``y``, ``yd``: the structure's other degrees of freedom (``model.dofs > 1``)."""
-    if model.system == "primary" and model.dofs > 1:
-        u, ud = base_motion(t, p)
-        p_in, p_c = structure.powers(_dofs(z, y), _dofs(zd, yd), u, ud,
-                                     jnp.cos(p.omega * t), p)
-    elif model.system == "primary":
-        u, ud = base_motion(t, p)
-        p_in, p_c = primary_powers(z, zd, u, ud, p.K, p.C)
-    else:  # work of the moving walls on the grains
-        p_in = -fo.box_z * zd
-        p_c = jnp.zeros_like(p_in)
+def _powers(fo: Forces, mount, z, zd, y, yd, t, v_pred, p: Params):
+    """Channel powers [W] at one force evaluation (see :data:`jaxdamp.physics.model.CHANNELS`):
+    the mount's input and damping, the granular losses and the settling drag."""
+    p_in, p_c = mount.powers(fo.box_z, z, zd, y, yd, t, p)
     p_drag = p.drag * jnp.sum(p.mass * jnp.sum(v_pred * v_pred, axis=-1))
     return jnp.concatenate([jnp.stack([p_in, p_c]), fo.losses, p_drag[None]])
-
-
-def _primary_acceleration(z, zd, t, box_z, p: Params):
-    u, ud = base_motion(t, p)
-    return primary_acceleration(z, zd, u, ud, box_z, p.M, p.K, p.C)
-
-
-def _dofs(z, y):
-    """The structure's vector ``(z, y...)`` (the box first)."""
-    return jnp.concatenate([jnp.reshape(z, (1,)), y])
-
-
-def _structure_acceleration(z, zd, y, yd, t, box_z, p: Params):
-    """``(z'', y'')`` of a multi-DOF structure (:func:`jaxdamp.physics.structure.acceleration`)."""
-    u, ud = base_motion(t, p)
-    a = structure.acceleration(_dofs(z, y), _dofs(zd, yd), u, ud, box_z,
-                               jnp.cos(p.omega * t), p)
-    return a[0], a[1:]
 
 
 def rotate(q, w, dt):
@@ -243,19 +203,14 @@ def initial_state(r, v, w, q, z, zd, t, idx, p: Params, model: Model, e_start=No
         x = jnp.concatenate([x, jnp.zeros(model.dofs - x.shape[0])])
         xd = jnp.concatenate([xd, jnp.zeros(model.dofs - xd.shape[0])])
     y, yd = x[1:model.dofs], xd[1:model.dofs]
-    if model.system == "primary":
+    mount = mount_of(model)
+    if mount.prescribed:
+        z, zd = mount.predict(x[0], xd[0], 0.0, t, 0.0, p)
+    else:
         z, zd = x[0], xd[0]
-    else:
-        z, zd, _ = drive_motion(t, p)
     fo = forces(r, v, w, z, zd, idx, p, model)
-    ydd = jnp.zeros_like(y)
-    if model.system == "primary" and model.dofs > 1:
-        zdd, ydd = _structure_acceleration(z, zd, y, yd, t, fo.box_z, p)
-    elif model.system == "primary":
-        zdd = _primary_acceleration(z, zd, t, fo.box_z, p)
-    else:
-        zdd = drive_motion(t, p)[2]
-    power = _powers(fo, z, zd, t, v, p, model, y, yd)
+    zdd, ydd = mount.accelerate(z, zd, y, yd, t, fo.box_z, p)
+    power = _powers(fo, mount, z, zd, y, yd, t, v, p)
     st = _finish(
         dict(
             r=r, v=v, w=w, q=jnp.asarray(q), a=fo.force / p.mass[:, None],
@@ -275,31 +230,21 @@ def step(st: State, idx, p: Params, model: Model) -> State:
     """Advance one system by one time step ``p.dt``. ``idx``: neighbour block ``(N, K)``."""
     dt = p.dt
     t1 = st.t + dt
+    mount = mount_of(model)
     r1 = st.r + dt * st.v + 0.5 * dt * dt * st.a
     v_pred = st.v + dt * st.a
     w_pred = st.w + dt * st.alpha
-    if model.system == "primary":
-        z1 = st.z + dt * st.zd + 0.5 * dt * dt * st.zdd
-        zd_pred = st.zd + dt * st.zdd
-    else:
-        z1, zd_pred, zdd1 = drive_motion(t1, p)
+    z1, zd_pred = mount.predict(st.z, st.zd, st.zdd, t1, dt, p)
     y1 = st.y + dt * st.yd + 0.5 * dt * dt * st.ydd
     yd_pred = st.yd + dt * st.ydd
 
     fo = forces(r1, v_pred, w_pred, z1, zd_pred, idx, p, model)
     a1 = fo.force / p.mass[:, None]
     alpha1 = fo.torque / p.inertia[:, None]
-    ydd1 = st.ydd
-    if model.system == "primary" and model.dofs > 1:
-        zdd1, ydd1 = _structure_acceleration(z1, zd_pred, y1, yd_pred, t1, fo.box_z, p)
-        zd1 = st.zd + 0.5 * dt * (st.zdd + zdd1)
-    elif model.system == "primary":
-        zdd1 = _primary_acceleration(z1, zd_pred, t1, fo.box_z, p)
-        zd1 = st.zd + 0.5 * dt * (st.zdd + zdd1)
-    else:
-        zd1 = zd_pred
+    zdd1, ydd1 = mount.accelerate(z1, zd_pred, y1, yd_pred, t1, fo.box_z, p)
+    zd1 = zd_pred if mount.prescribed else st.zd + 0.5 * dt * (st.zdd + zdd1)
 
-    power = _powers(fo, z1, zd_pred, t1, v_pred, p, model, y1, yd_pred)
+    power = _powers(fo, mount, z1, zd_pred, y1, yd_pred, t1, v_pred, p)
     in_window = t1 >= p.t_window
     return _finish(
         dict(
