@@ -105,6 +105,37 @@ class Box:
 
 
 @dataclass(frozen=True)
+class Container:
+    """A container other than the box of ``[box]``, chosen by name (``[container]`` in TOML;
+    :data:`jaxdamp.physics.containers.CONTAINERS`).
+
+    Attributes:
+      shape: the container's name, e.g. ``"cylinder"``.
+      Lz: inner height, floor to lid [m].
+      size: the container's own dimensions [m] by name, in TOML keys of the table beside
+        ``shape`` (the cylinder: ``radius``); each container names its own
+        (``Container.fields``), stored here as sorted ``(name, value)`` pairs.
+      wall: wall :class:`Material`; ``None`` means the material of the first species.
+
+    Example (TOML)::
+
+        [container]
+        shape = "cylinder"
+        radius = 0.02
+        Lz = 0.12
+    """
+
+    shape: str
+    Lz: float
+    size: tuple[tuple[str, float], ...] = ()
+    wall: Material | None = None
+
+    def dimension(self, name: str) -> float:
+        """The dimension ``name`` [m] (``KeyError`` if the table does not give it)."""
+        return dict(self.size)[name]
+
+
+@dataclass(frozen=True)
 class Primary:
     """The 1-DOF primary system of S1: ``M z'' = -C(z'-u') - K(z-u) + F_gz``.
 
@@ -306,7 +337,9 @@ class Config:
       system: ``"primary"`` (S1), ``"driven"`` (S2) or ``"impact"`` (S3).
       frequency: excitation frequency ``f`` [Hz] (``Ω = 2π f``).
       grains: the grain species (an empty tuple means an empty box).
-      box: the container.
+      box: the container when it is the rectangular box (``[box]``).
+      container: the container when it is another registered shape (``[container]``); a
+        configuration gives exactly one of ``box`` and ``container``.
       primary: the primary system (required for S1).
       drive: the prescribed box motion (required for S2).
       impactor: the single particle (required for S3).
@@ -338,7 +371,7 @@ class Config:
     system: str
     frequency: float
     grains: tuple[Species, ...]
-    box: Box
+    box: Box | None = None
     primary: Primary | None = None
     drive: Drive | None = None
     impactor: Impactor | None = None
@@ -353,6 +386,7 @@ class Config:
     contact_law: str = "hertz"
     name: str = "custom"
     notes: str = ""
+    container: Container | None = None
 
     # -- convenience -------------------------------------------------------------------------
     @property
@@ -365,15 +399,20 @@ class Config:
 
     @property
     def wall_material(self) -> Material:
-        if self.box.wall is not None:
-            return self.box.wall
+        wall = (self.box or self.container).wall
+        if wall is not None:
+            return wall
         if not self.grains:
             return Material(E=1.0, nu=0.0, density=1.0)
         return self.grains[0].material
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain nested dicts and lists (JSON/TOML-ready)."""
-        return _listify(dataclasses.asdict(self))
+        """Plain nested dicts and lists (JSON/TOML-ready); a container's ``size`` is written
+        as keys of its table, as in TOML."""
+        d = _listify(dataclasses.asdict(self))
+        if d.get("container") is not None:
+            d["container"].update({k: v for k, v in d["container"].pop("size")})
+        return d
 
     def to_json(self) -> str:
         return json.dumps(self.to_dict(), sort_keys=True)
@@ -404,6 +443,8 @@ def _build(cls, data: Any, path: str):
         return data
     if not isinstance(data, dict):
         raise ConfigError(f"{path or 'config'}: expected a table, got {data!r}")
+    if cls is Container:
+        data = _container_table(data, path)
     known = {f.name: f for f in fields(cls)}
     unknown = sorted(set(data) - set(known))
     if unknown:
@@ -417,6 +458,26 @@ def _build(cls, data: Any, path: str):
             _refuse_bool(known[name], value, sub)  # (a table's own message says "a table")
         kwargs[name] = _convert(cls, name, value, sub)
     return cls(**kwargs)
+
+
+def _container_table(data: dict, path: str) -> dict:
+    """A ``[container]`` table as :class:`Container` fields: every key beside ``shape``,
+    ``Lz`` and ``wall`` is one of the container's dimensions [m] (checked against the
+    container's own list by :mod:`jaxdamp.validation`)."""
+    out = {k: v for k, v in data.items() if k in ("shape", "Lz", "wall")}
+    size = []
+    for k, v in data.items():
+        if k in ("shape", "Lz", "wall"):
+            continue
+        if k == "size" and isinstance(v, (list, tuple)):  # the stored form, pairs
+            size += [tuple(pair) for pair in v]
+            continue
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise ConfigError(f"{path}.{k} = {v!r}: a dimension of the container, must be a "
+                              "number [m]")
+        size.append((k, float(v)))
+    out["size"] = tuple(sorted(size))
+    return out
 
 
 def _refuse_bool(f: dataclasses.Field, value: Any, path: str) -> None:
@@ -457,6 +518,8 @@ def missing_keys(data: Any, cls=None, path: str = "") -> list[str]:
     if not isinstance(data, dict):
         return []
     out = [f"{path}.{n}" if path else n for n in _required(cls) if data.get(n) is None]
+    if cls is Config and data.get("box") is None and data.get("container") is None:
+        out.insert(min(3, len(out)), "box")  # the container: [box] or [container]
     for name, value in data.items():
         sub = f"{path}.{name}" if path else name
         if (cls, name) in _NESTED:
@@ -474,7 +537,7 @@ _TOP_KEYS = {
     "system": 'system ("primary", "driven" or "impact")',
     "frequency": "frequency [Hz]",
     "grains": "the grains ([[grains]] tables: count, radius, [grains.material])",
-    "box": "the box ([box] table: Lx, Ly, Lz [m])",
+    "box": "the box ([box] table: Lx, Ly, Lz [m]; or a [container] table with its shape)",
 }
 
 
@@ -492,7 +555,9 @@ _NESTED = {
     (Config, "shock"): Shock,
     (Config, "structure"): Structure,
     (Config, "numerics"): Numerics,
+    (Config, "container"): Container,
     (Box, "wall"): Material,
+    (Container, "wall"): Material,
     (Species, "material"): Material,
 }
 
@@ -574,7 +639,17 @@ def load_toml(path: str, base: Config | None = None) -> Config:
                 "or start a whole file from a preset: jaxdamp presets --show NAME > my.toml "
                 "(the names: jaxdamp presets)")
         return from_dict(data)
-    return from_dict(_deep_merge(base.to_dict(), data))
+    return from_dict(_one_container(_deep_merge(base.to_dict(), data), set(data)))
+
+
+def _one_container(data: dict, given) -> dict:
+    """A configuration has one container: where ``given`` (the keys a file or the overrides
+    set) names one of ``box`` / ``container`` and not the other, the other is dropped (a
+    ``[container]`` file over a box preset makes a cylinder, not both)."""
+    for table, other in (("container", "box"), ("box", "container")):
+        if table in given and other not in given:
+            data[other] = None
+    return data
 
 
 def _deep_merge(base: dict, top: dict) -> dict:
@@ -615,7 +690,9 @@ def apply_overrides(config: Config, overrides: list[str] | dict[str, Any]) -> Co
     """Apply dotted-key overrides such as ``box.Lz=0.1225`` or ``grains.0.count=100``.
 
     ``overrides`` is a list of ``"key=value"`` strings (CLI ``--set``) or a dict of key -> value.
-    Setting a missing optional section (``drive.amplitude=0.02`` on an S1 config) creates it.
+    Setting a missing optional section (``drive.amplitude=0.02`` on an S1 config) creates it;
+    setting a ``container`` table on a box configuration (``container.shape=cylinder``,
+    ``container.radius=0.02``, ``container.Lz=0.12``) replaces the box, and back.
     Raises :class:`ConfigError` naming the key for malformed items or unknown keys.
     """
     if isinstance(overrides, dict):
@@ -636,6 +713,9 @@ def apply_overrides(config: Config, overrides: list[str] | dict[str, Any]) -> Co
     created: set = set()  # tables made by these overrides: any key may be added (checked later)
     for key, value in items:
         _set_path(data, key, value, created)
+    tops = {key.split(".", 1)[0] for key, _ in items}
+    if "container" in tops and config.container is None or "box" in tops and config.box is None:
+        _one_container(data, tops)  # a new container table replaces the other one
     return from_dict(data)
 
 

@@ -242,6 +242,43 @@ def check_periods(config: Config, frequency: float | None = None) -> None:
             "or the frequency")
 
 
+def _container(config: Config) -> None:
+    """Exactly one container table: ``[box]`` (Lx, Ly, Lz) or ``[container]`` (a registered
+    shape, its height and its own dimensions, :mod:`jaxdamp.physics.containers`)."""
+    from jaxdamp.physics.containers import CONTAINERS
+
+    if (config.box is None) == (config.container is None):
+        given = "both" if config.box is not None else "neither"
+        raise ConfigError(f"the container: give exactly one of [box] (Lx, Ly, Lz) and "
+                          f"[container] (shape, Lz and its dimensions); this gives {given}")
+    if config.box is not None:
+        box = config.box
+        for side in ("Lx", "Ly", "Lz"):
+            _positive(getattr(box, side), f"box.{side}")
+        if box.wall is not None:
+            _material(box.wall, "box.wall", grain=False)
+        return
+    c = config.container
+    shapes = [n for n in CONTAINERS if n != "box"]
+    if c.shape not in shapes:
+        hint = " (the box is the [box] table)" if c.shape == "box" else ""
+        raise ConfigError(f"container.shape = {c.shape!r}: expected one of {shapes}{hint}")
+    _positive(c.Lz, "container.Lz")
+    fields = CONTAINERS[c.shape].fields
+    names = [k for k, _ in c.size]
+    missing = [f for f in fields if f not in names]
+    extra = [k for k in names if k not in fields]
+    if missing or extra:
+        what = (f"lacks {', '.join(missing)}" if missing
+                else f"does not know {', '.join(extra)}")
+        raise ConfigError(f"container: a {c.shape} {what}; its dimensions are "
+                          f"{', '.join(fields)} [m] (and Lz)")
+    for k, v in c.size:
+        _positive(v, f"container.{k}")
+    if c.wall is not None:
+        _material(c.wall, "container.wall", grain=False)
+
+
 def validate(config: Config) -> Config:
     """Raise :class:`ConfigError` for any invalid value; return the config unchanged."""
     if config.system not in SYSTEMS:
@@ -258,19 +295,17 @@ def validate(config: Config) -> Config:
         if config.contact_law != "hertz":
             raise ConfigError("wall_damping = 'calibrated' applies to the Hertz law (the "
                               "linear law's restitution does not depend on the pair's size)")
-        wall_e = config.box.wall.restitution if config.box.wall is not None else None
+        table = "box" if config.box is not None else "container"
+        wall = getattr(config, table).wall if getattr(config, table) is not None else None
+        wall_e = wall.restitution if wall is not None else None
         for i, sp in enumerate(config.grains):
             if wall_e is None and sp.material.restitution is None:
                 raise ConfigError(f"wall_damping = 'calibrated': grains.{i}.material has no "
-                                  "restitution (thesis form gamma_n) and box.wall gives none; "
-                                  "set a restitution or use wall_damping = 'mixed'")
+                                  f"restitution (thesis form gamma_n) and {table}.wall gives "
+                                  "none; set a restitution or use wall_damping = 'mixed'")
     _positive(config.frequency, "frequency")
     _positive(config.gravity, "gravity", allow_zero=True)
-    box = config.box
-    for side in ("Lx", "Ly", "Lz"):
-        _positive(getattr(box, side), f"box.{side}")
-    if box.wall is not None:
-        _material(box.wall, "box.wall", grain=False)
+    _container(config)
     if config.system == "impact":
         return _validate_impact(config)
 
@@ -345,6 +380,7 @@ def validate(config: Config) -> Config:
     from jaxdamp.physics.containers import container
 
     vessel = container(config)
+    lid = vessel.height(config)
     volume = 0.0
     for i, sp in enumerate(config.grains):
         name = f"grains.{i}"
@@ -358,16 +394,16 @@ def validate(config: Config) -> Config:
         grain = (f"{name}.radius = {sp.radius} (largest {r_max:.4g} m): a grain of diameter "
                  f"{2 * r_max:.4g} m")
         why = vessel.fit_error(config, 2.0 * r_max, grain)
-        if why is None and 2.0 * r_max >= box.Lz:
-            why = f"{grain} does not fit {vessel.lid_key} = {box.Lz} m"
+        if why is None and 2.0 * r_max >= lid:
+            why = f"{grain} does not fit {vessel.lid_key} = {lid} m"
         if why is not None:
             raise ConfigError(why)
         volume += sp.count * 4.0 / 3.0 * math.pi * sp.radius**3
     if volume > 0:
         height = volume / (_DENSEST * vessel.base_area(config))
-        if height >= box.Lz:
+        if height >= lid:
             raise ConfigError(
-                f"{vessel.lid_key} = {box.Lz} m: the grains cannot fit — even packed at the "
+                f"{vessel.lid_key} = {lid} m: the grains cannot fit — even packed at the "
                 f"densest possible fraction {_DENSEST:.3f} they fill {height:.4g} m of the "
                 f"{vessel.describe(config)}"
             )
@@ -376,8 +412,9 @@ def validate(config: Config) -> Config:
     from jaxdamp.physics.model import collision_time_limit, config_dt, grain_radii, impact_speed
 
     law = LAWS[config.contact_law]
-    if box.wall is not None:
-        law.check(box.wall, "box.wall")  # the law's own inputs (damping, restitution, ...)
+    wall = vessel.wall(config)
+    if wall is not None:  # the law's own inputs (damping, restitution, ...)
+        law.check(wall, f"{vessel.lid_key.split('.')[0]}.wall")
     for i, sp in enumerate(config.grains):
         law.check(sp.material, f"grains.{i}.material")
     radii = grain_radii(config)

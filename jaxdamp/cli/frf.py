@@ -68,6 +68,7 @@ def cmd_frf(args) -> int:
     )
     from jaxdamp.figures import frf_figure, save
     from jaxdamp.io.sweepfile import write_fit
+    from jaxdamp.physics.containers import container
     from jaxdamp.physics.model import grain_mass
     from jaxdamp.studies.grid import steady_or_window
     from jaxdamp.studies.sweep import sweep
@@ -104,7 +105,7 @@ def cmd_frf(args) -> int:
         fits.append(None if why else (fr["M_ef"], fr["C_ef"]))
         failures.append(why)
         label = (f"Lz = {lz[j]:g} m" if lz else f"gap = {cfg.impactor.gap:g} m" if impact
-                 else f"Lz = {cfg.box.Lz:g} m")
+                 else f"Lz = {container(cfg).height(cfg):g} m")
         k = int(np.argmax(Z[:, j]))
         lines.append(f"{label}: peak Z/U = {Z[k, j] / p.U:.4g} at {freqs[k]:.4g} Hz; "
                      + "; ".join(_fit_text(fit_all[w][j], p.C) for w in order))

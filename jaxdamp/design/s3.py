@@ -31,6 +31,7 @@ import numpy as np
 
 from jaxdamp.config import Config, ConfigError, apply_overrides
 from jaxdamp.design.objectives import Estimate, Objective
+from jaxdamp.physics.containers import container
 
 
 def _first_harmonic_amplitude(t, z, omega, weights):
@@ -81,7 +82,8 @@ class S3Problem:
         self._long = None
         self.fallbacks = 0  # evaluations that fell back to long averages
         self._long_settings = (float(fallback_duration), float(fallback_window))
-        self.h_bed = float(config.box.Lz - config.impactor.gap) if h_bed is None else h_bed
+        lid = container(config).height(config)
+        self.h_bed = float(lid - config.impactor.gap) if h_bed is None else h_bed
         self.freqs = objective.frequencies(config)
         self.dt, self.record_every, self.n_rec = smooth.smooth_schedule([config])
         self.duration = self.n_rec * self.record_every * self.dt

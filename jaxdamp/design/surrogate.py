@@ -20,6 +20,7 @@ import numpy as np
 
 from jaxdamp.config import Config, Impactor
 from jaxdamp.design.objectives import Objective
+from jaxdamp.physics.containers import container
 
 
 def s3_config(config: Config, h_bed: float, restitution: float = 0.0) -> Config:
@@ -30,7 +31,7 @@ def s3_config(config: Config, h_bed: float, restitution: float = 0.0) -> Config:
     return dataclasses.replace(
         config, system="impact", grains=(), name=f"{config.name} (S3 surrogate)",
         impactor=Impactor(mass=grain_mass(config), restitution=restitution,
-                          gap=config.box.Lz - h_bed, method="smooth"))
+                          gap=container(config).height(config) - h_bed, method="smooth"))
 
 
 def propose(config: Config, objective: Objective, h_bed: float, lo: float, hi: float,

@@ -215,7 +215,8 @@ def band_from_file(h5_or_path, t0=None, t1=None, periods=BAND_PERIODS):
         cfg = json.loads(h5.attrs["config"])
         weight = (float(h5["grains/mass"][()].sum()) * float(cfg["gravity"])
                   if "grains/mass" in h5 else None)
-        return band_figure(s["t"], s["z_box"], float(cfg["box"]["Lz"]), s["z_lowest"],
+        lid = float((cfg.get("box") or cfg.get("container"))["Lz"])
+        return band_figure(s["t"], s["z_box"], lid, s["z_lowest"],
                            s["z_highest"], s["z_cm"], s["force_box"], weight=weight,
                            frequency=float(cfg["frequency"]), t0=t0, t1=t1, periods=periods,
                            title=run_title(h5, cfg), path=h5.filename)

@@ -148,6 +148,16 @@ def read_config(path: str) -> Config:
         return from_json(h.attrs["config"])
 
 
+def _container_words(cfg: dict) -> str:
+    """The container of a stored configuration in words: ``box 0.04 × 0.04 × 0.12 m``."""
+    if cfg.get("box") is not None:
+        b = cfg["box"]
+        return f"box {b['Lx']} × {b['Ly']} × {b['Lz']} m"
+    c = cfg.get("container") or {}
+    dims = ", ".join(f"{k} {v} m" for k, v in c.items() if k not in ("shape", "Lz", "wall"))
+    return f"{c.get('shape', '?')} ({dims}), height {c.get('Lz', '?')} m"
+
+
 def describe_lines(h, path: str) -> list[str]:
     """Human-readable overview of an open run file (``jaxdamp info``)."""
     lines = []
@@ -156,8 +166,7 @@ def describe_lines(h, path: str) -> list[str]:
                  f"{h.attrs.get('jaxdamp_version', '?')}")
     lines.append(f"  preset {h.attrs.get('preset')}, system {h.attrs.get('system')}, "
                  f"status {h.attrs.get('status')} {h.attrs.get('message', '')}".rstrip())
-    lines.append(f"  frequency {cfg['frequency']} Hz, box {cfg['box']['Lx']} × "
-                 f"{cfg['box']['Ly']} × {cfg['box']['Lz']} m, "
+    lines.append(f"  frequency {cfg['frequency']} Hz, {_container_words(cfg)}, "
                  f"{sum(s['count'] for s in cfg['grains'])} grains")
     if "settle" in h:
         lines.append(f"  settled bed height {h['settle'].attrs['bed_height']:.5g} m "

@@ -26,7 +26,7 @@ import numpy as np
 
 from jaxdamp.config import Config
 from jaxdamp.physics.contact import LAWS, Law, calibrate_wall_row
-from jaxdamp.physics.containers import container
+from jaxdamp.physics.containers import container, effective_radius
 from jaxdamp.physics.excitation import base_motion, random_lines
 from jaxdamp.physics.structure import internal
 
@@ -239,7 +239,7 @@ def contact_tables(config: Config) -> tuple[np.ndarray, np.ndarray]:
             for t in range(S):
                 pair[s, t] = law.mix(bodies[s], bodies[t], config.mixing)
         if config.wall_damping == "calibrated":  # each species against the wall, at v_ref
-            w = config.box.wall
+            w = container(config).wall(config)
             for s, sp in enumerate(config.grains):
                 src = w if w is not None and w.restitution is not None else sp.material
                 m = sp.material.density * 4.0 / 3.0 * np.pi * sp.radius**3
@@ -280,7 +280,7 @@ def build(config: Config, radii: np.ndarray | None = None) -> tuple[Model, Param
         pair_table=f64(pair_table),
         wall_table=f64(wall_table),
         section=f64(vessel.section(config)),
-        Lz=f64(config.box.Lz),
+        Lz=f64(vessel.height(config)),
         gravity=f64(config.gravity),
         M=f64(prim.M if prim else 1.0),
         K=f64(prim.K if prim else 0.0),
@@ -329,8 +329,9 @@ def collision_time_limit(config: Config, radii: np.ndarray) -> float:
     """Collision time [s] of the contact law (:attr:`jaxdamp.physics.contact.Law.collision_time`) of the
     stiffest, lightest contact at :func:`impact_speed`.
 
-    Checks the smallest grain of every species against a like grain and against a wall
-    (docs/physics.md §3); the shortest wins. (A small grain against a larger one collides longer than
+    Checks the smallest grain of every species against a like grain and against a wall — the
+    container's most curved wall, where a concave wall's effective radius makes the contact
+    stiffer (docs/physics.md §3); the shortest wins. (A small grain against a larger one collides longer than
     against a like grain, so unlike pairs never set the limit.)
     """
     if len(radii) == 0:
@@ -339,6 +340,7 @@ def collision_time_limit(config: Config, radii: np.ndarray) -> float:
     pair, wall = contact_tables(config)
     species = grain_species(config)
     v = impact_speed(config)
+    kappa = container(config).curvature(config)  # a concave wall: the stiffest wall contact
     t_c = math.inf
     for i, sp in enumerate(config.grains):
         sel = species == i
@@ -347,7 +349,7 @@ def collision_time_limit(config: Config, radii: np.ndarray) -> float:
         r = float(radii[sel].min())
         m = sp.material.density * 4.0 / 3.0 * math.pi * r**3
         t_c = min(t_c, law.collision_time(pair[i, i], 0.5 * m, 0.5 * r, v))
-        t_c = min(t_c, law.collision_time(wall[i], m, r, v))
+        t_c = min(t_c, law.collision_time(wall[i], m, effective_radius(r, kappa), v))
     return t_c
 
 

@@ -59,7 +59,8 @@ def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
     """
     # Signed distance of each centre to each wall, (N, 2 + W): floor, lid, the sides.
     x, y, floor = r[:, 0] - p.ex * z_box, r[:, 1] - p.ey * z_box, r[:, 2] - p.ez * z_box
-    gaps, (snx, sny), curvature = CONTAINERS[model.container].sides_jax(x, y, p.section)
+    vessel = CONTAINERS[model.container]
+    gaps, (snx, sny), curvature = vessel.sides_jax(x, y, p.section)
     dist = jnp.stack((floor, p.Lz - floor) + tuple(gaps), axis=-1)
     hi, lo = r.dtype, force_dtype(model)
     xi = (p.radius[:, None] - dist).astype(lo)  # the overlap in the state's precision
@@ -71,9 +72,9 @@ def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
     else:
         row = table[jnp.asarray(model.species_index())][:, None, :]  # (N, 1, F)
     R_contact = R
-    if any(k != 0 for k in curvature):  # a curved wall: its own effective radius
-        kappa = np.array((0.0, 0.0) + tuple(curvature), dtype=np.float64)
-        R_contact = effective_radius(R, jnp.asarray(kappa, lo))
+    if vessel.curved:  # a curved wall: its own effective radius (floor and lid are planes)
+        kappa = jnp.concatenate([jnp.zeros(2, lo), jnp.stack(curvature).astype(lo)])
+        R_contact = effective_radius(R, kappa)
     stiffness, damping = law.pair_jax(row, R_contact, p.mass[:, None].astype(lo))
     normals = Vec(*_normals(snx, sny, lo))  # (2 + W,) each, or (N, 2 + W) for curved sides
     # the walls move with e zd_box

@@ -34,6 +34,7 @@ from jaxdamp.io.common import (
     ensure_space,
     stop_file,
 )
+from jaxdamp.physics.containers import container
 from jaxdamp.physics.excitation import random_start
 from jaxdamp.physics.model import State, build, grain_species
 from jaxdamp.validation import validate
@@ -259,10 +260,11 @@ def run(
         if model.n and not bed.settled:
             say("warning: " + bed.unsettled_note(config) + "; the run file says so "
                 "(/settle attribute 'settled' = false)")
-        if model.n and bed.height >= config.box.Lz:
+        vessel = container(config)
+        if model.n and bed.height >= vessel.height(config):
             raise ConfigError(
-                f"box.Lz = {config.box.Lz} m: the settled bed is {bed.height:.5g} m high and "
-                "does not fit under the lid"
+                f"{vessel.lid_key} = {vessel.height(config)} m: the settled bed is "
+                f"{bed.height:.5g} m high and does not fit under the lid"
             )
         x0, xd0 = initial_structure(config, m_grains)
         r0 = bed_with_box(config, bed.r, x0[0])

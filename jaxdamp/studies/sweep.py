@@ -37,6 +37,7 @@ from jaxdamp.engine.packing import settle_many
 from jaxdamp.engine.simulate import resolve_engine
 from jaxdamp.io.common import ensure_space, stop_file
 from jaxdamp.io.sweepfile import SweepFile, holds
+from jaxdamp.physics.containers import container
 from jaxdamp.physics.model import build, config_dt, grain_radii
 from jaxdamp.studies.grid import (
     SweepResult,
@@ -208,8 +209,10 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
         r0, v0, w0, q0, z0, zd0 = [], [], [], [], [], []
         for c, (m, p), key in zip(configs, built, keys):
             bed = beds[key]
-            if m.n and bed.height >= c.box.Lz:
-                raise ConfigError(f"box.Lz = {c.box.Lz} m: the settled bed ({bed.height:.5g} m) "
+            vessel = container(c)
+            if m.n and bed.height >= vessel.height(c):
+                raise ConfigError(f"{vessel.lid_key} = {vessel.height(c)} m: the settled bed "
+                                  f"({bed.height:.5g} m) "
                                   "does not fit")
             x, xd = initial_structure(c, float(np.asarray(p.mass).sum()))
             r0.append(bed_with_box(c, bed.r, x[0]))

@@ -10,8 +10,8 @@ everything about it side by side:
   ``(nx, ny)`` (constants ``(W,)`` for planes, ``(N, W)`` for curved walls) and their
   curvatures (``1/R_wall``, 0 for a plane; a concave wall's effective contact radius is
   ``R* = R_i / (1 − R_i κ)``, :func:`effective_radius`);
-* the scalar forms for the compiled kernel, ``sides_scalar(x, y, s0, s1)`` (the distances, a
-  tuple of ``MAX_SIDES``, ``inf`` for absent walls) and ``normal_scalar(k, x, y, s0, s1)``
+* the scalar forms for the compiled kernel, ``sides_scalar(x, y, section)`` (the distances, a
+  tuple of ``MAX_SIDES``, ``inf`` for absent walls) and ``normal_scalar(k, x, y, section)``
   (``(nx, ny, κ)`` of wall ``k``), dispatched by :func:`sides_scalar` / :func:`normal_scalar`;
 * its host-side geometry: ``section(config)`` (the numbers of ``Params.section``),
   ``extent`` and ``inside`` (pouring the lattice, :mod:`jaxdamp.engine.packing`),
@@ -31,17 +31,24 @@ from __future__ import annotations
 from typing import Callable, NamedTuple
 
 from jaxdamp.physics.contact import scalar_form
-from jaxdamp.physics.containers import box
+from jaxdamp.physics.containers import box, cylinder
 
 #: Side walls a container may have (the compiled kernel's fixed loop over them).
 MAX_SIDES = 4
 
 
 class Container(NamedTuple):
-    """A container's forms (module docstring); ``id``: its number in the scalar dispatch."""
+    """A container's forms (module docstring); ``id``: its number in the scalar dispatch;
+    ``curved``: whether a side wall is curved (its effective radius is then formed per
+    contact); ``fields``: its own dimensions, keys of its ``[container]`` table;
+    ``curvature(config)``: the largest curvature of its walls [1/m] (0: all planes), which
+    shortens the stiffest wall contact and so the time step."""
 
     name: str
     id: int
+    curved: bool
+    fields: tuple[str, ...]
+    curvature: Callable
     section: Callable
     sides_jax: Callable
     extent: Callable
@@ -59,16 +66,30 @@ class Container(NamedTuple):
 
         return float(get_path(config, self.lid_key))
 
+    def wall(self, config):
+        """The wall :class:`~jaxdamp.config.Material` its table gives, or ``None``."""
+        return (config.container if self.name != "box" else config.box).wall
 
-BOX = Container("box", 0, box.section, box.sides_jax, box.extent, box.inside, box.base_area,
-                box.fit_error, box.describe, box.outline, "box.Lz", ("box.Lx", "box.Ly"))
+
+BOX = Container("box", 0, False, box.FIELDS, box.curvature, box.section, box.sides_jax, box.extent,
+                box.inside, box.base_area, box.fit_error, box.describe, box.outline, "box.Lz",
+                ("box.Lx", "box.Ly"))
+CYLINDER = Container("cylinder", 1, True, cylinder.FIELDS, cylinder.curvature,
+                     cylinder.section,
+                     cylinder.sides_jax, cylinder.extent, cylinder.inside, cylinder.base_area,
+                     cylinder.fit_error, cylinder.describe, cylinder.outline, "container.Lz",
+                     ("container.radius",))
 
 #: The containers by name.
-CONTAINERS: dict[str, Container] = {c.name: c for c in (BOX,)}
+CONTAINERS: dict[str, Container] = {c.name: c for c in (BOX, CYLINDER)}
+_CYLINDER = CYLINDER.id
 
 
 def container(config) -> Container:
-    """The container of ``config``: its ``[box]`` table is the box."""
+    """The container of ``config``: the box of its ``[box]`` table, or the one its
+    ``[container]`` table names (``shape``)."""
+    if getattr(config, "container", None) is not None:
+        return CONTAINERS[config.container.shape]
     return BOX
 
 
@@ -76,13 +97,17 @@ def container(config) -> Container:
 def sides_scalar(shape, x, y, section):
     """The distances from ``(x, y)`` to the side walls of container number ``shape``, a tuple
     of :data:`MAX_SIDES` (``section``: ``Params.section``)."""
-    return box.sides_scalar(x, y, section[0], section[1])
+    if shape == _CYLINDER:
+        return cylinder.sides_scalar(x, y, section)
+    return box.sides_scalar(x, y, section)
 
 
 @scalar_form
 def normal_scalar(shape, k, x, y, section):
     """``(nx, ny, κ)``: inward normal and curvature of side wall ``k`` of container ``shape``."""
-    return box.normal_scalar(k, x, y, section[0], section[1])
+    if shape == _CYLINDER:
+        return cylinder.normal_scalar(k, x, y, section)
+    return box.normal_scalar(k, x, y, section)
 
 
 def effective_radius(radius, curvature):

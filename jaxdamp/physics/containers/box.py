@@ -35,14 +35,23 @@ def sides_jax(bx, by, section):
     return gaps, (NORMALS[:, 0], NORMALS[:, 1]), (0.0, 0.0, 0.0, 0.0)
 
 
+def curvature(config) -> float:
+    """The largest curvature of the walls [1/m]: 0, all planes."""
+    return 0.0
+
+
+#: The box's own dimensions: none beyond its ``[box]`` table (Lx, Ly, Lz).
+FIELDS = ()
+
+
 @scalar_form
-def sides_scalar(x, y, s0, s1):
+def sides_scalar(x, y, section):
     """Scalar form of :func:`sides_jax`'s distances, for one grain: a tuple of 4."""
-    return x, s0 - x, y, s1 - y
+    return x, section[0] - x, y, section[1] - y
 
 
 @scalar_form
-def normal_scalar(k, x, y, s0, s1):
+def normal_scalar(k, x, y, section):
     """Inward normal ``(nx, ny)`` and curvature of side wall ``k`` at ``(x, y)``."""
     if k == 0:
         return 1.0, 0.0, 0.0

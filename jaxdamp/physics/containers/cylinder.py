@@ -1,0 +1,124 @@
+"""The upright cylinder: a prism of circular section, radius ``R_c`` (``[container]`` with
+``shape = "cylinder"``, ``radius``, ``Lz``).
+
+In the box frame its axis stands at ``(R_c, R_c)``, so the section's bounding square is
+``[0, 2 R_c]²`` (the frame of the box's corner, where lattices, figures and exports start). Its
+one side wall is concave seen from the grains: at a grain centre ``(x, y)`` at distance ``ρ``
+from the axis the wall is ``R_c − ρ`` away, its inward normal is ``−(x − R_c, y − R_c)/ρ`` and
+its curvature ``κ = 1/R_c``, so a grain of radius ``R`` touching it has the effective contact
+radius ``R* = R R_c / (R_c − R)`` (:func:`jaxdamp.physics.containers.effective_radius`: a
+concave wall is stiffer than a plane). ``Params.section`` is ``(R_c,)``.
+
+Example::
+
+    >>> from jaxdamp.cases import presets
+    >>> from jaxdamp.config import Container
+    >>> import dataclasses
+    >>> cfg = dataclasses.replace(presets.get("sanchez2012-optimal"), box=None,
+    ...     container=Container("cylinder", 0.12, (("radius", 0.025),)))
+    >>> from jaxdamp.physics.containers import container
+    >>> round(container(cfg).base_area(cfg) * 1e4, 4)  # π R_c² [cm²]
+    19.635
+"""
+
+from __future__ import annotations
+
+import math
+
+import jax.numpy as jnp
+import numpy as np
+
+from jaxdamp.physics.contact import safe_norm, scalar_form
+
+#: The container's own dimensions (keys of its ``[container]`` table beside ``shape``, ``Lz``).
+FIELDS = ("radius",)
+
+
+def _radius(config) -> float:
+    return float(config.container.dimension("radius"))
+
+
+def section(config) -> np.ndarray:
+    """``Params.section`` of the cylinder: ``(R_c,)`` [m]."""
+    return np.array([_radius(config)], dtype=np.float64)
+
+
+def sides_jax(bx, by, section):
+    """Distance ``(N,)`` from grain centres ``(bx, by)`` (box frame) to the side wall, its
+    inward normal ``(N, 1)`` each, and its curvature ``1/R_c``."""
+    Rc = section[0]
+    rho = jnp.stack([bx - Rc, by - Rc], axis=-1)
+    d = safe_norm(rho)
+    off = d > 0
+    inv = 1.0 / jnp.where(off, d, 1.0)
+    nx = jnp.where(off, -rho[:, 0] * inv, 1.0)
+    ny = jnp.where(off, -rho[:, 1] * inv, 0.0)
+    return (Rc - d,), (nx[:, None], ny[:, None]), (1.0 / Rc,)
+
+
+@scalar_form
+def sides_scalar(x, y, section):
+    """Scalar form of :func:`sides_jax`'s distance for one grain, as the registry's tuple of
+    4 (the absent walls ``inf``)."""
+    Rc = section[0]
+    d = math.sqrt((x - Rc) * (x - Rc) + (y - Rc) * (y - Rc))
+    return Rc - d, math.inf, math.inf, math.inf
+
+
+@scalar_form
+def normal_scalar(k, x, y, section):
+    """Inward normal ``(nx, ny)`` and curvature ``1/R_c`` of the side wall at ``(x, y)``."""
+    Rc = section[0]
+    dx = x - Rc
+    dy = y - Rc
+    d = math.sqrt(dx * dx + dy * dy)
+    if d > 0.0:
+        return -dx / d, -dy / d, 1.0 / Rc
+    return 1.0, 0.0, 1.0 / Rc
+
+
+def curvature(config) -> float:
+    """The side wall's curvature ``1/R_c`` [1/m]."""
+    return 1.0 / _radius(config)
+
+
+def extent(config) -> tuple[float, float, float, float]:
+    """The section's bounding square ``(0, 2 R_c, 0, 2 R_c)`` [m]."""
+    Rc = _radius(config)
+    return 0.0, 2.0 * Rc, 0.0, 2.0 * Rc
+
+
+def inside(x, y, margin: float, config) -> np.ndarray:
+    """Whether points ``(x, y)`` lie at least ``margin`` inside the wall."""
+    Rc = _radius(config)
+    return np.hypot(x - Rc, y - Rc) <= Rc - margin
+
+
+def base_area(config) -> float:
+    """``π R_c²`` [m²]."""
+    return math.pi * _radius(config) ** 2
+
+
+def fit_error(config, diameter: float, name: str) -> str | None:
+    """Why a grain of ``diameter`` [m] does not fit across the section, or ``None``."""
+    Rc = _radius(config)
+    if diameter >= 2.0 * Rc:
+        return f"{name} does not fit container.radius = {Rc} m"
+    return None
+
+
+def describe(config) -> str:
+    """The section in words."""
+    return f"cylinder of radius {_radius(config)} m"
+
+
+def outline(config, z0: float = 0.0) -> list[np.ndarray]:
+    """Floor and lid circles and four vertical lines as 3-D polylines [m] (floor at ``z0``)."""
+    Rc, Lz = _radius(config), float(config.container.Lz)
+    a = np.linspace(0.0, 2.0 * math.pi, 73)
+    ring = np.column_stack([Rc + Rc * np.cos(a), Rc + Rc * np.sin(a)])
+    lines = [np.column_stack([ring, np.full(len(a), z0 + h)]) for h in (0.0, Lz)]
+    for q in (0.0, 0.5 * math.pi, math.pi, 1.5 * math.pi):
+        x, y = Rc + Rc * math.cos(q), Rc + Rc * math.sin(q)
+        lines.append(np.array([[x, y, z0], [x, y, z0 + Lz]]))
+    return lines
