@@ -10,46 +10,72 @@ import pytest
 from jaxdamp.cases import presets
 from jaxdamp.config import Container, apply_overrides
 from jaxdamp.physics import containers
-from jaxdamp.physics.containers import CONTAINERS, MAX_SIDES, container
+from jaxdamp.physics.containers import CONTAINERS, container
 from jaxdamp.studies.grid import BED_FREE, geometry_key
 
 
 @pytest.mark.parametrize("name", sorted(CONTAINERS))
 def test_the_scalar_and_jax_forms_of_every_container_agree(name):
-    """Distances, normals and curvatures of the side walls at 200 random points of the
-    section: the JAX form (walls.py) and the scalar forms the compiled kernel inlines."""
+    """Grains at 300 random places near the side walls (mid-height: no floor or lid), moving
+    and spinning: the wall forces, torques, energies and losses of the JAX form
+    (``walls.wall_forces``) equal the container's scalar form, which the compiled kernel
+    inlines, grain by grain; the JAX form's distances and normals are consistent (the normal
+    points into the cavity and the distance grows by a step along it)."""
+    import jax.numpy as jnp
+
+    from jaxdamp.physics.contact import LAWS
+    from jaxdamp.physics.model import build
+    from jaxdamp.physics.walls import wall_forces
+
     cfg = _example(name)
     vessel = CONTAINERS[name]
     assert container(cfg) is vessel
+    model, p = build(cfg)
     section = np.asarray(vessel.section(cfg))
+    np.testing.assert_array_equal(np.asarray(p.section), section)
     x0, x1, y0, y1 = vessel.extent(cfg)
+    R = float(p.radius[0])
     rng = np.random.default_rng(0)
-    x = rng.uniform(x0, x1, 2000)
-    y = rng.uniform(y0, y1, 2000)
-    keep = vessel.inside(x, y, 0.0, cfg)
-    assert keep.mean() > 0.5  # the extent bounds the section tightly
-    x, y = x[keep][:200], y[keep][:200]
+    x = rng.uniform(x0, x1, 20000)
+    y = rng.uniform(y0, y1, 20000)
+    keep = vessel.inside(x, y, 0.3 * R, cfg) & ~vessel.inside(x, y, 1.5 * R, cfg)
+    assert vessel.inside(x, y, 0.0, cfg).mean() > 0.5  # the extent bounds the section tightly
+    x, y = x[keep][:300], y[keep][:300]
+    n = len(x)
+    r = np.column_stack([x, y, np.full(n, 0.5 * vessel.height(cfg))])
+    v = rng.normal(0, 0.3, (n, 3))
+    w = rng.normal(0, 50.0, (n, 3))
+    law = LAWS[model.law]
+    row = np.asarray(p.wall_table)[0]
+    kappa = containers.side_curvature_scalar(vessel.id, section)
+    assert kappa == vessel.curvature(cfg)
+    k, g = law.pair_scalar(row, containers.effective_radius(R, kappa), float(p.mass[0]))
+    wk = np.array([[k, g, row[0], row[1]]])
+    touching = 0
+    for i in range(n):
+        one = dataclasses.replace(model, n=1, species=())
+        pi = dataclasses.replace(p, radius=p.radius[:1], mass=p.mass[:1])
+        f = wall_forces(jnp.asarray(r[i:i + 1]), jnp.asarray(v[i:i + 1]), jnp.asarray(w[i:i + 1]),
+                        0.0, 0.0, pi, one)
+        acc = containers.side_contacts_scalar(
+            vessel.id, law.id, x[i], y[i], section, R, wk, 0, v[i, 0],
+            v[i, 1], v[i, 2], R * w[i, 0], R * w[i, 1], R * w[i, 2], 0.0, 0.0, 1.0,
+            (0.0,) * 10)
+        jax_side = np.concatenate([np.asarray(f.force)[0], np.asarray(f.torque)[0],
+                                   [float(f.elastic_energy), float(f.normal_loss),
+                                    float(f.friction_loss), float(f.box_z)]])
+        np.testing.assert_allclose(acc, jax_side, rtol=1e-9, atol=1e-12 * (1 + abs(jax_side).max()))
+        touching += acc[6] > 0
+    assert touching > n // 3  # the comparison saw contacts, not only zeros
     gaps, (nx, ny), kappa = vessel.sides_jax(x, y, section)
-    W = len(gaps)
-    assert 1 <= W <= MAX_SIDES and len(kappa) == W
-    nx = np.broadcast_to(np.asarray(nx, float), (200, W))
-    ny = np.broadcast_to(np.asarray(ny, float), (200, W))
-    for i in range(200):
-        s = containers.sides_scalar(vessel.id, x[i], y[i], section)
-        assert len(s) == MAX_SIDES
-        np.testing.assert_allclose(s[:W], [float(np.asarray(g)[i]) for g in gaps], rtol=0,
-                                   atol=1e-15)
-        assert min(s) >= 0.0  # inside: every wall ahead
-        assert all(v == np.inf for v in s[W:])
-        for k in range(W):
-            n = containers.normal_scalar(vessel.id, k, x[i], y[i], section)
-            np.testing.assert_allclose(n, (nx[i, k], ny[i, k], float(kappa[k])), atol=1e-12)
-            assert abs(np.hypot(n[0], n[1]) - 1.0) < 1e-12  # a unit normal in the plane
-            # the normal points into the cavity: a step along it moves away from that wall
-            h = 1e-6
-            s2 = containers.sides_scalar(vessel.id, x[i] + h * n[0], y[i] + h * n[1], section)
-            assert s2[k] == pytest.approx(s[k] + h, abs=1e-12)
-    assert vessel.curvature(cfg) == pytest.approx(max(float(k) for k in kappa), abs=0)
+    nx = np.broadcast_to(np.asarray(nx, float), (n, len(gaps)))
+    ny = np.broadcast_to(np.asarray(ny, float), (n, len(gaps)))
+    h = 1e-7
+    for j, gap in enumerate(gaps):
+        np.testing.assert_allclose(np.hypot(nx[:, j], ny[:, j]), 1.0, rtol=1e-12)
+        moved = vessel.sides_jax(x + h * nx[:, j], y + h * ny[:, j], section)[0][j]
+        np.testing.assert_allclose(np.asarray(moved) - np.asarray(gap), h, rtol=1e-5)
+    assert vessel.curvature(cfg) == pytest.approx(max(float(c) for c in kappa), abs=0)
 
 
 def _example(name):

@@ -42,7 +42,7 @@ from collections import namedtuple
 import numpy as np
 
 from jaxdamp.physics.contact import FASTMATH, GAMMA_S, MU, contact_scalar, pair_scalar
-from jaxdamp.physics.containers import CONTAINERS, MAX_SIDES, normal_scalar, sides_scalar
+from jaxdamp.physics.containers import CONTAINERS, side_contacts_scalar, side_curvature_scalar
 from jaxdamp.physics.energy import record_row
 from jaxdamp.physics.excitation import base_motion_scalar, drive_motion_scalar
 from jaxdamp.physics.integrate import body_force_scalar, rotate_scalar, rotate_series_scalar
@@ -71,6 +71,7 @@ REBUILD_STEPS = 40
 PARAM_FIELDS = tuple(f.name for f in dataclasses.fields(Params))
 STATE_FIELDS = tuple(f.name for f in dataclasses.fields(State))
 _DRIVEN = DRIVEN.id
+_BOX = CONTAINERS["box"].id
 
 #: The work channels' places (:data:`jaxdamp.physics.model.CHANNELS`, shared with the JAX engine).
 _IN, _PRIM, _PPN, _PPF, _PWN, _PWF, _DRAG = (
@@ -90,7 +91,7 @@ Dims = namedtuple("Dims", ("mount", "law", "shape", "n_species", "n_cols", "n_li
 #: The scalar forms the kernels inline (with the forms they call, from the same modules): a
 #: change to their source files must recompile the cached kernels (numba's cache only watches
 #: the kernel's own file).
-_INLINED = (contact_scalar, pair_scalar, sides_scalar, normal_scalar, base_motion_scalar,
+_INLINED = (contact_scalar, pair_scalar, side_contacts_scalar, base_motion_scalar,
             drive_motion_scalar, body_force_scalar, predict_scalar, respond_scalar,
             energy_scalar, rotate_scalar, rotate_series_scalar, record_row,
             structure_acceleration_scalar)
@@ -264,15 +265,16 @@ if AVAILABLE:
         return k, pi, pj, pc
 
     @_kernel()
-    def _wall_constants(R, m, sid, wall_table, law):
-        """Per grain, the constants of its contact with any wall: ``(N, 4)`` array of
-        ``(k, g, γ_s, μ)`` from the row of its species in the wall table, ``R* = R_i``,
-        ``m* = m_i`` (they depend on the grain and the wall material only)."""
+    def _wall_constants(R, m, sid, wall_table, law, kappa):
+        """Per grain, the constants of its contact with a wall of curvature ``kappa`` (0: a
+        plane): ``(N, 4)`` array of ``(k, g, γ_s, μ)`` from the row of its species in the wall
+        table, ``R* = R_i / (1 − R_i κ)`` (``R_i`` for a plane), ``m* = m_i`` (they depend on
+        the grain, the wall's material and its curvature only: formed once per call)."""
         n = R.shape[0]
         wk = np.empty((n, 4))
         for i in range(n):
             row = wall_table[sid[i]]
-            stiff, damp = pair_scalar(law, row, R[i], m[i])
+            stiff, damp = pair_scalar(law, row, R[i] / (1.0 - R[i] * kappa), m[i])
             wk[i, 0] = stiff
             wk[i, 1] = damp
             wk[i, 2] = row[GAMMA_S]
@@ -290,16 +292,84 @@ if AVAILABLE:
                 -Ri * (nx * ty - ny * tx), e, ln, lf)
 
     @_kernel(inline="always")
-    def _side(law, xi, nx, ny, kappa, vx, vy, vz, sx, sy, sz, Ri, mi, row, wki):
-        """Contact with a side wall of inward normal ``(nx, ny, 0)`` and curvature ``kappa``:
-        :func:`_wall` with the grain's plane-wall constants ``wki``, or for a curved wall the
-        constants at its effective radius (:func:`jaxdamp.physics.containers.effective_radius`),
-        formed where it touches."""
-        if kappa == 0.0:
-            return _wall(law, xi, nx, ny, 0.0, vx, vy, vz, sx, sy, sz, Ri, wki)
-        stiff, damp = pair_scalar(law, row, Ri / (1.0 - Ri * kappa), mi)
-        return _wall(law, xi, nx, ny, 0.0, vx, vy, vz, sx, sy, sz, Ri,
-                     (stiff, damp, row[GAMMA_S], row[MU]))
+    def _grain_walls(shape, law, n, r1, vp, rw, Rb, mb, ref, wk, wks, section, F, T, ex, ey, ez,
+                     z1, zdp, Lz, grav, drag, half_skin2):
+        """Pass 1 over the grains: body force, the floor, the lid and the container's sides
+        (number ``shape``, :mod:`jaxdamp.physics.containers`) into ``F``, ``T``; returns the
+        sums ``(elastic energy, normal loss, friction loss, box_z, floor + lid force, grains on
+        the floor, on the lid, Σ m v², whether a grain moved more than skin/2 since the list
+        was built)``. Inlined where ``shape`` is a constant, the container's branch folds away:
+        :func:`_advance_one` keeps a copy for the box."""
+        e_el = 0.0
+        pw_n = 0.0
+        pw_f = 0.0
+        box_z = 0.0
+        floor_lid = 0.0
+        n_floor = 0.0
+        n_lid = 0.0
+        pdrag = 0.0
+        far = False
+        for i in range(n):
+            x, y, zz = r1[i, 0], r1[i, 1], r1[i, 2]
+            ux, uy, uz = vp[i, 0], vp[i, 1], vp[i, 2]
+            sx, sy, sz = rw[i, 0], rw[i, 1], rw[i, 2]
+            Ri = Rb[i]
+            # box frame (the box's corner at e z1) and velocities relative to the walls
+            bx = x - ex * z1
+            by = y - ey * z1
+            floor = zz - ez * z1
+            wx = ux - ex * zdp
+            wy = uy - ey * zdp
+            wz = uz - ez * zdp
+            ddx = bx - ref[i, 0]
+            ddy = by - ref[i, 1]
+            ddz = floor - ref[i, 2]
+            far = far | (ddx * ddx + ddy * ddy + ddz * ddz > half_skin2)
+            pdrag += mb[i] * (ux * ux + uy * uy + uz * uz)
+            fx, fy, fz = body_force_scalar(mb[i], ux, uy, uz, grav, drag)
+            tx = 0.0
+            ty = 0.0
+            tz = 0.0
+            # walls: the floor, the lid, then the container's sides (inward normals);
+            # most grains touch none, so the common path is a compare per wall; box_z
+            # sums the force on the box along the axis e
+            if floor < Ri:
+                gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
+                    law, Ri - floor, 0.0, 0.0, 1.0, wx, wy, wz, sx, sy, sz, Ri, wk[i])
+                fx += gx
+                fy += gy
+                fz += gz
+                tx += hx
+                ty += hy
+                tz += hz
+                e_el += e
+                pw_n += ln
+                pw_f += lf
+                box_z -= ex * gx + ey * gy + ez * gz
+                floor_lid -= gz
+                n_floor += 1.0
+            if Lz - floor < Ri:
+                gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
+                    law, Ri - (Lz - floor), 0.0, 0.0, -1.0, wx, wy, wz, sx, sy, sz, Ri, wk[i])
+                fx += gx
+                fy += gy
+                fz += gz
+                tx += hx
+                ty += hy
+                tz += hz
+                e_el += e
+                pw_n += ln
+                pw_f += lf
+                box_z -= ex * gx + ey * gy + ez * gz
+                floor_lid -= gz
+                n_lid += 1.0
+            fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z = side_contacts_scalar(
+                shape, law, bx, by, section, Ri, wks, i, wx, wy, wz, sx, sy, sz, ex, ey,
+                ez,
+                (fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z))
+            F[i, 0], F[i, 1], F[i, 2] = fx, fy, fz
+            T[i, 0], T[i, 1], T[i, 2] = tx, ty, tz
+        return e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, pdrag, far
 
     @_kernel()
     def _pair_forces(law, r, v, rw, R, pi, pj, pc, npairs, F, T):
@@ -408,7 +478,9 @@ if AVAILABLE:
         pi = np.empty(4 * n + 16, np.int64)  # grown by _pairs when a bed lists more
         pj = np.empty(4 * n + 16, np.int64)
         pc = np.empty((4 * n + 16, 5))
-        wk = _wall_constants(Rb, mb, sid, wtab, law)
+        wk = _wall_constants(Rb, mb, sid, wtab, law, 0.0)  # floor and lid: planes
+        kappa = side_curvature_scalar(shape, section)
+        wks = wk if kappa == 0.0 else _wall_constants(Rb, mb, sid, wtab, law, kappa)
         inv_m = 1.0 / mb
         inv_I = 1.0 / Ib
         ref = np.empty((n, 3))
@@ -470,93 +542,20 @@ if AVAILABLE:
                     y1[j] = yv[j] + dt * ydv[j] + hdt2 * yddv[j]
                     ydp[j] = ydv[j] + dt * yddv[j]
                 # pass 1: predictor, body force, walls, drag power, displacement since the build
-                e_el = 0.0
-                pw_n = 0.0
-                pw_f = 0.0
-                box_z = 0.0
-                floor_lid = 0.0
-                n_floor = 0.0
-                n_lid = 0.0
-                pdrag = 0.0
-                far = False
                 for j in range(3 * n):  # the predicted positions, velocities and R ω
                     r1f[j] = rf[j] + dt * vf[j] + hdt2 * af[j]
                     vpf[j] = vf[j] + dt * af[j]
                 for j in range(3 * n):
                     rwf[j] = R3[j] * (wf[j] + dt * alf[j])
-                for i in range(n):
-                    x, y, zz = r1[i, 0], r1[i, 1], r1[i, 2]
-                    ux, uy, uz = vp[i, 0], vp[i, 1], vp[i, 2]
-                    sx, sy, sz = rw[i, 0], rw[i, 1], rw[i, 2]
-                    Ri = Rb[i]
-                    # box frame (the box's corner at e z1) and velocities relative to the walls
-                    bx = x - ex * z1
-                    by = y - ey * z1
-                    floor = zz - ez * z1
-                    wx = ux - ex * zdp
-                    wy = uy - ey * zdp
-                    wz = uz - ez * zdp
-                    ddx = bx - ref[i, 0]
-                    ddy = by - ref[i, 1]
-                    ddz = floor - ref[i, 2]
-                    far = far | (ddx * ddx + ddy * ddy + ddz * ddz > half_skin2)
-                    pdrag += mb[i] * (ux * ux + uy * uy + uz * uz)
-                    fx, fy, fz = body_force_scalar(mb[i], ux, uy, uz, grav, drag)
-                    tx = 0.0
-                    ty = 0.0
-                    tz = 0.0
-                    # walls: the floor, the lid, then the container's sides (inward normals);
-                    # most grains touch none, so the common path is a compare per wall; box_z
-                    # sums the force on the box along the axis e
-                    if floor < Ri:
-                        gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
-                            law, Ri - floor, 0.0, 0.0, 1.0, wx, wy, wz, sx, sy, sz, Ri, wk[i])
-                        fx += gx
-                        fy += gy
-                        fz += gz
-                        tx += hx
-                        ty += hy
-                        tz += hz
-                        e_el += e
-                        pw_n += ln
-                        pw_f += lf
-                        box_z -= ex * gx + ey * gy + ez * gz
-                        floor_lid -= gz
-                        n_floor += 1.0
-                    if Lz - floor < Ri:
-                        gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
-                            law, Ri - (Lz - floor), 0.0, 0.0, -1.0, wx, wy, wz, sx, sy, sz, Ri, wk[i])
-                        fx += gx
-                        fy += gy
-                        fz += gz
-                        tx += hx
-                        ty += hy
-                        tz += hz
-                        e_el += e
-                        pw_n += ln
-                        pw_f += lf
-                        box_z -= ex * gx + ey * gy + ez * gz
-                        floor_lid -= gz
-                        n_lid += 1.0
-                    gaps = sides_scalar(shape, bx, by, section)
-                    for k in range(MAX_SIDES):
-                        if gaps[k] < Ri:
-                            nx, nyy, kappa = normal_scalar(shape, k, bx, by, section)
-                            gx, gy, gz, hx, hy, hz, e, ln, lf = _side(
-                                law, Ri - gaps[k], nx, nyy, kappa, wx, wy, wz, sx, sy, sz, Ri,
-                                mb[i], wtab[sid[i]], wk[i])
-                            fx += gx
-                            fy += gy
-                            fz += gz
-                            tx += hx
-                            ty += hy
-                            tz += hz
-                            e_el += e
-                            pw_n += ln
-                            pw_f += lf
-                            box_z -= ex * gx + ey * gy + ez * gz
-                    F[i, 0], F[i, 1], F[i, 2] = fx, fy, fz
-                    T[i, 0], T[i, 1], T[i, 2] = tx, ty, tz
+                if shape == _BOX:  # the common container: a copy with its branch folded
+                    (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, pdrag,
+                     far) = _grain_walls(_BOX, law, n, r1, vp, rw, Rb, mb, ref, wk, wks, section,
+                                         F, T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
+                else:
+                    (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, pdrag,
+                     far) = _grain_walls(shape, law, n, r1, vp, rw, Rb, mb, ref, wk, wks,
+                                         section, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
+                                         half_skin2)
                 if n > 1 and far:  # a grain moved more than skin/2: list the pairs anew
                     npairs, pi, pj, pc = _pairs(r1, ex * z1, ey * z1, ez * z1, cutoff, pi, pj,
                                                 pc, ref, Rb, mb, sid, tab, law)

@@ -10,9 +10,10 @@ everything about it side by side:
   ``(nx, ny)`` (constants ``(W,)`` for planes, ``(N, W)`` for curved walls) and their
   curvatures (``1/R_wall``, 0 for a plane; a concave wall's effective contact radius is
   ``R* = R_i / (1 − R_i κ)``, :func:`effective_radius`);
-* the scalar forms for the compiled kernel, ``sides_scalar(x, y, section)`` (the distances, a
-  tuple of ``MAX_SIDES``, ``inf`` for absent walls) and ``normal_scalar(k, x, y, section)``
-  (``(nx, ny, κ)`` of wall ``k``), dispatched by :func:`sides_scalar` / :func:`normal_scalar`;
+* its scalar form for the compiled kernel, ``side_contacts_scalar``: the contacts of one
+  grain with its side walls, added to the grain's sums (each wall by
+  :func:`jaxdamp.physics.containers._scalar.add_wall_scalar`; the walls unrolled, so that a
+  grain touching none costs a few compares), dispatched by :func:`side_contacts_scalar`;
 * its host-side geometry: ``section(config)`` (the numbers of ``Params.section``),
   ``extent`` and ``inside`` (pouring the lattice, :mod:`jaxdamp.engine.packing`),
   ``fit_error`` and ``base_area`` (the fit checks of :mod:`jaxdamp.validation`, the design
@@ -23,7 +24,7 @@ everything about it side by side:
 The wall groups every engine reports are the floor and the lid (``State.f_floor_lid``,
 ``n_floor``, ``n_lid``) and the sides (the rest); the work channels are
 :data:`jaxdamp.physics.model.CHANNELS`. Adding a container is a module here and its entry in
-:data:`CONTAINERS` and in the two scalar dispatches below.
+:data:`CONTAINERS` and in the scalar dispatch below.
 """
 
 from __future__ import annotations
@@ -33,14 +34,11 @@ from typing import Callable, NamedTuple
 from jaxdamp.physics.contact import scalar_form
 from jaxdamp.physics.containers import box, cylinder
 
-#: Side walls a container may have (the compiled kernel's fixed loop over them).
-MAX_SIDES = 4
-
 
 class Container(NamedTuple):
     """A container's forms (module docstring); ``id``: its number in the scalar dispatch;
-    ``curved``: whether a side wall is curved (its effective radius is then formed per
-    contact); ``fields``: its own dimensions, keys of its ``[container]`` table;
+    ``curved``: whether a side wall is curved (the JAX form then forms its effective radius
+    per contact); ``fields``: its own dimensions, keys of its ``[container]`` table;
     ``curvature(config)``: the largest curvature of its walls [1/m] (0: all planes), which
     shortens the stiffest wall contact and so the time step."""
 
@@ -94,20 +92,27 @@ def container(config) -> Container:
 
 
 @scalar_form
-def sides_scalar(shape, x, y, section):
-    """The distances from ``(x, y)`` to the side walls of container number ``shape``, a tuple
-    of :data:`MAX_SIDES` (``section``: ``Params.section``)."""
+def side_contacts_scalar(shape, law, x, y, section, Ri, wk, i, vx, vy, vz, sx, sy, sz, ex, ey,
+                         ez, acc):
+    """The contacts of grain ``i`` (centre ``(x, y)`` in the box frame, radius ``Ri``, its
+    side-wall constants ``wk[i] = (k, g, γ_s, μ)`` formed at the sides' curvature
+    (:func:`side_curvature_scalar`), velocity ``v`` relative to the walls, spin ``R ω``) with
+    the side walls of container number ``shape`` (``section``: ``Params.section``), added to
+    ``acc = (fx, fy, fz, tx, ty, tz, elastic energy, normal loss, friction loss, box_z)``."""
     if shape == _CYLINDER:
-        return cylinder.sides_scalar(x, y, section)
-    return box.sides_scalar(x, y, section)
+        return cylinder.side_contacts_scalar(law, x, y, section, Ri, wk, i, vx, vy, vz, sx, sy,
+                                             sz, ex, ey, ez, acc)
+    return box.side_contacts_scalar(law, x, y, section, Ri, wk, i, vx, vy, vz, sx, sy, sz, ex,
+                                    ey, ez, acc)
 
 
 @scalar_form
-def normal_scalar(shape, k, x, y, section):
-    """``(nx, ny, κ)``: inward normal and curvature of side wall ``k`` of container ``shape``."""
+def side_curvature_scalar(shape, section):
+    """The curvature [1/m] of the side walls of container number ``shape`` (0: planes), at
+    which the kernel forms each grain's side-wall constants once per call."""
     if shape == _CYLINDER:
-        return cylinder.normal_scalar(k, x, y, section)
-    return box.normal_scalar(k, x, y, section)
+        return cylinder.curvature_scalar(section)
+    return 0.0
 
 
 def effective_radius(radius, curvature):

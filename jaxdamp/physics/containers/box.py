@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from jaxdamp.physics.contact import scalar_form
+from jaxdamp.physics.containers._scalar import add_wall_scalar
 
 #: Inward unit normals ``(nx, ny)`` of the side walls x=0, x=Lx, y=0, y=Ly.
 NORMALS = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])
@@ -45,21 +46,29 @@ FIELDS = ()
 
 
 @scalar_form
-def sides_scalar(x, y, section):
-    """Scalar form of :func:`sides_jax`'s distances, for one grain: a tuple of 4."""
-    return x, section[0] - x, y, section[1] - y
-
-
-@scalar_form
-def normal_scalar(k, x, y, section):
-    """Inward normal ``(nx, ny)`` and curvature of side wall ``k`` at ``(x, y)``."""
-    if k == 0:
-        return 1.0, 0.0, 0.0
-    if k == 1:
-        return -1.0, 0.0, 0.0
-    if k == 2:
-        return 0.0, 1.0, 0.0
-    return 0.0, -1.0, 0.0
+def side_contacts_scalar(law, x, y, section, Ri, wk, i, vx, vy, vz, sx, sy, sz, ex, ey, ez,
+                         acc):
+    """Scalar form of the side walls' contacts of one grain at ``(x, y)`` (box frame), added
+    to ``acc`` (:func:`jaxdamp.physics.containers._scalar.add_wall_scalar`; ``wk[i]``: the
+    grain's plane-wall constants ``(k, g, γ_s, μ)``). The four walls unrolled, in the order of
+    :data:`NORMALS`: most grains touch none, so the common path is four compares (no array
+    view is made per grain: its reference count would be touched by every thread)."""
+    if x >= Ri and section[0] - x >= Ri and y >= Ri and section[1] - y >= Ri:
+        return acc
+    k, g, gs, mu = wk[i, 0], wk[i, 1], wk[i, 2], wk[i, 3]
+    if x < Ri:
+        acc = add_wall_scalar(law, Ri - x, 1.0, 0.0, 0.0, vx, vy, vz, sx, sy, sz, Ri, k, g, gs,
+                              mu, ex, ey, ez, acc)
+    if section[0] - x < Ri:
+        acc = add_wall_scalar(law, Ri - (section[0] - x), -1.0, 0.0, 0.0, vx, vy, vz, sx, sy,
+                              sz, Ri, k, g, gs, mu, ex, ey, ez, acc)
+    if y < Ri:
+        acc = add_wall_scalar(law, Ri - y, 0.0, 1.0, 0.0, vx, vy, vz, sx, sy, sz, Ri, k, g, gs,
+                              mu, ex, ey, ez, acc)
+    if section[1] - y < Ri:
+        acc = add_wall_scalar(law, Ri - (section[1] - y), 0.0, -1.0, 0.0, vx, vy, vz, sx, sy,
+                              sz, Ri, k, g, gs, mu, ex, ey, ez, acc)
+    return acc
 
 
 def extent(config) -> tuple[float, float, float, float]:

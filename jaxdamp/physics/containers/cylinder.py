@@ -29,6 +29,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxdamp.physics.contact import safe_norm, scalar_form
+from jaxdamp.physics.containers._scalar import add_wall_scalar
 
 #: The container's own dimensions (keys of its ``[container]`` table beside ``shape``, ``Lz``).
 FIELDS = ("radius",)
@@ -57,24 +58,28 @@ def sides_jax(bx, by, section):
 
 
 @scalar_form
-def sides_scalar(x, y, section):
-    """Scalar form of :func:`sides_jax`'s distance for one grain, as the registry's tuple of
-    4 (the absent walls ``inf``)."""
-    Rc = section[0]
-    d = math.sqrt((x - Rc) * (x - Rc) + (y - Rc) * (y - Rc))
-    return Rc - d, math.inf, math.inf, math.inf
-
-
-@scalar_form
-def normal_scalar(k, x, y, section):
-    """Inward normal ``(nx, ny)`` and curvature ``1/R_c`` of the side wall at ``(x, y)``."""
+def side_contacts_scalar(law, x, y, section, Ri, wk, i, vx, vy, vz, sx, sy, sz, ex, ey, ez,
+                         acc):
+    """Scalar form of the side wall's contact of grain ``i`` at ``(x, y)`` (box frame), added
+    to ``acc`` (:func:`jaxdamp.physics.containers._scalar.add_wall_scalar`): touching where
+    ``ρ² > (R_c − R)²`` (no square root otherwise), with the grain's constants ``wk[i]``
+    formed at the concave radius (the kernel forms them once per call from
+    :func:`curvature_scalar`)."""
     Rc = section[0]
     dx = x - Rc
     dy = y - Rc
-    d = math.sqrt(dx * dx + dy * dy)
-    if d > 0.0:
-        return -dx / d, -dy / d, 1.0 / Rc
-    return 1.0, 0.0, 1.0 / Rc
+    rho2 = dx * dx + dy * dy
+    if rho2 > (Rc - Ri) * (Rc - Ri):
+        d = math.sqrt(rho2)
+        acc = add_wall_scalar(law, Ri - (Rc - d), -dx / d, -dy / d, 0.0, vx, vy, vz, sx, sy,
+                              sz, Ri, wk[i, 0], wk[i, 1], wk[i, 2], wk[i, 3], ex, ey, ez, acc)
+    return acc
+
+
+@scalar_form
+def curvature_scalar(section):
+    """The side wall's curvature ``1/R_c`` [1/m] from ``Params.section``."""
+    return 1.0 / section[0]
 
 
 def curvature(config) -> float:
