@@ -243,10 +243,9 @@ def check_periods(config: Config, frequency: float | None = None) -> None:
 
 
 def _container(config: Config) -> None:
-    """Exactly one container table: ``[box]`` (Lx, Ly, Lz) or ``[container]`` (a registered
-    shape, its height and its own dimensions, :mod:`jaxdamp.physics.containers`)."""
-    from jaxdamp.physics.containers import CONTAINERS
-
+    """Exactly one container table: ``[box]`` (Lx, Ly, Lz) or ``[container]`` (its height and
+    its dimensions positive; the shape and the names of its dimensions are checked against the
+    registry by :func:`_container_shape`, after the checks that need no import)."""
     if (config.box is None) == (config.container is None):
         given = "both" if config.box is not None else "neither"
         raise ConfigError(f"the container: give exactly one of [box] (Lx, Ly, Lz) and "
@@ -259,11 +258,25 @@ def _container(config: Config) -> None:
             _material(box.wall, "box.wall", grain=False)
         return
     c = config.container
+    _positive(c.Lz, "container.Lz")
+    for k, v in c.size:
+        _positive(v, f"container.{k}")
+    if c.wall is not None:
+        _material(c.wall, "container.wall", grain=False)
+
+
+def _container_shape(config: Config) -> None:
+    """A ``[container]`` names a registered shape and exactly its dimensions
+    (:data:`jaxdamp.physics.containers.CONTAINERS`; imports the physics)."""
+    c = config.container
+    if c is None:
+        return
+    from jaxdamp.physics.containers import CONTAINERS
+
     shapes = [n for n in CONTAINERS if n != "box"]
     if c.shape not in shapes:
         hint = " (the box is the [box] table)" if c.shape == "box" else ""
         raise ConfigError(f"container.shape = {c.shape!r}: expected one of {shapes}{hint}")
-    _positive(c.Lz, "container.Lz")
     fields = CONTAINERS[c.shape].fields
     names = [k for k, _ in c.size]
     missing = [f for f in fields if f not in names]
@@ -273,10 +286,6 @@ def _container(config: Config) -> None:
                 else f"does not know {', '.join(extra)}")
         raise ConfigError(f"container: a {c.shape} {what}; its dimensions are "
                           f"{', '.join(fields)} [m] (and Lz)")
-    for k, v in c.size:
-        _positive(v, f"container.{k}")
-    if c.wall is not None:
-        _material(c.wall, "container.wall", grain=False)
 
 
 def validate(config: Config) -> Config:
@@ -379,6 +388,7 @@ def validate(config: Config) -> Config:
 
     from jaxdamp.physics.containers import container
 
+    _container_shape(config)
     vessel = container(config)
     lid = vessel.height(config)
     volume = 0.0
@@ -496,4 +506,5 @@ def _validate_impact(config: Config) -> Config:
     if num.duration < 1.0 / config.frequency:
         raise ConfigError(f"numerics.duration = {num.duration} s: must cover at least one drive "
                           f"period (1/f = {1.0 / config.frequency:.4g} s)")
+    _container_shape(config)
     return config

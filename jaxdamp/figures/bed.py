@@ -21,7 +21,6 @@ import numpy as np
 from jaxdamp.figures._files import open_file, run_title
 from jaxdamp.figures.style import FIGSIZE, SPECIES_COLOURS, figure
 from jaxdamp.io.export import OutputFileError, load_snapshots
-from jaxdamp.physics.containers import container
 
 MM = 1e3  # m → mm: every bed drawing is in mm
 COLOURINGS = ("species", "height")
@@ -51,6 +50,8 @@ def draw_snapshot(ax, r, radius, species, config, z_box=0.0, *, color="species",
     grain a marker whose size on screen is its true diameter; on a 2-D axes it is the x–z side
     view in the box frame (``z − z_box``), grains as circles, large ones drawn first.
     """
+    from jaxdamp.physics.containers import container  # the physics: on use
+
     _check_colour(color)
     r, radius, sp = np.asarray(r, float), np.asarray(radius, float), np.asarray(species, int)
     Lz = container(config).height(config)
@@ -87,6 +88,8 @@ def draw_snapshot(ax, r, radius, species, config, z_box=0.0, *, color="species",
 
 
 def _draw_3d(ax, r, radius, faces, config, z_box, zlim, zoom, fontsize):
+    from jaxdamp.physics.containers import container  # the physics: on use
+
     from mpl_toolkits.mplot3d import proj3d
 
     vessel = container(config)
@@ -116,6 +119,8 @@ def _draw_3d(ax, r, radius, faces, config, z_box, zlim, zoom, fontsize):
 
 
 def _draw_side(ax, r, radius, faces, config, z_box, fontsize):
+    from jaxdamp.physics.containers import container  # the physics: on use
+
     from matplotlib.collections import PatchCollection
     from matplotlib.patches import Circle, Rectangle
 
@@ -141,6 +146,8 @@ def snapshot_figure(r, radius, species, config, z_box=0.0, *, color="species", s
     """3-D view of the grains (:func:`draw_snapshot`): positions ``r`` (N, 3) [m], ``radius``
     (N,) [m], ``species`` (N,), the container of ``config`` with its floor at ``z_box`` [m];
     ``color`` is ``'species'`` or ``'height'`` (height of the centre above the floor)."""
+    from jaxdamp.physics.containers import container  # the physics: on use
+
     _check_colour(color)
     vessel = container(config)
     fig = figure(FIGSIZE["snapshot"])
@@ -201,6 +208,8 @@ def animate(h5_or_path, out, *, every=1, fps=10, color="species", dpi=80) -> str
     """Write the snapshots (every ``every``-th) as an animation of :func:`draw_snapshot`
     frames: ``.gif`` through matplotlib's PillowWriter, ``.mp4`` through ffmpeg (must be on
     ``PATH``). Returns ``out``."""
+    from jaxdamp.physics.containers import container  # the physics: on use
+
     from matplotlib.animation import FFMpegWriter, PillowWriter
 
     out = os.fspath(out)

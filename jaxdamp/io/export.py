@@ -36,7 +36,6 @@ import h5py
 import numpy as np
 
 from jaxdamp.config import Config, ConfigError, from_json
-from jaxdamp.physics.containers import container
 
 
 class OutputFileError(ConfigError):
@@ -144,6 +143,8 @@ XYZ_PROPERTIES = "species:S:1:pos:R:3:radius:R:1:orientation:R:4"
 
 def write_xyz(s: Snapshots, out) -> str:
     """Write every frame of ``s`` to one extended-XYZ file; returns the path."""
+    from jaxdamp.physics.containers import container  # the physics: on use
+
     labels = _species_labels(s)
     vessel = container(s.config)
     x0, x1, y0, y1 = vessel.extent(s.config)
