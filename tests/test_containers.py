@@ -16,7 +16,7 @@ from jaxdamp.studies.grid import BED_FREE, geometry_key
 
 @pytest.mark.parametrize("name", sorted(CONTAINERS))
 def test_the_scalar_and_jax_forms_of_every_container_agree(name):
-    """Grains at 300 random places near the side walls (mid-height: no floor or lid), moving
+    """Grains at 120 random places near the side walls (mid-height: no floor or lid), moving
     and spinning: the wall forces, torques, energies and losses of the JAX form
     (``walls.wall_forces``) equal the container's scalar form, which the compiled kernel
     inlines, grain by grain; the JAX form's distances and normals are consistent (the normal
@@ -40,7 +40,7 @@ def test_the_scalar_and_jax_forms_of_every_container_agree(name):
     y = rng.uniform(y0, y1, 20000)
     keep = vessel.inside(x, y, 0.3 * R, cfg) & ~vessel.inside(x, y, 1.5 * R, cfg)
     assert vessel.inside(x, y, 0.0, cfg).mean() > 0.5  # the extent bounds the section tightly
-    x, y = x[keep][:300], y[keep][:300]
+    x, y = x[keep][:120], y[keep][:120]
     n = len(x)
     r = np.column_stack([x, y, np.full(n, 0.5 * vessel.height(cfg))])
     v = rng.normal(0, 0.3, (n, 3))
@@ -206,6 +206,7 @@ def _radial_hit(mat, v, dt_fraction, engine, theta=0.7):
     return -float(v_out @ e) / v, (rec["e_elastic"] > 0).sum() * dt, A, v_out
 
 
+@pytest.mark.long
 @pytest.mark.parametrize("engine", ENGINES)
 def test_a_grain_bounces_off_the_cylinder_wall_as_hertz_with_the_concave_radius(engine):
     """Against the independent integration of one collision (scipy, restitution.py) with the
