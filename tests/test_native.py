@@ -122,19 +122,21 @@ def test_cell_grid_pair_list_is_complete_and_grows():
 
 
 def test_kernel_caches_are_keyed_on_the_physics_sources():
-    """The kernels inline scalar forms from contact.py, excitation.py and integrate.py; numba's
+    """The kernels inline scalar forms from contact.py, excitation.py, integrate.py, mounts.py
+    and the container modules; numba's
     own cache would only notice edits to native.py and keep a stale law (checked by hand:
     an edited elastic energy was ignored), so every kernel's cache key holds their hash."""
     import os
 
-    from jaxdamp.physics import contact, excitation, integrate
+    from jaxdamp.physics import contact, excitation, integrate, mounts
+    from jaxdamp.physics.containers import _scalar, box, cylinder
 
     digest = native._source_hash()
-    kernels = [native._build_pairs, native._pairs, native._wall_constants, native._wall,
+    kernels = [native._build_pairs, native._pairs, native._wall_constants, native._grain_walls,
                native._pair_forces, native._advance_one, native._advance]
     for k in kernels:
         key = k._cache._index_key((), k.targetctx.codegen())
         assert key[-1] == digest, k.py_func.__name__
     files = set(native._source_files())
-    for mod in (contact, excitation, integrate, native):
+    for mod in (contact, excitation, integrate, mounts, box, cylinder, _scalar, native):
         assert os.path.abspath(mod.__file__) in files, mod.__name__

@@ -43,6 +43,7 @@ import numpy as np
 
 from jaxdamp.physics.contact import FASTMATH, GAMMA_S, MU, contact_scalar, pair_scalar
 from jaxdamp.physics.containers import CONTAINERS, side_contacts_scalar, side_curvature_scalar
+from jaxdamp.physics.containers._scalar import add_wall_scalar
 from jaxdamp.physics.energy import record_row
 from jaxdamp.physics.excitation import base_motion_scalar, drive_motion_scalar
 from jaxdamp.physics.integrate import body_force_scalar, rotate_scalar, rotate_series_scalar
@@ -282,16 +283,6 @@ if AVAILABLE:
         return wk
 
     @_kernel(inline="always")
-    def _wall(law, xi, nx, ny, nz, vx, vy, vz, sx, sy, sz, Ri, wki):
-        """Contact of a grain with a wall of inward normal ``n`` at overlap ``xi > 0``
-        (velocity ``v`` relative to the box, spin ``s = R ω``, wall constants ``wki``):
-        ``(force, torque, elastic energy, normal loss, friction loss)``."""
-        fx, fy, fz, tx, ty, tz, e, ln, lf = contact_scalar(
-            law, xi, nx, ny, nz, vx, vy, vz, sx, sy, sz, wki[0], wki[1], wki[2], wki[3])
-        return (fx, fy, fz, -Ri * (ny * tz - nz * ty), -Ri * (nz * tx - nx * tz),
-                -Ri * (nx * ty - ny * tx), e, ln, lf)
-
-    @_kernel(inline="always")
     def _grain_walls(shape, law, n, r1, vp, rw, Rb, mb, ref, wk, wks, section, F, T, ex, ey, ez,
                      z1, zdp, Lz, grav, drag, half_skin2):
         """Pass 1 over the grains: body force, the floor, the lid and the container's sides
@@ -333,40 +324,21 @@ if AVAILABLE:
             # walls: the floor, the lid, then the container's sides (inward normals);
             # most grains touch none, so the common path is a compare per wall; box_z
             # sums the force on the box along the axis e
+            acc = (fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z)
             if floor < Ri:
-                gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
-                    law, Ri - floor, 0.0, 0.0, 1.0, wx, wy, wz, sx, sy, sz, Ri, wk[i])
-                fx += gx
-                fy += gy
-                fz += gz
-                tx += hx
-                ty += hy
-                tz += hz
-                e_el += e
-                pw_n += ln
-                pw_f += lf
-                box_z -= ex * gx + ey * gy + ez * gz
+                acc, gz = add_wall_scalar(law, Ri - floor, 0.0, 0.0, 1.0, wx, wy, wz, sx, sy, sz,
+                                          Ri, wk[i, 0], wk[i, 1], wk[i, 2], wk[i, 3], ex, ey, ez,
+                                          acc)
                 floor_lid -= gz
                 n_floor += 1.0
             if Lz - floor < Ri:
-                gx, gy, gz, hx, hy, hz, e, ln, lf = _wall(
-                    law, Ri - (Lz - floor), 0.0, 0.0, -1.0, wx, wy, wz, sx, sy, sz, Ri, wk[i])
-                fx += gx
-                fy += gy
-                fz += gz
-                tx += hx
-                ty += hy
-                tz += hz
-                e_el += e
-                pw_n += ln
-                pw_f += lf
-                box_z -= ex * gx + ey * gy + ez * gz
+                acc, gz = add_wall_scalar(law, Ri - (Lz - floor), 0.0, 0.0, -1.0, wx, wy, wz, sx,
+                                          sy, sz, Ri, wk[i, 0], wk[i, 1], wk[i, 2], wk[i, 3], ex,
+                                          ey, ez, acc)
                 floor_lid -= gz
                 n_lid += 1.0
             fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z = side_contacts_scalar(
-                shape, law, bx, by, section, Ri, wks, i, wx, wy, wz, sx, sy, sz, ex, ey,
-                ez,
-                (fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z))
+                shape, law, bx, by, section, Ri, wks, i, wx, wy, wz, sx, sy, sz, ex, ey, ez, acc)
             F[i, 0], F[i, 1], F[i, 2] = fx, fy, fz
             T[i, 0], T[i, 1], T[i, 2] = tx, ty, tz
         return e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, pdrag, far

@@ -88,9 +88,9 @@ def draw_snapshot(ax, r, radius, species, config, z_box=0.0, *, color="species",
 
 
 def _draw_3d(ax, r, radius, faces, config, z_box, zlim, zoom, fontsize):
-    from jaxdamp.physics.containers import container  # the physics: on use
-
     from mpl_toolkits.mplot3d import proj3d
+
+    from jaxdamp.physics.containers import container  # the physics: on use
 
     vessel = container(config)
     Lz = vessel.height(config)
@@ -119,10 +119,10 @@ def _draw_3d(ax, r, radius, faces, config, z_box, zlim, zoom, fontsize):
 
 
 def _draw_side(ax, r, radius, faces, config, z_box, fontsize):
-    from jaxdamp.physics.containers import container  # the physics: on use
-
     from matplotlib.collections import PatchCollection
     from matplotlib.patches import Circle, Rectangle
+
+    from jaxdamp.physics.containers import container  # the physics: on use
 
     vessel = container(config)
     Lz = vessel.height(config)
@@ -208,9 +208,9 @@ def animate(h5_or_path, out, *, every=1, fps=10, color="species", dpi=80) -> str
     """Write the snapshots (every ``every``-th) as an animation of :func:`draw_snapshot`
     frames: ``.gif`` through matplotlib's PillowWriter, ``.mp4`` through ffmpeg (must be on
     ``PATH``). Returns ``out``."""
-    from jaxdamp.physics.containers import container  # the physics: on use
-
     from matplotlib.animation import FFMpegWriter, PillowWriter
+
+    from jaxdamp.physics.containers import container  # the physics: on use
 
     out = os.fspath(out)
     ext = os.path.splitext(out)[1].lower()

@@ -13,10 +13,11 @@ def add_wall_scalar(law, xi, nx, ny, nz, vx, vy, vz, sx, sy, sz, Ri, k, g, gamma
     """Add the contact of a grain (radius ``Ri``, velocity ``v`` relative to the walls, spin
     ``s = R ω``) with a wall of inward normal ``n`` at overlap ``xi > 0`` (constants ``k, g,
     γ_s, μ``) to ``acc = (fx, fy, fz, tx, ty, tz, elastic energy, normal loss, friction loss,
-    box_z)``: force and torque on the grain, and ``box_z`` less the force along ``e``."""
+    box_z)``: force and torque on the grain, and ``box_z`` less the force along ``e``. Returns
+    the new sums and the wall force's ``z`` component (the floor's and lid's own sum)."""
     fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z = acc
     gx, gy, gz, ax, ay, az, e, ln, lf = contact_scalar(law, xi, nx, ny, nz, vx, vy, vz, sx, sy,
                                                        sz, k, g, gamma_s, mu)
     return (fx + gx, fy + gy, fz + gz, tx - Ri * (ny * az - nz * ay),
             ty - Ri * (nz * ax - nx * az), tz - Ri * (nx * ay - ny * ax), e_el + e, pw_n + ln,
-            pw_f + lf, box_z - (ex * gx + ey * gy + ez * gz))
+            pw_f + lf, box_z - (ex * gx + ey * gy + ez * gz)), gz
