@@ -4,7 +4,7 @@
     python benchmarks/sweep_breakdown.py --duration 0.3 --probe-steps 500   # a quick look
 
 The end-to-end jobs (``end_to_end.py``) run at more µs per system-step than the kernel
-benchmarks (``bench_lammps.py``, ``bench_device.py``). This script says why, in two parts:
+benchmarks (``bench_lammps.py``, ``device_check.py``). This script says why, in two parts:
 
 1. **Phases.** ``jaxdamp frf --preset sanchez2012-optimal --n N --duration D`` runs in this
    process with every chunk of the time loop timed (:func:`jaxdamp.engine.driver.call_chunk`,

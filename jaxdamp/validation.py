@@ -51,7 +51,7 @@ CONTACT_LAWS = ("hertz", "linear")
 #: Grain–wall damping conventions (``Config.wall_damping``).
 WALL_DAMPING = ("mixed", "calibrated")
 
-#: The engines (``numerics.engine``; :func:`jaxdamp.engine.simulate.resolve_engine`).
+#: The engines (``numerics.engine``; :func:`jaxdamp.engine.choice.choose`).
 ENGINES = ("auto", "jax", "native")
 #: The contact laws' floating-point types (``numerics.precision``;
 #: :data:`jaxdamp.physics.contact.PRECISIONS`, checked equal by the tests).

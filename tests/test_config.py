@@ -63,7 +63,7 @@ def test_invalid_values_name_the_parameter(over, match):
 def test_float32_precision_runs_on_the_jax_engine():
     """``numerics.precision = 'float32'`` reaches the model, and ``auto`` resolves to the JAX
     engine for it (the native kernel is float64 only)."""
-    from jaxdamp.engine.simulate import resolve_engine
+    from jaxdamp.engine.choice import resolve_engine
     from jaxdamp.physics.model import build
 
     cfg = apply_overrides(presets.get("sanchez2012-optimal"), ["numerics.precision='float32'"])

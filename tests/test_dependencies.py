@@ -28,3 +28,25 @@ def test_jitted_vmapped_matvec_then_sum_is_exact(dtype, rows):
     bad = np.flatnonzero(got != exact)
     assert bad.size == 0, (f"jax {jax.__version__}: {bad.size} of {rows} rows wrong, e.g. row "
                            f"{bad[-1]}: {got[bad[-1]]} instead of {exact[bad[-1]]}")
+
+
+@pytest.mark.long
+def test_the_cuda_extra_resolves_to_jax_cuda_wheels_of_the_installed_jax():
+    """``pip install ".[cuda]"`` (README, "On a GPU") names JAX's CUDA plugin at the version of
+    the JAX installed here, checked without a GPU by pip's resolver (a dry run)."""
+    import os
+    import subprocess
+    import sys
+
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    done = subprocess.run([sys.executable, "-m", "pip", "install", "--dry-run", "--quiet",
+                           "--report", "-", f"{root}[cuda]"], capture_output=True, text=True,
+                          timeout=600, check=False)
+    assert done.returncode == 0, done.stderr[-2000:]
+    import json
+
+    names = {item["metadata"]["name"].lower(): item["metadata"]["version"]
+             for item in json.loads(done.stdout)["install"]}
+    plugin = [n for n in names if n.startswith("jax-cuda") and n.endswith("-plugin")]
+    assert plugin, sorted(names)
+    assert names[plugin[0]] == jax.__version__, (plugin[0], names[plugin[0]], jax.__version__)

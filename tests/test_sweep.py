@@ -119,12 +119,14 @@ def test_reuse_or_run_reads_back_resumes_or_replaces(tmp_path):
     assert holds(path, cfg, axes)
     msgs = []
     first = reuse_or_run(cfg, axes, path, progress=False, echo=msgs.append)
-    assert msgs == ["resuming sweep at chunk 3/4"]
+    # the engine the file was written with, kept (jaxdamp.engine.choice.stored_choice)
+    stored = "engine jax (as stored in the file: numerics.engine = 'jax')"
+    assert msgs == [stored, "resuming sweep at chunk 3/4"]
     with h5py.File(path) as h:
-        assert h.attrs["status"] == "finished"
+        assert h.attrs["status"] == "finished" and h.attrs["engine"] == "jax"
     msgs.clear()
     again = reuse_or_run(cfg, axes, path, progress=False, echo=msgs.append)
-    assert msgs == ["resuming sweep at chunk 4/4"]  # nothing left to compute
+    assert msgs == [stored, "resuming sweep at chunk 4/4"]  # nothing left to compute
     np.testing.assert_array_equal(again.summary["amplitude"], first.summary["amplitude"])
     assert again.summary["wall_time"] >= first.summary["wall_time"] > 0
     other = {k: v[:1] for k, v in axes.items()}

@@ -22,6 +22,15 @@ def cmd_presets(args) -> int:
 
 
 def cmd_info(args) -> int:
+    if args.devices:
+        from jaxdamp.engine.choice import describe_devices
+
+        print("\n".join(describe_devices(tuple(args.batch)) if args.batch
+                        else describe_devices()))
+        if args.file is None:
+            return 0
+    if args.file is None:
+        raise ConfigError("info: give a FILE.h5 to summarise, or --devices")
     from jaxdamp.io import describe
 
     print(describe(args.file))
@@ -142,9 +151,21 @@ def register(sub) -> None:
     pr.set_defaults(func=cmd_presets)
 
     i = sub.add_parser("info", help="summarise any file jaxdamp writes (run, sweep, optimiser "
-                                    "log)")
-    i.add_argument("file", metavar="FILE.h5",
+                                    "log), or this machine's devices (--devices)",
+                       description="Summarise an output file, or (--devices) list the devices "
+                                   "JAX sees and the engine numerics.engine = 'auto' picks "
+                                   "for each batch and precision.",
+                       epilog="examples:\n  jaxdamp info run.h5\n  jaxdamp info --devices\n"
+                              "  jaxdamp info --devices --batch 1 --batch 2400",
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    i.add_argument("file", metavar="FILE.h5", nargs="?",
                    help="a run, sweep or optimiser file (HDF5) written by jaxdamp")
+    i.add_argument("--devices", action="store_true",
+                   help="the devices, the host's cores, the engine 'auto' picks by batch and "
+                        "the float64/float32 advice")
+    i.add_argument("--batch", type=positive_int, action="append", metavar="N",
+                   help="with --devices: a batch to show the choice for (repeatable; default "
+                        "1, 32, 1024, 16384)")
     i.set_defaults(func=cmd_info)
 
     pl = sub.add_parser(

@@ -19,26 +19,10 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxdamp.engine import neighbors as nb
+from jaxdamp.engine.choice import resolve_engine
 from jaxdamp.physics.energy import record
 from jaxdamp.physics.integrate import box_frame, initial_state, step
 from jaxdamp.physics.model import Model, Params, State
-from jaxdamp.validation import ENGINES, engine_precision_error
-
-
-def resolve_engine(engine: str, precision: str = "float64") -> str:
-    """``"auto"`` is the compiled CPU engine (:mod:`jaxdamp.engine.native`) when JAX runs on the CPU
-    and numba is installed, else the pure-JAX engine; with ``precision = "float32"``
-    (``numerics.precision``) always the JAX engine (the native kernel is float64)."""
-    if engine not in ENGINES:
-        raise ValueError(f"engine = {engine!r}: expected one of {ENGINES}")
-    if (why := engine_precision_error(engine, precision)) is not None:
-        raise ValueError(why)
-    if engine == "auto":
-        from jaxdamp.engine import native
-
-        native_ok = native.AVAILABLE and jax.default_backend() == "cpu" and precision == "float64"
-        return "native" if native_ok else "jax"
-    return engine
 
 
 @functools.lru_cache(maxsize=64)

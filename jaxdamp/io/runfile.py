@@ -4,7 +4,9 @@ Schema of a run file (every dataset has a ``units`` attribute; see ``docs/output
 
     /                       attrs: format, jaxdamp_version, created, config (JSON), system,
                                    preset, status ('running' | 'finished' | 'diverged' |
-                                   'interrupted' | 'partial'), message
+                                   'interrupted' | 'partial'), message, dt, duration, engine,
+                                   engine_reason (the engine that ran it and why:
+                                   jaxdamp.engine.choice; --resume keeps it)
     /grains/radius (N,)     m        /grains/mass (N,) kg      /grains/species (N,)
     /settle                 attrs: bed_height [m], time [s], max_speed [m/s], settled (bool:
                             every grain below numerics.settle_speed before settle_time ran out);

@@ -4,7 +4,8 @@ Layout (``docs/output.md``, "Sweep file schema")::
 
     /                       attrs: format, jaxdamp_version, created, base_config (JSON), axes
                                    (JSON), replicates, configs (JSON list), dt, duration,
-                                   engine, devices, status, message, wall_time
+                                   engine, engine_reason (the engine that ran it and why:
+                                   jaxdamp.engine.choice), devices, status, message, wall_time
     /axes/<key>             the swept values
     /records/<name>         (P, T, ...) samples of every point × replicate (replicates fastest)
     /checkpoint             batched state and neighbour lists after the last finished chunk
@@ -88,11 +89,14 @@ class SweepFile:
 
     @classmethod
     def create(cls, path: str, config, axes: dict, configs: list, dt: float, duration: float,
-               engine: str, replicates: int = 1, devices: int = 1) -> "SweepFile":
+               engine, replicates: int = 1, devices: int = 1) -> "SweepFile":
+        """A new sweep file; ``engine``: the :class:`jaxdamp.engine.choice.Choice` that runs it
+        (stored as ``engine`` and ``engine_reason``)."""
         h5 = cls._open(path, "w")
         stamp(h5, FORMAT, base_config=config.to_json(), axes=axes_json(axes, replicates),
               replicates=int(replicates), configs=json.dumps([c.to_json() for c in configs]),
-              dt=float(dt), duration=float(duration), engine=engine, devices=int(devices),
+              dt=float(dt), duration=float(duration), engine=engine.engine,
+              engine_reason=engine.reason, devices=int(devices),
               status="running", message="")
         h5.create_group("records")
         ag = h5.create_group("axes")
@@ -133,6 +137,12 @@ class SweepFile:
         for ds in h5["records"].values():
             ds.resize(chunk * records_per_chunk, axis=1)
         return cls(h5), arrays, chunk, wall
+
+    @staticmethod
+    def attrs_of(path: str) -> dict:
+        """The root attributes of the sweep file ``path`` (read only)."""
+        with h5py.File(path, "r") as h5:
+            return dict(h5.attrs)
 
     @staticmethod
     def checkpoint_of(path: str, config, axes: dict, replicates: int):

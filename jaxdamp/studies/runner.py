@@ -23,9 +23,9 @@ from jaxdamp.analysis import stats
 from jaxdamp.analysis.response import analysis_start, steady_state_summary
 from jaxdamp.config import Config, ConfigError, is_stored
 from jaxdamp.engine import budget, driver, native
+from jaxdamp.engine.choice import choose, resolve_engine, stored_choice
 from jaxdamp.engine.driver import SimulationDiverged  # noqa: F401  (re-exported: runs raise it)
 from jaxdamp.engine.packing import SettledBed, settle
-from jaxdamp.engine.simulate import resolve_engine
 from jaxdamp.io import RunFile, write_steady
 from jaxdamp.io.common import (
     damaged_checkpoint,
@@ -148,7 +148,7 @@ def batch_budget(config: Config, sched: Schedule, systems: int = 1, out: str | N
         systems=systems, grains=config.n_grains, steps=steps,
         samples=sched.n_chunks * sched.records_per_chunk,
         sample_bytes=8 * (24 + 4 * len(config.grains) + dofs),
-        engine=resolve_engine(num.engine, num.precision), snapshots=snapshots,
+        engine=resolve_engine(num.engine, num.precision, systems), snapshots=snapshots,
         out=out is not None)
 
 
@@ -207,7 +207,7 @@ def run(
     t_window = analysis_start(config, sched.duration)
     params = dataclasses.replace(params, t_window=jnp.asarray(t_window))
     pb = driver.batched(params)
-    engine = dict(engine=config.numerics.engine, multiplier=config.numerics.capacity_multiplier)
+    choice = choose(config.numerics.engine, config.numerics.precision, batch=1)
     radii = np.asarray(params.radius)
     masses = np.asarray(params.mass)
     m_grains = float(masses.sum())
@@ -231,6 +231,7 @@ def run(
             raise ConfigError(f"--resume: {out} has no checkpoint (the run never finished a chunk)")
         arrays, attrs = ck
         start_chunk = int(attrs["chunk"])
+        choice = stored_choice(rf.h5.attrs, choice)
         series = rf.h5["series"]
         why = damaged_checkpoint(arrays) or (
             damaged_series(series["t"][()] if "t" in series else np.zeros(0),
@@ -238,6 +239,7 @@ def run(
         if why is not None:
             rf.close()
             raise ConfigError(damaged_message(out, why))
+        engine = dict(engine=choice.engine, multiplier=config.numerics.capacity_multiplier)
         batch = driver.restore(model, pb, arrays, **engine)
         rf.truncate(int(attrs["n_records"]), int(attrs["n_snapshots"]))
         s = rf.h5["settle"]
@@ -245,10 +247,11 @@ def run(
                   float(s.attrs["time"]), float(s.attrs["max_speed"]),
                   bool(s.attrs.get("settled", True)))
         say(f"resuming {out} at chunk {start_chunk}/{sched.n_chunks} "
-            f"(t = {float(batch.states.t[0]):.6g} s)")
+            f"(t = {float(batch.states.t[0]):.6g} s), engine {choice.engine} ({choice.reason})")
     else:
-        if (note := native.compile_note(resolve_engine(config.numerics.engine,
-                                                        config.numerics.precision))):
+        engine = dict(engine=choice.engine, multiplier=config.numerics.capacity_multiplier)
+        say(f"engine {choice.engine} ({choice.reason})")
+        if (note := native.compile_note(choice.engine)):
             say(note)
         t0 = time.perf_counter()
         bed = settle(config, model, params,
@@ -272,7 +275,9 @@ def run(
                              x0[None], xd0[None], **engine)
         if out is not None:
             rf = RunFile.create(out, config, radii, masses, grain_species(config), bed,
-                                extra_attrs={"dt": sched.dt, "duration": sched.duration})
+                                extra_attrs={"dt": sched.dt, "duration": sched.duration,
+                                             "engine": choice.engine,
+                                             "engine_reason": choice.reason})
             # resumable from its first moment: the settled start is checkpoint 0
             rf.write_checkpoint({k: v[0] for k, v in driver.checkpoint(batch, 1).items()},
                                 {"chunk": 0, "n_records": 0, "n_snapshots": 0})

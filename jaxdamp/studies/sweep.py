@@ -33,8 +33,8 @@ from jaxdamp.analysis import stats
 from jaxdamp.analysis.response import analysis_start, steady_state_summary
 from jaxdamp.config import Config, ConfigError
 from jaxdamp.engine import budget, driver, native
+from jaxdamp.engine.choice import choose, stored_choice
 from jaxdamp.engine.packing import settle_many
-from jaxdamp.engine.simulate import resolve_engine
 from jaxdamp.io.common import ensure_space, stop_file
 from jaxdamp.io.sweepfile import SweepFile, holds
 from jaxdamp.physics.containers import container
@@ -169,7 +169,11 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
     P = len(configs)
     sharding, padded = _mesh_sharding(P) if shard else (None, P)
     # native: one kernel call per shard
-    engine = resolve_engine(base.numerics.engine, base.numerics.precision)
+    choice = choose(base.numerics.engine, base.numerics.precision, batch=P)
+    if resume and out and os.path.exists(out):  # the engine the file was written with
+        choice = stored_choice(SweepFile.attrs_of(out), choice)
+    engine = choice.engine
+    say(f"engine {engine} ({choice.reason})")
     pb_s = _pad_and_shard(pb, padded, sharding)
     drive = dict(engine=engine, multiplier=base.numerics.capacity_multiplier,
                  place=lambda tree: _pad_and_shard(tree, padded, sharding))
@@ -221,7 +225,7 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
                              np.stack(z0), np.stack(zd0), **drive).replace(params=pb_s)
         start_arrays = driver.checkpoint(batch, P) if out else None  # a collective
         if out and writer:
-            sf = SweepFile.create(out, config, axes, configs, dt, sched.duration, engine, R,
+            sf = SweepFile.create(out, config, axes, configs, dt, sched.duration, choice, R,
                                   devices=len(jax.devices()))
             sf.write_settle([beds[k] for k in keys], [c.numerics.settle_speed for c in configs])
             sf.write_checkpoint(start_arrays, 0, 0.0)  # resumable from the settled start

@@ -1,0 +1,228 @@
+"""Device check: agreement with the CPU, then throughput by path, batch and precision — one
+command, under 5 minutes on an accelerator.
+
+    python benchmarks/device_check.py                     # on the machine with the device
+    python benchmarks/device_check.py --quick             # a smoke test of the script (CPU)
+    python benchmarks/device_check.py --budget 200 --batches 1,256,4096
+
+1. **A moving state made on the CPU.** The ``sanchez2012-optimal`` bed (250 grains), settled,
+   32 copies at 8–25 Hz driven ``--warm`` seconds by the native kernel on the host (grains
+   thrown against the lid, neighbour lists rebuilt), so that every path is timed on a bed in
+   motion. Larger batches repeat the 32 systems.
+2. **Agreement.** From that state, ``--agree-steps`` steps of 4 systems through the XLA step
+   on the CPU (the reference), on the default device, and through the native kernel; the
+   largest position difference from the reference [m] per path and precision.
+3. **Throughput.** µs per system-step of the production chunk
+   (:func:`jaxdamp.engine.simulate.chunk_fn`, compiled before timing, best of two timed
+   chunks) for every path (``xla``: the JAX engine on the default device, by precision;
+   ``native``: the compiled kernel on the host's cores, float64) and batch, in increasing
+   batch until ``--budget`` seconds are spent or the device runs out of memory.
+4. **The crossover** of :mod:`jaxdamp.engine.choice`: the smallest batch from which the
+   device's float64 step beats the native kernel at the same batch (the native kernel's
+   largest measured batch standing in for larger ones), printed as the
+   :data:`jaxdamp.engine.choice.MEASURED` entry for this device.
+
+Writes one JSON (``--json``; default ``benchmarks/results/device_<device>_<date>.json``)
+whose ``rows`` name the path, batch, precision and µs per system-step. Do not run while
+other jobs use the cores (the native rows time the host). This replaces ``bench_device.py``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import datetime
+import json
+import os
+import re
+import time
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxdamp.cases import presets
+from jaxdamp.config import apply_overrides
+from jaxdamp.engine import driver
+from jaxdamp.engine import neighbors as nb
+from jaxdamp.engine.choice import Crossover
+from jaxdamp.engine.packing import settle
+from jaxdamp.engine.simulate import chunk_fn
+from jaxdamp.physics.model import build
+from jaxdamp.studies.runner import initial_box_position
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+EVERY = 100  # steps per sample: the production chunk's record interval
+
+
+def moving_state(copies: int, warm: float):
+    """``(model, host states, host params, host reference positions)``: ``copies`` systems of
+    the thesis bed at 8–25 Hz, settled and driven ``warm`` s by the native kernel (on the
+    host, whatever the default device)."""
+    cfg = apply_overrides(presets.get("sanchez2012-optimal"), ["numerics.settle_time=0.3",
+                                                               "numerics.engine='native'"])
+    model, params = build(cfg)
+    bed = settle(cfg, model, params)
+    pb = jax.tree_util.tree_map(lambda x: jnp.stack([x] * copies), params)
+    pb = dataclasses.replace(pb, omega=jnp.asarray(2 * np.pi * np.linspace(8, 25, copies)))
+    z0 = initial_box_position(cfg, float(np.asarray(params.mass).sum()))
+    rep = lambda x: np.stack([x] * copies)  # noqa: E731
+    b = driver.start(model, pb, rep(bed.r + [0.0, 0.0, z0]), rep(bed.v), rep(bed.w),
+                     rep(bed.q), np.full(copies, z0), np.zeros(copies), engine="native",
+                     multiplier=cfg.numerics.capacity_multiplier)
+    if warm > 0:
+        b, _ = driver.advance(b, max(1, round(warm / (float(params.dt) * EVERY))), EVERY)
+    host = lambda t: jax.tree_util.tree_map(np.asarray, driver.to_host(t))  # noqa: E731
+    return model, host(b.states), host(b.params), np.asarray(driver.to_host(b.nbrs.reference))
+
+
+def batch_of(tree, batch: int):
+    """``batch`` systems cycling through the host pytree's systems."""
+    idx = np.arange(batch) % jax.tree_util.tree_leaves(tree)[0].shape[0]
+    return jax.tree_util.tree_map(lambda x: x[idx], tree)
+
+
+def advance(model, states, params, ref, steps: int, path: str, precision: str, device):
+    """``(final states, seconds of the last call, seconds of the first)``: ``steps`` steps
+    (whole samples) of the batch through ``path`` (``xla``: the JAX engine on ``device``;
+    ``native``: the kernel on the host), the first call compiling."""
+    model = dataclasses.replace(model, precision=precision)
+    n_rec = max(1, steps // EVERY)
+    engine = "jax" if path == "xla" else "native"
+    fn = chunk_fn(model, n_rec, EVERY, engine=engine)
+    put = (lambda t: jax.device_put(t, device)) if path == "xla" else jax.device_put
+    st, pb = put(states), put(params)
+    nbrs = put(nb.allocate(model, jnp.asarray(ref), 1.5, radius=jnp.asarray(params.radius)))
+    t0 = time.perf_counter()
+    out = fn(st, nbrs, pb)
+    jax.block_until_ready(out)
+    first = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    out = fn(st, nbrs, pb)
+    jax.block_until_ready(out)
+    again = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    out = fn(st, nbrs, pb)
+    jax.block_until_ready(out)
+    best = min(again, time.perf_counter() - t0)
+    return out[0], best, first, n_rec * EVERY
+
+
+def agreement(model, states, params, ref, steps: int, precisions) -> list[dict]:
+    """Max |Δr| [m] after ``steps`` steps of 4 systems: every path against the XLA step on
+    the CPU, by precision (the native kernel: float64 only)."""
+    cpu, dev = jax.devices("cpu")[0], jax.devices()[0]
+    s4, p4, r4 = batch_of(states, 4), batch_of(params, 4), ref[np.arange(4) % ref.shape[0]]
+    rows = []
+    for precision in precisions:
+        base = np.asarray(advance(model, s4, p4, r4, steps, "xla", precision, cpu)[0].r)
+        paths = [("xla", dev)] + ([("native", None)] if precision == "float64" else [])
+        for path, device in paths:
+            got = np.asarray(advance(model, s4, p4, r4, steps, path, precision, device)[0].r)
+            rows.append({"path": path, "precision": precision, "steps": steps,
+                         "device": "host" if path == "native" else device.device_kind,
+                         "max_abs_dr_m": float(np.max(np.abs(got - base))),
+                         "finite": bool(np.isfinite(got).all())})
+            print(f"agreement {path:6} {precision} after {steps} steps: max |Δr| = "
+                  f"{rows[-1]['max_abs_dr_m']:.3g} m against the XLA step on the CPU",
+                  flush=True)
+    return rows
+
+
+def crossover(rows: list[dict], kind: str, source: str) -> Crossover:
+    """The :data:`jaxdamp.engine.choice.MEASURED` entry from the throughput rows."""
+    xla = {r["batch"]: r["us"] for r in rows if r["path"] == "xla"
+           and r["precision"] == "float64" and "us" in r}
+    nat = {r["batch"]: r["us"] for r in rows if r["path"] == "native" and "us" in r}
+    start = None
+    if nat:
+        top = max(nat)
+        for b in sorted(xla):
+            if xla[b] < nat.get(b, nat[top]):
+                start = b
+                break
+    return Crossover(kind, os.cpu_count() or 1, xla, nat, start, source)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--batches", default="1,32,256,1024,4096,16384",
+                    help="batches of the device's XLA step (comma-separated)")
+    ap.add_argument("--native-batches", default="1,32,256,1024",
+                    help="batches of the native kernel on the host")
+    ap.add_argument("--precisions", default="float64,float32")
+    ap.add_argument("--steps", type=int, default=1000, help="steps per timed chunk")
+    ap.add_argument("--native-steps", type=int, default=3000,
+                    help="steps per timed chunk of the native kernel (its per-call cost: a "
+                         "list rebuild and one callback, amortised)")
+    ap.add_argument("--agree-steps", type=int, default=1000)
+    ap.add_argument("--warm", type=float, default=0.2, help="simulated seconds driven first")
+    ap.add_argument("--budget", type=float, default=240.0,
+                    help="seconds of throughput rows; larger batches are skipped after it")
+    ap.add_argument("--quick", action="store_true",
+                    help="tiny settings: a check that the script runs (any machine)")
+    ap.add_argument("--json", help="output (default benchmarks/results/device_<device>_<date>"
+                                   ".json)")
+    a = ap.parse_args(argv)
+    if a.quick:
+        a.batches, a.native_batches, a.steps, a.native_steps = "1,4", "1,2", 100, 100
+        a.agree_steps, a.warm, a.budget = 100, 0.01, 60.0
+    precisions = a.precisions.split(",")
+    dev = jax.devices()[0]
+    kind = dev.device_kind
+    info = {"jax": jax.__version__, "backend": jax.default_backend(), "device": kind,
+            "devices": len(jax.devices()), "host_cores": os.cpu_count(),
+            "date": datetime.date.today().isoformat(),
+            "command": "python benchmarks/device_check.py " + " ".join(argv or [])}
+    print(json.dumps(info), flush=True)
+    t_start = time.perf_counter()
+    model, states, params, ref = moving_state(32 if not a.quick else 4, a.warm)
+    print(f"moving state: {states.t.shape[0]} systems of {model.n} grains driven {a.warm} s "
+          f"({time.perf_counter() - t_start:.0f} s)", flush=True)
+    agree = agreement(model, states, params, ref, a.agree_steps, precisions)
+    rows: list[dict] = []
+    t_rows = time.perf_counter()
+    cases = [("native", "float64", int(b)) for b in a.native_batches.split(",")]
+    cases += [("xla", p, int(b)) for p in precisions for b in a.batches.split(",")]
+    skip: set = set()
+    for path, precision, b in cases:
+        if (path, precision) in skip:
+            continue
+        if time.perf_counter() - t_rows > a.budget:
+            print(f"{path} {precision} batch {b}: skipped (--budget {a.budget:.0f} s spent)")
+            continue
+        steps = a.native_steps if path == "native" else a.steps
+        try:
+            _, best, first, n = advance(model, batch_of(states, b), batch_of(params, b),
+                                        ref[np.arange(b) % ref.shape[0]], steps, path,
+                                        precision, dev)
+        except Exception as e:  # noqa: BLE001 - out of memory ends this path's batches
+            rows.append({"path": path, "precision": precision, "batch": b,
+                         "error": f"{type(e).__name__}: {e}"[:400]})
+            print(f"{path} {precision} batch {b}: {rows[-1]['error'][:200]}", flush=True)
+            skip.add((path, precision))
+            continue
+        us = best / (n * b) * 1e6
+        rows.append({"path": path, "precision": precision, "batch": b, "us": us,
+                     "steps": n, "compile_and_first_s": first,
+                     "particle_steps_per_s": model.n * b * n / best})
+        print(f"{path:6} {precision} batch {b:>6}: {us:8.3f} µs per system-step "
+              f"({model.n * b * n / best:.3g} particle-steps/s; first call {first:.1f} s)",
+              flush=True)
+    entry = crossover(rows, kind, f"benchmarks/device_check.py, {info['date']}, jax "
+                                  f"{info['jax']}")
+    print("\njaxdamp.engine.choice.MEASURED entry for this device:\n  "
+          f"{entry.device_kind!r}: {entry!r},")
+    out = a.json or os.path.join(HERE, "results", "device_" + re.sub(r"[^A-Za-z0-9]+", "_",
+                                 kind).strip("_") + f"_{info['date']}.json")
+    os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
+    with open(out, "w") as fh:
+        json.dump({"info": info, "agreement": agree, "rows": rows,
+                   "crossover": entry._asdict(),
+                   "seconds": time.perf_counter() - t_start}, fh, indent=1)
+    print(f"wrote {out} ({time.perf_counter() - t_start:.0f} s in all)")
+
+
+if __name__ == "__main__":
+    main()
