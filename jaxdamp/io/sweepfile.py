@@ -89,14 +89,15 @@ class SweepFile:
 
     @classmethod
     def create(cls, path: str, config, axes: dict, configs: list, dt: float, duration: float,
-               engine, replicates: int = 1, devices: int = 1) -> "SweepFile":
-        """A new sweep file; ``engine``: the :class:`jaxdamp.engine.choice.Choice` that runs it
-        (stored as ``engine`` and ``engine_reason``)."""
+               engine: str, replicates: int = 1, devices: int = 1,
+               engine_reason: str = "") -> "SweepFile":
+        """A new sweep file; ``engine`` computes it and ``engine_reason`` says why
+        (:func:`jaxdamp.engine.choice.choose`)."""
         h5 = cls._open(path, "w")
         stamp(h5, FORMAT, base_config=config.to_json(), axes=axes_json(axes, replicates),
               replicates=int(replicates), configs=json.dumps([c.to_json() for c in configs]),
-              dt=float(dt), duration=float(duration), engine=engine.engine,
-              engine_reason=engine.reason, devices=int(devices),
+              dt=float(dt), duration=float(duration), engine=engine,
+              engine_reason=engine_reason, devices=int(devices),
               status="running", message="")
         h5.create_group("records")
         ag = h5.create_group("axes")

@@ -127,7 +127,8 @@ def sweep(config: Config, axes: dict, out: str | None = None, progress: bool = T
     n_rec = records["t"].shape[1] - 1
     duration = n_rec * configs[0].numerics.record_dt
     if out:
-        sf = SweepFile.create(out, config, axes, configs, dt, duration, f"impact-{method}")
+        sf = SweepFile.create(out, config, axes, configs, dt, duration, f"impact-{method}",
+                              engine_reason=f"the S3 impact model ({method})")
         sf.write_summary(summary, SUMMARY_UNITS)
         sf.write_records(records, RECORD_UNITS, channels=CHANNELS)
         if method == "event":

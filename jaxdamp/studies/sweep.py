@@ -225,8 +225,8 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
                              np.stack(z0), np.stack(zd0), **drive).replace(params=pb_s)
         start_arrays = driver.checkpoint(batch, P) if out else None  # a collective
         if out and writer:
-            sf = SweepFile.create(out, config, axes, configs, dt, sched.duration, choice, R,
-                                  devices=len(jax.devices()))
+            sf = SweepFile.create(out, config, axes, configs, dt, sched.duration, engine, R,
+                                  devices=len(jax.devices()), engine_reason=choice.reason)
             sf.write_settle([beds[k] for k in keys], [c.numerics.settle_speed for c in configs])
             sf.write_checkpoint(start_arrays, 0, 0.0)  # resumable from the settled start
 
