@@ -4,12 +4,12 @@ run and sweep files and kept by ``--resume``."""
 
 import h5py
 import pytest
+from test_runner import small_config
 
 from jaxdamp import cli
 from jaxdamp.engine import choice
 from jaxdamp.engine.choice import Choice, Crossover, choose, stored_choice
 from jaxdamp.studies.runner import run
-from test_runner import small_config
 
 GPU = dict(backend="gpu", device_kind="NVIDIA H200", have_native=True)
 
