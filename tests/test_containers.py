@@ -33,6 +33,10 @@ def test_the_scalar_and_jax_forms_of_every_container_agree(name):
     model, p = build(cfg)
     section = np.asarray(vessel.section(cfg))
     np.testing.assert_array_equal(np.asarray(p.section), section)
+    # the kernel holds the section numbers in registers (section_scalar): all of them fit
+    assert 1 <= len(section) <= containers.MAX_SECTION
+    sec = containers.section_scalar(section)
+    assert len(sec) == containers.MAX_SECTION and list(sec[:len(section)]) == list(section)
     x0, x1, y0, y1 = vessel.extent(cfg)
     R = float(p.radius[0])
     rng = np.random.default_rng(0)
@@ -58,7 +62,7 @@ def test_the_scalar_and_jax_forms_of_every_container_agree(name):
         f = wall_forces(jnp.asarray(r[i:i + 1]), jnp.asarray(v[i:i + 1]), jnp.asarray(w[i:i + 1]),
                         0.0, 0.0, pi, one)
         acc = containers.side_contacts_scalar(
-            vessel.id, law.id, x[i], y[i], section, R, wk, 0, v[i, 0],
+            vessel.id, law.id, x[i], y[i], sec, R, wk, 0, v[i, 0],
             v[i, 1], v[i, 2], R * w[i, 0], R * w[i, 1], R * w[i, 2], 0.0, 0.0, 1.0,
             (0.0,) * 10)
         jax_side = np.concatenate([np.asarray(f.force)[0], np.asarray(f.torque)[0],

@@ -42,7 +42,12 @@ from collections import namedtuple
 import numpy as np
 
 from jaxdamp.physics.contact import FASTMATH, GAMMA_S, MU, contact_scalar, pair_scalar
-from jaxdamp.physics.containers import CONTAINERS, side_contacts_scalar, side_curvature_scalar
+from jaxdamp.physics.containers import (
+    CONTAINERS,
+    section_scalar,
+    side_contacts_scalar,
+    side_curvature_scalar,
+)
 from jaxdamp.physics.containers._scalar import add_wall_scalar
 from jaxdamp.physics.energy import record_row
 from jaxdamp.physics.excitation import base_motion_scalar, drive_motion_scalar
@@ -283,10 +288,12 @@ if AVAILABLE:
         return wk
 
     @_kernel(inline="always")
-    def _grain_walls(shape, law, n, r1, vp, rw, Rb, mb, ref, wk, wks, section, F, T, ex, ey, ez,
+    def _grain_walls(shape, law, n, r1, vp, rw, Rb, mb, ref, wk, wks, sec, F, T, ex, ey, ez,
                      z1, zdp, Lz, grav, drag, half_skin2):
         """Pass 1 over the grains: body force, the floor, the lid and the container's sides
-        (number ``shape``, :mod:`jaxdamp.physics.containers`) into ``F``, ``T``; returns the
+        (number ``shape``, :mod:`jaxdamp.physics.containers`; ``sec``: its section numbers in
+        registers, :func:`~jaxdamp.physics.containers.section_scalar`) into ``F``, ``T``;
+        returns the
         sums ``(elastic energy, normal loss, friction loss, box_z, floor + lid force, grains on
         the floor, on the lid, Σ m v², whether a grain moved more than skin/2 since the list
         was built)``. Inlined where ``shape`` is a constant, the container's branch folds away:
@@ -338,7 +345,7 @@ if AVAILABLE:
                 floor_lid -= gz
                 n_lid += 1.0
             fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z = side_contacts_scalar(
-                shape, law, bx, by, section, Ri, wks, i, wx, wy, wz, sx, sy, sz, ex, ey, ez, acc)
+                shape, law, bx, by, sec, Ri, wks, i, wx, wy, wz, sx, sy, sz, ex, ey, ez, acc)
             F[i, 0], F[i, 1], F[i, 2] = fx, fy, fz
             T[i, 0], T[i, 1], T[i, 2] = tx, ty, tz
         return e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, pdrag, far
@@ -452,6 +459,7 @@ if AVAILABLE:
         pc = np.empty((4 * n + 16, 5))
         wk = _wall_constants(Rb, mb, sid, wtab, law, 0.0)  # floor and lid: planes
         kappa = side_curvature_scalar(shape, section)
+        sec = section_scalar(section)  # in registers for the grain loop, not reloaded per grain
         wks = wk if kappa == 0.0 else _wall_constants(Rb, mb, sid, wtab, law, kappa)
         inv_m = 1.0 / mb
         inv_I = 1.0 / Ib
@@ -521,12 +529,12 @@ if AVAILABLE:
                     rwf[j] = R3[j] * (wf[j] + dt * alf[j])
                 if shape == _BOX:  # the common container: a copy with its branch folded
                     (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, pdrag,
-                     far) = _grain_walls(_BOX, law, n, r1, vp, rw, Rb, mb, ref, wk, wks, section,
+                     far) = _grain_walls(_BOX, law, n, r1, vp, rw, Rb, mb, ref, wk, wks, sec,
                                          F, T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
                 else:
                     (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, pdrag,
                      far) = _grain_walls(shape, law, n, r1, vp, rw, Rb, mb, ref, wk, wks,
-                                         section, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
+                                         sec, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
                                          half_skin2)
                 if n > 1 and far:  # a grain moved more than skin/2: list the pairs anew
                     npairs, pi, pj, pc = _pairs(r1, ex * z1, ey * z1, ez * z1, cutoff, pi, pj,

@@ -97,13 +97,30 @@ def side_contacts_scalar(shape, law, x, y, section, Ri, wk, i, vx, vy, vz, sx, s
     """The contacts of grain ``i`` (centre ``(x, y)`` in the box frame, radius ``Ri``, its
     side-wall constants ``wk[i] = (k, g, γ_s, μ)`` formed at the sides' curvature
     (:func:`side_curvature_scalar`), velocity ``v`` relative to the walls, spin ``R ω``) with
-    the side walls of container number ``shape`` (``section``: ``Params.section``), added to
+    the side walls of container number ``shape`` (``section``: ``Params.section`` as the tuple
+    of :func:`section_scalar`), added to
     ``acc = (fx, fy, fz, tx, ty, tz, elastic energy, normal loss, friction loss, box_z)``."""
     if shape == _CYLINDER:
         return cylinder.side_contacts_scalar(law, x, y, section, Ri, wk, i, vx, vy, vz, sx, sy,
                                              sz, ex, ey, ez, acc)
     return box.side_contacts_scalar(law, x, y, section, Ri, wk, i, vx, vy, vz, sx, sy, sz, ex,
                                     ey, ez, acc)
+
+
+#: How many section numbers (``Params.section``) the compiled kernel holds in registers: the
+#: most any registered container has (checked by ``tests/test_containers.py``).
+MAX_SECTION = 2
+
+
+@scalar_form
+def section_scalar(section):
+    """The section numbers ``Params.section`` as a tuple of :data:`MAX_SECTION` floats (zeros
+    after a container's own), which the kernel forms once per call and passes to
+    :func:`side_contacts_scalar`. Read from the parameter array inside the grain loop instead,
+    the numbers were loaded again for every grain (the loop's stores to the force arrays
+    might alias them): that alone made the native step 15–19 % slower
+    (``benchmarks/RESULTS.md``, 2026-12-05)."""
+    return (section[0], section[1] if section.shape[0] > 1 else 0.0)
 
 
 @scalar_form
