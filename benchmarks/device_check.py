@@ -10,16 +10,19 @@ command, under 5 minutes on an accelerator.
    thrown against the lid, neighbour lists rebuilt), so that every path is timed on a bed in
    motion. Larger batches repeat the 32 systems.
 2. **Agreement.** From that state, ``--agree-steps`` steps of 4 systems through the XLA step
-   on the CPU (the reference), on the default device, and through the native kernel; the
+   on the CPU (the reference), on the default device, through the native kernel and through
+   the fused device step (:mod:`jaxdamp.engine.fused`, when numba-cuda finds a GPU); the
    largest position difference from the reference [m] per path and precision.
 3. **Throughput.** µs per system-step of the production chunk
    (:func:`jaxdamp.engine.simulate.chunk_fn`, compiled before timing, best of two timed
    chunks) for every path (``xla``: the JAX engine on the default device, by precision;
-   ``native``: the compiled kernel on the host's cores, float64) and batch, in increasing
-   batch until ``--budget`` seconds are spent or the device runs out of memory.
-4. **The crossover** of :mod:`jaxdamp.engine.choice`: the smallest batch from which the
-   device's float64 step beats the native kernel at the same batch (the native kernel's
-   largest measured batch standing in for larger ones), printed as the
+   ``native``: the compiled kernel on the host's cores, float64; ``fused``: the fused step,
+   float64) and batch, in increasing batch until ``--budget`` seconds are spent or the
+   device runs out of memory.
+4. **The crossovers** of :mod:`jaxdamp.engine.choice`: the smallest batch from which the
+   device's float64 XLA step, and its fused step, beat the native kernel at the same batch
+   (the native kernel's largest measured batch standing in for larger ones; the fused step
+   only if it agreed with the CPU to 1e-9 m), printed as the
    :data:`jaxdamp.engine.choice.MEASURED` entry for this device.
 
 Writes one JSON (``--json``; default ``benchmarks/results/device_<device>_<date>.json``)
@@ -85,10 +88,11 @@ def batch_of(tree, batch: int):
 def advance(model, states, params, ref, steps: int, path: str, precision: str, device):
     """``(final states, seconds of the last call, seconds of the first)``: ``steps`` steps
     (whole samples) of the batch through ``path`` (``xla``: the JAX engine on ``device``;
-    ``native``: the kernel on the host), the first call compiling."""
+    ``native``: the kernel on the host; ``fused``: the CUDA kernel), the first call
+    compiling."""
     model = dataclasses.replace(model, precision=precision)
     n_rec = max(1, steps // EVERY)
-    engine = "jax" if path == "xla" else "native"
+    engine = {"xla": "jax"}.get(path, path)
     fn = chunk_fn(model, n_rec, EVERY, engine=engine)
     put = (lambda t: jax.device_put(t, device)) if path == "xla" else jax.device_put
     st, pb = put(states), put(params)
@@ -108,19 +112,33 @@ def advance(model, states, params, ref, steps: int, path: str, precision: str, d
     return out[0], best, first, n_rec * EVERY
 
 
+def fused_usable() -> tuple[bool, str]:
+    """Whether the fused step runs here (numba-cuda and a GPU; not the CPU simulator, far too
+    slow for this bed), and why not."""
+    from jaxdamp.engine import fused
+
+    ok, why = fused.available()
+    if ok and fused.simulated():
+        return False, "NUMBA_ENABLE_CUDASIM is set (the simulator is for the tests' tiny beds)"
+    return ok, why
+
+
 def agreement(model, states, params, ref, steps: int, precisions) -> list[dict]:
     """Max |Δr| [m] after ``steps`` steps of 4 systems: every path against the XLA step on
-    the CPU, by precision (the native kernel: float64 only)."""
+    the CPU, by precision (the native and fused kernels: float64 only)."""
     cpu, dev = jax.devices("cpu")[0], jax.devices()[0]
     s4, p4, r4 = batch_of(states, 4), batch_of(params, 4), ref[np.arange(4) % ref.shape[0]]
     rows = []
     for precision in precisions:
         base = np.asarray(advance(model, s4, p4, r4, steps, "xla", precision, cpu)[0].r)
         paths = [("xla", dev)] + ([("native", None)] if precision == "float64" else [])
+        if precision == "float64" and fused_usable()[0]:
+            paths.append(("fused", None))
         for path, device in paths:
             got = np.asarray(advance(model, s4, p4, r4, steps, path, precision, device)[0].r)
             rows.append({"path": path, "precision": precision, "steps": steps,
-                         "device": "host" if path == "native" else device.device_kind,
+                         "device": {"native": "host", "fused": "cuda:0"}.get(
+                             path, getattr(device, "device_kind", "")),
                          "max_abs_dr_m": float(np.max(np.abs(got - base))),
                          "finite": bool(np.isfinite(got).all())})
             print(f"agreement {path:6} {precision} after {steps} steps: max |Δr| = "
@@ -129,19 +147,31 @@ def agreement(model, states, params, ref, steps: int, precisions) -> list[dict]:
     return rows
 
 
-def crossover(rows: list[dict], kind: str, source: str) -> Crossover:
-    """The :data:`jaxdamp.engine.choice.MEASURED` entry from the throughput rows."""
-    xla = {r["batch"]: r["us"] for r in rows if r["path"] == "xla"
-           and r["precision"] == "float64" and "us" in r}
-    nat = {r["batch"]: r["us"] for r in rows if r["path"] == "native" and "us" in r}
-    start = None
-    if nat:
+#: The fused step's largest |Δr| from the CPU's XLA step, 1000 steps after the same state,
+#: for ``auto`` to use it (the XLA step on a device agreed to 2e-15 m, issue 32).
+FUSED_AGREES = 1e-9
+
+
+def crossover(rows: list[dict], kind: str, source: str, agree: list[dict]) -> Crossover:
+    """The :data:`jaxdamp.engine.choice.MEASURED` entry from the throughput rows (the fused
+    step's only where it agreed with the CPU, :data:`FUSED_AGREES`)."""
+    def by_batch(path):
+        return {r["batch"]: r["us"] for r in rows if r["path"] == path
+                and r["precision"] == "float64" and "us" in r}
+
+    nat = by_batch("native")
+
+    def first_faster(dev: dict):
+        if not nat:
+            return None
         top = max(nat)
-        for b in sorted(xla):
-            if xla[b] < nat.get(b, nat[top]):
-                start = b
-                break
-    return Crossover(kind, os.cpu_count() or 1, xla, nat, start, source)
+        return next((b for b in sorted(dev) if dev[b] < nat.get(b, nat[top])), None)
+
+    xla, fz = by_batch("xla"), by_batch("fused")
+    ok = [r for r in agree if r["path"] == "fused"]
+    trusted = bool(ok) and all(r["finite"] and r["max_abs_dr_m"] <= FUSED_AGREES for r in ok)
+    return Crossover(kind, os.cpu_count() or 1, xla, nat, first_faster(xla), source, fz,
+                     first_faster(fz) if trusted else None)
 
 
 def main(argv=None):
@@ -151,6 +181,8 @@ def main(argv=None):
                     help="batches of the device's XLA step (comma-separated)")
     ap.add_argument("--native-batches", default="1,32,256,1024",
                     help="batches of the native kernel on the host")
+    ap.add_argument("--fused-batches", default="1,32,256,1024,4096,16384",
+                    help="batches of the fused device step (when numba-cuda finds a GPU)")
     ap.add_argument("--precisions", default="float64,float32")
     ap.add_argument("--steps", type=int, default=1000, help="steps per timed chunk")
     ap.add_argument("--native-steps", type=int, default=3000,
@@ -167,6 +199,7 @@ def main(argv=None):
     a = ap.parse_args(argv)
     if a.quick:
         a.batches, a.native_batches, a.steps, a.native_steps = "1,4", "1,2", 100, 100
+        a.fused_batches = "1,4"
         a.agree_steps, a.warm, a.budget = 100, 0.01, 60.0
     precisions = a.precisions.split(",")
     dev = jax.devices()[0]
@@ -184,6 +217,11 @@ def main(argv=None):
     rows: list[dict] = []
     t_rows = time.perf_counter()
     cases = [("native", "float64", int(b)) for b in a.native_batches.split(",")]
+    usable, why = fused_usable()
+    if usable:
+        cases += [("fused", "float64", int(b)) for b in a.fused_batches.split(",")]
+    else:
+        print(f"fused: not timed ({why})", flush=True)
     cases += [("xla", p, int(b)) for p in precisions for b in a.batches.split(",")]
     skip: set = set()
     for path, precision, b in cases:
@@ -211,7 +249,7 @@ def main(argv=None):
               f"({model.n * b * n / best:.3g} particle-steps/s; first call {first:.1f} s)",
               flush=True)
     entry = crossover(rows, kind, f"benchmarks/device_check.py, {info['date']}, jax "
-                                  f"{info['jax']}")
+                                  f"{info['jax']}", agree)
     print("\njaxdamp.engine.choice.MEASURED entry for this device:\n  "
           f"{entry.device_kind!r}: {entry!r},")
     out = a.json or os.path.join(HERE, "results", "device_" + re.sub(r"[^A-Za-z0-9]+", "_",

@@ -300,9 +300,12 @@ class Numerics:
       settle_time: maximum simulated time for settling the bed before driving [s].
       settle_speed: settling stops once every grain is slower than this [m/s].
       settle_drag: viscous drag rate [1/s] on grains during settling only.
-      engine: ``"auto"`` (the compiled CPU kernel of :mod:`jaxdamp.engine.native` when JAX runs on
-        the CPU, else pure JAX), ``"jax"`` or ``"native"``. Both compute the same step;
-        gradients always use JAX.
+      engine: ``"auto"`` (by workload, :mod:`jaxdamp.engine.choice`: the compiled CPU kernel
+        of :mod:`jaxdamp.engine.native` when JAX runs on the CPU and for small batches beside
+        an accelerator), ``"jax"`` (the XLA step, differentiable), ``"native"`` or
+        ``"fused"`` (the CUDA kernel of :mod:`jaxdamp.engine.fused`, one launch per chunk;
+        needs ``jaxdamp[cuda]`` and an NVIDIA GPU). All compute the same step; gradients
+        always use JAX.
       precision: ``"float64"`` (default) or ``"float32"``: the floating-point type the JAX
         engine evaluates the contact laws in (for accelerators, where float32 is much faster).
         The state, the integration, each contact's overlap and normal, and every sum of

@@ -52,18 +52,19 @@ CONTACT_LAWS = ("hertz", "linear")
 WALL_DAMPING = ("mixed", "calibrated")
 
 #: The engines (``numerics.engine``; :func:`jaxdamp.engine.choice.choose`).
-ENGINES = ("auto", "jax", "native")
+ENGINES = ("auto", "jax", "native", "fused")
 #: The contact laws' floating-point types (``numerics.precision``;
 #: :data:`jaxdamp.physics.contact.PRECISIONS`, checked equal by the tests).
 PRECISIONS = ("float64", "float32")
 
 
 def engine_precision_error(engine: str, precision: str) -> str | None:
-    """Why ``engine`` cannot run at ``precision``, or ``None``: the native kernel computes in
-    float64 (the one statement of the rule, for configurations and for direct calls)."""
-    if engine == "native" and precision != "float64":
-        return (f"numerics.precision = {precision!r} runs on the JAX engine only (the native "
-                "kernel computes in float64): set numerics.engine = 'jax' or 'auto'")
+    """Why ``engine`` cannot run at ``precision``, or ``None``: the native kernel and the
+    fused device step compute in float64 (the one statement of the rule, for configurations
+    and for direct calls)."""
+    if engine in ("native", "fused") and precision != "float64":
+        return (f"numerics.precision = {precision!r} runs on the JAX engine only (the "
+                f"{engine} kernel computes in float64): set numerics.engine = 'jax' or 'auto'")
     return None
 
 
@@ -383,6 +384,12 @@ def validate(config: Config) -> Config:
         raise ConfigError(why)
     if num.engine == "native" and importlib.util.find_spec("numba") is None:
         raise ConfigError("numerics.engine = 'native' needs numba (pip install numba)")
+    if num.engine == "fused":
+        from jaxdamp.engine import fused
+
+        usable, why = fused.available()
+        if not usable:
+            raise ConfigError(f"numerics.engine = 'fused': {why}")
     if not _integer(num.seed) or num.seed < 0:
         raise ConfigError(f"numerics.seed = {num.seed!r}: must be a non-negative integer")
 

@@ -6,8 +6,9 @@ import dataclasses
 
 import jax.numpy as jnp
 import numpy as np
+import pytest
 
-from jaxdamp.config import Box, Config, Drive, Material, Numerics, Species
+from jaxdamp.config import Box, Config, Drive, Material, Numerics, Primary, Species
 from jaxdamp.engine import driver
 from jaxdamp.engine.simulate import chunk_fn
 from jaxdamp.physics.model import build
@@ -53,10 +54,17 @@ def start(cfg: Config, r, v, w=None, z=0.0, zd=0.0, dt=None, **param_changes):
     return model, pb, b.states, b.nbrs
 
 
-#: The implementations of the step the physics tests run on: the two engines
+#: The implementations of the step the physics tests run on: the three engines
 #: (``numerics.engine``) and the JAX engine with its contact laws in float32
-#: (``numerics.precision = "float32"``, :func:`engine_model`).
-ENGINES = ("jax", "native", "float32")
+#: (``numerics.precision = "float32"``, :func:`engine_model`). The fused device step runs in
+#: numba-cuda's CUDA simulator here (tests/conftest.py), ~1–2 ms per step of a 2-grain bed:
+#: its physics tests (2–40 s each) are ``long``.
+ENGINES = ("jax", "native", pytest.param("fused", marks=pytest.mark.long), "float32")
+#: :data:`ENGINES` without the fused step, for the physics tests that take 10⁵ steps or a settled
+#: damper (hours in the simulator); the fused step matches the native kernel to round-off on
+#: every path of the step (tests/test_fused.py), and ``benchmarks/device_check.py`` compares it
+#: with the CPU on a device.
+ENGINES_UNSIMULATED = ("jax", "native", "float32")
 
 
 def engine_model(model, engine: str):
@@ -115,3 +123,54 @@ def load_experiment(name):
     sys.modules[spec.name] = mod  # dataclasses look their module up
     spec.loader.exec_module(mod)
     return mod
+
+
+# -- a two-species bed that exercises every path of a kernel (tests/test_native.py, test_fused.py)
+
+MIX_STEEL = Material(E=2e9, nu=0.3, density=7850.0, mu=0.3, gamma_n=40.0, gamma_s=120.0)
+MIX_GLASS = Material(E=5e9, nu=0.22, density=2500.0, mu=0.5, gamma_s=50.0, restitution=0.8,
+                     v_ref=1.0)
+
+
+def mixture(system, mixing, law="hertz", counts=(20, 30)) -> Config:
+    """Two species (5 % radius spread, different materials and walls) with friction in a 2 cm
+    box: ``counts`` big steel and small glass grains, for :func:`mixture_bed`."""
+    steel, glass = MIX_STEEL, MIX_GLASS
+    if law == "linear":  # the linear law takes a stiffness and a restitution, no gamma_n
+        steel = dataclasses.replace(steel, gamma_n=None, restitution=0.6, linear_stiffness=2e4)
+        glass = dataclasses.replace(glass, linear_stiffness=5e3)
+    grains = (Species(count=counts[0], radius=2e-3, radius_spread=0.05, material=steel,
+                      name="big"),
+              Species(count=counts[1], radius=1e-3, material=glass, name="small"))
+    return Config(
+        system=system, frequency=30.0, grains=grains, box=Box(0.02, 0.02, 0.02, wall=glass),
+        primary=Primary(M=0.5, K=2e4, C=3.0, U=0.002) if system == "primary" else None,
+        drive=Drive(0.003) if system == "driven" else None,
+        numerics=Numerics(v_impact=2.0), mixing=mixing, contact_law=law, name="mixture",
+    )
+
+
+def mixture_bed(n: int, seed: int = 2, spacing: float = 0.0045):
+    """``(r, v, w)`` of ``n ≤ 64`` grains on a jittered 4×4×4 lattice of ``spacing`` [m] in the
+    2 cm box, fast and spinning, the first three too fast for the kernels' series rotation
+    (a small bed needs a closer lattice, 4.2 mm, for pair contacts within 600 steps)."""
+    rng = np.random.default_rng(seed)
+    grid = np.stack(np.meshgrid(*[np.arange(4)] * 3, indexing="ij"), -1).reshape(-1, 3)[:n]
+    r = (grid + 0.5) * spacing + rng.uniform(-3e-4, 3e-4, (n, 3))
+    r[:, 2] += 0.001
+    v = rng.normal(0, 0.5, (n, 3))
+    w = rng.normal(0, 100.0, (n, 3))
+    w[:3] *= 500.0  # three fast spins: the kernel's exact rotation, not its series
+    return r, v, w
+
+
+#: Random base motion (120 lines, 10–600 Hz) and a shock pulse that starts, peaks and ends
+#: inside the 600 steps, on top of the harmonic drive.
+BASE_EXTRAS = {"random.psd": [[10.0, 50.0], [600.0, 20.0]], "random.resolution": 5.0,
+               "shock.peak": -30.0, "shock.duration": 1e-4, "shock.start": 2e-5}
+
+#: A 3-DOF chain carrying the box on its middle mass, a harmonic force on the top one.
+STRUCTURE = {"structure.M": [[0.4, 0.0, 0.0], [0.0, 0.5, 0.0], [0.0, 0.0, 0.3]],
+             "structure.K": [[4e4, -2e4, 0.0], [-2e4, 4e4, -2e4], [0.0, -2e4, 2e4]],
+             "structure.C": [[6.0, -3.0, 0.0], [-3.0, 6.0, -3.0], [0.0, -3.0, 3.0]],
+             "structure.attach": 1, "structure.force": 40.0, "structure.force_dof": 2}

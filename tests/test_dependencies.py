@@ -33,7 +33,8 @@ def test_jitted_vmapped_matvec_then_sum_is_exact(dtype, rows):
 @pytest.mark.long
 def test_the_cuda_extra_resolves_to_jax_cuda_wheels_of_the_installed_jax():
     """``pip install ".[cuda]"`` (README, "On a GPU") names JAX's CUDA plugin at the version of
-    the JAX installed here, checked without a GPU by pip's resolver (a dry run)."""
+    the JAX installed here and numba-cuda, checked without a GPU by pip's resolver (a dry
+    run)."""
     import os
     import subprocess
     import sys
@@ -50,3 +51,8 @@ def test_the_cuda_extra_resolves_to_jax_cuda_wheels_of_the_installed_jax():
     plugin = [n for n in names if n.startswith("jax-cuda") and n.endswith("-plugin")]
     assert plugin, sorted(names)
     assert names[plugin[0]] == jax.__version__, (plugin[0], names[plugin[0]], jax.__version__)
+    # the fused device step's compiler with it (numerics.engine = "fused")
+    import importlib.metadata
+
+    installed = {d.metadata["Name"].lower() for d in importlib.metadata.distributions()}
+    assert "numba-cuda" in names or "numba-cuda" in installed, sorted(names)

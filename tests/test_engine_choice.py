@@ -23,8 +23,11 @@ def test_an_explicit_engine_wins_everywhere():
                           have_native=True).engine == "native"
     with pytest.raises(ValueError, match="native kernel computes in float64"):
         choose("native", "float32")
+    with pytest.raises(ValueError, match="fused kernel computes in float64"):
+        choose("fused", "float32")
     with pytest.raises(ValueError, match="expected one of"):
-        choose("fused", "float64")
+        choose("warp", "float64")
+    assert choose("fused", "float64", 1, backend="cpu", device_kind="cpu").engine == "fused"
 
 
 def test_auto_on_a_cpu_is_the_native_kernel_at_every_batch():
@@ -62,6 +65,26 @@ def test_auto_switches_at_a_recorded_crossover_and_names_a_borrowed_measurement(
                have_native=True)
     assert c.engine == "jax" and "measured on Fast GPU 9000, not on this Fast GPU 9100" in c.reason
     assert choice.nearest("NVIDIA H100 80GB HBM3") == (choice.MEASURED["NVIDIA H200"], False)
+
+
+def test_auto_takes_the_fused_step_where_it_was_measured_and_can_run(monkeypatch):
+    """A device whose record has a fused crossover (``fused_from``, written by
+    benchmarks/device_check.py only where the fused step agreed with the CPU): the native
+    kernel below it, the fused step from it when numba-cuda finds a GPU, else the rule without
+    it (here the XLA step from its own crossover)."""
+    monkeypatch.setitem(choice.MEASURED, "Fast GPU 9000", Crossover(
+        "Fast GPU 9000", 8, {1024: 0.5}, {1024: 0.6, 256: 0.7}, 1024, "test",
+        fused={256: 0.3, 1024: 0.1}, fused_from=256))
+    gpu = dict(backend="gpu", device_kind="Fast GPU 9000", have_native=True)
+    assert choose("auto", "float64", 255, have_fused=True, **gpu).engine == "native"
+    c = choose("auto", "float64", 256, have_fused=True, **gpu)
+    assert c.engine == "fused" and "256" in c.reason and "fused" in c.reason
+    assert choose("auto", "float64", 256, have_fused=False, **gpu).engine == "native"
+    assert choose("auto", "float64", 4096, have_fused=False, **gpu).engine == "jax"
+    assert choose("auto", "float32", 4096, have_fused=True, **gpu).engine == "jax"
+    # the H200's record has no fused measurement yet: auto never picks it there
+    assert choice.MEASURED["NVIDIA H200"].fused_from is None
+    assert choose("auto", "float64", 10**6, have_fused=True, **GPU).engine == "native"
 
 
 def test_resume_keeps_the_engine_stored_in_the_file(tmp_path):

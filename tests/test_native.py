@@ -1,50 +1,16 @@
 """The compiled CPU engine (numba) computes the same step as the pure-JAX reference."""
 
-import dataclasses
-
 import numpy as np
 import pytest
-from helpers import start
+from helpers import BASE_EXTRAS, STRUCTURE, mixture, mixture_bed, start
 
 from jaxdamp.cases import presets
-from jaxdamp.config import Box, Config, Drive, Material, Numerics, Primary, Species, apply_overrides
+from jaxdamp.config import apply_overrides
 from jaxdamp.engine import native
 from jaxdamp.physics.contact import LAWS
 from jaxdamp.studies.runner import run
 
 pytestmark = pytest.mark.skipif(not native.AVAILABLE, reason="numba not installed")
-
-STEEL = Material(E=2e9, nu=0.3, density=7850.0, mu=0.3, gamma_n=40.0, gamma_s=120.0)
-GLASS = Material(E=5e9, nu=0.22, density=2500.0, mu=0.5, gamma_s=50.0, restitution=0.8, v_ref=1.0)
-
-
-def _mixture(system, mixing, law="hertz"):
-    steel, glass = STEEL, GLASS
-    if law == "linear":  # the linear law takes a stiffness and a restitution, no gamma_n
-        steel = dataclasses.replace(STEEL, gamma_n=None, restitution=0.6, linear_stiffness=2e4)
-        glass = dataclasses.replace(GLASS, linear_stiffness=5e3)
-    grains = (Species(count=20, radius=2e-3, radius_spread=0.05, material=steel, name="big"),
-              Species(count=30, radius=1e-3, material=glass, name="small"))
-    return Config(
-        system=system, frequency=30.0, grains=grains, box=Box(0.02, 0.02, 0.02, wall=glass),
-        primary=Primary(M=0.5, K=2e4, C=3.0, U=0.002) if system == "primary" else None,
-        drive=Drive(0.003) if system == "driven" else None,
-        numerics=Numerics(v_impact=2.0), mixing=mixing, contact_law=law, name="mixture",
-    )
-
-
-#: Random base motion (120 lines, 10–600 Hz) and a shock pulse that starts, peaks and ends
-#: inside the 600 steps, on top of the harmonic drive.
-BASE_EXTRAS = {"random.psd": [[10.0, 50.0], [600.0, 20.0]], "random.resolution": 5.0,
-               "shock.peak": -30.0, "shock.duration": 1e-4, "shock.start": 2e-5}
-
-
-#: A 3-DOF chain carrying the box on its middle mass, a harmonic force on the top one.
-STRUCTURE = {"structure.M": [[0.4, 0.0, 0.0], [0.0, 0.5, 0.0], [0.0, 0.0, 0.3]],
-             "structure.K": [[4e4, -2e4, 0.0], [-2e4, 4e4, -2e4], [0.0, -2e4, 2e4]],
-             "structure.C": [[6.0, -3.0, 0.0], [-3.0, 6.0, -3.0], [0.0, -3.0, 3.0]],
-             "structure.attach": 1, "structure.force": 40.0, "structure.force_dof": 2}
-
 
 @pytest.mark.parametrize("system, mixing, law, extras", [
     ("primary", "arithmetic", "hertz", {}), ("driven", "harmonic", "hertz", {}),
@@ -55,14 +21,8 @@ def test_native_equals_jax_on_a_mixture(system, mixing, law, extras):
     both systems, all mixing rules, both contact laws, random + shock base motion and a 3-DOF
     structure, three grains spinning too fast for the kernel's series rotation: states and
     samples agree to round-off after 600 steps."""
-    cfg = apply_overrides(_mixture(system, mixing, law), extras)
-    rng = np.random.default_rng(2)
-    grid = np.stack(np.meshgrid(*[np.arange(4)] * 3, indexing="ij"), -1).reshape(-1, 3)[:50]
-    r = (grid + 0.5) * 0.0045 + rng.uniform(-3e-4, 3e-4, (50, 3))
-    r[:, 2] += 0.001
-    v = rng.normal(0, 0.5, (50, 3))
-    w = rng.normal(0, 100.0, (50, 3))
-    w[:3] *= 500.0  # three fast spins: the kernel's exact rotation, not its series
+    cfg = apply_overrides(mixture(system, mixing, law), extras)
+    r, v, w = mixture_bed(50)
     model, pb, st, nbrs = start(cfg, r, v, w)
     half_angle = 0.5 * np.linalg.norm(w[:3], axis=1) * float(np.asarray(pb.dt).ravel()[0])
     assert (half_angle**2 > 1e-4).all()

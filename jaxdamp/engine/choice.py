@@ -1,15 +1,19 @@
 """Which engine advances a batch: the one rule behind ``numerics.engine = "auto"``.
 
-Two engines compute the same step (:mod:`jaxdamp.physics.integrate`): the XLA step of
-:mod:`jaxdamp.engine.simulate` (``"jax"``, differentiable, any device, float64 or float32) and
+Three engines compute the same step (:mod:`jaxdamp.physics.integrate`): the XLA step of
+:mod:`jaxdamp.engine.simulate` (``"jax"``, differentiable, any device, float64 or float32),
 the compiled CPU kernel of :mod:`jaxdamp.engine.native` (``"native"``, forward only, float64,
-the host's cores). Which one is faster depends on where JAX runs and on the batch:
+the host's cores) and the same kernel's step fused into one CUDA launch per chunk
+(:mod:`jaxdamp.engine.fused`, ``"fused"``, forward only, float64, an NVIDIA GPU). Which one
+is faster depends on where JAX runs and on the batch:
 
 * JAX on the CPU: the native kernel, always (XLA's CPU step is 20–40× slower,
   ``benchmarks/RESULTS.md``);
 * float32 (``numerics.precision``): the XLA step, the only float32 engine;
 * JAX on an accelerator: the native kernel below the batch at which the device's step was
-  *measured* to beat it (:data:`MEASURED`), the device's step from there on. A device with no
+  *measured* to beat it (:data:`MEASURED`), the device's step from there on: the fused step
+  where it was measured on the device (``fused_from``; it agreed with the CPU there, by
+  ``benchmarks/device_check.py``) and numba-cuda finds a GPU, else the XLA step. A device with no
   measurement of its own uses the nearest one recorded (said so by ``jaxdamp info
   --devices``); ``benchmarks/device_check.py`` measures a device and prints its entry.
 
@@ -36,9 +40,11 @@ from jaxdamp.validation import ENGINES, engine_precision_error
 
 
 class Crossover(NamedTuple):
-    """One measurement of a device's XLA step against the native kernel on its own host's
-    cores: µs per system-step by batch (``xla``, ``native``), the host's cores, and the batch
-    from which the device is faster in float64 (``None``: at no measured batch)."""
+    """One measurement of a device's steps against the native kernel on its own host's
+    cores: µs per system-step by batch (``xla``, ``native``, ``fused``), the host's cores,
+    the batch from which the device's XLA step is faster in float64 (``float64_from``) and
+    from which its fused step is (``fused_from``; ``None``: at no measured batch, or not
+    measured)."""
 
     device_kind: str
     host_cores: int
@@ -46,6 +52,8 @@ class Crossover(NamedTuple):
     native: dict
     float64_from: int | None
     source: str
+    fused: dict = {}
+    fused_from: int | None = None
 
 
 #: The recorded measurements, by ``jax.Device.device_kind``. Add one with
@@ -89,11 +97,13 @@ def nearest(device_kind: str) -> tuple[Crossover | None, bool]:
 
 
 def choose(engine: str, precision: str = "float64", batch: int = 1, backend: str | None = None,
-           device_kind: str | None = None, have_native: bool | None = None) -> Choice:
+           device_kind: str | None = None, have_native: bool | None = None,
+           have_fused: bool | None = None) -> Choice:
     """The engine for a batch of ``batch`` systems: ``engine`` itself unless ``"auto"``
     (checked against ``precision``), else the rule of this module. ``backend`` and
     ``device_kind``: JAX's default backend and its first device's kind (looked up when
-    ``None``); ``have_native``: whether numba is installed (looked up when ``None``)."""
+    ``None``); ``have_native``: whether numba is installed, ``have_fused``: whether the fused
+    step can run here (numba-cuda and a GPU; both looked up when ``None``)."""
     if engine not in ENGINES:
         raise ValueError(f"engine = {engine!r}: expected one of {ENGINES}")
     if (why := engine_precision_error(engine, precision)) is not None:
@@ -121,6 +131,12 @@ def choose(engine: str, precision: str = "float64", batch: int = 1, backend: str
                                 "kernel on the host's cores")
     basis = ("measured on this device" if own
              else f"measured on {rec.device_kind}, not on this {device_kind}")
+    if rec.fused_from is not None and batch >= rec.fused_from:
+        if have_fused is None:
+            have_fused = backend == "gpu" and _fused_usable()
+        if have_fused:
+            return Choice("fused", f"auto: batch {batch} ≥ {rec.fused_from}, where the fused "
+                                   f"device step beats the native kernel ({basis})")
     if rec.float64_from is None:
         return Choice("native", f"auto: the native kernel beat the device's float64 step at "
                                 f"every batch up to {max(rec.xla)} ({basis})")
@@ -131,8 +147,14 @@ def choose(engine: str, precision: str = "float64", batch: int = 1, backend: str
                             f"kernel beats the device ({basis})")
 
 
+def _fused_usable() -> bool:
+    from jaxdamp.engine import fused
+
+    return fused.available()[0] and not fused.simulated()
+
+
 def resolve_engine(engine: str, precision: str = "float64", batch: int = 1) -> str:
-    """The engine name of :func:`choose` (``"jax"`` or ``"native"``)."""
+    """The engine name of :func:`choose` (``"jax"``, ``"native"`` or ``"fused"``)."""
     return choose(engine, precision, batch).engine
 
 
@@ -167,8 +189,14 @@ def describe_devices(batches=(1, 32, 1024, 16384)) -> list[str]:
         except Exception:  # noqa: BLE001 - not every backend reports memory
             pass
         lines.append(f"  {d.platform}:{d.id} {d.device_kind}{mem}")
+    from jaxdamp.engine import fused
+
+    usable, why = fused.available()
     lines.append(f"host: {os.cpu_count()} cores; native kernel (numba): "
-                 + ("available" if native.AVAILABLE else "not installed"))
+                 + ("available" if native.AVAILABLE else "not installed")
+                 + "; fused device step (numba-cuda): "
+                 + ("available" if usable and not fused.simulated() else
+                    "CUDA simulator only (NUMBA_ENABLE_CUDASIM)" if usable else why))
     if backend != "cpu":
         rec, own = nearest(devs[0].device_kind)
         lines.append("measured crossover: " + (

@@ -160,6 +160,43 @@ def _kernel(**flags):
 
 if AVAILABLE:
 
+    @_kernel(inline="always")
+    def pair_constants(law, table, si, sj, Ri, Rj, mi, mj):
+        """The constants of a grain pair's contact, ``(R_i + R_j, k, g, γ_s, μ)``: the row
+        ``table[si, sj]`` of the pair table (species ``si``, ``sj``) and the law's radius- and
+        mass-dependent part (:func:`jaxdamp.physics.contact.pair_scalar`) at ``R* = R_i R_j /
+        (R_i + R_j)``, ``m* = m_i m_j / (m_i + m_j)``. The CPU kernel forms them once per listed
+        pair, the device kernel once per touching pair and step."""
+        rs = Ri + Rj
+        row = table[si, sj]
+        stiff, damp = pair_scalar(law, row, Ri * Rj / rs, mi * mj / (mi + mj))
+        return rs, stiff, damp, row[GAMMA_S], row[MU]
+
+    @_kernel(inline="always")
+    def wall_constants(law, row, Ri, mi, kappa):
+        """The constants ``(k, g, γ_s, μ)`` of a grain's contact with a wall of curvature
+        ``kappa`` (0: a plane): the row of its species in the wall table, ``R* = R_i / (1 −
+        R_i κ)``, ``m* = m_i``."""
+        stiff, damp = pair_scalar(law, row, Ri / (1.0 - Ri * kappa), mi)
+        return stiff, damp, row[GAMMA_S], row[MU]
+
+    @_kernel(inline="always")
+    def pair_contact(law, dx, dy, dz, d2, rs, vx, vy, vz, sx, sy, sz, k, g, gamma_s, mu):
+        """The contact of grains ``i, j`` that touch (``d = r_i − r_j``, ``d2 = |d|² < rs²``,
+        ``rs = R_i + R_j``; ``v = v_i − v_j``, ``s = R_i ω_i + R_j ω_j``; constants of
+        :func:`pair_constants`): ``(F on i, n × F_t, elastic energy, normal loss, friction
+        loss)``, ``n = d / |d|``; the torque on each grain ``k`` of the pair is ``−R_k n × F_t``.
+        Odd in ``(d, v)``: from ``j``'s side the force is exactly ``−F`` and ``n × F_t`` the
+        same, so a full list (the device's, each grain its own) and a half list (the CPU's,
+        Newton's third law) give the same forces."""
+        d = math.sqrt(d2)
+        xi = rs - d
+        inv = 1.0 / d
+        nx, ny, nz = dx * inv, dy * inv, dz * inv
+        fx, fy, fz, tx, ty, tz, e, ln, lf = contact_scalar(law, xi, nx, ny, nz, vx, vy, vz, sx,
+                                                           sy, sz, k, g, gamma_s, mu)
+        return (fx, fy, fz, ny * tz - nz * ty, nz * tx - nx * tz, nx * ty - ny * tx, e, ln, lf)
+
     @_kernel()
     def _build_pairs(r, bx, by, bz, cutoff, pi, pj, pc, ref, R, m, sid, table, law):
         """Half list of the pairs whose surfaces are closer than the skin, ``|r_i - r_j| < R_i +
@@ -247,15 +284,9 @@ if AVAILABLE:
                         if k < cap:
                             pi[k] = i
                             pj[k] = j
-                            rs = R[i] + R[j]
-                            row = table[sid[i], sid[j]]
-                            stiff, damp = pair_scalar(law, row, R[i] * R[j] / rs,
-                                                      m[i] * m[j] / (m[i] + m[j]))
-                            pc[k, 0] = rs
-                            pc[k, 1] = stiff
-                            pc[k, 2] = damp
-                            pc[k, 3] = row[GAMMA_S]
-                            pc[k, 4] = row[MU]
+                            (pc[k, 0], pc[k, 1], pc[k, 2], pc[k, 3],
+                             pc[k, 4]) = pair_constants(law, table, sid[i], sid[j], R[i], R[j],
+                                                        m[i], m[j])
                         k += 1
         return k if k <= cap else -k
 
@@ -279,75 +310,79 @@ if AVAILABLE:
         n = R.shape[0]
         wk = np.empty((n, 4))
         for i in range(n):
-            row = wall_table[sid[i]]
-            stiff, damp = pair_scalar(law, row, R[i] / (1.0 - R[i] * kappa), m[i])
-            wk[i, 0] = stiff
-            wk[i, 1] = damp
-            wk[i, 2] = row[GAMMA_S]
-            wk[i, 3] = row[MU]
+            wk[i, 0], wk[i, 1], wk[i, 2], wk[i, 3] = wall_constants(law, wall_table[sid[i]], R[i],
+                                                                    m[i], kappa)
         return wk
+
+    @_kernel(inline="always")
+    def grain_walls(shape, law, x, y, zz, ux, uy, uz, sx, sy, sz, Ri, mi, wk, wks, i, sec, ex,
+                    ey, ez, z1, zdp, Lz, grav, drag, sums):
+        """One grain's body force and its contacts with the floor, the lid and the sides of
+        container number ``shape`` (:mod:`jaxdamp.physics.containers`; ``sec``: its section
+        numbers in registers, :func:`~jaxdamp.physics.containers.section_scalar`): the grain
+        ``i`` at ``(x, y, zz)`` with velocity ``u``, spin ``s = R ω``, radius ``Ri``, mass
+        ``mi``, its floor/lid and side constants ``wk[i]``, ``wks[i]``; the box at ``e z1``
+        moving at ``e zdp``. ``sums = (elastic energy, normal loss, friction loss, box_z,
+        floor + lid force, grains on the floor, on the lid)`` are the running sums it adds to.
+        Returns ``((fx, fy, fz, tx, ty, tz), sums, (x, y, z) in the box frame)``. The one
+        definition of a grain's walls for both kernels: the CPU loop (:func:`_grain_walls`)
+        and the device's thread per grain (:mod:`jaxdamp.engine.fused`)."""
+        e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid = sums
+        # box frame (the box's corner at e z1) and velocities relative to the walls
+        bx = x - ex * z1
+        by = y - ey * z1
+        floor = zz - ez * z1
+        wx = ux - ex * zdp
+        wy = uy - ey * zdp
+        wz = uz - ez * zdp
+        fx, fy, fz = body_force_scalar(mi, ux, uy, uz, grav, drag)
+        tx = 0.0
+        ty = 0.0
+        tz = 0.0
+        # walls: the floor, the lid, then the container's sides (inward normals); most grains
+        # touch none, so the common path is a compare per wall; box_z sums the force on the
+        # box along the axis e
+        acc = (fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z)
+        if floor < Ri:
+            acc, gz = add_wall_scalar(law, Ri - floor, 0.0, 0.0, 1.0, wx, wy, wz, sx, sy, sz, Ri,
+                                      wk[i, 0], wk[i, 1], wk[i, 2], wk[i, 3], ex, ey, ez, acc)
+            floor_lid -= gz
+            n_floor += 1.0
+        if Lz - floor < Ri:
+            acc, gz = add_wall_scalar(law, Ri - (Lz - floor), 0.0, 0.0, -1.0, wx, wy, wz, sx, sy,
+                                      sz, Ri, wk[i, 0], wk[i, 1], wk[i, 2], wk[i, 3], ex, ey, ez,
+                                      acc)
+            floor_lid -= gz
+            n_lid += 1.0
+        fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z = side_contacts_scalar(
+            shape, law, bx, by, sec, Ri, wks, i, wx, wy, wz, sx, sy, sz, ex, ey, ez, acc)
+        return ((fx, fy, fz, tx, ty, tz), (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid),
+                (bx, by, floor))
 
     @_kernel(inline="always")
     def _grain_walls(shape, law, n, r1, vp, rw, Rb, mb, ref, wk, wks, sec, F, T, ex, ey, ez,
                      z1, zdp, Lz, grav, drag, half_skin2):
-        """Pass 1 over the grains: body force, the floor, the lid and the container's sides
-        (number ``shape``, :mod:`jaxdamp.physics.containers`; ``sec``: its section numbers in
-        registers, :func:`~jaxdamp.physics.containers.section_scalar`) into ``F``, ``T``;
-        returns the
+        """Pass 1 over the grains: :func:`grain_walls` for each into ``F``, ``T``; returns the
         sums ``(elastic energy, normal loss, friction loss, box_z, floor + lid force, grains on
         the floor, on the lid, Σ m v², whether a grain moved more than skin/2 since the list
         was built)``. Inlined where ``shape`` is a constant, the container's branch folds away:
         :func:`_advance_one` keeps a copy for the box."""
-        e_el = 0.0
-        pw_n = 0.0
-        pw_f = 0.0
-        box_z = 0.0
-        floor_lid = 0.0
-        n_floor = 0.0
-        n_lid = 0.0
+        sums = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         pdrag = 0.0
         far = False
         for i in range(n):
-            x, y, zz = r1[i, 0], r1[i, 1], r1[i, 2]
             ux, uy, uz = vp[i, 0], vp[i, 1], vp[i, 2]
-            sx, sy, sz = rw[i, 0], rw[i, 1], rw[i, 2]
-            Ri = Rb[i]
-            # box frame (the box's corner at e z1) and velocities relative to the walls
-            bx = x - ex * z1
-            by = y - ey * z1
-            floor = zz - ez * z1
-            wx = ux - ex * zdp
-            wy = uy - ey * zdp
-            wz = uz - ez * zdp
-            ddx = bx - ref[i, 0]
-            ddy = by - ref[i, 1]
-            ddz = floor - ref[i, 2]
+            f, sums, b = grain_walls(shape, law, r1[i, 0], r1[i, 1], r1[i, 2], ux, uy, uz,
+                                     rw[i, 0], rw[i, 1], rw[i, 2], Rb[i], mb[i], wk, wks, i, sec,
+                                     ex, ey, ez, z1, zdp, Lz, grav, drag, sums)
+            ddx = b[0] - ref[i, 0]
+            ddy = b[1] - ref[i, 1]
+            ddz = b[2] - ref[i, 2]
             far = far | (ddx * ddx + ddy * ddy + ddz * ddz > half_skin2)
             pdrag += mb[i] * (ux * ux + uy * uy + uz * uz)
-            fx, fy, fz = body_force_scalar(mb[i], ux, uy, uz, grav, drag)
-            tx = 0.0
-            ty = 0.0
-            tz = 0.0
-            # walls: the floor, the lid, then the container's sides (inward normals);
-            # most grains touch none, so the common path is a compare per wall; box_z
-            # sums the force on the box along the axis e
-            acc = (fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z)
-            if floor < Ri:
-                acc, gz = add_wall_scalar(law, Ri - floor, 0.0, 0.0, 1.0, wx, wy, wz, sx, sy, sz,
-                                          Ri, wk[i, 0], wk[i, 1], wk[i, 2], wk[i, 3], ex, ey, ez,
-                                          acc)
-                floor_lid -= gz
-                n_floor += 1.0
-            if Lz - floor < Ri:
-                acc, gz = add_wall_scalar(law, Ri - (Lz - floor), 0.0, 0.0, -1.0, wx, wy, wz, sx,
-                                          sy, sz, Ri, wk[i, 0], wk[i, 1], wk[i, 2], wk[i, 3], ex,
-                                          ey, ez, acc)
-                floor_lid -= gz
-                n_lid += 1.0
-            fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z = side_contacts_scalar(
-                shape, law, bx, by, sec, Ri, wks, i, wx, wy, wz, sx, sy, sz, ex, ey, ez, acc)
-            F[i, 0], F[i, 1], F[i, 2] = fx, fy, fz
-            T[i, 0], T[i, 1], T[i, 2] = tx, ty, tz
+            F[i, 0], F[i, 1], F[i, 2] = f[0], f[1], f[2]
+            T[i, 0], T[i, 1], T[i, 2] = f[3], f[4], f[5]
+        e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid = sums
         return e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, pdrag, far
 
     @_kernel()
@@ -368,12 +403,8 @@ if AVAILABLE:
             rs = pc[p, 0]
             if d2 >= rs * rs:
                 continue
-            d = math.sqrt(d2)
-            xi = rs - d
-            inv = 1.0 / d
-            nx, ny, nz = dx * inv, dy * inv, dz * inv
-            fx, fy, fz, tx, ty, tz, e, ln, lf = contact_scalar(
-                law, xi, nx, ny, nz, v[i, 0] - v[j, 0], v[i, 1] - v[j, 1], v[i, 2] - v[j, 2],
+            fx, fy, fz, cx, cy, cz, e, ln, lf = pair_contact(
+                law, dx, dy, dz, d2, rs, v[i, 0] - v[j, 0], v[i, 1] - v[j, 1], v[i, 2] - v[j, 2],
                 rw[i, 0] + rw[j, 0], rw[i, 1] + rw[j, 1], rw[i, 2] + rw[j, 2],
                 pc[p, 1], pc[p, 2], pc[p, 3], pc[p, 4])
             F[i, 0] += fx
@@ -383,9 +414,6 @@ if AVAILABLE:
             F[j, 1] -= fy
             F[j, 2] -= fz
             # torque -R_k (n × F_t) on both grains of the pair
-            cx = ny * tz - nz * ty
-            cy = nz * tx - nx * tz
-            cz = nx * ty - ny * tx
             T[i, 0] -= R[i] * cx
             T[i, 1] -= R[i] * cy
             T[i, 2] -= R[i] * cz
@@ -686,6 +714,26 @@ def offsets(lay, names) -> np.ndarray:
     return np.array([starts[n] for n in names], np.int64)
 
 
+def kernel_args(model, state_layout, param_layout):
+    """What both kernels take beside the packed rows (this one and the device's,
+    :mod:`jaxdamp.engine.fused`): ``(dims, state offsets, param offsets, species index,
+    species bounds, sample width)``."""
+    from jaxdamp.physics.contact import LAWS
+    from jaxdamp.physics.energy import record_layout
+
+    shapes = dict((name, shape) for name, shape, _ in param_layout)
+    table = shapes["pair_table"]
+    width = sum(int(np.prod(shape, dtype=np.int64)) for _, shape in record_layout(model))
+    bounds = np.array([sl.start for sl in model.species_slices()] + [model.n], np.int64)
+    dims = Dims(mount=mount_of(model).id, law=LAWS[model.law].id,
+                shape=CONTAINERS[model.container].id, n_species=int(table[0]),
+                n_cols=int(table[2]), n_lines=int(shapes["lines"][0]),
+                ndof=int(shapes["s_r"][0]), n_section=int(shapes["section"][0]))
+    return (dims, StateOffsets(*offsets(state_layout, STATE_FIELDS)),
+            ParamOffsets(*offsets(param_layout, PARAM_FIELDS)),
+            model.species_index().astype(np.int64), bounds, width)
+
+
 def advance_packed(model, state_packed, params_packed, state_layout, param_layout,
                    n_records: int, record_every: int, threads: bool = True):
     """Advance a packed batch (:func:`pack`: ``(B, total)`` float64 rows of ``State`` and
@@ -696,25 +744,13 @@ def advance_packed(model, state_packed, params_packed, state_layout, param_layou
     works in place on one copy of the state: no per-field copies, no re-packing.
     ``threads=False``: the batch runs in the calling thread (no OpenMP), for callers that run
     several batches side by side in their own threads (sharded chunks)."""
-    from jaxdamp.physics.contact import LAWS
-    from jaxdamp.physics.energy import record_layout
-
     st = np.array(state_packed, dtype=np.float64, order="C", copy=True)
     pm = np.ascontiguousarray(params_packed, dtype=np.float64)
-    shapes = dict((name, shape) for name, shape, _ in param_layout)
-    table = shapes["pair_table"]
-    width = sum(int(np.prod(shape, dtype=np.int64)) for _, shape in record_layout(model))
+    dims, so, po, sid, bounds, width = kernel_args(model, state_layout, param_layout)
     rec = np.empty((st.shape[0], int(n_records), width))
-    bounds = np.array([sl.start for sl in model.species_slices()] + [model.n], np.int64)
     kernel = _advance if threads else _advance_serial
-    dims = Dims(mount=mount_of(model).id, law=LAWS[model.law].id,
-                shape=CONTAINERS[model.container].id, n_species=int(table[0]),
-                n_cols=int(table[2]), n_lines=int(shapes["lines"][0]),
-                ndof=int(shapes["s_r"][0]), n_section=int(shapes["section"][0]))
-    kernel(int(n_records), int(record_every), dims, model.skin, st, pm,
-           StateOffsets(*offsets(state_layout, STATE_FIELDS)),
-           ParamOffsets(*offsets(param_layout, PARAM_FIELDS)),
-           model.species_index().astype(np.int64), bounds, rec)
+    kernel(int(n_records), int(record_every), dims, model.skin, st, pm, so, po, sid, bounds,
+           rec)
     return st, rec
 
 

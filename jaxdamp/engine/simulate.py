@@ -34,13 +34,15 @@ def chunk_fn(model: Model, n_records: int, record_every: int, remat: bool = Fals
     inner block of ``record_every`` steps is rematerialised in reverse mode (bounded memory for
     gradients through long scans). ``engine="native"`` advances the whole chunk in the compiled
     CPU kernel, samples included, in one host callback (forward only; the neighbour lists in
-    ``nbrs`` are then passed through unused). ``sharding``: the batch's sharding over several
-    devices (the batch axis split over a mesh axis); the JAX engine's jit partitions by itself,
-    the native chunk advances every local shard in its own host thread and puts the results
-    back on the shards' devices.
+    ``nbrs`` are then passed through unused); ``engine="fused"`` the same through the CUDA
+    kernel of :mod:`jaxdamp.engine.fused` (one launch per chunk). ``sharding``: the batch's
+    sharding over several devices (the batch axis split over a mesh axis); the JAX engine's
+    jit partitions by itself, the kernels advance every local shard in its own host thread
+    and put the results back on the shards' devices.
     """
-    if resolve_engine(engine, model.precision) == "native":
-        return _native_chunk(model, n_records, record_every, sharding)
+    resolved = resolve_engine(engine, model.precision)
+    if resolved in ("native", "fused"):
+        return _packed_chunk(model, n_records, record_every, sharding, resolved)
     block = _jax_block(model, record_every)
     if remat:
         block = jax.checkpoint(block)
@@ -85,9 +87,12 @@ def _jax_block(model: Model, record_every: int):
     return block
 
 
-def _native_chunk(model: Model, n_records: int, record_every: int,
-                  sharding: jax.sharding.NamedSharding | None = None):
-    """The chunk through the numba kernel (:mod:`jaxdamp.engine.native`): one host callback
+def _packed_chunk(model: Model, n_records: int, record_every: int,
+                  sharding: jax.sharding.NamedSharding | None = None, kernel: str = "native"):
+    """The chunk through a kernel on packed rows, the numba CPU kernel
+    (:mod:`jaxdamp.engine.native`, ``kernel="native"``) or the CUDA one
+    (:mod:`jaxdamp.engine.fused`, ``"fused"``, which copies the rows to its device and back
+    inside the callback, once per chunk): one host callback
     advances the whole chunk and writes the samples itself
     (:func:`jaxdamp.physics.energy.record_row`, the scalar form of ``record``), so a chunk
     crosses the JAX/Python boundary once, not once per sample. State and parameters cross as
@@ -104,11 +109,18 @@ def _native_chunk(model: Model, n_records: int, record_every: int,
     from jaxdamp.engine import native
     from jaxdamp.physics.energy import INT_RECORDS, record_layout
 
+    if kernel == "fused":
+        from jaxdamp.engine import fused as module
+    else:
+        module = native
     rec_layout = record_layout(model)
     width = sum(int(np.prod(shape, dtype=np.int64)) for _, shape in rec_layout)
 
-    def advance(sp, pp, state_layout, param_layout, threads=True):
-        return native.advance_packed(model, sp, pp, state_layout, param_layout, n_records,
+    def advance(sp, pp, state_layout, param_layout, threads=True, device=None):
+        if kernel == "fused":
+            return module.advance_packed(model, sp, pp, state_layout, param_layout, n_records,
+                                         record_every, device=device)
+        return module.advance_packed(model, sp, pp, state_layout, param_layout, n_records,
                                      record_every, threads)
 
     def unpack(new, flat, states):
@@ -147,8 +159,11 @@ def _native_chunk(model: Model, n_records: int, record_every: int,
         lay = native.layout(states), native.layout(params)
         sp, pp = pack(states, params)
         pairs = list(zip(sp.addressable_shards, pp.addressable_shards, strict=True))
-        done = list(pool.map(lambda ab: advance(np.asarray(ab[0].data), np.asarray(ab[1].data),
-                                                *lay, threads=threads), pairs))
+        # the fused kernel runs each shard on the shard's own GPU (numba's ordinal)
+        done = list(pool.map(lambda ab: advance(
+            np.asarray(ab[0].data), np.asarray(ab[1].data), *lay, threads=threads,
+            device=(ab[0].device.local_hardware_id if ab[0].device.platform == "gpu"
+                    else None)), pairs))
         devices = [a.device for a, _ in pairs]
         new, flat = (jax.make_array_from_single_device_arrays(
             (sp.shape[0],) + done[0][i].shape[1:], sharding,
