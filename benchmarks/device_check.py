@@ -25,6 +25,12 @@ command, under 5 minutes on an accelerator.
    only if it agreed with the CPU to 1e-9 m), printed as the
    :data:`jaxdamp.engine.choice.MEASURED` entry for this device.
 
+5. **The scan** (``--scan``): the 30-frequency × 10-height × 8-replicate thesis scan (2 400
+   systems) as the one command a user types (``jaxdamp frf ... --replicates 8``), over
+   ``--scan-duration`` simulated seconds (settling included), on ``--scan-engine``; its wall
+   time split into settling and driving (the file's ``wall_time``) and projected to 5 s per
+   system.
+
 Writes one JSON (``--json``; default ``benchmarks/results/device_<device>_<date>.json``)
 whose ``rows`` name the path, batch, precision and µs per system-step. Do not run while
 other jobs use the cores (the native rows time the host). This replaces ``bench_device.py``.
@@ -92,7 +98,7 @@ def advance(model, states, params, ref, steps: int, path: str, precision: str, d
     compiling."""
     model = dataclasses.replace(model, precision=precision)
     n_rec = max(1, steps // EVERY)
-    engine = {"xla": "jax"}.get(path, path)
+    engine = {"xla": "jax"}.get(path, "fused" if path.startswith("fused") else path)
     fn = chunk_fn(model, n_rec, EVERY, engine=engine)
     put = (lambda t: jax.device_put(t, device)) if path == "xla" else jax.device_put
     st, pb = put(states), put(params)
@@ -183,6 +189,10 @@ def main(argv=None):
                     help="batches of the native kernel on the host")
     ap.add_argument("--fused-batches", default="1,32,256,1024,4096,16384",
                     help="batches of the fused device step (when numba-cuda finds a GPU)")
+    ap.add_argument("--fused-registers", default="0",
+                    help="register caps of the fused kernel to time (0: none, the default "
+                         "kernel; e.g. 0,128: also two blocks per SM, more spills); rows of a "
+                         "cap are path 'fused-r<cap>'")
     ap.add_argument("--precisions", default="float64,float32")
     ap.add_argument("--steps", type=int, default=1000, help="steps per timed chunk")
     ap.add_argument("--native-steps", type=int, default=3000,
@@ -192,6 +202,12 @@ def main(argv=None):
     ap.add_argument("--warm", type=float, default=0.2, help="simulated seconds driven first")
     ap.add_argument("--budget", type=float, default=240.0,
                     help="seconds of throughput rows; larger batches are skipped after it")
+    ap.add_argument("--scan", action="store_true",
+                    help="also time the 2 400-system thesis scan (jaxdamp frf, one command)")
+    ap.add_argument("--scan-only", action="store_true", help="only the scan")
+    ap.add_argument("--scan-duration", type=float, default=0.25,
+                    help="simulated seconds per system of the scan (settling comes first)")
+    ap.add_argument("--scan-engine", default="auto", help="numerics.engine of the scan")
     ap.add_argument("--quick", action="store_true",
                     help="tiny settings: a check that the script runs (any machine)")
     ap.add_argument("--json", help="output (default benchmarks/results/device_<device>_<date>"
@@ -210,16 +226,31 @@ def main(argv=None):
             "command": "python benchmarks/device_check.py " + " ".join(argv or [])}
     print(json.dumps(info), flush=True)
     t_start = time.perf_counter()
+    if a.scan_only:
+        scan = thesis_scan(a.scan_duration, a.scan_engine, a.quick)
+        _write(a, kind, info, {"scan": scan}, t_start)
+        return
     model, states, params, ref = moving_state(32 if not a.quick else 4, a.warm)
     print(f"moving state: {states.t.shape[0]} systems of {model.n} grains driven {a.warm} s "
           f"({time.perf_counter() - t_start:.0f} s)", flush=True)
     agree = agreement(model, states, params, ref, a.agree_steps, precisions)
+    if fused_usable()[0]:  # the fused kernel's registers and spills, from its assembly
+        from jaxdamp.engine import fused
+
+        try:
+            cc = tuple(int(x) for x in jax.devices()[0].compute_capability.split("."))
+            info["fused_resources"] = fused.resources(model, states, params, cc)
+        except Exception as e:  # noqa: BLE001 - a report, not a reason to stop the check
+            info["fused_resources"] = {"error": f"{type(e).__name__}: {e}"[:400]}
+        print(f"fused kernel: {info['fused_resources']}", flush=True)
     rows: list[dict] = []
     t_rows = time.perf_counter()
     cases = [("native", "float64", int(b)) for b in a.native_batches.split(",")]
     usable, why = fused_usable()
     if usable:
-        cases += [("fused", "float64", int(b)) for b in a.fused_batches.split(",")]
+        for cap in (int(x) for x in a.fused_registers.split(",")):
+            path = "fused" if cap == 0 else f"fused-r{cap}"
+            cases += [(path, "float64", int(b)) for b in a.fused_batches.split(",")]
     else:
         print(f"fused: not timed ({why})", flush=True)
     cases += [("xla", p, int(b)) for p in precisions for b in a.batches.split(",")]
@@ -231,6 +262,10 @@ def main(argv=None):
             print(f"{path} {precision} batch {b}: skipped (--budget {a.budget:.0f} s spent)")
             continue
         steps = a.native_steps if path == "native" else a.steps
+        if path.startswith("fused"):
+            from jaxdamp.engine import fused
+
+            fused.MAX_REGISTERS = int(path[7:]) if path.startswith("fused-r") else None
         try:
             _, best, first, n = advance(model, batch_of(states, b), batch_of(params, b),
                                         ref[np.arange(b) % ref.shape[0]], steps, path,
@@ -252,13 +287,61 @@ def main(argv=None):
                                   f"{info['jax']}", agree)
     print("\njaxdamp.engine.choice.MEASURED entry for this device:\n  "
           f"{entry.device_kind!r}: {entry!r},")
+    result = {"agreement": agree, "rows": rows, "crossover": entry._asdict()}
+    if a.scan:
+        result["scan"] = thesis_scan(a.scan_duration, a.scan_engine, a.quick)
+    _write(a, kind, info, result, t_start)
+
+
+def thesis_scan(duration: float, engine: str, quick: bool = False) -> dict:
+    """Time the thesis scan as a user runs it: ``jaxdamp frf`` over 30 frequencies × 10 box
+    heights × 8 replicates (2 400 systems; ``quick``: 3 × 2 × 2 at 20–25 Hz) for ``duration``
+    simulated
+    seconds after settling, in a process of its own. Returns the wall times (total, driving
+    from the file's ``wall_time``, settling and start-up the rest) and the projection to 5 s
+    simulated per system."""
+    import subprocess
+    import sys
+    import tempfile
+
+    import h5py
+
+    n, lz, reps = (3, "0.09,0.1225", 2) if quick else (
+        30, ",".join(f"{x:.4g}" for x in np.linspace(0.07, 0.16, 10)), 8)
+    with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, "scan.h5")
+        cmd = ["jaxdamp", "frf", "--preset", "sanchez2012-optimal", "--n", str(n), "--lz", lz,
+               *(["--fmin", "20", "--fmax", "25"] if quick else []),
+               "--replicates", str(reps), "--duration", str(duration), "--set",
+               f"numerics.engine='{engine}'", "--out", out, "--no-progress"]
+        print("scan: " + " ".join(cmd), flush=True)
+        t0 = time.perf_counter()
+        done = subprocess.run(cmd, capture_output=True, text=True, check=False)
+        total = time.perf_counter() - t0
+        print(done.stdout[-3000:], done.stderr[-3000:], flush=True)
+        if done.returncode != 0:
+            return {"command": " ".join(cmd), "error": done.stderr[-2000:], "seconds": total}
+        with h5py.File(out, "r") as h5:
+            driving = float(h5.attrs["wall_time"])
+            used = str(h5.attrs.get("engine", "?"))
+    systems = n * len(lz.split(",")) * reps
+    projected = (total - driving) + driving * 5.0 / duration
+    row = {"command": " ".join(cmd), "systems": systems, "duration_s": duration,
+           "engine": used, "wall_s": total, "driving_s": driving,
+           "settling_and_startup_s": total - driving, "projected_5s_min": projected / 60}
+    print(f"scan: {systems} systems × {duration} s on {used}: {total:.0f} s "
+          f"({driving:.0f} s driving); projected to 5 s each: {projected / 60:.1f} min",
+          flush=True)
+    return row
+
+
+def _write(a, kind: str, info: dict, result: dict, t_start: float) -> None:
     out = a.json or os.path.join(HERE, "results", "device_" + re.sub(r"[^A-Za-z0-9]+", "_",
                                  kind).strip("_") + f"_{info['date']}.json")
     os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
     with open(out, "w") as fh:
-        json.dump({"info": info, "agreement": agree, "rows": rows,
-                   "crossover": entry._asdict(),
-                   "seconds": time.perf_counter() - t_start}, fh, indent=1)
+        json.dump({"info": info, **result, "seconds": time.perf_counter() - t_start}, fh,
+                  indent=1)
     print(f"wrote {out} ({time.perf_counter() - t_start:.0f} s in all)")
 
 

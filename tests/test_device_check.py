@@ -32,3 +32,22 @@ def test_device_check_quick_runs_and_writes_its_rows(tmp_path):
     c = res["crossover"]
     assert c["device_kind"] == "cpu" and set(c["native"]) == {"1", "2"}
     assert "MEASURED entry for this device" in done.stdout
+    assert c["fused"] == {} and c["fused_from"] is None  # not timed without a GPU
+    assert "fused: not timed" in done.stdout
+
+
+@pytest.mark.long
+def test_device_check_times_the_thesis_scan_as_one_command(tmp_path):
+    """``--scan-only --quick``: the scan's command (``jaxdamp frf``, 3 × 2 × 2 systems, 50 ms)
+    runs, and its wall time is split into settling and driving and projected to 5 s."""
+    out = tmp_path / "scan.json"
+    done = subprocess.run([sys.executable, os.path.join(ROOT, "benchmarks", "device_check.py"),
+                           "--scan-only", "--quick", "--scan-duration", "0.05", "--json",
+                           str(out)], capture_output=True, text=True, timeout=900, check=False,
+                          cwd=ROOT)
+    assert done.returncode == 0, done.stderr[-3000:]
+    scan = json.loads(out.read_text())["scan"]
+    assert "error" not in scan, scan
+    assert scan["systems"] == 12 and scan["engine"] == "native"
+    assert 0 < scan["driving_s"] < scan["wall_s"]
+    assert scan["projected_5s_min"] * 60 > scan["wall_s"]

@@ -163,9 +163,10 @@ def test_fused_without_a_gpu_is_refused_before_any_compute(monkeypatch):
 @pytest.mark.long
 def test_the_kernel_compiles_for_a_device():
     """The kernel lowers to PTX for compute capability 9.0 (H100/H200) with numba-cuda's
-    compiler on this CPU-only machine, for the thesis bed and for a structure with a
-    cylinder: the device's first minutes are not spent on compile errors. A process of its
-    own: numba.cuda cannot leave the simulator once imported."""
+    compiler on this CPU-only machine and links to SASS with nvJitLink (its registers and
+    shared memory within an SM's limits), for the thesis bed and for a cylinder: the device's
+    first minutes are not spent on compile errors. A process of its own: numba.cuda cannot
+    leave the simulator once imported."""
     script = textwrap.dedent("""
         import jax, numpy as np
         jax.config.update("jax_enable_x64", True)
@@ -185,7 +186,9 @@ def test_the_kernel_compiles_for_a_device():
                              np.zeros(1), np.zeros(1), engine="jax")
             ptx = fused.compile_ptx(model, b.states, b.params)
             assert ".target sm_90" in ptx and ".entry" in ptx, ptx[:400]
-            print("ptx", len(ptx))
+            use = fused.resources(model, b.states, b.params)  # linked: no undefined symbol
+            assert 0 < use["registers"] <= 255 and use["shared"] < 48 * 1024, use
+            print("ptx", len(ptx), use)
     """)
     env = dict(os.environ, NUMBA_ENABLE_CUDASIM="0")
     res = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,

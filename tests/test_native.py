@@ -92,7 +92,7 @@ def test_kernel_caches_are_keyed_on_the_physics_sources():
     from jaxdamp.physics.containers import _scalar, box, cylinder
 
     digest = native._source_hash()
-    kernels = [native._build_pairs, native._pairs, native._wall_constants, native._grain_walls,
+    kernels = [native._build_pairs, native._pairs, native._wall_constants, native.grain_walls,
                native._pair_forces, native._advance_one, native._advance]
     for k in kernels:
         key = k._cache._index_key((), k.targetctx.codegen())

@@ -18,7 +18,7 @@ step for one system). This module advances a whole chunk in **one** kernel launc
   grain moved more than ``skin / 2``; the skin is widened for fast grains as on the CPU;
 * per step: thread 0 predicts the mount, every thread predicts its grains, the lists are
   rebuilt if needed, every thread adds its grains' walls (:func:`~jaxdamp.engine.native.
-  grain_walls`) and pairs and applies the velocity-Verlet corrector and the rotation to
+  grain walls`) and pairs and applies the velocity-Verlet corrector and the rotation to
   them; the block sums the energy channels and the force on the box (a tree in shared memory,
   the same order every run, so a resumed run repeats itself bit for bit), and thread 0 moves
   the mount and writes the samples (:func:`jaxdamp.physics.energy.record_row`).
@@ -69,6 +69,12 @@ except ImportError:  # the cuda extra is not installed: available() says so
 THREADS = 256
 #: Smallest block on a device (a warp); the simulator runs one thread per grain.
 WARP = 32
+#: Registers a thread may use (``None``: as many as the compiler wants, up to 255). The
+#: kernel for the thesis bed takes all 255 and spills ~0.5 kB per thread, so one block of 256
+#: threads fits an SM; capped at 128, two fit and it spills ~1.5 kB
+#: (:func:`resources`, sm_90). Which is faster is for a device to measure
+#: (``benchmarks/device_check.py --fused-registers``).
+MAX_REGISTERS: int | None = None
 #: Neighbours a grain's list holds at first; a chunk whose lists overflow is run again from
 #: its inputs with room for the most any grain needed (a pure function of its inputs).
 NEIGHBOURS = 16
@@ -80,9 +86,10 @@ _DRIVEN = DRIVEN.id
 _IN, _PRIM, _PPN, _PPF, _PWN, _PWF, _DRAG = (
     CH[k] for k in ("input", "primary_damping", "pp_normal", "pp_friction", "pw_normal",
                     "pw_friction", "drag"))
-#: Per-system scratch in device memory: per-grain rows ``(3, n)`` / ``(n, 4)`` and the
-#: structure's vectors.
-_SCRATCH = ("r1", "vp", "rw", "ref", "wk", "wks", "y1", "ydp", "xs", "xds", "acc", "tmp")
+#: Per-system scratch in device memory: per-grain rows ``(n, 3)`` / ``(n, 4)`` (the CPU
+#: kernel's layout: its grain pass runs on them) and the structure's vectors.
+_SCRATCH = ("r1", "vp", "rw", "ref", "F", "T", "wk", "wks", "y1", "ydp", "xs", "xds", "acc",
+            "tmp")
 Scratch = namedtuple("Scratch", _SCRATCH)
 
 
@@ -110,7 +117,8 @@ def available() -> tuple[bool, str]:
 
 def scratch_layout(n: int, ndof: int) -> tuple[Scratch, int]:
     """Offsets of :data:`_SCRATCH` in a system's scratch row and the row's length."""
-    sizes = {"r1": 3 * n, "vp": 3 * n, "rw": 3 * n, "ref": 3 * n, "wk": 4 * n, "wks": 4 * n,
+    sizes = {"r1": 3 * n, "vp": 3 * n, "rw": 3 * n, "ref": 3 * n, "F": 3 * n, "T": 3 * n,
+             "wk": 4 * n, "wks": 4 * n,
              "y1": ndof - 1, "ydp": ndof - 1, "xs": ndof, "xds": ndof, "acc": ndof,
              "tmp": ndof}
     off, k = {}, 0
@@ -129,10 +137,13 @@ def threads_per_block(n: int) -> int:
     return t if simulated() else max(t, WARP)
 
 
-@functools.lru_cache(maxsize=1)
-def _kernel():
-    """The kernel, compiled by numba-cuda on first use (for the device, or run in the
-    simulator)."""
+@functools.lru_cache(maxsize=16)
+def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
+    """The kernel for the mount, contact law and container numbered ``mount``, ``law``,
+    ``shape`` (``Dims``), compiled by numba-cuda on first use (for the device, or run in the
+    simulator). The three are constants of the compiled code, so the paths of the others
+    fold away: with every path in one kernel it needed 255 registers and spilled (nvJitLink
+    for sm_90, ``benchmarks/RESULTS.md``)."""
     from numba import float64, njit
 
     grain_walls = native.grain_walls
@@ -165,7 +176,8 @@ def _kernel():
             cuda.syncthreads()
             s //= 2
 
-    @cuda.jit
+    @cuda.jit(**({} if simulated() or max_registers is None else
+                  {"max_registers": max_registers}))
     def advance(n_records, record_every, dims, skin0, st, pm, so, po, sid, bounds, rec, scr, sc,
                 nbr, cnt, status):
         st, pm, sid, bounds, rec = plain(st), plain(pm), plain(sid), plain(bounds), plain(rec)
@@ -180,7 +192,6 @@ def _kernel():
         s = scr[b]
         nb = nbr[b]
         nc = cnt[b]
-        mount, law, shape = dims.mount, dims.law, dims.shape
         prescribed = mount == _DRIVEN
         S, F, n_lines, ndof, n_section = (dims.n_species, dims.n_cols, dims.n_lines, dims.ndof,
                                           dims.n_section)
@@ -206,10 +217,12 @@ def _kernel():
         yv = row[so.y:so.y + ny]
         ydv = row[so.yd:so.yd + ny]
         yddv = row[so.ydd:so.ydd + ny]
-        r1 = s[sc.r1:sc.r1 + 3 * n].reshape((3, n))
-        vp = s[sc.vp:sc.vp + 3 * n].reshape((3, n))
-        rw = s[sc.rw:sc.rw + 3 * n].reshape((3, n))
-        ref = s[sc.ref:sc.ref + 3 * n].reshape((3, n))
+        r1 = s[sc.r1:sc.r1 + 3 * n].reshape((n, 3))
+        vp = s[sc.vp:sc.vp + 3 * n].reshape((n, 3))
+        rw = s[sc.rw:sc.rw + 3 * n].reshape((n, 3))
+        ref = s[sc.ref:sc.ref + 3 * n].reshape((n, 3))
+        Fs = s[sc.F:sc.F + 3 * n].reshape((n, 3))
+        Ts = s[sc.T:sc.T + 3 * n].reshape((n, 3))
         wk = s[sc.wk:sc.wk + 4 * n].reshape((n, 4))
         wks = s[sc.wks:sc.wks + 4 * n].reshape((n, 4))
         y1 = s[sc.y1:sc.y1 + ny]
@@ -239,7 +252,7 @@ def _kernel():
                      + (vb[i, 2] - ez * zd) ** 2)
             r_max = max(r_max, Rb[i])
             for c in range(3):
-                ref[c, i] = 0.0  # set at the first step's build
+                ref[i, c] = 0.0  # set at the first step's build
         red[0, tid] = v2
         red[1, tid] = r_max
         block_sum(red, tid, nt, 2, True)
@@ -273,32 +286,31 @@ def _kernel():
                     sh[0], sh[1], sh[2] = t1, z1, zdp
                 cuda.syncthreads()
                 z1, zdp = sh[1], sh[2]
-                # the predictor of this thread's grains, and whether one moved skin/2
-                far = 0
+                # the predictor of this thread's grains, then their body force and walls
+                # (the CPU kernel's grain pass over this thread's grains) and whether one
+                # moved skin/2 since the lists were built
                 for i in range(tid, n, nt):
                     for c in range(3):
-                        r1[c, i] = rb[i, c] + dt * vb[i, c] + hdt2 * ab[i, c]
-                        vp[c, i] = vb[i, c] + dt * ab[i, c]
-                        rw[c, i] = Rb[i] * (wb[i, c] + dt * alb[i, c])
-                    ddx = r1[0, i] - ex * z1 - ref[0, i]
-                    ddy = r1[1, i] - ey * z1 - ref[1, i]
-                    ddz = r1[2, i] - ez * z1 - ref[2, i]
-                    if ddx * ddx + ddy * ddy + ddz * ddz > half_skin2:
-                        far = 1
-                if cuda.syncthreads_or(far) or first:
+                        r1[i, c] = rb[i, c] + dt * vb[i, c] + hdt2 * ab[i, c]
+                        vp[i, c] = vb[i, c] + dt * ab[i, c]
+                        rw[i, c] = Rb[i] * (wb[i, c] + dt * alb[i, c])
+                (parts[0], parts[1], parts[2], parts[3], parts[4], parts[5], parts[6], parts[7],
+                 far) = grain_walls(shape, law, tid, n, nt, r1, vp, rw, Rb, mb, ref, wk, wks, sec,
+                                    Fs, Ts, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
+                if cuda.syncthreads_or(1 if far else 0) or first:
                     # the lists anew, from the predicted positions in the box frame
                     first = False
                     for i in range(tid, n, nt):
-                        ref[0, i] = r1[0, i] - ex * z1
-                        ref[1, i] = r1[1, i] - ey * z1
-                        ref[2, i] = r1[2, i] - ez * z1
+                        ref[i, 0] = r1[i, 0] - ex * z1
+                        ref[i, 1] = r1[i, 1] - ey * z1
+                        ref[i, 2] = r1[i, 2] - ez * z1
                     cuda.syncthreads()
                     for i in range(tid, n, nt):
                         m = 0
                         for j in range(n):
-                            dx = ref[0, i] - ref[0, j]
-                            dy = ref[1, i] - ref[1, j]
-                            dz = ref[2, i] - ref[2, j]
+                            dx = ref[i, 0] - ref[j, 0]
+                            dy = ref[i, 1] - ref[j, 1]
+                            dz = ref[i, 2] - ref[j, 2]
                             lim = Rb[i] + Rb[j] + extra
                             if j != i and dx * dx + dy * dy + dz * dz < lim * lim:
                                 if m < cap:
@@ -308,33 +320,27 @@ def _kernel():
                         if m > cap:
                             cuda.atomic.max(status, b, m)
                     cuda.syncthreads()
-                # this thread's grains: walls, pairs, corrector, rotation
-                for k in range(N_SUMS):
+                # this thread's grains: pairs, corrector, rotation
+                for k in range(8, N_SUMS):
                     parts[k] = 0.0
                 for i in range(tid, n, nt):
-                    ux, uy, uz = vp[0, i], vp[1, i], vp[2, i]
-                    f, sums, _ = grain_walls(
-                        shape, law, r1[0, i], r1[1, i], r1[2, i], ux, uy, uz, rw[0, i], rw[1, i],
-                        rw[2, i], Rb[i], mb[i], wk, wks, i, sec, ex, ey, ez, z1, zdp, Lz, grav,
-                        drag, (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
-                    for k in range(7):
-                        parts[k] += sums[k]
-                    parts[7] += mb[i] * (ux * ux + uy * uy + uz * uz)
-                    fx, fy, fz, tx, ty, tz = f
+                    ux, uy, uz = vp[i, 0], vp[i, 1], vp[i, 2]
+                    fx, fy, fz = Fs[i, 0], Fs[i, 1], Fs[i, 2]
+                    tx, ty, tz = Ts[i, 0], Ts[i, 1], Ts[i, 2]
                     for k in range(min(nc[i], cap)):
                         j = nb[k, i]
-                        dx = r1[0, i] - r1[0, j]
-                        dy = r1[1, i] - r1[1, j]
-                        dz = r1[2, i] - r1[2, j]
+                        dx = r1[i, 0] - r1[j, 0]
+                        dy = r1[i, 1] - r1[j, 1]
+                        dz = r1[i, 2] - r1[j, 2]
                         d2 = dx * dx + dy * dy + dz * dz
                         rs = Rb[i] + Rb[j]
                         if d2 < rs * rs:
                             _, kk, gg, gs, mu = pair_constants(law, tab, sid[i], sid[j], Rb[i],
                                                                Rb[j], mb[i], mb[j])
                             gx, gy, gz, cx, cy, cz, e, ln, lf = pair_contact(
-                                law, dx, dy, dz, d2, rs, ux - vp[0, j], uy - vp[1, j],
-                                uz - vp[2, j], rw[0, i] + rw[0, j], rw[1, i] + rw[1, j],
-                                rw[2, i] + rw[2, j], kk, gg, gs, mu)
+                                law, dx, dy, dz, d2, rs, ux - vp[j, 0], uy - vp[j, 1],
+                                uz - vp[j, 2], rw[i, 0] + rw[j, 0], rw[i, 1] + rw[j, 1],
+                                rw[i, 2] + rw[j, 2], kk, gg, gs, mu)
                             fx += gx
                             fy += gy
                             fz += gz
@@ -360,7 +366,7 @@ def _kernel():
                         ab[i, c] = a1
                         wb[i, c] = wb[i, c] + 0.5 * dt * (alb[i, c] + al1)
                         alb[i, c] = al1
-                        rb[i, c] = r1[c, i]
+                        rb[i, c] = r1[i, c]
                     parts[11] += h
                     qw, qx, qy, qz, ok = rotate_series_scalar(qb[i, 0], qb[i, 1], qb[i, 2],
                                                               qb[i, 3], ox, oy, oz, dt)
@@ -461,7 +467,7 @@ def _advance_packed(model, state_packed, params_packed, state_layout, param_layo
     dims, so, po, sid, bounds, width = native.kernel_args(model, state_layout, param_layout)
     n, batch = model.n, st.shape[0]
     sc, size = scratch_layout(n, dims.ndof)
-    kernel = _kernel()
+    kernel = _kernel(dims.mount, dims.law, dims.shape, MAX_REGISTERS)
     cap = NEIGHBOURS
     while True:
         d_st = cuda.to_device(st)
@@ -496,5 +502,66 @@ def compile_ptx(model, states, params, cc: tuple[int, int] = (9, 0)) -> str:
            numba.typeof(so), numba.typeof(po), numba.int64[::1], numba.int64[::1],
            numba.float64[:, :, ::1], f2, numba.typeof(sc), numba.int32[:, :, ::1],
            numba.int32[:, ::1], numba.int64[::1])
-    ptx, _ = cuda.compile_ptx(_kernel().py_func, sig, cc=cc)
+    kernel = _kernel(dims.mount, dims.law, dims.shape)
+    ptx, _ = cuda.compile_ptx(kernel.py_func, sig, cc=cc)
     return ptx
+
+
+def resources(model, states, params, cc: tuple[int, int] = (9, 0),
+              max_registers: int | None = None) -> dict:
+    """The kernel assembled for ``cc`` without a device: :func:`compile_ptx`, linked by
+    nvJitLink with the helper numba-cuda links into kernels that reshape arrays (as it does
+    at launch). Returns ``{"registers", "spill_stores", "spill_loads", "stack",
+    "shared"}`` (per thread; bytes, shared per block) from ptxas's report — a link error
+    (an undefined function) raises. ``max_registers``: the cap of :data:`MAX_REGISTERS`."""
+    import re
+
+    import numba_cuda
+    from cuda.bindings import nvjitlink, nvrtc
+
+    ptx = compile_ptx(model, states, params, cc).encode()
+    src_file = os.path.join(os.path.dirname(numba_cuda.__file__), "numba", "cuda",
+                            "reshape_funcs.cu")
+    with open(src_file, "rb") as fh:
+        src = fh.read()
+    _, prog = nvrtc.nvrtcCreateProgram(src, b"reshape_funcs.cu", 0, [], [])
+    opts = [f"-arch=compute_{cc[0]}{cc[1]}".encode(), b"-rdc=true"]
+    (err,) = nvrtc.nvrtcCompileProgram(prog, len(opts), opts)
+    if err != nvrtc.nvrtcResult.NVRTC_SUCCESS:
+        raise RuntimeError(f"NVRTC could not compile numba-cuda's {src_file}: {err}")
+    _, size = nvrtc.nvrtcGetPTXSize(prog)
+    helper = b" " * size
+    nvrtc.nvrtcGetPTX(prog, helper)
+    helper = helper.rstrip(b"\x00 ")
+    link_opts = [f"-arch=sm_{cc[0]}{cc[1]}", "-verbose", "-O3"]
+    if max_registers is not None:
+        link_opts.append(f"-maxrregcount={max_registers}")
+    h = nvjitlink.create(len(link_opts), link_opts)
+
+    def log(size_fn, get_fn):
+        buf = bytearray(size_fn(h))
+        get_fn(h, buf)
+        return buf.decode(errors="replace").rstrip("\x00")
+
+    try:
+        nvjitlink.add_data(h, nvjitlink.InputType.PTX, helper, len(helper), "reshape_funcs")
+        nvjitlink.add_data(h, nvjitlink.InputType.PTX, ptx, len(ptx), "fused")
+        try:
+            nvjitlink.complete(h)
+        except nvjitlink.nvJitLinkError as err:
+            raise RuntimeError("nvJitLink: " + log(nvjitlink.get_error_log_size,
+                                                  nvjitlink.get_error_log)) from err
+        info = log(nvjitlink.get_info_log_size, nvjitlink.get_info_log)
+    finally:
+        nvjitlink.destroy(h)
+    # the kernel's lines (the helper's come first)
+    entry = info[info.rindex("Compiling entry function"):]
+
+    def num(pattern):
+        m = re.search(pattern, entry)
+        return int(m.group(1)) if m else 0
+
+    return {"registers": num(r"Used (\d+) registers"),
+            "spill_stores": num(r"(\d+) bytes spill stores"),
+            "spill_loads": num(r"(\d+) bytes spill loads"),
+            "stack": num(r"(\d+) bytes stack frame"), "shared": num(r"(\d+) bytes smem")}

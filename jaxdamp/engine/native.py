@@ -315,74 +315,68 @@ if AVAILABLE:
         return wk
 
     @_kernel(inline="always")
-    def grain_walls(shape, law, x, y, zz, ux, uy, uz, sx, sy, sz, Ri, mi, wk, wks, i, sec, ex,
-                    ey, ez, z1, zdp, Lz, grav, drag, sums):
-        """One grain's body force and its contacts with the floor, the lid and the sides of
-        container number ``shape`` (:mod:`jaxdamp.physics.containers`; ``sec``: its section
-        numbers in registers, :func:`~jaxdamp.physics.containers.section_scalar`): the grain
-        ``i`` at ``(x, y, zz)`` with velocity ``u``, spin ``s = R ω``, radius ``Ri``, mass
-        ``mi``, its floor/lid and side constants ``wk[i]``, ``wks[i]``; the box at ``e z1``
-        moving at ``e zdp``. ``sums = (elastic energy, normal loss, friction loss, box_z,
-        floor + lid force, grains on the floor, on the lid)`` are the running sums it adds to.
-        Returns ``((fx, fy, fz, tx, ty, tz), sums, (x, y, z) in the box frame)``. The one
-        definition of a grain's walls for both kernels: the CPU loop (:func:`_grain_walls`)
-        and the device's thread per grain (:mod:`jaxdamp.engine.fused`)."""
-        e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid = sums
-        # box frame (the box's corner at e z1) and velocities relative to the walls
-        bx = x - ex * z1
-        by = y - ey * z1
-        floor = zz - ez * z1
-        wx = ux - ex * zdp
-        wy = uy - ey * zdp
-        wz = uz - ez * zdp
-        fx, fy, fz = body_force_scalar(mi, ux, uy, uz, grav, drag)
-        tx = 0.0
-        ty = 0.0
-        tz = 0.0
-        # walls: the floor, the lid, then the container's sides (inward normals); most grains
-        # touch none, so the common path is a compare per wall; box_z sums the force on the
-        # box along the axis e
-        acc = (fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z)
-        if floor < Ri:
-            acc, gz = add_wall_scalar(law, Ri - floor, 0.0, 0.0, 1.0, wx, wy, wz, sx, sy, sz, Ri,
-                                      wk[i, 0], wk[i, 1], wk[i, 2], wk[i, 3], ex, ey, ez, acc)
-            floor_lid -= gz
-            n_floor += 1.0
-        if Lz - floor < Ri:
-            acc, gz = add_wall_scalar(law, Ri - (Lz - floor), 0.0, 0.0, -1.0, wx, wy, wz, sx, sy,
-                                      sz, Ri, wk[i, 0], wk[i, 1], wk[i, 2], wk[i, 3], ex, ey, ez,
-                                      acc)
-            floor_lid -= gz
-            n_lid += 1.0
-        fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z = side_contacts_scalar(
-            shape, law, bx, by, sec, Ri, wks, i, wx, wy, wz, sx, sy, sz, ex, ey, ez, acc)
-        return ((fx, fy, fz, tx, ty, tz), (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid),
-                (bx, by, floor))
-
-    @_kernel(inline="always")
-    def _grain_walls(shape, law, n, r1, vp, rw, Rb, mb, ref, wk, wks, sec, F, T, ex, ey, ez,
-                     z1, zdp, Lz, grav, drag, half_skin2):
-        """Pass 1 over the grains: :func:`grain_walls` for each into ``F``, ``T``; returns the
+    def grain_walls(shape, law, lo, n, step, r1, vp, rw, Rb, mb, ref, wk, wks, sec, F, T, ex,
+                     ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
+        """Pass 1 over the grains ``lo, lo + step, … < n`` (all of them on the CPU; a thread's
+        own on the device, :mod:`jaxdamp.engine.fused`: the one definition of a grain's walls
+        for both kernels): body force, the floor, the lid and the container's sides
+        (number ``shape``, :mod:`jaxdamp.physics.containers`; ``sec``: its section numbers in
+        registers, :func:`~jaxdamp.physics.containers.section_scalar`) into ``F``, ``T``;
+        returns the
         sums ``(elastic energy, normal loss, friction loss, box_z, floor + lid force, grains on
         the floor, on the lid, Σ m v², whether a grain moved more than skin/2 since the list
         was built)``. Inlined where ``shape`` is a constant, the container's branch folds away:
         :func:`_advance_one` keeps a copy for the box."""
-        sums = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        e_el = 0.0
+        pw_n = 0.0
+        pw_f = 0.0
+        box_z = 0.0
+        floor_lid = 0.0
+        n_floor = 0.0
+        n_lid = 0.0
         pdrag = 0.0
         far = False
-        for i in range(n):
+        for i in range(lo, n, step):
+            x, y, zz = r1[i, 0], r1[i, 1], r1[i, 2]
             ux, uy, uz = vp[i, 0], vp[i, 1], vp[i, 2]
-            f, sums, b = grain_walls(shape, law, r1[i, 0], r1[i, 1], r1[i, 2], ux, uy, uz,
-                                     rw[i, 0], rw[i, 1], rw[i, 2], Rb[i], mb[i], wk, wks, i, sec,
-                                     ex, ey, ez, z1, zdp, Lz, grav, drag, sums)
-            ddx = b[0] - ref[i, 0]
-            ddy = b[1] - ref[i, 1]
-            ddz = b[2] - ref[i, 2]
+            sx, sy, sz = rw[i, 0], rw[i, 1], rw[i, 2]
+            Ri = Rb[i]
+            # box frame (the box's corner at e z1) and velocities relative to the walls
+            bx = x - ex * z1
+            by = y - ey * z1
+            floor = zz - ez * z1
+            wx = ux - ex * zdp
+            wy = uy - ey * zdp
+            wz = uz - ez * zdp
+            ddx = bx - ref[i, 0]
+            ddy = by - ref[i, 1]
+            ddz = floor - ref[i, 2]
             far = far | (ddx * ddx + ddy * ddy + ddz * ddz > half_skin2)
             pdrag += mb[i] * (ux * ux + uy * uy + uz * uz)
-            F[i, 0], F[i, 1], F[i, 2] = f[0], f[1], f[2]
-            T[i, 0], T[i, 1], T[i, 2] = f[3], f[4], f[5]
-        e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid = sums
+            fx, fy, fz = body_force_scalar(mb[i], ux, uy, uz, grav, drag)
+            tx = 0.0
+            ty = 0.0
+            tz = 0.0
+            # walls: the floor, the lid, then the container's sides (inward normals);
+            # most grains touch none, so the common path is a compare per wall; box_z
+            # sums the force on the box along the axis e
+            acc = (fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z)
+            if floor < Ri:
+                acc, gz = add_wall_scalar(law, Ri - floor, 0.0, 0.0, 1.0, wx, wy, wz, sx, sy, sz,
+                                          Ri, wk[i, 0], wk[i, 1], wk[i, 2], wk[i, 3], ex, ey, ez,
+                                          acc)
+                floor_lid -= gz
+                n_floor += 1.0
+            if Lz - floor < Ri:
+                acc, gz = add_wall_scalar(law, Ri - (Lz - floor), 0.0, 0.0, -1.0, wx, wy, wz, sx,
+                                          sy, sz, Ri, wk[i, 0], wk[i, 1], wk[i, 2], wk[i, 3], ex,
+                                          ey, ez, acc)
+                floor_lid -= gz
+                n_lid += 1.0
+            fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z = side_contacts_scalar(
+                shape, law, bx, by, sec, Ri, wks, i, wx, wy, wz, sx, sy, sz, ex, ey, ez, acc)
+            F[i, 0], F[i, 1], F[i, 2] = fx, fy, fz
+            T[i, 0], T[i, 1], T[i, 2] = tx, ty, tz
         return e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, pdrag, far
 
     @_kernel()
@@ -600,11 +594,12 @@ if AVAILABLE:
                     rwf[j] = R3[j] * (wf[j] + dt * alf[j])
                 if shape == _BOX:  # the common container: a copy with its branch folded
                     (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, pdrag,
-                     far) = _grain_walls(_BOX, law, n, r1, vp, rw, Rb, mb, ref, wk, wks, sec,
-                                         F, T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
+                     far) = grain_walls(_BOX, law, 0, n, 1, r1, vp, rw, Rb, mb, ref, wk, wks,
+                                         sec, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
+                                         half_skin2)
                 else:
                     (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, pdrag,
-                     far) = _grain_walls(shape, law, n, r1, vp, rw, Rb, mb, ref, wk, wks,
+                     far) = grain_walls(shape, law, 0, n, 1, r1, vp, rw, Rb, mb, ref, wk, wks,
                                          sec, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
                                          half_skin2)
                 if n > 1 and far:  # a grain moved more than skin/2: list the pairs anew
