@@ -62,7 +62,7 @@ def _agree(got, ref, records_got, records_ref, rtol=1e-9):
 
 @pytest.mark.parametrize("system, mixing, law, extras", [
     ("primary", "arithmetic", "hertz", {}),
-    ("driven", "harmonic", "hertz", {}),
+    pytest.param("driven", "harmonic", "hertz", {}, marks=pytest.mark.long),
     pytest.param("driven", "geometric", "hertz", {}, marks=pytest.mark.long),
     pytest.param("primary", "harmonic", "linear", {}, marks=pytest.mark.long),
     pytest.param("primary", "arithmetic", "hertz", BASE_EXTRAS, marks=pytest.mark.long),
