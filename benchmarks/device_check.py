@@ -310,7 +310,7 @@ def thesis_scan(duration: float, engine: str, quick: bool = False) -> dict:
         30, ",".join(f"{x:.4g}" for x in np.linspace(0.07, 0.16, 10)), 8)
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "scan.h5")
-        cmd = ["jaxdamp", "frf", "--preset", "sanchez2012-optimal", "--n", str(n), "--lz", lz,
+        cmd = [sys.executable, "-m", "jaxdamp", "frf", "--preset", "sanchez2012-optimal", "--n", str(n), "--lz", lz,
                *(["--fmin", "20", "--fmax", "25"] if quick else []),
                "--replicates", str(reps), "--duration", str(duration), "--set",
                f"numerics.engine='{engine}'", "--out", out, "--no-progress"]
