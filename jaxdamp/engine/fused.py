@@ -435,11 +435,13 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
 
 
 def advance_packed(model, state_packed, params_packed, state_layout, param_layout,
-                   n_records: int, record_every: int, device: int | None = None):
+                   n_records: int, record_every: int, threads: bool = True,
+                   device: int | None = None):
     """:func:`jaxdamp.engine.native.advance_packed` on the CUDA device: the same packed rows
     in and out, the same samples. The rows travel to the device and back once per call (a
     chunk of thousands of steps: the copies are milliseconds beside seconds of compute).
-    ``device``: the CUDA ordinal to run on (default: numba's current device). In the
+    ``device``: the CUDA ordinal to run on (default: numba's current device); ``threads``
+    (the native kernel's OpenMP switch, the same signature) is unused. In the
     simulator (the CPU tests) the threads hand over the interpreter every 0.1 ms instead of
     every 5 ms, or its barriers cost milliseconds each."""
     import contextlib

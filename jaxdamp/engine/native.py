@@ -730,7 +730,8 @@ def kernel_args(model, state_layout, param_layout):
 
 
 def advance_packed(model, state_packed, params_packed, state_layout, param_layout,
-                   n_records: int, record_every: int, threads: bool = True):
+                   n_records: int, record_every: int, threads: bool = True,
+                   device: int | None = None):
     """Advance a packed batch (:func:`pack`: ``(B, total)`` float64 rows of ``State`` and
     ``Params`` in the layouts ``state_layout``, ``param_layout``) by ``n_records ×
     record_every`` steps, sampling after every ``record_every``. Returns ``(new packed state,
@@ -738,7 +739,8 @@ def advance_packed(model, state_packed, params_packed, state_layout, param_layou
     :func:`jaxdamp.physics.energy.record_layout`; the inputs are not modified. The kernel
     works in place on one copy of the state: no per-field copies, no re-packing.
     ``threads=False``: the batch runs in the calling thread (no OpenMP), for callers that run
-    several batches side by side in their own threads (sharded chunks)."""
+    several batches side by side in their own threads (sharded chunks). ``device``: the GPU
+    of :func:`jaxdamp.engine.fused.advance_packed` (the same signature); unused here."""
     st = np.array(state_packed, dtype=np.float64, order="C", copy=True)
     pm = np.ascontiguousarray(params_packed, dtype=np.float64)
     dims, so, po, sid, bounds, width = kernel_args(model, state_layout, param_layout)

@@ -117,11 +117,8 @@ def _packed_chunk(model: Model, n_records: int, record_every: int,
     width = sum(int(np.prod(shape, dtype=np.int64)) for _, shape in rec_layout)
 
     def advance(sp, pp, state_layout, param_layout, threads=True, device=None):
-        if kernel == "fused":
-            return module.advance_packed(model, sp, pp, state_layout, param_layout, n_records,
-                                         record_every, device=device)
         return module.advance_packed(model, sp, pp, state_layout, param_layout, n_records,
-                                     record_every, threads)
+                                     record_every, threads=threads, device=device)
 
     def unpack(new, flat, states):
         recs, k = {}, 0
