@@ -62,25 +62,37 @@ def test_overflow_reallocates_and_redoes_the_chunk():
     np.testing.assert_allclose(out_a.v, out_b.v, rtol=1e-10, atol=1e-13)
 
 
-def test_batch_rebuild_is_shared_and_lists_stay_complete():
-    """Two systems in one batch: after grains moved past skin/2 in one of them, both lists are
-    rebuilt and each still contains every pair closer than the cutoff."""
-    n, radius = 64, 1e-3
+@pytest.mark.parametrize("movers", [(0,), (0, 5), (1, 2, 6, 7, 3)])
+def test_rebuild_is_per_system_and_lists_stay_complete(movers):
+    """Eight systems in one batch (rebuild groups of 1, 4 and 8): after one grain of each
+    system in ``movers`` moved past skin/2, exactly those systems' lists are rebuilt — through
+    the gathered group of one or four, or the whole batch (five movers) — the others keep
+    theirs, and every list still contains every pair closer than the cutoff and equals a fresh
+    build where rebuilt."""
+    n, radius, B = 64, 1e-3, 8
+    assert nb.rebuild_groups(B) == (1, 4, B)
     cfg = config(n=n, radius=radius, material=MAT, box=(0.01, 0.01, 0.01))
     model, _ = build(cfg)
     r, _, _ = _dense_packing(n, radius, 0.01, seed=7)
-    pos = jnp.stack([jnp.asarray(r), jnp.asarray(r)])
+    pos = jnp.stack([jnp.asarray(r)] * B)
     nbrs = nb.allocate(model, pos, 2.0)
-    moved = pos.at[0, 0, 0].add(model.skin)  # one grain of system 0 moves a full skin
+    moved = pos
+    for k in movers:  # one grain of system k moves a full skin, a different one per system
+        moved = moved.at[k, k, 0].add(model.skin)
     updated = jax.jit(lambda nbr, p: nb.update(model, nbr, p))(nbrs, moved)
-    np.testing.assert_array_equal(np.asarray(updated.reference), np.asarray(moved))
-    for b in range(2):
+    fresh = nb._build(model, nb.capacity(nbrs), moved)
+    for b in range(B):
+        expect = moved[b] if b in movers else pos[b]
+        np.testing.assert_array_equal(np.asarray(updated.reference[b]), np.asarray(expect))
+        ref = fresh.idx[b] if b in movers else nbrs.idx[b]
+        np.testing.assert_array_equal(np.asarray(updated.idx[b]), np.asarray(ref))
         idx = np.asarray(updated.idx[b])
         x = np.asarray(moved[b])
         d = np.linalg.norm(x[:, None] - x[None], axis=-1)
         for i in range(n):
             close = set(np.nonzero((d[i] < model.cutoff) & (np.arange(n) != i))[0])
             assert close <= set(idx[i][idx[i] < n])
+    assert not bool(updated.overflow.any())
 
 
 def _all_pairs_lists(positions, radius, skin, capacity):

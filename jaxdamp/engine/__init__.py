@@ -5,6 +5,6 @@
   advances grains goes through it.
 * :mod:`~jaxdamp.engine.simulate` — the jitted ``lax.scan`` chunk for either engine.
 * :mod:`~jaxdamp.engine.native` — the compiled CPU engine (numba) of the same step.
-* :mod:`~jaxdamp.engine.neighbors` — neighbour lists (host cell lists to allocate, all pairs in JAX to rebuild), rebuilt once per batch.
+* :mod:`~jaxdamp.engine.neighbors` — neighbour lists (host cell lists to allocate, all pairs in JAX to rebuild), rebuilt per system.
 * :mod:`~jaxdamp.engine.packing` — initial lattice and settling (batched over beds).
 """

@@ -1,9 +1,13 @@
-"""Neighbour lists for grain–grain contacts, rebuilt once per batch.
+"""Neighbour lists for grain–grain contacts, each system's rebuilt when its own grains moved.
 
-A per-system rebuild decision (``lax.cond`` per system, as jax-md's ``NeighborList.update``
-takes it) becomes a select under ``vmap``, so every system would rebuild at every step. Here
-the decision is made once for the whole batch (``any`` over systems, one ``lax.cond``) and the
-capacity (neighbours per grain, a static shape) is allocated for the whole batch.
+The rebuild policy (:func:`update`) is per system: a system's list is rebuilt when one of its
+grains moved more than ``skin / 2`` since its last build, and only then, so one fast system
+does not force a rebuild of thousands. A per-system ``lax.cond`` (as jax-md's
+``NeighborList.update`` takes it) becomes a select under ``vmap``, which would rebuild every
+system at every step; instead the systems that need it are gathered (static shapes) into the
+smallest of a few group sizes (:func:`rebuild_groups`) that holds them, rebuilt and scattered
+back, with one ``lax.switch`` per step on the batch as a whole. The capacity (neighbours per grain, a static shape) is allocated for the whole
+batch. The policy is independent of the builder (:func:`_build_traced`, all pairs).
 
 Positions given to the list are in the box frame (``z`` measured from the floor): pair
 distances do not change under the box's rigid translation, and a bed that rides with the box
@@ -214,23 +218,66 @@ def _radius_array(model: Model, positions, radius):
     return _with_radius(model, positions, radius)[..., 3]
 
 
+#: Ratio of successive rebuild group sizes (:func:`rebuild_groups`): the systems that need a
+#: new list are rebuilt as the smallest group that holds them, at most this many times their
+#: number; each size is one branch (one more compiled copy of the builder).
+GROUP_RATIO = 4
+
+
+def rebuild_groups(batch: int) -> tuple[int, ...]:
+    """The group sizes a batch of ``batch`` systems rebuilds in: 1, 4, 16, … and ``batch``."""
+    sizes = [1]
+    while sizes[-1] * GROUP_RATIO < batch:
+        sizes.append(sizes[-1] * GROUP_RATIO)
+    return tuple(s for s in sizes if s < batch) + (batch,)
+
+
 def update(model: Model, nbrs: Neighbors, positions, radius=None) -> Neighbors:
-    """Rebuild every list of the batch if any grain of any system moved more than skin/2.
+    """Rebuild the list of every system of which a grain moved more than ``skin / 2``.
 
     Traceable (use inside ``jit``/``scan``); ``positions`` are box-frame, ``(B, N, 3)``;
-    ``radius`` as in :func:`allocate`.
+    ``radius`` as in :func:`allocate`. Systems whose grains did not move that far keep their
+    lists (a system's trajectory does not depend on the batch it runs in). The systems that
+    need it are gathered into the smallest group of :func:`rebuild_groups` that holds them,
+    rebuilt together and scattered back (one ``lax.switch`` per step on the batch); the group
+    of the whole batch rebuilds every system and keeps the others' lists. No gradient flows
+    through a rebuild (the lists are integers; the reference positions only decide the next
+    rebuild).
     """
     if model.n < 2:
         return nbrs
+    b = positions.shape[0]
     cap = capacity(nbrs)
+    positions = jax.lax.stop_gradient(positions)
+    radius = _radius_array(model, positions, radius)
     moved2 = jnp.sum((positions - nbrs.reference) ** 2, axis=-1)
-    need = jnp.any(moved2 > (0.5 * model.skin) ** 2)
+    need = jnp.any(moved2 > (0.5 * model.skin) ** 2, axis=-1)  # (B,)
+    count = jnp.sum(need)
+    sizes = rebuild_groups(b)
 
-    def rebuild(nb):
-        fresh = _build_traced(model, cap, positions, _radius_array(model, positions, radius))
-        return Neighbors(fresh.idx, fresh.reference, nb.overflow | fresh.overflow)
+    def rebuild_all(nb):
+        fresh = _build_traced(model, cap, positions, radius)
+        keep = lambda new, old: jnp.where(  # noqa: E731
+            need.reshape(need.shape + (1,) * (old.ndim - 1)), new, old)
+        return Neighbors(keep(fresh.idx, nb.idx), keep(fresh.reference, nb.reference),
+                         nb.overflow | (need & fresh.overflow))
 
-    return jax.lax.cond(need, rebuild, lambda nb: nb, nbrs)
+    def group_of(size):
+        def rebuild(nb):
+            sel = jnp.nonzero(need, size=size, fill_value=b)[0]  # those that need it, then b
+            take = jnp.minimum(sel, b - 1)
+            fresh = _build_traced(model, cap, positions[take], radius[take])
+            return Neighbors(nb.idx.at[sel].set(fresh.idx, mode="drop"),
+                             nb.reference.at[sel].set(fresh.reference, mode="drop"),
+                             nb.overflow.at[sel].set(nb.overflow[take] | fresh.overflow,
+                                                     mode="drop"))
+        return rebuild
+
+    branches = [lambda nb: nb] + [group_of(s) for s in sizes[:-1]] + [rebuild_all]
+    if len(branches) == 2:
+        return jax.lax.cond(count > 0, branches[1], branches[0], nbrs)
+    which = sum((count > s).astype(jnp.int32) for s in (0,) + sizes[:-1])
+    return jax.lax.switch(which, branches, nbrs)
 
 
 def _build_traced(model: Model, capacity: int, positions, radius=None) -> Neighbors:

@@ -2,7 +2,7 @@
 
 Everything here works on a *batch* of ``B`` independent systems (``B = 1`` for a single run):
 states, params and neighbour lists carry a leading batch axis. The physics step is
-``vmap``-ed; the neighbour-list rebuild is decided once per batch (:mod:`jaxdamp.engine.neighbors`).
+``vmap``-ed; each system's neighbour list is rebuilt when its own grains moved (:mod:`jaxdamp.engine.neighbors`).
 
 A chunk runs ``n_records × record_every`` steps and returns the states, neighbour lists and
 ``n_records`` samples per system (:func:`jaxdamp.physics.energy.record`). Allocating the
