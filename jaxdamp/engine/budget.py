@@ -160,7 +160,7 @@ def check(budget: Budget, out=None, say=None) -> None:
         raise ConfigError(
             f"this batch needs about {size(budget.memory)} of memory ({budget.line()}), more "
             f"than the {size(room)} this process may use: run fewer systems or replicates at "
-            "once, a shorter numerics.duration or a longer numerics.record_dt (fewer samples), "
+            "once (a sweep written to a file runs in waves that fit by itself), a shorter numerics.duration or a longer numerics.record_dt (fewer samples), "
             "or fewer grains (`jaxdamp --no-size-check ...` runs it anyway)")
     if out is not None and budget.file:
         import shutil
@@ -172,6 +172,35 @@ def check(budget: Budget, out=None, say=None) -> None:
                 f"{out}: the output needs about {size(budget.file)} and its disk has "
                 f"{size(free)} free: free some space or write elsewhere "
                 "(`jaxdamp --no-size-check ...` runs it anyway)")
+
+
+def largest(make, systems: int) -> int:
+    """The most systems, at most ``systems``, whose batch fits the memory :func:`check` allows:
+    ``make(n)`` is the :class:`Budget` of ``n`` systems (memory affine in ``n``); at least 1.
+    Without :data:`ENFORCE`, every system."""
+    if not ENFORCE:
+        return int(systems)
+    room = MEMORY_FRACTION * min(available_memory(), device_memory())
+    one, two = make(1).memory, make(2).memory
+    per = max(two - one, 1.0)
+    return int(max(1, min(systems, (room - (one - per)) // per)))
+
+
+def device_memory() -> float:
+    """Bytes free on the first accelerator JAX sees (``inf`` on a CPU, or where the device
+    does not say). A batch on a device holds its state and working arrays there; the samples
+    come back to the host every chunk."""
+    import jax
+
+    dev = jax.devices()[0]
+    if dev.platform == "cpu":
+        return math.inf
+    try:
+        stats = dev.memory_stats() or {}
+    except Exception:  # noqa: BLE001 - a backend without statistics
+        return math.inf
+    limit = stats.get("bytes_limit")
+    return math.inf if limit is None else float(limit - stats.get("bytes_in_use", 0))
 
 
 def size(n: float) -> str:

@@ -5,13 +5,16 @@ Layout (``docs/output.md``, "Sweep file schema")::
     /                       attrs: format, jaxdamp_version, created, base_config (JSON), axes
                                    (JSON), replicates, configs (JSON list), dt, duration,
                                    engine, engine_reason (the engine that ran it and why:
-                                   jaxdamp.engine.choice), devices, status, message, wall_time
+                                   jaxdamp.engine.choice), devices, wave_size (systems per
+                                   wave: jaxdamp.studies.sweep), status, message, wall_time
     /axes/<key>             the swept values
     /records/<name>         (P, T, ...) samples of every point × replicate (replicates fastest)
     /checkpoint             batched state and neighbour lists after the last finished chunk
+                            (attrs chunk, wave: of the running wave's systems)
     /snapshots/...          t (S,), r, v (P, S, N, 3), z_box (P, S)
     /summary/<name>         grid-shaped mean over replicates of each fixed-window scalar
     /replicate_summary/...  grid + (R,)
+    /system_summary/<name>  (P,) per system, written at the end of its wave (sweeps in waves)
     /steady/<quantity>/...  steady-state estimates over replicates (:func:`write_steady`)
     /settle/...             per system: settled (bool), time, max_speed, bed_height; attr
                             unsettled (count of beds that did not settle)
@@ -24,6 +27,7 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Mapping
 
 import h5py
 import numpy as np
@@ -90,14 +94,16 @@ class SweepFile:
     @classmethod
     def create(cls, path: str, config, axes: dict, configs: list, dt: float, duration: float,
                engine: str, replicates: int = 1, devices: int = 1,
-               engine_reason: str = "") -> "SweepFile":
+               engine_reason: str = "", wave_size: int | None = None) -> "SweepFile":
         """A new sweep file; ``engine`` computes it and ``engine_reason`` says why
-        (:func:`jaxdamp.engine.choice.choose`)."""
+        (:func:`jaxdamp.engine.choice.choose`); ``wave_size`` systems run at once (all of
+        them when ``None``)."""
         h5 = cls._open(path, "w")
         stamp(h5, FORMAT, base_config=config.to_json(), axes=axes_json(axes, replicates),
               replicates=int(replicates), configs=json.dumps([c.to_json() for c in configs]),
               dt=float(dt), duration=float(duration), engine=engine,
               engine_reason=engine_reason, devices=int(devices),
+              wave_size=int(len(configs) if wave_size is None else wave_size),
               status="running", message="")
         h5.create_group("records")
         ag = h5.create_group("axes")
@@ -105,39 +111,61 @@ class SweepFile:
             put(ag, k, np.asarray(v, float))
         return cls(h5)
 
-    def write_settle(self, beds, settle_speed) -> None:
+    def write_settle(self, beds, settle_speed, rows: range | None = None,
+                     total: int | None = None) -> None:
         """``/settle``: per system (point × replicate, in ``configs`` order) the settled bed's
         ``settled`` flag (every grain below ``settle_speed`` before ``settle_time`` ran out),
         ``time`` [s], ``max_speed`` [m/s] and ``bed_height`` [m]; the group's attribute
-        ``unsettled`` counts the systems whose bed did not settle."""
+        ``unsettled`` counts the systems whose bed did not settle. ``rows`` of ``total``: one
+        wave's systems (the others keep theirs; not yet settled: ``settled`` false, NaN)."""
         g = self.h5.require_group("settle")
-        flags = np.array([bool(b.settled) for b in beds])
-        put(g, "settled", flags, "1")
-        put(g, "time", np.array([b.time for b in beds]), "s")
-        put(g, "max_speed", np.array([b.max_speed for b in beds]), "m/s")
-        put(g, "bed_height", np.array([b.height for b in beds]), "m")
-        put(g, "settle_speed", np.asarray(settle_speed, float), "m/s")
-        g.attrs["unsettled"] = int((~flags).sum())
+        values = {"settled": (np.array([bool(b.settled) for b in beds]), "1"),
+                  "time": (np.array([b.time for b in beds], float), "s"),
+                  "max_speed": (np.array([b.max_speed for b in beds], float), "m/s"),
+                  "bed_height": (np.array([b.height for b in beds], float), "m"),
+                  "settle_speed": (np.asarray(settle_speed, float), "m/s")}
+        for k, (v, unit) in values.items():
+            if rows is None:
+                put(g, k, v, unit)
+                continue
+            if k not in g:
+                put(g, k, np.zeros(total, bool) if v.dtype == bool else np.full(total, np.nan),
+                    unit)
+            g[k][rows.start:rows.stop] = v
+        settled_yet = np.isfinite(g["time"][()])  # waves not yet started: NaN
+        g.attrs["unsettled"] = int((~g["settled"][()] & settled_yet).sum())
         self.h5.flush()
 
     @classmethod
-    def resume(cls, path: str, config, axes: dict, replicates: int, records_per_chunk: int):
+    def resume(cls, path: str, config, axes: dict, replicates: int, records_per_chunk: int,
+               rows: range | None = None):
         """Open ``path`` to continue the sweep: ``(file, checkpoint arrays, chunk, compute time
-        so far)``; samples after the checkpoint are dropped. Refuses a different sweep."""
+        so far)``; samples after the checkpoint are dropped (in the first wave; a later wave,
+        ``rows``, overwrites its rows). Refuses a different sweep."""
         from jaxdamp.config import ConfigError
 
         arrays, chunk, wall = cls.checkpoint_of(path, config, axes, replicates)
+        first = rows is None or rows.start == 0
         with h5py.File(path, "r") as h5:
             n = chunk * records_per_chunk
-            why = (damaged_series(h5["records/t"][()], n) if "t" in h5["records"]
+            t = (h5["records/t"][slice(None) if rows is None else slice(rows.start, rows.stop)]
+                 if "t" in h5["records"] else None)
+            why = (damaged_series(t, n) if t is not None
                    else f"its checkpoint counts {n} samples but the file holds none" if n
                    else None)
         if why is not None:
             raise ConfigError(damaged_message(path, why))
         h5 = cls._open(path, "a")
-        for ds in h5["records"].values():
-            ds.resize(chunk * records_per_chunk, axis=1)
+        if first:
+            for ds in h5["records"].values():
+                ds.resize(chunk * records_per_chunk, axis=1)
         return cls(h5), arrays, chunk, wall
+
+    @staticmethod
+    def wave_of(path: str) -> int:
+        """The wave the checkpoint of the sweep file ``path`` belongs to (0 without waves)."""
+        with h5py.File(path, "r") as h5:
+            return int(h5["checkpoint"].attrs.get("wave", 0))
 
     @staticmethod
     def attrs_of(path: str) -> dict:
@@ -168,32 +196,49 @@ class SweepFile:
         return arrays, chunk, wall
 
     # -- while running --------------------------------------------------------------------
-    def append_records(self, recs: dict) -> None:
-        """Append samples ``(P, T, ...)`` along the time axis."""
+    def append_records(self, recs: dict, at: int | None = None, rows: range | None = None,
+                       total: int | None = None) -> None:
+        """Write samples ``(P, T, ...)`` at sample ``at`` (default: after the last) along the
+        time axis; ``rows`` of ``total`` systems: one wave's."""
         from jaxdamp.physics.energy import RECORD_UNITS
 
         g = self.h5["records"]
         for k, v in recs.items():
+            v = np.asarray(v)
+            systems = v.shape[0] if rows is None else total
             if k not in g:
-                ds = g.create_dataset(k, data=v, maxshape=(v.shape[0], None) + v.shape[2:],
-                                      chunks=True)
+                ds = g.create_dataset(k, shape=(systems, 0) + v.shape[2:], dtype=v.dtype,
+                                      maxshape=(systems, None) + v.shape[2:], chunks=True)
                 ds.attrs["units"] = RECORD_UNITS.get(k, "")
+            ds = g[k]
+            n0 = ds.shape[1] if at is None else at
+            if ds.shape[1] < n0 + v.shape[1]:
+                ds.resize(n0 + v.shape[1], axis=1)
+            if rows is None:
+                ds[:, n0:n0 + v.shape[1]] = v
             else:
-                n0 = g[k].shape[1]
-                g[k].resize(n0 + v.shape[1], axis=1)
-                g[k][:, n0:] = v
+                ds[rows.start:rows.stop, n0:n0 + v.shape[1]] = v
 
-    def write_checkpoint(self, arrays: dict, chunk: int, wall_time: float) -> None:
-        """``/checkpoint`` after ``chunk`` chunks, written whole after the samples before it
-        (:func:`jaxdamp.io.common.write_checkpoint`)."""
+    def write_checkpoint(self, arrays: dict, chunk: int, wall_time: float,
+                         wave: int = 0) -> None:
+        """``/checkpoint`` after ``chunk`` chunks of wave ``wave``, written whole after the
+        samples before it (:func:`jaxdamp.io.common.write_checkpoint`)."""
         self.h5.attrs["wall_time"] = wall_time
-        write_checkpoint(self.h5, arrays, {"chunk": chunk})
+        write_checkpoint(self.h5, arrays, {"chunk": chunk, "wave": wave})
 
-    def append_snapshot(self, t: float, per_point: dict) -> None:
+    def append_snapshot(self, t: float, per_point: dict, rows: range | None = None,
+                        total: int | None = None) -> None:
         """Append the batch's ``r``, ``v`` ``(P, N, 3)`` and ``z_box`` ``(P,)`` at time ``t``
-        (resumable: a snapshot at or before the last stored time overwrites from there)."""
+        (resumable: a snapshot at or before the last stored time overwrites from there);
+        ``rows`` of ``total`` systems: one wave's, at the time the first wave stored."""
         g = self.h5.require_group("snapshots")
-        P = next(iter(per_point.values())).shape[0]
+        P = next(iter(per_point.values())).shape[0] if rows is None else total
+        if rows is not None and rows.start > 0:  # a later wave: the times are stored
+            n = int(np.searchsorted(g["t"][()], t - 1e-12))
+            for k, x in per_point.items():
+                g[k][rows.start:rows.stop, n] = x
+            self.h5.flush()
+            return
         if "t" not in g:
             g.create_dataset("t", shape=(0,), maxshape=(None,), dtype="f8").attrs["units"] = "s"
             for k, x in per_point.items():
@@ -206,7 +251,7 @@ class SweepFile:
         g["t"][n] = t
         for k, x in per_point.items():
             g[k].resize(n + 1, axis=1)
-            g[k][:, n] = x
+            g[k][slice(None) if rows is None else slice(rows.start, rows.stop), n] = x
         self.h5.flush()
 
     def set_status(self, status: str, message: str = "") -> None:
@@ -215,8 +260,29 @@ class SweepFile:
         self.h5.flush()
 
     # -- results --------------------------------------------------------------------------
-    def records(self) -> dict:
-        return {k: self.h5["records"][k][()] for k in self.h5["records"]}
+    def records(self, rows: range | None = None) -> dict:
+        """Every sample, or the samples of the systems ``rows``."""
+        part = slice(None) if rows is None else slice(rows.start, rows.stop)
+        return {k: self.h5["records"][k][part] for k in self.h5["records"]}
+
+    def write_system_summary(self, summaries: list[dict], units: dict, rows: range,
+                             total: int) -> None:
+        """``/system_summary/<name>`` ``(total,)``: the fixed-window summaries of the systems
+        ``rows`` (one wave's, NaN until their wave ends)."""
+        g = self.h5.require_group("system_summary")
+        for k in summaries[0]:
+            if k not in g:
+                put(g, k, np.full(total, np.nan), units.get(k, ""))
+            g[k][rows.start:rows.stop] = [s[k] for s in summaries]
+        self.h5.flush()
+
+    def system_summaries(self) -> tuple[list[dict], dict]:
+        """The per-system summaries of ``/system_summary`` and their units."""
+        g = self.h5["system_summary"]
+        values = {k: g[k][()] for k in g}
+        n = len(next(iter(values.values())))
+        return ([{k: float(v[i]) for k, v in values.items()} for i in range(n)],
+                {k: str(g[k].attrs.get("units", "")) for k in g})
 
     def snapshots(self) -> dict:
         if "snapshots" not in self.h5:
@@ -255,6 +321,55 @@ class SweepFile:
             self.h5.close()
         finally:
             claims.release(self.path)
+
+
+class StoredRecords(Mapping):
+    """The samples of a sweep file read on demand: ``records[name]`` is a view whose
+    ``[rows]`` (an index, a slice) reads those systems' samples, and ``np.asarray`` the whole
+    dataset — the ``records`` of a sweep that ran in waves (:func:`jaxdamp.studies.sweep.sweep`),
+    whose samples need not fit in memory together."""
+
+    def __init__(self, path: str):
+        self.path = path
+        with h5py.File(path, "r") as h5:
+            self._names = tuple(h5["records"])
+
+    def __getitem__(self, name: str) -> "_StoredRows":
+        if name not in self._names:
+            raise KeyError(name)
+        return _StoredRows(self.path, name)
+
+    def __iter__(self):
+        return iter(self._names)
+
+    def __len__(self) -> int:
+        return len(self._names)
+
+
+class _StoredRows:
+    """One record of a sweep file, read by rows (:class:`StoredRecords`)."""
+
+    def __init__(self, path: str, name: str):
+        self.path, self.name = path, name
+        with h5py.File(path, "r") as h5:
+            self.shape = h5["records"][name].shape
+
+    def __len__(self) -> int:
+        return self.shape[0]
+
+    def __getitem__(self, key):
+        with h5py.File(self.path, "r") as h5:
+            ds = h5["records"][self.name]
+            if isinstance(key, (list, np.ndarray)):  # h5py wants increasing unique indices
+                key = np.asarray(key)
+                order, back = np.unique(key, return_inverse=True)
+                return ds[order][back]
+            return ds[key]
+
+    def __array__(self, dtype=None, copy=None):
+        with h5py.File(self.path, "r") as h5:
+            x = h5["records"][self.name][()]
+        return x if dtype is None else x.astype(dtype)
 
 
 def perturb_checkpoint(path: str, grain: int, delta: float, chunk: int, flag: str,
@@ -326,9 +441,15 @@ def describe_lines(h, path: str) -> list[str]:
                  f"{k} ({len(v)}: {min(v):.5g} … {max(v):.5g})" for k, v in axes.items())
              + (f" × {R} replicates" if R > 1 else "")
              + f"; {float(h.attrs.get('duration', 0)):.4g} s each, dt {float(h.attrs.get('dt', 0)):.3g} s"]
+    W = int(h.attrs.get("wave_size", n))
+    waves = -(-n // W) if W else 1
+    if waves > 1:
+        lines.append(f"  run in {waves} waves of {W} systems")
     if "checkpoint" in h and h.attrs.get("status") != "finished":
+        wave = int(h["checkpoint"].attrs.get("wave", 0))
         lines.append(f"  checkpoint after chunk {int(h['checkpoint'].attrs.get('chunk', 0))}"
-                     " (resumable with --resume)")
+                     + (f" of wave {wave + 1}/{waves}" if waves > 1 else "")
+                     + " (resumable with --resume)")
     parts = [g for g in ("summary", "replicate_summary", "steady", "fit", "efficiency",
                          "snapshots", "impacts") if g in h]
     if parts:

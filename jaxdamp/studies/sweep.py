@@ -15,6 +15,10 @@ Across processes every process runs the same call on its own shards; the samples
 to every process after each chunk and only process 0 writes ``out`` (the others return the
 same result from memory). Between chunks: progress, overflow handling (in ``advance``)
 and a checkpoint; ``resume=True`` skips finished chunks.
+
+A batch that does not fit the memory this process may use runs, with an output file, in waves
+of whole grid points (:func:`sweep`, "Waves"; in one process), sized by the one estimator
+:mod:`jaxdamp.engine.budget`.
 """
 
 from __future__ import annotations
@@ -36,7 +40,7 @@ from jaxdamp.engine import budget, driver, native
 from jaxdamp.engine.choice import choose, stored_choice
 from jaxdamp.engine.packing import settle_many
 from jaxdamp.io.common import ensure_space, stop_file
-from jaxdamp.io.sweepfile import SweepFile, holds
+from jaxdamp.io.sweepfile import StoredRecords, SweepFile, holds
 from jaxdamp.physics.containers import container
 from jaxdamp.physics.model import build, config_dt, grain_radii
 from jaxdamp.studies.grid import (
@@ -105,17 +109,33 @@ def impact_budget(config: Config, points: int, out=None):
                            out=out is not None)
 
 
+def wave_budget(config: Config, sched, systems: int, replicates: int, out, snapshots: int = 0):
+    """``(wave size, budget)`` of a sweep of ``systems`` systems: every system at once when the
+    batch fits the memory this process may use (:func:`jaxdamp.engine.budget.largest`), else —
+    with an output file, which holds every sample — the largest wave of whole grid points
+    (``replicates`` systems each) that fits; the budget is that wave's memory and the whole
+    sweep's file and time."""
+    whole = batch_budget(config, sched, systems, out, snapshots)
+    fits = budget.largest(lambda n: batch_budget(config, sched, n, out, snapshots), systems)
+    if out is None or fits >= systems:
+        return systems, whole
+    size = max(replicates, fits // replicates * replicates)
+    part = batch_budget(config, sched, size, out, snapshots)
+    return size, dataclasses.replace(whole, memory=part.memory)
+
+
 def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = False,
           progress: bool = True, echo=print, shard: bool = True,
           max_chunks: int | None = None, snapshots: int = 0,
-          replicates: int = 1, beds: dict | None = None) -> SweepResult | None:
-    """Run every grid point of ``axes`` (``{dotted key: values}``) as one batch.
+          replicates: int = 1, beds: dict | None = None,
+          wave: int | None = None) -> SweepResult | None:
+    """Run every grid point of ``axes`` (``{dotted key: values}``) as one batch, or in waves.
 
     Args:
       config: the base configuration.
       axes: one or two swept fields, e.g. ``{"frequency": [10, 12, 14], "box.Lz": [0.07, 0.12]}``.
       out: HDF5 file for the results (and the checkpoint); ``None`` keeps them in memory.
-      resume: continue ``out`` from its checkpoint, skipping finished chunks.
+      resume: continue ``out`` from its checkpoint, skipping finished chunks (and waves).
       progress: tqdm progress bar over chunks.
       shard: shard the batch over all JAX devices (no-op with one device).
       max_chunks: stop after this many chunks (leaving ``out`` to resume); returns ``None``
@@ -127,9 +147,21 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
         :func:`jaxdamp.analysis.stats.replicate_seed` ``(seed, 0..R-1)``, run in the same batch.
       beds: a cache of settled beds by geometry, filled and reused across calls (repeated
         sweeps of one damper, e.g. an optimiser's evaluations, settle each bed once).
+      wave: systems per wave (a multiple of ``replicates``); ``None`` sizes it by itself.
+
+    **Waves.** A sweep whose batch does not fit the memory this process may use
+    (:func:`wave_budget`, the one estimator of :mod:`jaxdamp.engine.budget`) runs, with an
+    output file, in waves of whole grid points, one after another: each wave settles its beds,
+    runs every chunk and writes its samples, snapshots and per-system summaries
+    (``/system_summary``) into its rows of the file; the checkpoint holds the running wave and
+    its index, so ``resume`` continues inside the wave it stopped in. The summaries and the
+    steady-state estimates are then made from the file, a wave at a time, and the result's
+    ``records`` read rows from the file on demand (:class:`jaxdamp.io.sweepfile.StoredRecords`)
+    instead of holding every sample.
 
     S3 configurations (``system = "impact"``) go to :func:`jaxdamp.s3.impact.sweep` (same result
-    and file layout; ``resume``, ``shard`` and ``max_chunks`` do not apply: it runs whole).
+    and file layout; ``resume``, ``shard``, ``max_chunks`` and ``wave`` do not apply: it runs
+    whole).
     """
     if config.system == "impact":  # S3: the single-particle model of jaxdamp.s3.impact
         from jaxdamp.s3 import impact
@@ -143,10 +175,25 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
     say = echo or (lambda *a, **k: None)
     grid = grid_configs(config, axes)
     R = int(replicates)
-    if not (resume and out and os.path.exists(out)):  # sized before any system is built
+    P = len(grid) * R
+    if resume and out:  # across hosts: the writer closed the file before anyone reads it
+        _barrier("jaxdamp-sweep-open")
+    resuming = bool(resume and out and os.path.exists(out))
+    if resuming:  # the waves the file was started with
+        W = int(SweepFile.attrs_of(out).get("wave_size", P))
+    elif wave is not None:
+        W = int(wave)
+        if W < R or W % R:
+            raise ConfigError(f"wave = {W}: a wave holds whole grid points, a positive "
+                              f"multiple of replicates = {R}")
+        W = min(W, P)
+    if not resuming:  # sized before any system is built
         first = grid[0]
         sched0 = schedule(first, config_dt(first, grain_radii(first)))
-        budget.check(batch_budget(first, sched0, len(grid) * R, out, snapshots), out, say)
+        size, cost = wave_budget(first, sched0, P, R, out, snapshots)
+        W = size if wave is None else W
+        budget.check(cost if W == size else dataclasses.replace(
+            cost, memory=batch_budget(first, sched0, W, out, snapshots).memory), out, say)
     interrupt.check()
     configs = replicate_configs(grid, R)
     base = configs[0]
@@ -165,43 +212,176 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
     t_windows = [analysis_start(c, sched.duration) for c in configs]
     params = [dataclasses.replace(p, dt=jnp.asarray(dt), t_window=jnp.asarray(tw))
               for (_, p), tw in zip(built, t_windows)]
-    pb = jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *params)
-    P = len(configs)
-    sharding, padded = _mesh_sharding(P) if shard else (None, P)
-    # native: one kernel call per shard
-    choice = choose(base.numerics.engine, base.numerics.precision, batch=P)
-    if resume and out and os.path.exists(out):  # the engine the file was written with
+    waves = [range(a, min(a + W, P)) for a in range(0, P, W)]
+    if len(waves) > 1:
+        say(f"{P} systems in {len(waves)} waves of {W} ("
+            + ("wave = " + str(wave) if wave is not None and not resuming else
+               "as the file was started" if resuming else
+               "the whole batch needs more memory than this process may use") + ")")
+    if len(waves) > 1 and jax.process_count() > 1:
+        raise ConfigError(f"{P} systems need {len(waves)} waves of {W}, and a sweep in waves "
+                          "runs in one process: run it on one host, or split the grid into "
+                          "sweeps that fit each host's memory")
+    choice = choose(base.numerics.engine, base.numerics.precision, batch=W)
+    if resuming:  # the engine the file was written with
         choice = stored_choice(SweepFile.attrs_of(out), choice)
     engine = choice.engine
     say(f"engine {engine} ({choice.reason})")
-    pb_s = _pad_and_shard(pb, padded, sharding)
-    drive = dict(engine=engine, multiplier=base.numerics.capacity_multiplier,
-                 place=lambda tree: _pad_and_shard(tree, padded, sharding))
 
     sf = None
-    start_chunk = 0
     writer = jax.process_index() == 0  # across hosts, process 0 writes the file
-    if resume and out and os.path.exists(out):
+    start_wave, start_chunk, wall_before, arrays = 0, 0, 0.0, None
+    if resuming:
         arrays, start_chunk, wall_before = SweepFile.checkpoint_of(out, config, axes, R)
+        start_wave = SweepFile.wave_of(out)
         _barrier("jaxdamp-sweep-resume")  # every process has read before the writer opens
         if writer:
             sf, arrays, start_chunk, wall_before = SweepFile.resume(
-                out, config, axes, R, sched.records_per_chunk)
-        batch = driver.restore(model, pb, arrays, **drive).replace(params=pb_s)
-        say(f"resuming sweep at chunk {start_chunk}/{sched.n_chunks}")
-    else:
-        wall_before = 0.0
+                out, config, axes, R, sched.records_per_chunk, rows=waves[start_wave])
+        say(f"resuming sweep at chunk {start_chunk}/{sched.n_chunks}"
+            + (f" of wave {start_wave + 1}/{len(waves)}" if len(waves) > 1 else ""))
+    elif out and writer:
+        sf = SweepFile.create(out, config, axes, configs, dt, sched.duration, engine, R,
+                              devices=len(jax.devices()), engine_reason=choice.reason,
+                              wave_size=W)
+
+    ctx = _Sweep(model=model, configs=configs, built=built, params=params, sched=sched,
+                 engine=engine,
+                 t_windows=t_windows, out=out, sf=sf, snapshots=snapshots, beds=beds,
+                 progress=progress, say=say, shard=shard, P=P, waves=len(waves))
+    wall0 = time.perf_counter()
+    budget_chunks = math.inf if max_chunks is None else max_chunks
+    results = []
+    for w in range(start_wave, len(waves)):
+        resumed = arrays if w == start_wave else None
+        first_chunk = start_chunk if w == start_wave else 0
+        done, result = ctx.run_wave(w, waves[w], first_chunk, resumed, budget_chunks,
+                                    lambda: wall_before + time.perf_counter() - wall0)
+        budget_chunks -= done
+        if result is None:  # stopped by max_chunks
+            if sf is not None:
+                sf.set_status("partial")
+                sf.close()
+            return None
+        results.append(result)
+    wall = wall_before + time.perf_counter() - wall0  # over every session of a resumed sweep
+    return ctx.finish(grid, axes, R, results, wall)
+
+
+@dataclasses.dataclass
+class _Sweep:
+    """What every wave of one sweep shares (:func:`sweep`)."""
+
+    model: object
+    configs: list
+    built: list
+    params: list
+    sched: object
+    engine: str
+    t_windows: list
+    out: str | None
+    sf: SweepFile | None
+    snapshots: int
+    beds: dict | None
+    progress: bool
+    say: object
+    shard: bool
+    P: int
+    waves: int
+
+    def run_wave(self, w: int, rows: range, start_chunk: int, arrays, max_chunks, elapsed):
+        """Run wave ``w`` (systems ``rows``) from ``start_chunk`` (``arrays``: its checkpoint,
+        or ``None`` to settle and start it) for at most ``max_chunks`` chunks: ``(chunks run,
+        in-memory result or None if stopped early)``; the result is ``(records, snapshots,
+        final host states)`` of the wave (records and snapshots empty when a file holds
+        them)."""
+        model, sched, sf, out = self.model, self.sched, self.sf, self.out
+        configs = [self.configs[i] for i in rows]
+        n = len(configs)
+        pb = jax.tree_util.tree_map(lambda *xs: jnp.stack(xs), *[self.params[i] for i in rows])
+        sharding, padded = _mesh_sharding(n) if self.shard else (None, n)
+        pb_s = _pad_and_shard(pb, padded, sharding)
+        drive = dict(engine=self.engine, multiplier=configs[0].numerics.capacity_multiplier,
+                     place=lambda tree: _pad_and_shard(tree, padded, sharding))
+        part = rows if self.waves > 1 else None  # the file's rows of this wave
+        if arrays is not None:
+            batch = driver.restore(model, pb, arrays, **drive).replace(params=pb_s)
+        else:
+            batch = self._start(rows, pb, pb_s, drive, part, w, elapsed)
+        mem: dict = {}
+        snaps: dict = {}
+
+        def keep(chunk, batch, recs):
+            if out:  # gathered by every process (a collective across hosts), written by one
+                arrays = driver.checkpoint(batch, n)
+            if sf is not None:
+                ensure_space(out, sum(np.asarray(v).nbytes
+                                      for v in (*recs.values(), *arrays.values())))
+                sf.append_records(recs, at=chunk * sched.records_per_chunk, rows=part,
+                                  total=self.P)
+                sf.write_checkpoint(arrays, chunk + 1, elapsed(), wave=w)
+            if chunk >= sched.n_chunks - self.snapshots:
+                _keep_snapshot(sf, snaps, batch.states, n, part, self.P)
+            if sf is None:
+                for k, v in recs.items():
+                    mem.setdefault(k, []).append(v)
+
+        def diverged(e):
+            if sf is not None:  # the file keeps every finished chunk and its checkpoint
+                sf.set_status("diverged", str(e) + (f" (wave {w + 1}/{self.waves}, systems "
+                                                    f"{rows.start}-{rows.stop - 1})"
+                                                    if part else ""))
+                sf.close()
+
+        def interrupted():
+            if sf is not None:  # every finished chunk and its checkpoint are in the file
+                sf.set_status("interrupted", "stopped by Ctrl-C; --resume continues from the "
+                              "last checkpoint")
+                sf.close()
+
+        stop = int(min(sched.n_chunks, start_chunk + max_chunks))
+        label = f"sweep of {n} systems" + (f", wave {w + 1}/{self.waves}" if part else "")
+        try:
+            batch = driver.run_chunks(
+                batch, range(start_chunk, stop), sched.records_per_chunk, sched.record_every,
+                systems=n, on_chunk=keep, on_diverged=diverged, on_interrupt=interrupted,
+                total=sched.n_chunks, progress=label if self.progress else None)
+        except OSError as err:  # the disk filled (or went away): keep what the file holds
+            if sf is not None:
+                stop_file(sf, str(err))
+            raise
+        if stop < sched.n_chunks:
+            return stop - start_chunk, None
+        final = jax.tree_util.tree_map(lambda x: x[:n], driver.to_host(batch.states))
+        if sf is not None and part is not None:  # this wave's summaries, before the next
+            sf.write_system_summary(*self._summaries(rows, sf.records(part), final),
+                                    rows=part, total=self.P)
+            return stop - start_chunk, ({}, {}, None)
+        records = (sf.records() if sf is not None
+                   else {k: np.concatenate(v, axis=1) for k, v in mem.items()})
+        if sf is not None:
+            snaps = sf.snapshots() or snaps
+        else:
+            snaps = {k: np.stack(v, axis=1 if k != "t" else 0) for k, v in snaps.items()}
+        return stop - start_chunk, (records, snaps, final)
+
+    def _start(self, rows, pb, pb_s, drive, part, w, elapsed):
+        """Settle the new beds of the wave ``w`` (systems ``rows``, one batch) and start it;
+        writes its ``/settle`` rows and the settled checkpoint."""
+        model, sf, say = self.model, self.sf, self.say
+        configs = [self.configs[i] for i in rows]
+        built = [self.built[i] for i in rows]
         keys = [geometry_key(c) for c in configs]
-        beds = {} if beds is None else beds
+        beds = {} if self.beds is None else self.beds
         first = {k: i for i, k in reversed(list(enumerate(keys))) if k not in beds}
         order = sorted(first.values())  # one new bed per geometry, all settled in one batch
         if order:
-            if (note := native.compile_note(engine)):
+            if (note := native.compile_note(self.engine)):
                 say(note)
             settled = settle_many([configs[i] for i in order], model,
                                   [built[i][1] for i in order],
                                   progress=(f"settling {len(order)} bed(s) of {model.n} grains"
-                                            if progress and model.n else None))
+                                            if self.progress and model.n else None))
             beds.update({keys[i]: b for i, b in zip(order, settled)})
             say(f"settled {len(order)} bed(s) in one batch: heights "
                 + ", ".join(f"{b.height:.5g}" for b in settled) + " m")
@@ -223,92 +403,64 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
             v0.append(bed.v), w0.append(bed.w), q0.append(bed.q), z0.append(x), zd0.append(xd)
         batch = driver.start(model, pb, np.stack(r0), np.stack(v0), np.stack(w0), np.stack(q0),
                              np.stack(z0), np.stack(zd0), **drive).replace(params=pb_s)
-        start_arrays = driver.checkpoint(batch, P) if out else None  # a collective
-        if out and writer:
-            sf = SweepFile.create(out, config, axes, configs, dt, sched.duration, engine, R,
-                                  devices=len(jax.devices()), engine_reason=choice.reason)
-            sf.write_settle([beds[k] for k in keys], [c.numerics.settle_speed for c in configs])
-            sf.write_checkpoint(start_arrays, 0, 0.0)  # resumable from the settled start
-
-    wall0 = time.perf_counter()
-    mem: dict = {}
-    snaps: dict = {}
-
-    def keep(chunk, batch, recs):
-        if out:  # gathered by every process (a collective across hosts), written by one
-            arrays = driver.checkpoint(batch, P)
+        start_arrays = driver.checkpoint(batch, len(configs)) if self.out else None
         if sf is not None:
-            ensure_space(out, sum(np.asarray(v).nbytes for v in (*recs.values(), *arrays.values())))
-            sf.append_records(recs)
-            sf.write_checkpoint(arrays, chunk + 1, wall_before + time.perf_counter() - wall0)
-        if chunk >= sched.n_chunks - snapshots:
-            _keep_snapshot(sf, snaps, batch.states, P)
-        for k, v in recs.items():
-            mem.setdefault(k, []).append(v)
+            sf.write_settle([beds[k] for k in keys], [c.numerics.settle_speed for c in configs],
+                            rows=part, total=self.P)
+            sf.write_checkpoint(start_arrays, 0, elapsed(), wave=w)  # resumable from here
+        return batch
 
-    def diverged(e):
-        if sf is not None:  # the file keeps every finished chunk and its checkpoint
-            sf.set_status("diverged", str(e))
-            sf.close()
+    def _summaries(self, rows: range, records: dict, final) -> tuple[list[dict], dict]:
+        """Fixed-window summaries of the systems ``rows`` (their records, final host states)
+        and their units."""
+        out, units = [], {}
+        for j, i in enumerate(rows):
+            rec = {k: v[j] for k, v in records.items()}
+            s, units = steady_state_summary(self.configs[i], rec, driver.take(final, j),
+                                            self.t_windows[i], self.sched.duration)
+            out.append(s)
+        return out, units
 
-    def interrupted():
-        if sf is not None:  # every finished chunk and its checkpoint are in the file
-            sf.set_status("interrupted", "stopped by Ctrl-C; --resume continues from the "
-                          "last checkpoint")
-            sf.close()
-
-    stop = sched.n_chunks if max_chunks is None else min(sched.n_chunks, start_chunk + max_chunks)
-    try:
-        batch = driver.run_chunks(
-            batch, range(start_chunk, stop), sched.records_per_chunk, sched.record_every,
-            systems=P, on_chunk=keep, on_diverged=diverged, on_interrupt=interrupted,
-            total=sched.n_chunks, progress=f"sweep of {P} systems" if progress else None)
-    except OSError as err:  # the disk filled (or went away): keep what the file holds
+    def finish(self, grid, axes, R, results, wall) -> SweepResult:
+        """The summaries, steady-state estimates and result of a finished sweep."""
+        sf, configs = self.sf, self.configs
+        shape = grid_shape(axes)
+        if results and results[-1][2] is not None:  # one wave, in memory
+            records, snaps, final = results[-1]
+            summaries, units = self._summaries(range(self.P), records, final)
+        else:  # waves: per-system summaries from the file, records read on demand
+            summaries, units = sf.system_summaries()
+            records, snaps = StoredRecords(self.out), sf.snapshots()
+        per_rep = {k: np.array([s[k] for s in summaries]).reshape(shape + (R,))
+                   for k in summaries[0]}
+        summary = {k: v.mean(axis=-1) for k, v in per_rep.items()}
+        summary["wall_time"] = wall
+        estimates = []
+        for g in range(len(grid)):  # a grid point's replicates, read together
+            rows = range(g * R, (g + 1) * R)
+            rec = (sf.records(rows) if isinstance(records, StoredRecords)
+                   else {k: v[rows.start:rows.stop] for k, v in records.items()})
+            estimates.append(stats.steady([
+                stats.per_period({k: v[j] for k, v in rec.items()}, configs[i].frequency,
+                                 channels=stats.CHANNELS) for j, i in enumerate(rows)]))
+        steady = stats.to_arrays(estimates, shape)
         if sf is not None:
-            stop_file(sf, str(err))
-        raise
-    if stop < sched.n_chunks:
-        if sf is not None:
-            sf.set_status("partial")
+            sf.write_summary(summary, units, per_rep, steady, R, stats.unit)
+            sf.finish(wall)
             sf.close()
-        return None
-    wall = wall_before + time.perf_counter() - wall0  # over every session of a resumed sweep
-    if sf is not None:
-        records = sf.records()
-        snaps = sf.snapshots() or snaps
-    else:
-        records = {k: np.concatenate(v, axis=1) for k, v in mem.items()}
-        snaps = {k: np.stack(v, axis=1 if k != "t" else 0) for k, v in snaps.items()}
-    final = jax.tree_util.tree_map(lambda x: x[:P], driver.to_host(batch.states))
-    summaries, series = [], []
-    for i, c in enumerate(configs):
-        rec_i = {k: v[i] for k, v in records.items()}
-        s, units = steady_state_summary(c, rec_i, driver.take(final, i), t_windows[i], sched.duration)
-        summaries.append(s)
-        series.append(stats.per_period(rec_i, c.frequency, channels=stats.CHANNELS))
-    shape = grid_shape(axes)
-    per_rep = {k: np.array([s[k] for s in summaries]).reshape(shape + (R,)) for k in summaries[0]}
-    summary = {k: v.mean(axis=-1) for k, v in per_rep.items()}
-    summary["wall_time"] = wall
-    steady = stats.to_arrays(
-        [stats.steady(series[g * R:(g + 1) * R]) for g in range(len(grid))], shape)
-    if sf is not None:
-        sf.write_summary(summary, units, per_rep, steady, R, stats.unit)
-        sf.finish(wall)
-        sf.close()
-    return SweepResult(axes=axes, configs=grid, summary=summary, records=records, path=out,
-                       snapshots=snaps or None, replicates=R, replicate_summary=per_rep,
-                       steady=steady)
+        return SweepResult(axes=axes, configs=grid, summary=summary, records=records,
+                           path=self.out, snapshots=snaps or None, replicates=R,
+                           replicate_summary=per_rep, steady=steady)
 
 
-def _keep_snapshot(sf, mem: dict, states, P: int) -> None:
+def _keep_snapshot(sf, mem: dict, states, P: int, rows=None, total=None) -> None:
     """The batch's positions, velocities and box heights now: into the file's
-    ``/snapshots`` (resumable) or into ``mem``."""
+    ``/snapshots`` (resumable; ``rows`` of ``total`` systems for a wave) or into ``mem``."""
     host = driver.to_host({"t": states.t, "r": states.r, "v": states.v, "z_box": states.z})
     t = float(host.pop("t")[0])
     per_point = {k: x[:P] for k, x in host.items()}
     if sf is not None:
-        sf.append_snapshot(t, per_point)
+        sf.append_snapshot(t, per_point, rows=rows, total=total)
         return
     mem.setdefault("t", []).append(t)
     for k, x in per_point.items():
