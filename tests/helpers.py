@@ -174,3 +174,18 @@ STRUCTURE = {"structure.M": [[0.4, 0.0, 0.0], [0.0, 0.5, 0.0], [0.0, 0.0, 0.3]],
              "structure.K": [[4e4, -2e4, 0.0], [-2e4, 4e4, -2e4], [0.0, -2e4, 2e4]],
              "structure.C": [[6.0, -3.0, 0.0], [-3.0, 6.0, -3.0], [0.0, -3.0, 3.0]],
              "structure.attach": 1, "structure.force": 40.0, "structure.force_dof": 2}
+
+
+#: A short run of the thesis' optimal damper (30 grains, 0.08 s in 4 chunks): runner, CLI and
+#: engine-choice tests.
+SMALL_RUN = ["grains.0.count=30", "box.Lz=0.05", "numerics.duration=0.08", "numerics.chunk=0.02",
+             "numerics.settle_time=0.2", "numerics.record_dt=1e-3"]
+
+
+def small_config(*extra) -> Config:
+    """The thesis' optimal damper shortened to :data:`SMALL_RUN`, with ``extra`` overrides."""
+    from jaxdamp.cases import presets
+    from jaxdamp.config import apply_overrides
+
+    return apply_overrides(presets.get("sanchez2012-optimal"), SMALL_RUN + list(extra))
+

@@ -4,7 +4,7 @@ run and sweep files and kept by ``--resume``."""
 
 import h5py
 import pytest
-from test_runner import small_config
+from helpers import small_config
 
 from jaxdamp import cli
 from jaxdamp.engine import choice

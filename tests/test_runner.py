@@ -5,19 +5,15 @@ import json
 import h5py
 import numpy as np
 import pytest
+from helpers import SMALL_RUN, small_config
 
 from jaxdamp import cli
 from jaxdamp.cases import presets
-from jaxdamp.config import apply_overrides, from_json
+from jaxdamp.config import from_json
 from jaxdamp.physics.energy import RECORD_UNITS
 from jaxdamp.studies.runner import SimulationDiverged, run
 
-SMALL = ["grains.0.count=30", "box.Lz=0.05", "numerics.duration=0.08", "numerics.chunk=0.02",
-         "numerics.settle_time=0.2", "numerics.record_dt=1e-3"]
-
-
-def small_config(*extra):
-    return apply_overrides(presets.get("sanchez2012-optimal"), SMALL + list(extra))
+SMALL = SMALL_RUN
 
 
 @pytest.fixture(scope="module")
