@@ -419,3 +419,15 @@ def test_a_cold_native_kernel_is_announced_before_it_compiles(monkeypatch):
     assert "compiling the native kernel once" in native.compile_note("native")
     monkeypatch.setattr(native.os.path, "exists", lambda path: True)
     assert native.compile_note("native") is None
+
+
+def test_the_fused_kernel_is_announced_before_its_first_launch():
+    """numba-cuda compiles the fused kernel at its first launch in a process: the driver's one
+    note says so until a kernel of this process exists, and says nothing for the JAX engine."""
+    from jaxdamp.engine import driver, fused
+
+    assert driver.compile_note("jax") is None
+    fused._kernel.cache_clear()
+    assert "compiling the fused CUDA kernel" in driver.compile_note("fused")
+    fused._kernel(0, 0, 0)  # what the first launch creates
+    assert driver.compile_note("fused") is None

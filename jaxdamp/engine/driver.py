@@ -99,6 +99,21 @@ class Batch:
         return dataclasses.replace(self, **changes)
 
 
+def compile_note(engine: str) -> str | None:
+    """A one-line note when ``engine``'s kernel will be compiled before the first chunk (the
+    native kernel without its on-disk cache, the fused one at its first launch in a process),
+    else ``None``: printed before settling, so that a still progress bar is explained."""
+    if engine == "native":
+        from jaxdamp.engine import native
+
+        return native.compile_note(engine)
+    if engine == "fused":
+        from jaxdamp.engine import fused
+
+        return fused.compile_note()
+    return None
+
+
 def batched(tree):
     """Add a leading batch axis of size 1 to every leaf of a pytree."""
     return jax.tree_util.tree_map(lambda x: jnp.asarray(x)[None], tree)

@@ -137,6 +137,16 @@ def threads_per_block(n: int) -> int:
     return t if simulated() else max(t, WARP)
 
 
+def compile_note() -> str | None:
+    """A one-line note before this process first launches the fused kernel (numba-cuda
+    compiles it for the device at its first launch, once per process and kind of bed: mount,
+    contact law, container; there is no on-disk cache), else ``None``."""
+    if _kernel.cache_info().currsize:
+        return None
+    return ("compiling the fused CUDA kernel for this bed (once per process) — the first "
+            "progress bar starts after it")
+
+
 @functools.lru_cache(maxsize=16)
 def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
     """The kernel for the mount, contact law and container numbered ``mount``, ``law``,

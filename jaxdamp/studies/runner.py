@@ -22,7 +22,7 @@ from jaxdamp import interrupt
 from jaxdamp.analysis import stats
 from jaxdamp.analysis.response import analysis_start, steady_state_summary
 from jaxdamp.config import Config, ConfigError, is_stored
-from jaxdamp.engine import budget, driver, native
+from jaxdamp.engine import budget, driver
 from jaxdamp.engine.choice import choose, resolve_engine, stored_choice
 from jaxdamp.engine.driver import SimulationDiverged  # noqa: F401  (re-exported: runs raise it)
 from jaxdamp.engine.packing import SettledBed, settle
@@ -251,7 +251,7 @@ def run(
     else:
         engine = dict(engine=choice.engine, multiplier=config.numerics.capacity_multiplier)
         say(f"engine {choice.engine} ({choice.reason})")
-        if (note := native.compile_note(choice.engine)):
+        if (note := driver.compile_note(choice.engine)):
             say(note)
         t0 = time.perf_counter()
         bed = settle(config, model, params,

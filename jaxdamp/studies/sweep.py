@@ -36,7 +36,7 @@ from jaxdamp import interrupt
 from jaxdamp.analysis import stats
 from jaxdamp.analysis.response import analysis_start, steady_state_summary
 from jaxdamp.config import Config, ConfigError
-from jaxdamp.engine import budget, driver, native
+from jaxdamp.engine import budget, driver
 from jaxdamp.engine.choice import choose, stored_choice
 from jaxdamp.engine.packing import settle_many
 from jaxdamp.io.common import ensure_space, stop_file
@@ -376,7 +376,7 @@ class _Sweep:
         first = {k: i for i, k in reversed(list(enumerate(keys))) if k not in beds}
         order = sorted(first.values())  # one new bed per geometry, all settled in one batch
         if order:
-            if (note := native.compile_note(self.engine)):
+            if (note := driver.compile_note(self.engine)):
                 say(note)
             settled = settle_many([configs[i] for i in order], model,
                                   [built[i][1] for i in order],
