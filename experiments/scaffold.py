@@ -25,6 +25,7 @@ import time
 from dataclasses import dataclass
 
 import jaxdamp
+from jaxdamp.analysis.stats import mean_se, pm, standard_error  # noqa: F401 - the one "±"
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -60,17 +61,6 @@ def save_figure(fig, out: str, name: str = "figure.png", dpi: int = 120) -> str:
     fig.savefig(path, dpi=dpi)
     plt.close(fig)
     return path
-
-
-def mean_se(x, axis=-1):
-    """Mean and standard error ``s/√n`` over independent realisations along ``axis`` (NaN for
-    one realisation): the ``±`` of a summary."""
-    import numpy as np
-
-    x = np.asarray(x, float)
-    n = x.shape[axis]
-    m = x.mean(axis=axis)
-    return m, (x.std(axis=axis, ddof=1) / np.sqrt(n) if n > 1 else np.full(np.shape(m), np.nan))
 
 
 def write_summary(out: str, lines: list[str]) -> str:

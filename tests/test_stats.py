@@ -97,3 +97,25 @@ def test_replicated_sweep_has_independent_beds_and_a_detected_steady_state():
     assert int(a["n"]) == int(np.sum(a["stationary"]))
     assert float(rep.summary["amplitude"]) == pytest.approx(
         rep.replicate_summary["amplitude"].mean())
+
+
+def test_standard_error_and_the_one_formatter():
+    """``standard_error`` equals scipy's ``sem`` (ddof 1) along any axis and is NaN for one
+    realisation; ``pm`` writes value ± error with the stated digits, scaled, and leaves out an
+    error that is not finite."""
+    from scipy.stats import sem
+
+    from jaxdamp.analysis.stats import mean_se, pm, standard_error
+
+    x = np.random.default_rng(3).normal(size=(4, 7))
+    for axis in (0, 1, -1):
+        np.testing.assert_allclose(standard_error(x, axis), sem(x, axis=axis), rtol=1e-14)
+    assert np.isnan(standard_error([2.0]))
+    assert np.isnan(standard_error(x[:, :1], axis=1)).all()
+    m, e = mean_se(x, axis=0)
+    np.testing.assert_allclose(m, x.mean(axis=0), rtol=1e-14)
+    np.testing.assert_allclose(e, sem(x, axis=0), rtol=1e-14)
+    assert pm(0.123456, 0.0012, unit="m") == "0.12346 ± 0.0012 m"
+    assert pm(0.0314, 0.00201, ".3f", scale=100, unit="%") == "3.140 ± 0.2 %"
+    assert pm(2.5, float("nan"), unit="Hz") == "2.5 Hz"
+    assert pm(1.5, 0.25, 3, compact=True) == "1.5±0.25"

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from jaxdamp.analysis.stats import pm, standard_error
 from jaxdamp.config import Config
 
 if TYPE_CHECKING:
@@ -163,7 +164,7 @@ def fit_frf_replicates(f, Z, U, K, M0, C0, residuals: str = "relative") -> dict:
     R = Z.shape[1]
     reps = np.array([fit_frf(f, Z[:, r], U, K, M0, C0, residuals=residuals)[:2] for r in range(R)])
     Mm, Cm, dM, dC = fit_frf(f, Z.mean(axis=1), U, K, M0, C0, residuals=residuals)
-    se = reps.std(axis=0, ddof=1) / np.sqrt(R) if R >= 2 else np.full(2, np.nan)
+    se = standard_error(reps, axis=0) if R >= 2 else np.full(2, np.nan)
     return {"M_ef": float(reps[:, 0].mean()), "C_ef": float(reps[:, 1].mean()),
             "se_M": float(se[0]), "se_C": float(se[1]),
             "M_reps": reps[:, 0], "C_reps": reps[:, 1],
@@ -230,7 +231,7 @@ def fit_failure(fit: dict) -> str:
         if se > FIT_MAX_RELATIVE_SE * abs(value):
             ratio = se / abs(value)
             size = f"{100 * ratio:.0f} % of" if ratio < 10 else f"{ratio:.2g} times"
-            return (f"{key} = {value:.4g} ± {se:.2g} {FIT_UNITS[key]} ({what}): its standard "
+            return (f"{key} = {pm(value, se, 4, unit=FIT_UNITS[key])} ({what}): its standard "
                     f"error is {size} the value, above the limit of "
                     f"{100 * FIT_MAX_RELATIVE_SE:g} % — not determined by the data")
     return ""
@@ -241,7 +242,7 @@ def replicate_mean(values):
     them ``s/√R``; the error is ``None`` for ``R = 1``."""
     values = np.asarray(values, float)
     R = values.shape[-1]
-    se = values.std(axis=-1, ddof=1) / np.sqrt(R) if R >= 2 else None
+    se = standard_error(values) if R >= 2 else None
     return values.mean(axis=-1), se
 
 

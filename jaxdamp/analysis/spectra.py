@@ -33,11 +33,9 @@ Example::
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from jaxdamp.analysis.stats import mser
+from jaxdamp.analysis.stats import mser, standard_error
 
 
 def _segments(x, nperseg: int, window: str):
@@ -89,7 +87,7 @@ def h1(xs, ys, fs: float, nperseg: int, window: str = "boxcar") -> dict:
         coh = np.abs(gxy) ** 2 / (gxx * gyy)
         H_each = np.array([e[2] / e[0] for e in each])
     R = len(each)
-    mag_se = (np.std(np.abs(H_each), axis=0, ddof=1) / math.sqrt(R) if R > 1
+    mag_se = (standard_error(np.abs(H_each), axis=0) if R > 1
               else np.full(len(H), np.nan))
     return dict(f=np.fft.rfftfreq(nperseg, 1.0 / fs), H=H, coherence=coh, Gxx=gxx, Gyy=gyy,
                 H_each=H_each, mag_se=mag_se, segments=int(k.sum()))

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import textwrap
 
+from jaxdamp.analysis.stats import pm
 from jaxdamp.cli.common import (
     add_config_options,
     add_no_progress,
@@ -51,10 +52,9 @@ def cmd_decay(args) -> int:
             print("  fewer than two peaks: no cycle to analyse (longer --duration?)")
             continue
         for k in np.unique(np.linspace(0, len(c["Z"]) - 1, 6).round().astype(int))[::-1]:
-            se = (f" ± {100 * c['zeta_se'][k]:.2g}" if np.isfinite(c["zeta_se"][k]) else "")
-            fse = f" ± {c['f_se'][k]:.2g}" if np.isfinite(c["f_se"][k]) else ""
-            print(f"  Z = {1e3 * c['Z'][k]:8.3f} mm: ζ = {100 * c['zeta'][k]:.3f}{se} %, "
-                  f"f = {c['f'][k]:.4g}{fse} Hz ({int(c['n'][k])} bed(s))")
+            zeta = pm(c["zeta"][k], c["zeta_se"][k], ".3f", scale=100, unit="%")
+            print(f"  Z = {1e3 * c['Z'][k]:8.3f} mm: ζ = {zeta}, "
+                  f"f = {pm(c['f'][k], c['f_se'][k], 4, unit='Hz')} ({int(c['n'][k])} bed(s))")
     if png:
         title = (f"{cfg.name}: N = {cfg.n_grains}, free decay, mean of R = {R} bed(s)"
                  + (" ± 2 SE" if R > 1 else ""))

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import textwrap
 
+from jaxdamp.analysis.stats import pm
 from jaxdamp.cli.common import (
     add_config_options,
     add_no_progress,
@@ -129,7 +130,7 @@ def cmd_efficiency(args) -> int:
         print("  A_d [cm]  <E_d> mean ± std   fit     <E_d>/m [1/kg]  E_pp [J]  E_pw [J]  "
               "contacts  balance")
         for i, a in enumerate(r.amplitudes):
-            print(f"  {a * 100:7.3f}  {s['E_d_mean'][i]:.4f} ± {s['E_d_std'][i]:.4f}  "
+            print(f"  {a * 100:7.3f}  {pm(s['E_d_mean'][i], s['E_d_std'][i], '.4f', '.4f')}  "
                   f"{s['E_d_fit'][i]:.4f}  {s['E_d_mean_per_mass'][i]:12.4g}  "
                   f"{s['E_pp'][i]:8.4g}  {s['E_pw'][i]:8.4g}  {s['contacts_mean'][i]:8.3g}  "
                   f"{s['balance_error'][i]:.1e}")

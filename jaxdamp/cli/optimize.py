@@ -6,6 +6,7 @@ import argparse
 import math
 import textwrap
 
+from jaxdamp.analysis.stats import pm
 from jaxdamp.cli.common import (
     add_config_options,
     add_no_progress,
@@ -121,7 +122,7 @@ def cmd_optimize(args) -> int:
             x = res.design
             value = (f"{objective.kind} = {res.value:.5g} {unit}" if x == res.x else
                      f"(the average of the last iterates; {objective.kind} at the last = "
-                     f"{res.value:.5g} ± {res.history['objective_se'][-1]:.2g} {unit})")
+                     f"{pm(res.value, res.history['objective_se'][-1], unit=unit)})")
             print(f"optimum Lz = {prob.to_lz(x):.5g} m"
                   + (f" ({var} = {x:.5g} m)" if var != "Lz" else "") + f": {value}; "
                   f"converged after {status.iterations} iterations: {status.reason}")
@@ -317,9 +318,9 @@ def _cmd_design(args, cfg, objective, names) -> int:
     R = s["confirm"]
     conf = prob.evaluate(np.stack([design, x0]), R)  # fresh beds: no winner's curse
     conf.update(X=np.stack([design, x0]), labels=["found", "start"])
-    print(f"confirmed on {R} fresh beds (95 %): {objective.kind} = {conf['mean'][0]:.5g} ± "
-          f"{conf['ci95'][0]:.2g} {objective.unit}; at the start ({fmt(x0)}): "
-          f"{conf['mean'][1]:.5g} ± {conf['ci95'][1]:.2g}")
+    print(f"confirmed on {R} fresh beds (95 %): {objective.kind} = "
+          f"{pm(conf['mean'][0], conf['ci95'][0], unit=objective.unit)}; at the start "
+          f"({fmt(x0)}): {pm(conf['mean'][1], conf['ci95'][1])}")
     edge = [n for n, v, a, b in zip(names, space.to_u(design), space.lo, space.hi)
             if v < 0.02 or v > 0.98]
     if edge:

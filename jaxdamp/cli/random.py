@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import textwrap
 
+from jaxdamp.analysis.stats import mean_se, pm
 from jaxdamp.cli.common import (
     add_config_options,
     add_no_progress,
@@ -72,10 +73,9 @@ def cmd_random(args) -> int:
     for s, lev in zip(res.scales, res.levels):
         f, mag, coh = lev["f"], np.abs(lev["H"]), lev["coherence"]
         k = int(np.argmax(mag))
-        se = f" ± {lev['mag_se'][k]:.3g}" if np.isfinite(lev["mag_se"][k]) else ""
-        y_se = (f" ± {1e3 * lev['y_rms'].std(ddof=1) / np.sqrt(R):.2g}" if R > 1 else "")
+        y_rms = pm(*mean_se(lev["y_rms"]), 4, scale=1e3, unit="mm")
         print(f"scale {s:g}: base RMS acceleration {lev['a_rms']:.4g} m/s², RMS of z − u "
-              f"{1e3 * lev['y_rms'].mean():.4g}{y_se} mm; peak |H1| = {mag[k]:.4g}{se} at "
+              f"{y_rms}; peak |H1| = {pm(mag[k], lev['mag_se'][k], 4, 3)} at "
               f"{f[k]:g} Hz (coherence {coh[k]:.3f}); coherence over the band "
               f"{coh.min():.3f}–{coh.max():.3f}; {lev['segments']} period(s) averaged; "
               f"stationary start detected in {int(lev['stationary'].sum())} of {R}")

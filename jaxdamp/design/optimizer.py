@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import jax.numpy as jnp
 import numpy as np
 
+from jaxdamp.analysis.stats import pm
 from jaxdamp.config import ConfigError
 from jaxdamp.design.status import (
     CONVERGED,
@@ -151,14 +152,14 @@ def optimize(problem, x0: float, lr: float = 0.01, decay: float = 0.9, max_iter:
                                       sim_total)
             if bar is not None:
                 bar.update(1)
-                ci = (f"±{1.96 * best['value_se']:.2g}"
-                      if np.isfinite(best["value_se"]) and best["value_se"] > 0 else "")
+                ci = 1.96 * best["value_se"] if best["value_se"] > 0 else np.nan
                 bar.set_postfix({problem.variable: f"{x:.5f}",
-                                 "best": f"{best['value']:.4g}{ci} at {best['x']:.5f}",
-                                 "grad": f"{est.grad:.3g}±{est.grad_se:.2g}"})
+                                 "best": f"{pm(best['value'], ci, 4, compact=True)} at "
+                                         f"{best['x']:.5f}",
+                                 "grad": pm(est.grad, est.grad_se, 3, compact=True)})
             if echo:
-                echo(f"{k:3d} {problem.variable} = {x:.6f} m  objective = {est.value:.6g} "
-                     f"± {est.value_se:.2g}  gradient = {est.grad:.5g} ± {est.grad_se:.2g}")
+                echo(f"{k:3d} {problem.variable} = {x:.6f} m  objective = "
+                     f"{pm(est.value, est.value_se, 6)}  gradient = {pm(est.grad, est.grad_se)}")
             if converged:
                 break
             small_steps = small_steps + 1 if abs(step) < xtol else 0

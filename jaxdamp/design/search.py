@@ -23,12 +23,12 @@ round cap, a scan's quadratic without an interior optimum).
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from jaxdamp.analysis.stats import standard_error
 from jaxdamp.design.status import CONVERGED, FAILED, NOT_CONVERGED, Status, non_finite
 from jaxdamp.design.surface import Optimum, quadratic_optimum
 
@@ -88,7 +88,7 @@ class _Pool:
         x = np.asarray(self.x)
         J = np.asarray(self.J)
         R = J.shape[1]
-        se = J.std(axis=1, ddof=1) / math.sqrt(R) if R > 1 else np.zeros(len(x))
+        se = standard_error(J, axis=1) if R > 1 else np.zeros(len(x))
         return x, J.mean(axis=1), se, J
 
     def within(self, lo, hi):

@@ -35,12 +35,12 @@ Example::
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass
 
 import numpy as np
 
+from jaxdamp.analysis.stats import standard_error
 from jaxdamp.config import Config, ConfigError, apply_overrides, get_path
 from jaxdamp.physics.containers import container
 
@@ -306,7 +306,7 @@ class DesignProblem:
         rows = np.repeat(X, R, axis=0)
         m = self.measure(rows, self.seeds(len(rows)))
         J = m["J"].reshape(len(X), R)
-        se = J.std(axis=1, ddof=1) / math.sqrt(R) if R > 1 else np.full(len(X), np.nan)
+        se = standard_error(J, axis=1) if R > 1 else np.full(len(X), np.nan)
         half = t_quantile(0.975, R - 1) * se if R > 1 else se
         return {"mean": J.mean(axis=1), "se": se, "ci95": half, "J": J,
                 "stationary": m["stationary"].reshape(len(X), R), "sim_seconds": m["sim_seconds"]}

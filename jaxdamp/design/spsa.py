@@ -65,6 +65,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from jaxdamp.analysis.stats import pm, standard_error
 from jaxdamp.design.objectives import Estimate
 from jaxdamp.design.status import (
     CONVERGED,
@@ -95,7 +96,7 @@ def spsa_gradient(problem, u, pairs: int, c: float, rng) -> Estimate:
     g = ((plus - minus) / (2 * c))[:, None] * delta  # (n, d)
     v = 0.5 * (plus + minus)
     if n > 1:
-        g_se, v_se = g.std(axis=0, ddof=1) / math.sqrt(n), float(v.std(ddof=1) / math.sqrt(n))
+        g_se, v_se = standard_error(g, axis=0), float(standard_error(v))
     else:
         g_se, v_se = np.full(d, np.nan), math.nan
     return Estimate(float(v.mean()), v_se, g.mean(axis=0), g_se, m["sim_seconds"],
@@ -198,12 +199,12 @@ def spsa(problem, x0, pairs: int = 4, c: float = 0.08,
                         "iterate": k}
             if bar is not None:
                 bar.update(1)
-                bar.set_postfix_str(f"best {best['value']:.4g} ± {best['ci95']:.2g} at "
+                bar.set_postfix_str(f"best {pm(best['value'], best['ci95'], 4)} at "
                                     + ", ".join(f"{n}={v:.4g}" for n, v in zip(space.names,
                                                                                best["x"])))
             if echo:
                 echo(f"{k:3d} " + ", ".join(f"{n} = {v:.5g}" for n, v in zip(space.names, x))
-                     + f"  objective = {est.value:.5g} ± {est.value_se:.2g}")
+                     + f"  objective = {pm(est.value, est.value_se)}")
             converged = rule.check(u, est.grad, est.grad_se)
             upd, state = opt.update(jnp.asarray(sign * est.grad), state)
             u = space.project(u + np.asarray(upd), shrink=c)

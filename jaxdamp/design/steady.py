@@ -32,6 +32,7 @@ import time
 
 import numpy as np
 
+from jaxdamp.analysis.stats import standard_error
 from jaxdamp.config import Config, ConfigError, apply_overrides
 from jaxdamp.design.objectives import Estimate, Objective
 
@@ -132,7 +133,7 @@ class SteadyProblem:
         """``(mean (L,), se (L,), J (L, R))`` of the objective over ``lzs``."""
         m = self.measure(lzs)
         J = m["J"]
-        se = J.std(axis=1, ddof=1) / math.sqrt(self.R) if self.R > 1 else np.full(len(J), np.nan)
+        se = standard_error(J, axis=1) if self.R > 1 else np.full(len(J), np.nan)
         return J.mean(axis=1), se, J
 
     def evaluate(self, lz: float, state=None):
@@ -143,7 +144,7 @@ class SteadyProblem:
         v_r = 0.5 * (J[0] + J[1])
         g_r = (J[1] - J[0]) / (2 * self.h)
         R = self.R
-        se = (lambda x: float(x.std(ddof=1) / math.sqrt(R))) if R > 1 else (lambda x: math.nan)
+        se = (lambda x: float(standard_error(x))) if R > 1 else (lambda x: math.nan)
         return Estimate(float(v_r.mean()), se(v_r), float(g_r.mean()), se(g_r),
                         m["sim_seconds"], m["wall"],
                         extra={"minus": J[0], "plus": J[1],

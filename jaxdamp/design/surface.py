@@ -31,6 +31,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from jaxdamp.analysis.stats import standard_error
+
 
 @dataclass(frozen=True)
 class Optimum:
@@ -78,7 +80,7 @@ def quadratic_optimum(x, J, maximise: bool) -> Optimum:
     if L < 3:
         raise ValueError(f"a quadratic needs at least 3 design points, got {L}")
     mean = J.mean(axis=1)
-    se = J.std(axis=1, ddof=1) / np.sqrt(R) if R > 1 else np.ones(L)
+    se = standard_error(J, axis=1) if R > 1 else np.ones(L)
     w = 1.0 / np.maximum(se, 1e-9 * np.abs(mean).max() + 1e-300)
     x0, v0, interior = _fit(x, mean, w, maximise)
     if R < 2:

@@ -29,6 +29,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxdamp.analysis.stats import standard_error
 from jaxdamp.config import Config, ConfigError
 from jaxdamp.design.objectives import Estimate, Objective
 
@@ -296,8 +297,8 @@ class DEMProblem:
         raw = np.asarray(raw, float).reshape(F, K)
         draw = np.asarray(draw, float).reshape(F, K)
         m, dm = raw.mean(axis=1), draw.mean(axis=1)
-        sm = raw.std(axis=1, ddof=1) / math.sqrt(K) if K > 1 else np.full(F, np.nan)
-        sdm = draw.std(axis=1, ddof=1) / math.sqrt(K) if K > 1 else np.full(F, np.nan)
+        sm = standard_error(raw, axis=1) if K > 1 else np.full(F, np.nan)
+        sdm = standard_error(draw, axis=1) if K > 1 else np.full(F, np.nan)
         if self.objective.kind == "dissipation":
             return float(m[0]), float(sm[0]), float(dm[0]), float(sdm[0])
         Z = np.sqrt(2.0 * m)

@@ -14,6 +14,7 @@ import time
 import h5py
 import numpy as np
 
+from jaxdamp.analysis.stats import pm
 from jaxdamp.io.common import stamp
 
 #: Iterate fields of the gradient optimiser's log and their units.
@@ -163,5 +164,5 @@ def describe_lines(h, path: str) -> list[str]:
         c = h["confirmation"]
         labels = json.loads(c.attrs.get("labels", "[]"))
         for lab, x, m, ci in zip(labels, c["X"][()], c["mean"][()], c["ci95"][()]):
-            lines.append(f"  {lab}: {', '.join(f'{v:.5g}' for v in x)} -> {m:.5g} ± {ci:.2g}")
+            lines.append(f"  {lab}: {', '.join(f'{v:.5g}' for v in x)} -> {pm(m, ci)}")
     return lines
