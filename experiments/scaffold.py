@@ -25,7 +25,7 @@ import time
 from dataclasses import dataclass
 
 import jaxdamp
-from jaxdamp.analysis.stats import mean_se, pm, standard_error  # noqa: F401 - the one "±"
+from jaxdamp.analysis.uncertainty import mean_se, pm, standard_error  # noqa: F401 - the one "±"
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 

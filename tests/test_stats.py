@@ -105,7 +105,7 @@ def test_standard_error_and_the_one_formatter():
     error that is not finite."""
     from scipy.stats import sem
 
-    from jaxdamp.analysis.stats import mean_se, pm, standard_error
+    from jaxdamp.analysis.uncertainty import mean_se, pm, standard_error
 
     x = np.random.default_rng(3).normal(size=(4, 7))
     for axis in (0, 1, -1):

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from jaxdamp.analysis.stats import pm, standard_error
+from jaxdamp.analysis.uncertainty import pm, standard_error
 from jaxdamp.config import Config
 
 if TYPE_CHECKING:

@@ -35,7 +35,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from jaxdamp.analysis.stats import mser, standard_error
+from jaxdamp.analysis.stats import mser
+from jaxdamp.analysis.uncertainty import standard_error
 
 
 def _segments(x, nperseg: int, window: str):

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import textwrap
 
-from jaxdamp.analysis.stats import pm
+from jaxdamp.analysis.uncertainty import pm
 from jaxdamp.cli.common import (
     add_config_options,
     add_no_progress,

@@ -6,7 +6,7 @@ import argparse
 import math
 import textwrap
 
-from jaxdamp.analysis.stats import pm
+from jaxdamp.analysis.uncertainty import pm
 from jaxdamp.cli.common import (
     add_config_options,
     add_no_progress,

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import jax.numpy as jnp
 import numpy as np
 
-from jaxdamp.analysis.stats import pm
+from jaxdamp.analysis.uncertainty import pm
 from jaxdamp.config import ConfigError
 from jaxdamp.design.status import (
     CONVERGED,

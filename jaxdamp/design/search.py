@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from jaxdamp.analysis.stats import standard_error
+from jaxdamp.analysis.uncertainty import standard_error
 from jaxdamp.design.status import CONVERGED, FAILED, NOT_CONVERGED, Status, non_finite
 from jaxdamp.design.surface import Optimum, quadratic_optimum
 

@@ -40,7 +40,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from jaxdamp.analysis.stats import standard_error
+from jaxdamp.analysis.uncertainty import standard_error
 from jaxdamp.config import Config, ConfigError, apply_overrides, get_path
 from jaxdamp.physics.containers import container
 

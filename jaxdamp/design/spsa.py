@@ -65,7 +65,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from jaxdamp.analysis.stats import pm, standard_error
+from jaxdamp.analysis.uncertainty import pm, standard_error
 from jaxdamp.design.objectives import Estimate
 from jaxdamp.design.status import (
     CONVERGED,

@@ -32,7 +32,7 @@ import time
 
 import numpy as np
 
-from jaxdamp.analysis.stats import standard_error
+from jaxdamp.analysis.uncertainty import standard_error
 from jaxdamp.config import Config, ConfigError, apply_overrides
 from jaxdamp.design.objectives import Estimate, Objective
 

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from jaxdamp.analysis.stats import standard_error
+from jaxdamp.analysis.uncertainty import standard_error
 
 
 @dataclass(frozen=True)

@@ -29,7 +29,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxdamp.analysis.stats import standard_error
+from jaxdamp.analysis.uncertainty import standard_error
 from jaxdamp.config import Config, ConfigError
 from jaxdamp.design.objectives import Estimate, Objective
 

@@ -14,7 +14,7 @@ import time
 import h5py
 import numpy as np
 
-from jaxdamp.analysis.stats import pm
+from jaxdamp.analysis.uncertainty import pm
 from jaxdamp.io.common import stamp
 
 #: Iterate fields of the gradient optimiser's log and their units.
