@@ -251,7 +251,7 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
                  progress=progress, say=say, shard=shard, P=P, waves=len(waves))
     wall0 = time.perf_counter()
     budget_chunks = math.inf if max_chunks is None else max_chunks
-    results = []
+    last = None
     for w in range(start_wave, len(waves)):
         resumed = arrays if w == start_wave else None
         first_chunk = start_chunk if w == start_wave else 0
@@ -263,9 +263,9 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
                 sf.set_status("partial")
                 sf.close()
             return None
-        results.append(result)
+        last = result
     wall = wall_before + time.perf_counter() - wall0  # over every session of a resumed sweep
-    return ctx.finish(grid, axes, R, results, wall)
+    return ctx.finish(grid, axes, R, last, wall)
 
 
 @dataclasses.dataclass
@@ -421,12 +421,13 @@ class _Sweep:
             out.append(s)
         return out, units
 
-    def finish(self, grid, axes, R, results, wall) -> SweepResult:
-        """The summaries, steady-state estimates and result of a finished sweep."""
+    def finish(self, grid, axes, R, last, wall) -> SweepResult:
+        """The summaries, steady-state estimates and result of a finished sweep (``last``:
+        what :meth:`run_wave` returned for the last wave)."""
         sf, configs = self.sf, self.configs
         shape = grid_shape(axes)
-        if results and results[-1][2] is not None:  # one wave, in memory
-            records, snaps, final = results[-1]
+        if last[2] is not None:  # one wave, in memory
+            records, snaps, final = last
             summaries, units = self._summaries(range(self.P), records, final)
         else:  # waves: per-system summaries from the file, records read on demand
             summaries, units = sf.system_summaries()
