@@ -97,7 +97,7 @@ def verdicts(a, s3, s) -> dict:
         n_sig = sum(abs(d) > h for d, h in diffs)
         out["cases"].append(dict(
             gamma_n=gn, gamma_s=gs, peak=float(a["Z_peak"][c].mean() / U),
-            peak_se=float(a["Z_peak"][c].std(ddof=1) / math.sqrt(s["R"]) / U),
+            peak_se=float(scaffold.standard_error(a["Z_peak"][c]) / U),
             d_peak_rel=d_peak / float(a["Z_peak"][ref].mean()),
             d_peak_ci_rel=h_peak / float(a["Z_peak"][ref].mean()),
             peak_changed=bool(abs(d_peak) > h_peak) if c != ref else None,
@@ -105,7 +105,7 @@ def verdicts(a, s3, s) -> dict:
             max_rel_diff=float(max(abs(d) / a["Z"][ref, i].mean() for i, (d, _) in
                                    enumerate(diffs)))))
     zref = a["Z"][ref]
-    se = zref.std(axis=-1, ddof=1) / math.sqrt(s["R"])
+    se = scaffold.standard_error(zref)
     for m, d in s3.items():
         z = (d["Z"] - zref.mean(axis=-1)) / se
         out[f"s3_{m}"] = dict(z=[float(x) for x in z],
@@ -128,7 +128,7 @@ def compute(quick: bool, log, ctx):
     v = verdicts(a, s3, s)
     for row in v["cases"][1:]:
         log(f"(γn, γs) = ({row['gamma_n']:g}, {row['gamma_s']:g}): peak change "
-            f"{row['d_peak_rel']:+.1%} ± {row['d_peak_ci_rel']:.1%}; "
+            f"{scaffold.pm(row['d_peak_rel'], row['d_peak_ci_rel'], '+.1%', '.1%')}; "
             f"{row['freqs_differing']} of {len(s['freqs'])} frequencies differ at 95 %")
     result = dict(dem=a, s3=s3, verdicts=v, cfg=cfg, m_p=grain_mass(cfg),
                   wall=float(res.summary["wall_time"]) + sum(d["wall"] for d in s3.values()))
@@ -182,7 +182,7 @@ def _figure(out, r, s):
             lw=0.9, label="analytic, M + m_p")
     for c, ((gn, gs), mk) in enumerate(zip(s["cases"], "osd^")):
         Z = a["Z"][c] / p.U
-        a1.errorbar(f, Z.mean(-1), yerr=2 * Z.std(-1, ddof=1) / math.sqrt(R), fmt=mk, ms=6,
+        a1.errorbar(f, Z.mean(-1), yerr=2 * scaffold.standard_error(Z), fmt=mk, ms=6,
                     mfc="none", capsize=3, label=f"DEM γn = {gn:g}, γs = {gs:g}")
     a1.plot(f, r["s3"]["event"]["Z"] / p.U, "k-", lw=1.2, label="S3, e = 0 (event-driven)")
     a1.plot(f, r["s3"]["smooth"]["Z"] / p.U, "k:", lw=1.2, label="S3, e = 0 (smooth)")
@@ -200,7 +200,7 @@ def _figure(out, r, s):
         E = a["E"][c]
         a2.plot(f, coll, "^-", color=col, ms=4, lw=0.8, label=f"collision, ({gn:g}, {gs:g})")
         a2.plot(f, fric, "s--", color=col, ms=4, lw=0.8, label=f"friction, ({gn:g}, {gs:g})")
-        a2.errorbar(f, E.mean(-1), yerr=2 * E.std(-1, ddof=1) / math.sqrt(R), fmt="o-",
+        a2.errorbar(f, E.mean(-1), yerr=2 * scaffold.standard_error(E), fmt="o-",
                     color=col, ms=5, mfc="none", lw=1.2, capsize=2,
                     label=f"total, ({gn:g}, {gs:g})")
     a2.plot(f, r["s3"]["event"]["total"], "k-", lw=1.2, label="S3, e = 0")
@@ -235,7 +235,7 @@ def _summary(out, r, s, prov):
         "| --- " * (len(s["cases"]) + 5) + "|"]
     for i, fi in enumerate(f):
         zc = a["Z"][:, i] / U  # (case, replicate)
-        cells = [f"{z.mean():.2f} ± {z.std(ddof=1) / math.sqrt(R):.2f}" for z in zc]
+        cells = [scaffold.pm(*scaffold.mean_se(z), ".2f", ".2f") for z in zc]
         lines.append(f"| {fi:g} | " + " | ".join(cells)
                      + f" | {s3['event']['Z'][i] / U:.2f} | {s3['smooth']['Z'][i] / U:.2f} | "
                      f"{frf_amplitude(fi, p.M, p.K, p.C, U) / U:.2f} | "
@@ -248,10 +248,10 @@ def _summary(out, r, s, prov):
         coll = sum(a["split"][x][c, k].mean() for x in ("pp_normal", "pw_normal"))
         tot = sum(a["split"][x][c, k].mean() for x in SPLIT)
         change = ("reference" if c == 0 else
-                  f"{row['d_peak_rel']:+.1%} ± {row['d_peak_ci_rel']:.1%} — "
+                  f"{scaffold.pm(row['d_peak_rel'], row['d_peak_ci_rel'], '+.1%', '.1%')} — "
                   + ("**changed**" if row["peak_changed"] else "not significant"))
-        lines.append(f"| ({row['gamma_n']:g}, {row['gamma_s']:g}) | {row['peak']:.2f} ± "
-                     f"{row['peak_se']:.2f} | {change} | "
+        lines.append(f"| ({row['gamma_n']:g}, {row['gamma_s']:g}) | "
+                     f"{scaffold.pm(row['peak'], row['peak_se'], '.2f', '.2f')} | {change} | "
                      + ("–" if c == 0 else f"{row['freqs_differing']} of {len(f)}")
                      + f" | {f'{coll / tot:.0%}' if tot > 0 else '– (no loss)'} | "
                      f"{float(np.max(a['balance'][c])):.1e} |")
@@ -267,7 +267,7 @@ def _summary(out, r, s, prov):
               "| f [Hz] | " + " | ".join(f"({gn:g}, {gs:g}) [J]" for gn, gs in s["cases"])
               + " | S3 e = 0 [J] | S3 / reference |", "| --- " * (len(s["cases"]) + 3) + "|"]
     for i, fi in enumerate(f):
-        cells = [f"{e.mean():.3g} ± {e.std(ddof=1) / math.sqrt(R):.2g}" for e in a["E"][:, i]]
+        cells = [scaffold.pm(*scaffold.mean_se(e), 3) for e in a["E"][:, i]]
         ref = a["E"][0, i].mean()
         ratio = s3["event"]["total"][i] / ref if ref > 0 else math.nan
         lines.append(f"| {fi:g} | " + " | ".join(cells)
