@@ -174,7 +174,7 @@ def write(r, out, prov):
     for i, U in enumerate(r["U"]):
         zm = r["Z"][i].mean(axis=-1) * 1e3
         ym = 100 * r["zeta_sine"][i].mean(axis=-1)
-        ye = 200 * r["zeta_sine"][i].std(axis=-1, ddof=1) / np.sqrt(r["Z"].shape[-1])
+        ye = 200 * scaffold.standard_error(r["zeta_sine"][i])
         ax.errorbar(zm, ym, yerr=ye, fmt="o", ms=4, capsize=2,
                     label=f"stepped sine, U = {U * 1e3:g} mm ({', '.join(f'{x:g}' for x in r['f'])} Hz)")
     ax.set_xscale("log")
@@ -225,13 +225,12 @@ def write(r, out, prov):
                 agree += v == "agree"
             dec_txt = diff_txt = "–"
             if np.isfinite(zd).sum() >= 2:
-                dec_txt = (f"{100 * np.nanmean(zd):.3f} ± "
-                           f"{100 * np.nanstd(zd, ddof=1) / np.sqrt(np.isfinite(zd).sum()):.2g}")
-                diff_txt = f"{100 * cm['diff'][i, j]:+.3f} ± {100 * cm['half'][i, j]:.2g}"
+                dec_txt = scaffold.pm(*scaffold.mean_se(zd[np.isfinite(zd)]), ".3f", scale=100)
+                diff_txt = scaffold.pm(cm["diff"][i, j], cm["half"][i, j], "+.3f", scale=100)
             cells += [dec_txt, diff_txt, v]
-        L.append(f"| {U * 1e3:g} | {r['f'][j]:g} | {1e3 * Zm[j]:.2f} ± "
-                 f"{1e3 * r['Z'][i, j].std(ddof=1) / np.sqrt(len(r['Z'][i, j])):.2g} | "
-                 f"{100 * zs.mean():.3f} ± {100 * zs.std(ddof=1) / np.sqrt(len(zs)):.2g} | "
+        z_amp = scaffold.pm(Zm[j], scaffold.standard_error(r["Z"][i, j]), ".2f", scale=1e3)
+        L.append(f"| {U * 1e3:g} | {r['f'][j]:g} | {z_amp} | "
+                 f"{scaffold.pm(*scaffold.mean_se(zs), '.3f', scale=100)} | "
                  + " | ".join(cells) + " |")
     counts = {}
     for name, cm in r["cmp"].items():

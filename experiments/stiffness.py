@@ -122,7 +122,7 @@ def write(rows, s, k15, out, prov):
     R = s["R"]
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
     for scale, r in rows.items():
-        se = lambda x: 2 * x.std(-1, ddof=1) / math.sqrt(R)  # noqa: E731
+        se = lambda x: 2 * scaffold.standard_error(x)  # noqa: E731
         a1.errorbar(s["freqs"], r["Z"].mean(-1) / U, yerr=se(r["Z"]) / U, fmt="o-", capsize=3,
                     label=f"E = {r['E']:.3g} Pa (dt = {r['dt']:.2g} s)")
         a2.errorbar(s["freqs"], r["loss"].mean(-1), yerr=se(r["loss"]), fmt="o-", capsize=3,
@@ -141,7 +141,8 @@ def write(rows, s, k15, out, prov):
     def verdict(r, name):
         if r[f"{name}_changed"] is None:
             return "reference"
-        return (f"{100 * r[f'd_{name}']:+.1f} ± {100 * r[f'd_{name}_ci']:.1f} % — "
+        return (scaffold.pm(r[f"d_{name}"], r[f"d_{name}_ci"], "+.1f", ".1f", scale=100,
+                            unit="%") + " — "
                 + ("**changed**" if r[f"{name}_changed"] else "not significant"))
 
     lines = ["# Stiffness sensitivity at the optimal box, with replicates", "",
@@ -170,9 +171,9 @@ def write(rows, s, k15, out, prov):
         zp = r["Z_peak"] / U
         lines.append(
             f"| {r['E']:.3g} | {r['t_c']:.3g} | {r['dt']:.3g} | "
-            f"{', '.join(f'{z / U:.2f}' for z in r['Z'].mean(-1))} | {zp.mean():.3f} ± "
-            f"{zp.std(ddof=1) / math.sqrt(R):.3f} | {verdict(r, 'peak')} | "
-            f"{r['loss15'].mean():.3f} ± {r['loss15'].std(ddof=1) / math.sqrt(R):.3f} | "
+            f"{', '.join(f'{z / U:.2f}' for z in r['Z'].mean(-1))} | "
+            f"{scaffold.pm(*scaffold.mean_se(zp), '.3f', '.3f')} | {verdict(r, 'peak')} | "
+            f"{scaffold.pm(*scaffold.mean_se(r['loss15']), '.3f', '.3f')} | "
             f"{verdict(r, 'loss')} | {r['stationary']} of {r['runs']} | "
             f"{float(np.max(r['balance'])):.1e} | {r['wall']:.0f} |")
     scaffold.write_summary(out, lines)
