@@ -101,7 +101,7 @@ def _t_interval(x) -> tuple[float, float, float]:
     x = x[np.isfinite(x)]
     if len(x) < 2:
         return (float(x.mean()) if len(x) else math.nan), math.nan, math.nan
-    se = float(x.std(ddof=1) / math.sqrt(len(x)))
+    se = float(scaffold.standard_error(x))
     return float(x.mean()), se, t_quantile(0.975, len(x) - 1) * se
 
 
@@ -207,9 +207,11 @@ def compute(quick: bool, log, ctx):
             heights = np.asarray(h["settle/bed_height"][()])[:s["R"]]
         results[C] = dict(res=res, cfg=cfg, bed_heights=heights, **a)
         o = a["optimum"][f"max_C_ef_{THESIS_WEIGHTING}"]
-        log(f"C = {C}: optimum (largest C_ef, {THESIS_WEIGHTING} fit) {o['mean']:.4f} ± "
-            f"{o['ci95']:.4f} m; smallest peak {a['optimum']['min_peak']['mean']:.4f} ± "
-            f"{a['optimum']['min_peak']['ci95']:.4f} m; {a['stationary']}/{a['runs']} runs "
+        mp = a["optimum"]["min_peak"]
+        log(f"C = {C}: optimum (largest C_ef, {THESIS_WEIGHTING} fit) "
+            f"{scaffold.pm(o['mean'], o['ci95'], '.4f', '.4f', unit='m')}; smallest peak "
+            f"{scaffold.pm(mp['mean'], mp['ci95'], '.4f', '.4f', unit='m')}; "
+            f"{a['stationary']}/{a['runs']} runs "
             "stationary")
     return results, lambda path, prov: write(results, s, path, prov)
 
@@ -282,7 +284,7 @@ def _figures(out, results, s):
                     [(fw[j]["M_ef"], fw[j]["C_ef"]) for j in cols],
                     title=f"sanchez2012-optimal, C = {C0} N s/m, mean of R = {s['R']} beds ± 2 SE; "
                     f"dotted: {THESIS_WEIGHTING}-residual 1-DOF fits (thesis fig. 3.6)",
-                    Z_se=Zr.std(axis=-1, ddof=1) / math.sqrt(s["R"])),
+                    Z_se=scaffold.standard_error(Zr)),
          os.path.join(out, "fig3_6.png"))
 
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(7.5, 7.5), sharex=True)
@@ -368,7 +370,7 @@ def _figure_3_9(out, results, s):
     M_f = np.array([r["cfg"].primary.M + fo["m_add"][i, lz.index(L)] for L, i in rows])
     a1 = fig.add_subplot(gs[1, : max(len(show), 4) // 2])
     a2 = fig.add_subplot(gs[1, max(len(show), 4) // 2:])
-    se = lambda x: 2 * x.std(-1, ddof=1) / math.sqrt(R)  # noqa: E731
+    se = lambda x: 2 * scaffold.standard_error(x)  # noqa: E731
     a1.errorbar(lz, ph.mean(-1), yerr=se(ph), fmt="o-", capsize=3)
     a1.axhline(0, color="0.6", lw=0.6)
     a1.axhline(-90, color="0.6", lw=0.6, ls=":")
@@ -394,7 +396,8 @@ def _figure_3_9(out, results, s):
 def _fmt_opt(o) -> str:
     verdict = ("cannot judge (fewer than 2 finite vertices)" if o["contains_thesis"] is None
                else "contains" if o["contains_thesis"] else "excludes")
-    return (f"{o['mean']:.4f} ± {o['se']:.4f} m (95 %: ± {o['ci95']:.4f}; replicates' vertices "
+    return (f"{scaffold.pm(o['mean'], o['se'], '.4f', '.4f', unit='m')} (95 %: ± {o['ci95']:.4f}; "
+            "replicates' vertices "
             f"{', '.join(f'{x:.4f}' for x in o['vertices'])}; best grid heights "
             f"{', '.join(f'{x:g}' for x in o['grid_best'])}) — {verdict} the thesis' 0.1225 m")
 
@@ -413,8 +416,7 @@ def _summary(out, results, s, prov):
         f"heights × **R = {R} independently poured beds** (seeds 0…{R - 1}), {s['duration']} s "
         f"simulated per run after settling (thesis: 13.12 s). Settled bed heights: "
         + ", ".join(f"{x:.6f}" for x in r0["bed_heights"])
-        + f" m (mean {np.mean(r0['bed_heights']):.6f} ± "
-        f"{np.std(r0['bed_heights'], ddof=1) / np.sqrt(len(r0['bed_heights'])):.6f} m, SE; "
+        + f" m (mean {scaffold.pm(*scaffold.mean_se(r0['bed_heights']), '.6f', '.6f')} m, SE; "
         "thesis ≈ 0.039 m).", "",
         "**Stationarity.** The amplitude of a run is its mean over the steady state detected by "
         "MSER on the per-period amplitude and dissipation, not a fixed window. "
@@ -440,11 +442,12 @@ def _summary(out, results, s, prov):
             fp = _t_interval(r["f_peak"][j])
             zp = _t_interval(r["Z_peak"][j] / p0.U)
             lines.append(
-                f"| {L} | {fa[j]['M_ef']:.3f} ± {fa[j]['se_M']:.3f} | "
-                f"{fa[j]['C_ef'] / C:.2f} ± {fa[j]['se_C'] / C:.2f} | "
-                f"{fr[j]['M_ef']:.3f} ± {fr[j]['se_M']:.3f} | "
-                f"{fr[j]['C_ef'] / C:.2f} ± {fr[j]['se_C'] / C:.2f} | "
-                f"{fp[0]:.2f} ± {fp[1]:.2f} | {zp[0]:.2f} ± {zp[1]:.2f} | "
+                f"| {L} | {scaffold.pm(fa[j]['M_ef'], fa[j]['se_M'], '.3f', '.3f')} | "
+                f"{scaffold.pm(fa[j]['C_ef'] / C, fa[j]['se_C'] / C, '.2f', '.2f')} | "
+                f"{scaffold.pm(fr[j]['M_ef'], fr[j]['se_M'], '.3f', '.3f')} | "
+                f"{scaffold.pm(fr[j]['C_ef'] / C, fr[j]['se_C'] / C, '.2f', '.2f')} | "
+                f"{scaffold.pm(fp[0], fp[1], '.2f', '.2f')} | "
+                f"{scaffold.pm(zp[0], zp[1], '.2f', '.2f')} | "
                 f"{int(r['stationary_by_lz'][j])} of {len(s['freqs']) * R} |")
         o = r["optimum"]
         lines += ["", "± = standard error over the replicates.", "",
@@ -486,10 +489,11 @@ def _summary(out, results, s, prov):
             ph = _t_interval(np.degrees(fo["phase"][i, j]))
             mf = _t_interval(p.M + fo["m_add"][i, j])
             cf = _t_interval(p.C + fo["c_add"][i, j])
-            lines.append(f"| {L} | {fq[i]:g} | {ph[0]:.0f} ± {ph[1]:.0f} | {mf[0]:.3f} ± "
-                         f"{mf[1]:.3f} | {fa[j]['M_ef']:.3f} ± {fa[j]['se_M']:.3f} | "
-                         f"{cf[0]:.1f} ± {cf[1]:.1f} | {fa[j]['C_ef']:.1f} ± "
-                         f"{fa[j]['se_C']:.1f} |")
+            lines.append(f"| {L} | {fq[i]:g} | {scaffold.pm(ph[0], ph[1], '.0f', '.0f')} | "
+                         f"{scaffold.pm(mf[0], mf[1], '.3f', '.3f')} | "
+                         f"{scaffold.pm(fa[j]['M_ef'], fa[j]['se_M'], '.3f', '.3f')} | "
+                         f"{scaffold.pm(cf[0], cf[1], '.1f', '.1f')} | "
+                         f"{scaffold.pm(fa[j]['C_ef'], fa[j]['se_C'], '.1f', '.1f')} |")
         if r["widen"]:
             lines += ["", f"**Widened range.** Refitting on {F_NARROW[0]:g}–{F_NARROW[1]:g} Hz "
                       "only "
