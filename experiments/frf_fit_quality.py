@@ -24,7 +24,6 @@ resolved — a limit stated in the summary. Writes ``data.h5``, ``figure.png``, 
 from __future__ import annotations
 
 import json
-import math
 import os
 
 import h5py
@@ -99,7 +98,7 @@ def _figure(r, out):
     import matplotlib.pyplot as plt
 
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.4))
-    se2 = lambda x: 2 * x.std(-1, ddof=1) / math.sqrt(r["R"])  # noqa: E731
+    se2 = lambda x: 2 * scaffold.standard_error(x)  # noqa: E731
     for w, ls in zip(RESIDUALS, ("-", "--")):
         a1.errorbar(r["lz"], r["mis"][w].mean(-1), yerr=se2(r["mis"][w]), fmt="o", ls=ls,
                     capsize=3, label=f"{w} residuals")
@@ -124,7 +123,7 @@ def _figure(r, out):
 
 def _summary(r, out, prov):
     R = r["R"]
-    fmt = lambda x: f"{x.mean():.3g} ± {x.std(ddof=1) / math.sqrt(len(x)):.2g}"  # noqa: E731
+    fmt = lambda x: scaffold.pm(*scaffold.mean_se(x), 3)  # noqa: E731
     L = ["# How well the 1-DOF FRF describes the damper at each height (thesis §3.2.1, fig. 3.5)",
          "", scaffold.provenance_line(prov), "",
          f"Data: `experiments/gap_scan/data.h5` (gap scan at commit {r['source']['git']}: "
@@ -141,7 +140,7 @@ def _summary(r, out, prov):
           "misfits; positive: the intermediate height fits worse):", ""]
     for w in RESIDUALS:
         L.append(f"- {w}: " + "; ".join(
-            f"{c['mid']:g} − {c['ext']:g} m: {c['diff']:+.3g} ± {c['ci95']:.2g}"
+            f"{c['mid']:g} − {c['ext']:g} m: {scaffold.pm(c['diff'], c['ci95'], '+.3g')}"
             + (" (significant)" if np.isfinite(c["ci95"]) and abs(c["diff"]) > c["ci95"]
                else "") for c in r["comp"][w]) + ".")
     L += ["", f"Limit: {len(r['f'])} frequencies over {r['f'].min():g}–{r['f'].max():g} Hz; a "

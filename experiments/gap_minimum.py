@@ -127,7 +127,7 @@ def write(r, out, prov):
     for b in range(R):
         ax.plot(1e3 * lz, 1e3 * Z[:, b], "o-", ms=3, lw=0.8, alpha=0.6, label=f"bed {b}")
     m = Z.mean(axis=1)
-    e = Z.std(axis=1, ddof=1) / np.sqrt(R) if R > 1 else np.zeros(len(lz))
+    e = scaffold.standard_error(Z, axis=1) if R > 1 else np.zeros(len(lz))
     ax.errorbar(1e3 * lz, 1e3 * m, yerr=2e3 * e, fmt="ks-", ms=4, capsize=2,
                 label=f"mean of {R} beds ± 2 SE")
     for name, style in (("local", "C3"), ("quadratic", "C2")):
@@ -157,8 +157,7 @@ def write(r, out, prov):
          "| Lz [m] | Z [mm] (mean ± SE over beds) | Z per bed [mm] | stationary |",
          "|---|---|---|---|"]
     for i, x in enumerate(lz):
-        se = Z[i].std(ddof=1) / np.sqrt(R) if R > 1 else np.nan
-        L.append(f"| {x:g} | {1e3 * Z[i].mean():.3f} ± {1e3 * se:.2g} | "
+        L.append(f"| {x:g} | {scaffold.pm(*scaffold.mean_se(Z[i]), '.3f', scale=1e3)} | "
                  + ", ".join(f"{1e3 * z:.2f}" for z in Z[i])
                  + f" | {int(r['stationary'][i].sum())}/{R} |")
     L += ["", "Minimum of Z over Lz per bed, mean ± SE over beds and Student-t 95 % interval:",
@@ -169,7 +168,7 @@ def write(r, out, prov):
                                       + ", ".join(f"{x:g}" for x in r["fit_lz"]) + " m")):
         iv = r[name]
         L.append(f"| {label} | " + ", ".join(f"{x:.4g}" for x in iv["values"])
-                 + f" | {iv['mean']:.4g} ± {iv['se']:.2g} | [{iv['lo']:.4g}, {iv['hi']:.4g}] "
+                 + f" | {scaffold.pm(iv['mean'], iv['se'], 4)} | [{iv['lo']:.4g}, {iv['hi']:.4g}] "
                  f"| {verdict(iv)} |")
     found = [r[k]["contains_thesis"] for k in ("local", "quadratic")
              if r[k]["contains_thesis"] is not None]
@@ -189,7 +188,7 @@ def write(r, out, prov):
         k, j = int(np.argmin(Z.mean(axis=1))), list(lz).index(THESIS_LZ)
         d, h = welch(Z[j], Z[k])
         L += ["", f"How much it matters: Z at 0.1225 m exceeds Z at the smallest sampled mean "
-              f"({lz[k]:g} m) by {1e3 * d:.3f} ± {1e3 * h:.2g} mm (Welch 95 %), "
+              f"({lz[k]:g} m) by {scaffold.pm(d, h, '.3f', scale=1e3, unit='mm')} (Welch 95 %), "
               f"{100 * d / Z[k].mean():.2f} % of Z: the minimum is shallow."]
     L += ["", "Figure: `figure.png`. Data: `data.h5`."]
     scaffold.write_summary(out, L)

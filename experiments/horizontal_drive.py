@@ -104,7 +104,7 @@ def write(r, out, prov):
     ax = fig.subplots()
     fine = np.linspace(f.min(), f.max(), 300)
     for name, d in r["runs"].items():
-        m, e = d["Z"].mean(axis=1), d["Z"].std(axis=1, ddof=1) / np.sqrt(d["Z"].shape[1])
+        m, e = scaffold.mean_se(d["Z"], axis=1)
         bar = ax.errorbar(f, 1e3 * m, yerr=2e3 * np.nan_to_num(e), fmt="o", ms=4, capsize=2,
                           label=f"{name} drive (mean of {d['Z'].shape[1]} beds ± 2 SE)")
         ax.plot(fine, 1e3 * frf_amplitude(fine, d["fit"]["M_ef"], r["K"], d["fit"]["C_ef"],
@@ -155,8 +155,9 @@ def write(r, out, prov):
         d, hw = r["cmp"][key]
         verdict = ("no interval" if not np.isfinite(hw) else "same" if abs(d) <= hw
                    else "horizontal higher" if d > 0 else "horizontal lower")
-        L.append(f"| {label} | {k * mv:.4g} ± {k * ev:.2g} | {k * mh:.4g} ± {k * eh:.2g} | "
-                 f"{k * d:+.3g} ± {k * hw:.2g} | {verdict} |")
+        L.append(f"| {label} | {scaffold.pm(mv, ev, 4, scale=k)} | "
+                 f"{scaffold.pm(mh, eh, 4, scale=k)} | {scaffold.pm(d, hw, '+.3g', scale=k)} | "
+                 f"{verdict} |")
     L += ["", f"Grains as dead mass: M + m_p = {r['M'] + r['m_p']:.4g} kg, C = {r['C']} N s/m.",
           "", "## Amplitude per frequency (mean ± SE over beds) [mm]", "",
           "| f [Hz] | vertical | horizontal |", "|---|---|---|"]
@@ -164,7 +165,7 @@ def write(r, out, prov):
         cells = []
         for name in ("vertical", "horizontal"):
             m, e = scaffold.mean_se(runs[name]["Z"][j])
-            cells.append(f"{1e3 * m:.4g} ± {1e3 * e:.2g}")
+            cells.append(scaffold.pm(m, e, 4, scale=1e3))
         L.append(f"| {x:g} | " + " | ".join(cells) + " |")
     L += ["", "Figure: `figure.png`. Data: `data.h5`."]
     scaffold.write_summary(out, L)
