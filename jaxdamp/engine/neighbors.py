@@ -249,14 +249,14 @@ def update(model: Model, nbrs: Neighbors, positions, radius=None) -> Neighbors:
     b = positions.shape[0]
     cap = capacity(nbrs)
     positions = jax.lax.stop_gradient(positions)
-    radius = _radius_array(model, positions, radius)
+    radii = lambda: _radius_array(model, positions, radius)  # noqa: E731 - in a rebuild only
     moved2 = jnp.sum((positions - nbrs.reference) ** 2, axis=-1)
     need = jnp.any(moved2 > (0.5 * model.skin) ** 2, axis=-1)  # (B,)
     count = jnp.sum(need)
     sizes = rebuild_groups(b)
 
     def rebuild_all(nb):
-        fresh = _build_traced(model, cap, positions, radius)
+        fresh = _build_traced(model, cap, positions, radii())
         keep = lambda new, old: jnp.where(  # noqa: E731
             need.reshape(need.shape + (1,) * (old.ndim - 1)), new, old)
         return Neighbors(keep(fresh.idx, nb.idx), keep(fresh.reference, nb.reference),
@@ -266,7 +266,7 @@ def update(model: Model, nbrs: Neighbors, positions, radius=None) -> Neighbors:
         def rebuild(nb):
             sel = jnp.nonzero(need, size=size, fill_value=b)[0]  # those that need it, then b
             take = jnp.minimum(sel, b - 1)
-            fresh = _build_traced(model, cap, positions[take], radius[take])
+            fresh = _build_traced(model, cap, positions[take], radii()[take])
             return Neighbors(nb.idx.at[sel].set(fresh.idx, mode="drop"),
                              nb.reference.at[sel].set(fresh.reference, mode="drop"),
                              nb.overflow.at[sel].set(nb.overflow[take] | fresh.overflow,
