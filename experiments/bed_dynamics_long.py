@@ -45,7 +45,6 @@ from collections import Counter
 
 import h5py
 import numpy as np
-import scaffold
 
 from jaxdamp.analysis import dynamics as dyn
 from jaxdamp.analysis import stats
@@ -53,6 +52,11 @@ from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.studies.grid import replicate_configs
 from jaxdamp.studies.twin import twin_sweep
+
+try:
+    from . import scaffold
+except ImportError:  # run as a file: python experiments/<name>.py
+    import scaffold
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 F_FULL = (10.0, 10.5, 11.0, 13.0, 14.5, 21.0)

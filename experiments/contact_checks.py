@@ -31,11 +31,15 @@ import os
 
 import h5py
 import numpy as np
-import scaffold
 
 from jaxdamp.cases import presets
 from jaxdamp.config import Box, Config, Drive, Numerics, Species
 from jaxdamp.physics.model import CH
+
+try:
+    from . import scaffold
+except ImportError:  # run as a file: python experiments/<name>.py
+    import scaffold
 
 V0 = 0.1  # [m/s]
 R = 3e-3  # [m]

@@ -34,7 +34,6 @@ import os
 
 import h5py
 import numpy as np
-import scaffold
 
 from jaxdamp.analysis.decay import on_amplitudes
 from jaxdamp.analysis.stats import welch
@@ -43,6 +42,11 @@ from jaxdamp.config import apply_overrides
 from jaxdamp.studies import decay
 from jaxdamp.studies.grid import steady_or_window
 from jaxdamp.studies.sweep import reuse_or_run
+
+try:
+    from . import scaffold
+except ImportError:  # run as a file: python experiments/<name>.py
+    import scaffold
 
 
 def settings(quick: bool) -> dict:

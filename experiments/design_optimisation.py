@@ -34,13 +34,17 @@ import time
 
 import h5py
 import numpy as np
-import scaffold
 
 from jaxdamp.analysis.stats import t_quantile
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.design import Objective, SteadyProblem, adaptive_scan, optimize, trust_region
 from jaxdamp.design.surrogate import propose
+
+try:
+    from . import scaffold
+except ImportError:  # run as a file: python experiments/<name>.py
+    import scaffold
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 THESIS_LZ = 0.1225

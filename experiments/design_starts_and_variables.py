@@ -31,7 +31,6 @@ import time
 
 import h5py
 import numpy as np
-import scaffold
 
 from jaxdamp.analysis.stats import t_quantile
 from jaxdamp.cases import presets
@@ -40,6 +39,11 @@ from jaxdamp.design import Objective, SteadyProblem, adaptive_scan, trust_region
 from jaxdamp.design.space import DesignProblem
 from jaxdamp.design.spsa import random_search, spsa
 from jaxdamp.design.surrogate import descend
+
+try:
+    from . import scaffold
+except ImportError:  # run as a file: python experiments/<name>.py
+    import scaffold
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCAN_FILE = os.path.join(HERE, "design_optimisation", "data.h5")

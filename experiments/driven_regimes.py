@@ -34,12 +34,16 @@ import os
 
 import h5py
 import numpy as np
-import scaffold
 
 from jaxdamp.analysis.response import first_harmonic
 from jaxdamp.analysis.stats import t_quantile, welch
 from jaxdamp.cases import presets
 from jaxdamp.studies import efficiency as ef
+
+try:
+    from . import scaffold
+except ImportError:  # run as a file: python experiments/<name>.py
+    import scaffold
 
 A_OPT_OURS = 0.02567  # [m], reference system, binary_mixtures (3 beds)
 A_OPT_PAPER = 0.028

@@ -28,11 +28,15 @@ import os
 
 import h5py
 import numpy as np
-import scaffold
 
 from jaxdamp.analysis.response import RESIDUALS, frf_amplitude
 from jaxdamp.analysis.stats import welch
 from jaxdamp.config import from_json
+
+try:
+    from . import scaffold
+except ImportError:  # run as a file: python experiments/<name>.py
+    import scaffold
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 DATA = os.path.join(HERE, "gap_scan", "data.h5")

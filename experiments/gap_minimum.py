@@ -30,7 +30,6 @@ import os
 
 import h5py
 import numpy as np
-import scaffold
 
 from jaxdamp.analysis.response import parabolic_extremum
 from jaxdamp.analysis.stats import across
@@ -39,6 +38,11 @@ from jaxdamp.config import apply_overrides
 from jaxdamp.physics.model import primary_frequency
 from jaxdamp.studies.grid import steady_or_window
 from jaxdamp.studies.sweep import reuse_or_run
+
+try:
+    from . import scaffold
+except ImportError:  # run as a file: python experiments/<name>.py
+    import scaffold
 
 THESIS_LZ = 0.1225
 

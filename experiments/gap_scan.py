@@ -41,7 +41,6 @@ import os
 
 import h5py
 import numpy as np
-import scaffold
 
 from jaxdamp.analysis.response import (
     RESIDUALS,
@@ -57,6 +56,11 @@ from jaxdamp.config import apply_overrides
 from jaxdamp.physics.model import grain_mass
 from jaxdamp.studies.grid import steady_or_window
 from jaxdamp.studies.sweep import reuse_or_run
+
+try:
+    from . import scaffold
+except ImportError:  # run as a file: python experiments/<name>.py
+    import scaffold
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 #: Box heights [m] of the thesis' scan (SPEC §5), its 0.117 and 0.282 m included.

@@ -55,7 +55,6 @@ import os
 
 import h5py
 import numpy as np
-import scaffold
 
 from jaxdamp.analysis import dynamics as dyn
 from jaxdamp.analysis.response import (
@@ -70,6 +69,11 @@ from jaxdamp.config import apply_overrides
 from jaxdamp.physics.model import grain_mass
 from jaxdamp.studies.grid import steady_or_window
 from jaxdamp.studies.sweep import reuse_or_run
+
+try:
+    from . import scaffold
+except ImportError:  # run as a file: python experiments/<name>.py
+    import scaffold
 
 NS = (250, 500, 1000)
 #: The thesis' heights [m] (SPEC §5) but 0.15 and 0.33 m, left out to afford three beds per

@@ -24,7 +24,6 @@ import os
 
 import h5py
 import numpy as np
-import scaffold
 
 from jaxdamp.analysis.response import fit_frf_replicates, frf_amplitude, parabolic_extremum
 from jaxdamp.analysis.stats import welch
@@ -33,6 +32,11 @@ from jaxdamp.config import apply_overrides
 from jaxdamp.physics.model import grain_mass
 from jaxdamp.studies.grid import steady_or_window
 from jaxdamp.studies.sweep import reuse_or_run
+
+try:
+    from . import scaffold
+except ImportError:  # run as a file: python experiments/<name>.py
+    import scaffold
 
 DIRECTIONS = {"vertical": (0.0, 0.0, 1.0), "horizontal": (1.0, 0.0, 0.0)}
 

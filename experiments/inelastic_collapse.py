@@ -22,9 +22,13 @@ import os
 
 import h5py
 import numpy as np
-import scaffold
 
 from jaxdamp.s3.collapse import E_CRITICAL, collapse_sequence, critical_restitution, cycle_ratio
+
+try:
+    from . import scaffold
+except ImportError:  # run as a file: python experiments/<name>.py
+    import scaffold
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 RESTITUTIONS = (0.01, 0.05, 0.1, 0.15, 0.17, 0.18, 0.3)

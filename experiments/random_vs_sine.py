@@ -31,7 +31,6 @@ import os
 
 import h5py
 import numpy as np
-import scaffold
 
 from jaxdamp.analysis.stats import welch
 from jaxdamp.cases import presets
@@ -39,6 +38,11 @@ from jaxdamp.config import apply_overrides
 from jaxdamp.studies import random as rnd
 from jaxdamp.studies.grid import steady_or_window
 from jaxdamp.studies.sweep import reuse_or_run
+
+try:
+    from . import scaffold
+except ImportError:  # run as a file: python experiments/<name>.py
+    import scaffold
 
 #: amplitudes may differ by this fraction for a random level and a sine amplitude to be compared
 MATCH = 0.25

@@ -1,17 +1,20 @@
-"""What the experiment scripts share: the command line, the provenance, the summary's first line.
+"""What the studies share: the command line, provenance, the results file, figures, tables.
 
-An experiment is a script, ``python experiments/<name>.py [--quick] [--out DIR]
-[--no-progress]``, that computes, judges and writes ``data.h5``, ``figure.png`` and
-``summary.md`` into ``DIR`` (default ``experiments/<name>/``). The scripts import this module
-from their own folder (``tests/helpers.load_experiment`` puts the folder on the path)::
-
-    import scaffold
+A study is a module of the ``experiments`` package, run as ``python experiments/<name>.py
+[--quick] [--out DIR] [--no-progress]`` (or ``python -m experiments.<name>``), that computes,
+judges and writes ``data.h5``, figures and ``summary.md`` into ``DIR`` (default
+``experiments/<name>/``)::
 
     def main(argv=None):
         def compute(quick, log, ctx):         # ctx: Context (out folder, progress)
-            result = ...                      # the experiment's numbers and verdicts
+            result = ...                      # the study's numbers and verdicts
             return result, lambda path, prov: write(result, path, prov)
         return scaffold.main(__doc__, "my_experiment", argv, compute)
+
+``write`` uses :func:`data_file` (``data.h5`` with the provenance), :func:`subplots` and
+:func:`save_figure` (the figures' style of :mod:`jaxdamp.figures`), :func:`table` and
+:func:`write_summary`; every "mean ± SE" is :func:`pm` of :func:`mean_se` or of an
+:class:`~jaxdamp.analysis.stats.Estimate` (:func:`across`).
 """
 
 from __future__ import annotations
@@ -21,10 +24,12 @@ import json
 import os
 import platform
 import subprocess
+import sys
 import time
 from dataclasses import dataclass
 
 import jaxdamp
+from jaxdamp.analysis.stats import across  # noqa: F401 - the one estimate over replicates
 from jaxdamp.analysis.uncertainty import mean_se, pm, standard_error  # noqa: F401 - the one "±"
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -39,9 +44,11 @@ def git_revision() -> str:
         return "unknown"
 
 
-def provenance(name: str, quick: bool, elapsed: float) -> dict:
-    """``command``, ``jaxdamp_version``, ``git``, ``machine`` and ``elapsed_s`` of a run."""
-    return {"command": f"python experiments/{name}.py" + (" --quick" if quick else ""),
+def provenance(name: str, quick: bool, elapsed: float, flags: str = "") -> dict:
+    """``command``, ``jaxdamp_version``, ``git``, ``machine`` and ``elapsed_s`` of a run
+    (``flags``: the study's own options as given, after ``--quick``)."""
+    return {"command": f"python experiments/{name}.py" + (" --quick" if quick else "")
+            + (f" {flags}" if flags else ""),
             "jaxdamp_version": jaxdamp.__version__, "git": git_revision(),
             "machine": f"{platform.machine()}, {os.cpu_count()} cores, Python "
                        f"{platform.python_version()}", "elapsed_s": elapsed}
@@ -52,15 +59,38 @@ def stamp(h5, prov: dict) -> None:
     h5.attrs.update({k: json.dumps(x) if not isinstance(x, str) else x for k, x in prov.items()})
 
 
-def save_figure(fig, out: str, name: str = "figure.png", dpi: int = 120) -> str:
-    """Lay out, write ``out/name`` and close a matplotlib figure; returns the path."""
-    import matplotlib.pyplot as plt
+def data_file(out: str, prov: dict, name: str = "data.h5", **attrs):
+    """``out/name`` opened for writing (an ``h5py.File``, to use in ``with``), its root
+    attributes the provenance and ``attrs`` (JSON for non-strings: settings, verdicts)."""
+    import h5py
 
-    path = os.path.join(out, name)
+    h5 = h5py.File(os.path.join(out, name), "w")
+    stamp(h5, dict(prov, **attrs))
+    return h5
+
+
+def subplots(nrows: int = 1, ncols: int = 1, figsize=(7.0, 4.5), **kwargs):
+    """``(fig, axes)`` of a new figure in the figures' style (:func:`jaxdamp.figures.figure`:
+    no pyplot, the package's resolution); ``axes`` as ``Figure.subplots`` returns them."""
+    from jaxdamp.figures import figure
+
+    fig = figure(figsize)
+    return fig, fig.subplots(nrows, ncols, **kwargs)
+
+
+def save_figure(fig, out: str, name: str = "figure.png", dpi: int = 120) -> str:
+    """Lay out and write ``out/name`` (:func:`jaxdamp.figures.save`); returns the path."""
+    from jaxdamp.figures import save
+
     fig.tight_layout()
-    fig.savefig(path, dpi=dpi)
-    plt.close(fig)
-    return path
+    return save(fig, os.path.join(out, name), dpi=dpi)
+
+
+def table(header, rows) -> list[str]:
+    """A markdown table's lines: ``header`` (cells) and ``rows`` (each a list of cells, any
+    value ``str``-ed)."""
+    line = lambda cells: "| " + " | ".join(str(c) for c in cells) + " |"  # noqa: E731
+    return [line(header), "|" + "---|" * len(header)] + [line(r) for r in rows]
 
 
 def write_summary(out: str, lines: list[str]) -> str:
@@ -86,10 +116,12 @@ def provenance_line(prov: dict, sweep_wall: float | None = None) -> str:
 @dataclass(frozen=True)
 class Context:
     """What ``compute`` may need besides ``quick``: the output folder ``out`` (for raw,
-    resumable files under ``out/raw``) and whether to show progress bars."""
+    resumable files under ``out/raw``), whether to show progress bars and ``args``, the
+    parsed command line (a study's own options: ``main(..., options=)``)."""
 
     out: str
     progress: bool
+    args: argparse.Namespace | None = None
 
     def raw(self, name: str) -> str:
         """``out/raw/name``, the folder created: files kept for resuming, not committed."""
@@ -97,19 +129,37 @@ class Context:
         return os.path.join(self.out, "raw", name)
 
 
-def main(doc: str, name: str, argv, compute):
-    """Parse ``--quick``, ``--out``, ``--no-progress``; ``compute(quick, log, ctx)``
-    (``ctx``: :class:`Context`) returns ``(result, writer)``; ``writer(out_dir, provenance)``
-    writes the files. Returns ``result``."""
+def _study_flags(argv: list[str]) -> str:
+    """The options of a command line that change the study: without ``--quick`` (written
+    first), ``--out DIR`` and ``--no-progress`` (where and how, not what)."""
+    out, skip = [], False
+    for a in argv:
+        if skip:
+            skip = False
+        elif a == "--out":
+            skip = True
+        elif a not in ("--quick", "--no-progress") and not a.startswith("--out="):
+            out.append(a)
+    return " ".join(out)
+
+
+def main(doc: str, name: str, argv, compute, options=None):
+    """Parse ``--quick``, ``--out``, ``--no-progress`` and, with ``options(parser)``, the
+    study's own options (in ``ctx.args``); ``compute(quick, log, ctx)`` (``ctx``:
+    :class:`Context`) returns ``(result, writer)``; ``writer(out_dir, provenance)`` writes
+    the files. Returns ``result``."""
     ap = argparse.ArgumentParser(description=doc,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="test-sized settings (minutes)")
     ap.add_argument("--out", default=os.path.join(HERE, name), help="output folder")
     ap.add_argument("--no-progress", action="store_true")
+    if options is not None:
+        options(ap)
+    argv = sys.argv[1:] if argv is None else list(argv)
     args = ap.parse_args(argv)
     log = (lambda m: print(m, flush=True)) if not args.no_progress else (lambda m: None)
     t0 = time.perf_counter()
-    result, writer = compute(args.quick, log, Context(args.out, not args.no_progress))
+    result, writer = compute(args.quick, log, Context(args.out, not args.no_progress, args))
     os.makedirs(args.out, exist_ok=True)
-    writer(args.out, provenance(name, args.quick, time.perf_counter() - t0))
+    writer(args.out, provenance(name, args.quick, time.perf_counter() - t0, _study_flags(argv)))
     return result

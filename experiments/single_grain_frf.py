@@ -34,7 +34,6 @@ import os
 
 import h5py
 import numpy as np
-import scaffold
 
 from jaxdamp.analysis.response import secondary_maxima
 from jaxdamp.cases import presets
@@ -42,6 +41,11 @@ from jaxdamp.config import apply_overrides
 from jaxdamp.s3 import impact
 from jaxdamp.studies.grid import steady_or_window
 from jaxdamp.studies.sweep import reuse_or_run
+
+try:
+    from . import scaffold
+except ImportError:  # run as a file: python experiments/<name>.py
+    import scaffold
 
 LZ = 0.11
 H_BED = 0.039  # the preset's bed height: gap = Lz − h_bed (sanchez2012-impact notes)

@@ -28,7 +28,6 @@ import os
 
 import h5py
 import numpy as np
-import scaffold
 
 from jaxdamp.analysis.response import resonance
 from jaxdamp.analysis.stats import welch
@@ -37,6 +36,11 @@ from jaxdamp.config import apply_overrides
 from jaxdamp.physics.model import collision_time_limit, grain_radii
 from jaxdamp.studies.grid import steady_or_window
 from jaxdamp.studies.sweep import reuse_or_run
+
+try:
+    from . import scaffold
+except ImportError:  # run as a file: python experiments/<name>.py
+    import scaffold
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCALES = (1.0, 0.01, 0.001)

@@ -35,13 +35,17 @@ import os
 
 import h5py
 import numpy as np
-import scaffold
 
 from jaxdamp.analysis.stats import welch
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.physics.structure import matrices
 from jaxdamp.studies import random as rnd
+
+try:
+    from . import scaffold
+except ImportError:  # run as a file: python experiments/<name>.py
+    import scaffold
 
 #: the chain and the damper: the preset (one definition)
 PRESET = "sanchez2012-chain"

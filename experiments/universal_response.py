@@ -31,7 +31,6 @@ import os
 
 import h5py
 import numpy as np
-import scaffold
 
 from jaxdamp.analysis.response import frf_amplitude, resonance
 from jaxdamp.analysis.stats import welch
@@ -40,6 +39,11 @@ from jaxdamp.config import apply_overrides
 from jaxdamp.physics.model import grain_mass
 from jaxdamp.studies.grid import Points, steady_or_window
 from jaxdamp.studies.sweep import reuse_or_run, sweep
+
+try:
+    from . import scaffold
+except ImportError:  # run as a file: python experiments/<name>.py
+    import scaffold
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 CASES = ((3660.0, 10980.0), (0.0, 10980.0), (3660.0, 0.0), (0.0, 0.0))

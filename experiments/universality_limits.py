@@ -34,7 +34,6 @@ import os
 
 import h5py
 import numpy as np
-import scaffold
 
 from jaxdamp.analysis.response import resonance
 from jaxdamp.analysis.stats import welch
@@ -42,6 +41,11 @@ from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.studies.grid import Points, steady_or_window
 from jaxdamp.studies.sweep import reuse_or_run
+
+try:
+    from . import scaffold
+except ImportError:  # run as a file: python experiments/<name>.py
+    import scaffold
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 GN, GS = 3660.0, 10980.0  # thesis values

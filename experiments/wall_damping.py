@@ -25,7 +25,6 @@ import time
 
 import h5py
 import numpy as np
-import scaffold
 
 from jaxdamp.analysis.stats import welch
 from jaxdamp.cases import presets
@@ -33,6 +32,11 @@ from jaxdamp.config import apply_overrides
 from jaxdamp.physics import restitution as rst
 from jaxdamp.physics.model import build, contact_law
 from jaxdamp.studies import efficiency as ef
+
+try:
+    from . import scaffold
+except ImportError:  # run as a file: python experiments/<name>.py
+    import scaffold
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 CONVENTIONS = ("mixed", "calibrated")

@@ -108,21 +108,12 @@ def trajectory(model, pb, st, nbrs, n_steps, every=1):
     return st, out
 
 
-EXPERIMENTS = __import__("pathlib").Path(__file__).parent.parent / "experiments"
-
-
 def load_experiment(name):
-    """The module ``experiments/<name>.py`` (experiments are scripts, not a package)."""
-    import importlib.util
-    import sys
+    """The study ``experiments/<name>.py``, imported as the module ``experiments.<name>``
+    (the repository root is on the tests' path: ``pythonpath`` in pyproject.toml)."""
+    import importlib
 
-    if str(EXPERIMENTS) not in sys.path:  # the scripts import experiments/scaffold.py
-        sys.path.insert(0, str(EXPERIMENTS))
-    spec = importlib.util.spec_from_file_location(name, EXPERIMENTS / f"{name}.py")
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = mod  # dataclasses look their module up
-    spec.loader.exec_module(mod)
-    return mod
+    return importlib.import_module(f"experiments.{name}")
 
 
 # -- a two-species bed that exercises every path of a kernel (tests/test_native.py, test_fused.py)
