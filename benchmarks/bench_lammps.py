@@ -13,7 +13,7 @@ Two beds, each brought into motion by jaxdamp and then handed to both codes in t
 * ``reference``: the 2023 paper's reference box (``varela2023-reference``: 300 frictionless
   grains, 8 cm cube, 3 cm at 70 Hz), after 10 periods.
 
-Same physics and time step: the contact mapping of ``experiments/lammps_crosscheck.py``
+Same physics and time step: the contact mapping of :mod:`jaxdamp.peers.lammps`
 (checked there and in ``tests/test_lammps_crosscheck.py``), friction by ``tangential
 linear_nohistory γ_s/g μ``; LAMMPS runs in the box frame (static walls, gravity plus the box's
 inertial force), which has the same contact work; same neighbour skin (0.3 R), checked every
@@ -40,7 +40,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import importlib.util
 import json
 import os
 import platform
@@ -53,22 +52,14 @@ import time
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-CROSSCHECK = os.path.join(HERE, "..", "experiments", "lammps_crosscheck.py")
+from jaxdamp.peers import lammps
 
+HERE = os.path.dirname(os.path.abspath(__file__))
 BEDS = {
     "thesis": dict(preset="sanchez2012-optimal", frequency=15.0, amplitude=0.03, warm=0.4),
     "reference": dict(preset="varela2023-reference", frequency=70.0, amplitude=0.03,
                       warm=10 / 70.0),
 }
-
-
-def crosscheck():
-    spec = importlib.util.spec_from_file_location("lammps_crosscheck", CROSSCHECK)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = mod
-    spec.loader.exec_module(mod)
-    return mod
 
 
 def busy_fraction(interval: float = 0.5) -> float:
@@ -157,35 +148,16 @@ def time_jaxdamp(model, params, st, batch: int, steps: int, every: int, engine="
 # ------------------------------------------------------------------------------- LAMMPS
 
 
-def lammps_input(lc, cfg, params, st, steps: int, workdir: str) -> str:
+def lammps_input(cfg, params, st, steps: int, workdir: str) -> str:
     """Input deck of the same bed, box frame, no output; returns its path."""
-    mp = lc.build_mapping(cfg)
+    mp = lammps.build_mapping(cfg)
     z_box, v_box = float(st.z), float(st.zd)
     r = np.asarray(st.r) - [0.0, 0.0, z_box]
     v = np.asarray(st.v) - [0.0, 0.0, v_box]
     data = os.path.join(workdir, "bed.data")
-    lc.write_data(data, r, v, mp, cfg.box, w=np.asarray(st.w))
-    box = cfg.box
-    omega = 2 * np.pi * cfg.frequency
-    t0 = float(st.t)
-    text = lc.HEADER + f"""
-read_data {data}
-pair_style granular
-{lc.pair_coeff(mp)}
-fix wx all wall/gran {lc.wall_args(mp)} xplane 0.0 {box.Lx!r}
-fix wy all wall/gran {lc.wall_args(mp)} yplane 0.0 {box.Ly!r}
-fix wz all wall/gran {lc.wall_args(mp)} zplane 0.0 {box.Lz!r}
-neighbor {0.3 * mp.R!r} bin
-neigh_modify delay 0 every 1 check yes
-timestep {float(params.dt)!r}
-variable Ad equal {cfg.drive.amplitude!r}
-variable w equal {omega!r}
-variable geff equal {cfg.gravity!r}-v_Ad*v_w^2*cos(v_w*(time+{t0!r}))
-fix grav all gravity v_geff vector 0 0 -1
-fix integ all nve/sphere
-thermo 0
-run {steps}
-"""
+    lammps.write_data(data, r, v, mp, cfg.box, w=np.asarray(st.w))
+    text = lammps.box_deck(mp, cfg, cfg.drive.amplitude, data, dt=float(params.dt),
+                           t0=float(st.t)) + f"thermo 0\nrun {steps}\n"
     path = os.path.join(workdir, "in.bench")
     with open(path, "w") as fh:
         fh.write(text)
@@ -240,15 +212,14 @@ def main(argv=None):
 
     import jaxdamp
 
-    lc = crosscheck()
-    version = lc.lammps_version()
+    version = lammps.version()
     print(f"jaxdamp {jaxdamp.__version__}, jax {jax.__version__}; {version}; "
           f"{platform.machine()}, {os.cpu_count()} cores")
     results = {}
     for name in args.beds:
         cfg, model, params, st = moving_bed(name)
         tmp = tempfile.mkdtemp(prefix=f"bench_{name}_")
-        path = lammps_input(lc, cfg, params, st, args.steps, tmp)
+        path = lammps_input(cfg, params, st, args.steps, tmp)
         rows: dict[str, list] = {}
         loads: list[float] = []
 

@@ -107,11 +107,10 @@ def run_job(args: list[str], workdir: str) -> tuple[float, int]:
 def lammps_rates(beds, steps: int, rounds: int, quiet) -> dict:
     """µs per system-step of LAMMPS on each bed: two processes' aggregate, one process, one bed
     on two MPI processes (medians over ``rounds``)."""
-    lc = bl.crosscheck()
     rates = {}
     for name in beds:
         cfg, model, params, st = bl.moving_bed(name)
-        path = bl.lammps_input(lc, cfg, params, st, steps, tempfile.mkdtemp(prefix="e2e_"))
+        path = bl.lammps_input(cfg, params, st, steps, tempfile.mkdtemp(prefix="e2e_"))
         got = {"x2": [], "one": [], "mpi2": []}
         for _ in range(rounds):
             quiet()
@@ -146,7 +145,7 @@ def main(argv=None):
 
     table = jobs(args.scale)
     chosen = {k: table[k] for k in args.jobs}
-    print(f"jaxdamp {jaxdamp.__version__}; {bl.crosscheck().lammps_version()}; "
+    print(f"jaxdamp {jaxdamp.__version__}; {bl.lammps.version()}; "
           f"{platform.machine()}, {os.cpu_count()} cores; scale {args.scale:g}", flush=True)
     rates = lammps_rates(sorted({v[2] for v in chosen.values()}), args.lammps_steps,
                          args.lammps_rounds, quiet)

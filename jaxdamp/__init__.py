@@ -25,6 +25,8 @@ the bottom layer up (a module imports only from its own layer or below):
   periodic orbits with exact steady-state derivatives.
 * :mod:`jaxdamp.design` — design objectives, problems, searches and optimisers with intervals.
 * :mod:`jaxdamp.figures` — every figure.
+* :mod:`jaxdamp.peers` — independent codes we check and time against (LAMMPS: the contact
+  mapping, its checks, input decks, runs).
 * :mod:`jaxdamp.cli` — the ``jaxdamp`` command line.
 """
 

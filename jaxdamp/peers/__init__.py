@@ -1,0 +1,1 @@
+"""Independent codes jaxdamp is checked and timed against: :mod:`jaxdamp.peers.lammps`."""
