@@ -1,12 +1,14 @@
 """Independent-DEM cross-check: the 2023 reference damper in LAMMPS and in jaxdamp.
 
-    python experiments/lammps_crosscheck.py            # full: A_d = 2, 3, 4 cm, 10 + 50 periods, 5 beds
-    python experiments/lammps_crosscheck.py --quick    # one amplitude (3 cm), 2 + 3 periods, 2 beds
+    python experiments/lammps_crosscheck.py          # full: A_d = 2, 3, 4 cm, 10 + 50 periods,
+                                                     # 5 beds
+    python experiments/lammps_crosscheck.py --quick  # one amplitude (3 cm), 2 + 3 periods, 2 beds
 
 System: preset ``varela2023-reference`` (S2: cube of 8 cm driven as ``z = A_d cos(2π f t)``,
 f = 70 Hz, 300 frictionless steel spheres, R = 2.5 mm, E = 2e9 Pa, ν = 0.3, ε = 0.75 at 1 m/s).
 Both codes start from the same settled bed (jaxdamp's ``packing.settle``, run inside
-``jaxdamp.studies.runner.run``) and use the same time step (``params.dt`` of the run's configuration).
+``jaxdamp.studies.runner.run``) and use the same time step (``params.dt`` of the run's
+configuration).
 
 **Replicates**: ``--replicates R`` independently poured beds per amplitude (seeds
 ``jaxdamp.analysis.stats.replicate_seed(preset seed, k)``); each bed is handed to both codes,
@@ -49,20 +51,21 @@ snapshots in ``--out/raw`` (git-ignored).
 
 from __future__ import annotations
 
-import argparse
-import dataclasses
 import json
 import math
 import os
-import platform
-import re
-import shutil
-import subprocess
 import time
 
 import numpy as np
 
+from jaxdamp.analysis.uncertainty import ar1_standard_error, lag1_autocorrelation
+from jaxdamp.io.common import put
 from jaxdamp.peers import lammps
+
+try:
+    from . import scaffold
+except ImportError:  # run as a file: python experiments/lammps_crosscheck.py
+    import scaffold
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 PRESET = "varela2023-reference"
@@ -176,7 +179,7 @@ def load_bed(path: str, key: dict):
     return jd, lm
 
 
-def run_bed(amplitude: float, seed: int, s: dict, raw: str, exe, progress: bool) -> dict:
+def run_bed(amplitude: float, seed: int, s: dict, raw: str, exe, progress: bool, log) -> dict:
     """One bed poured by jaxdamp with ``seed``, driven at ``amplitude`` in jaxdamp and, from
     the same settled state, in LAMMPS; reused from ``raw/beds`` when stored with the same
     settings."""
@@ -186,20 +189,20 @@ def run_bed(amplitude: float, seed: int, s: dict, raw: str, exe, progress: bool)
     got = load_bed(path, key)
     if got is not None:
         jd, lm = got
-        print(f"A_d = {amplitude * 100:g} cm, seed {seed}: reused {path}", flush=True)
+        log(f"A_d = {amplitude * 100:g} cm, seed {seed}: reused {path}")
         return dict(seed=seed, jd=jd, lm=lm, mp=lammps.build_mapping(jd["config"]), reused=True)
     # jaxdamp first: its settled bed is the initial state of both codes
-    print(f"A_d = {amplitude * 100:g} cm, seed {seed}: jaxdamp ...", flush=True)
+    log(f"A_d = {amplitude * 100:g} cm, seed {seed}: jaxdamp ...")
     jd = jaxdamp_case(amplitude, n_total, s["settle_time"], progress=progress, seed=seed)
     cfg = jd["config"]
     mp = lammps.build_mapping(cfg)
     assert abs(mp.dt - jd["dt"]) < 1e-15
-    print(f"  jaxdamp: dt = {jd['dt']:.6g} s, {jd['wall']:.1f} s stepping "
-          f"({jd['elapsed']:.1f} s with settling)", flush=True)
-    print(f"A_d = {amplitude * 100:g} cm, seed {seed}: LAMMPS ...", flush=True)
+    log(f"  jaxdamp: dt = {jd['dt']:.6g} s, {jd['wall']:.1f} s stepping "
+        f"({jd['elapsed']:.1f} s with settling)")
+    log(f"A_d = {amplitude * 100:g} cm, seed {seed}: LAMMPS ...")
     lm = lammps.driven_bed(mp, cfg, amplitude, jd["bed_r"], jd["bed_v"], n_total, raw, exe=exe,
-                    tag=f"_seed{seed}")
-    print(f"  LAMMPS: {lm['wall']:.1f} s", flush=True)
+                           tag=f"_seed{seed}")
+    log(f"  LAMMPS: {lm['wall']:.1f} s")
     save_bed(path, key, jd, lm)
     return dict(seed=seed, jd=jd, lm=lm, mp=mp, reused=False)
 
@@ -223,22 +226,17 @@ def phase_average(t, y, T, n_bins=50, t0=0.0):
     return (np.arange(n_bins) + 0.5) / n_bins, s / np.maximum(c, 1)
 
 
-def fmt(x, d=4):
-    return f"{x:.{d}g}"
-
-
-def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--out", default=os.path.join(HERE, "lammps_crosscheck"))
-    ap.add_argument("--no-progress", action="store_true")
+def options(ap) -> None:
     ap.add_argument("--replicates", type=int, default=None,
-                    help="independently poured beds per amplitude (default 3; quick: 2)")
+                    help="independently poured beds per amplitude (default 5; quick: 2)")
     ap.add_argument("--amplitudes", type=float, nargs="+", default=None,
                     help="drive amplitudes [m] (default 0.02 0.03 0.04; quick: 0.03)")
     ap.add_argument("--lmp", default=None, help="LAMMPS executable (default: lmp on PATH)")
-    args = ap.parse_args(argv)
-    s = settings(args.quick)
+
+
+def compute(quick: bool, log, ctx):
+    args = ctx.args
+    s = settings(quick)
     if args.replicates is not None:
         s["replicates"] = args.replicates
     if args.amplitudes is not None:
@@ -248,16 +246,13 @@ def main(argv=None):
     exe = args.lmp or lammps.executable()
     if exe is None:
         raise SystemExit("LAMMPS (`lmp`) is not on PATH: apt-get install lammps")
-    raw = os.path.join(args.out, "raw")
-    os.makedirs(raw, exist_ok=True)
-    t_start = time.perf_counter()
+    raw = ctx.raw("")
 
-    import jaxdamp
     from jaxdamp.analysis.stats import replicate_seed
     from jaxdamp.cases import presets
 
     version = lammps.version(exe)
-    print(f"LAMMPS: {version}")
+    log(f"LAMMPS: {version}")
     base = presets.get(PRESET)
     T = 1.0 / base.frequency
     omega = 2 * math.pi * base.frequency
@@ -269,24 +264,25 @@ def main(argv=None):
     checks = lammps.mapping_checks(mp0, os.path.join(raw, "checks"), exe)
     checks_wall = time.perf_counter() - t0
     for r in checks["pair"]:
-        print(f"pair v={r['v']:g}: e_LAMMPS={r['restitution']:.5f} e_ref={r['ref_restitution']:.5f}"
-              f" duration {r['duration']:.4g} vs {r['ref_duration']:.4g} s")
+        log(f"pair v={r['v']:g}: e_LAMMPS={r['restitution']:.5f} e_ref={r['ref_restitution']:.5f}"
+            f" duration {r['duration']:.4g} vs {r['ref_duration']:.4g} s")
     for r in checks["wall"]:
-        print(f"wall v={r['v']:g}: e_LAMMPS={r['restitution']:.5f} e_ref={r['ref_restitution']:.5f}")
+        log(f"wall v={r['v']:g}: e_LAMMPS={r['restitution']:.5f} "
+            f"e_ref={r['ref_restitution']:.5f}")
     for r in checks["static"] + [checks["static_uncompensated"]]:
-        print(f"static {r['wall']} ({'compensated' if r['compensated'] else 'E as is'}): "
-              f"overlap/Hertz = {r['ratio']:.5f}")
+        log(f"static {r['wall']} ({'compensated' if r['compensated'] else 'E as is'}): "
+            f"overlap/Hertz = {r['ratio']:.5f}")
 
     cases = {}
     for A in s["amplitudes"]:
         beds = []
         for seed in seeds:
-            b = run_bed(A, seed, s, raw, exe, progress=not args.no_progress)
+            b = run_bed(A, seed, s, raw, exe, ctx.progress, log)
             b["d_lammps_all"] = np.diff(b["lm"]["D"])
             b["d_jaxdamp_all"] = np.diff(b["jd"]["D"])
-            print(f"  dissipation per period after the transient: LAMMPS "
-                  f"{b['d_lammps_all'][s['transient']:].mean():.4g} J, jaxdamp "
-                  f"{b['d_jaxdamp_all'][s['transient']:].mean():.4g} J", flush=True)
+            log(f"  dissipation per period after the transient: LAMMPS "
+                f"{b['d_lammps_all'][s['transient']:].mean():.4g} J, jaxdamp "
+                f"{b['d_jaxdamp_all'][s['transient']:].mean():.4g} J")
             beds.append(b)
         mp = beds[0]["mp"]
         m_gran = mp.mass * beds[0]["jd"]["config"].grains[0].count
@@ -296,45 +292,32 @@ def main(argv=None):
     A_c = 0.03 if 0.03 in cases else s["amplitudes"][0]
     c = cases[A_c]["beds"][0]
     clo = lammps.driven_bed(c["mp"], c["jd"]["config"], A_c, c["jd"]["bed_r"], c["jd"]["bed_v"],
-                     s["closure_periods"], raw, damped=False, exe=exe, tag=f"_seed{c['seed']}")
+                            s["closure_periods"], raw, damped=False, exe=exe,
+                            tag=f"_seed{c['seed']}")
     dE = float(np.max(np.abs(clo["E"] - clo["E"][0])))
     closure = dict(amplitude=A_c, seed=c["seed"], periods=s["closure_periods"],
                    D=clo["D"].tolist(), W=clo["W"].tolist(), E=clo["E"].tolist(),
                    relative=float(np.max(np.abs(clo["D"])) / max(dE, 1e-300)))
-    print(f"closure (undamped, {s['closure_periods']} periods): max |W - ΔE| = "
-          f"{np.max(np.abs(clo['D'])):.3g} J, max |ΔE| = {np.max(np.abs(clo['E'] - clo['E'][0])):.3g} J")
-    elapsed = time.perf_counter() - t_start
-    command = "python experiments/lammps_crosscheck.py" + (" --quick" if args.quick else "")
-    if args.replicates is not None:
-        command += f" --replicates {args.replicates}"
-    if args.amplitudes is not None:
-        command += " --amplitudes " + " ".join(f"{a:g}" for a in args.amplitudes)
-    table = write_outputs(args.out, cases, checks, closure, s, version, command, elapsed,
-                          checks_wall, mp0, T, jaxdamp.__version__)
-    return dict(cases=cases, checks=checks, closure=closure, mapping=mp0, settings=s,
-                table=table)
+    log(f"closure (undamped, {s['closure_periods']} periods): max |W - ΔE| = "
+        f"{np.max(np.abs(clo['D'])):.3g} J, max |ΔE| = {dE:.3g} J")
+    amps = sorted(cases)
+    table = {A: analyse_amplitude(A, cases[A], s, T) for A in amps}
+    run = dict(cases=cases, checks=checks, closure=closure, mapping=mp0, settings=s,
+               table=table, version=version, checks_wall=checks_wall, T=T, seeds=seeds)
+    return run, lambda out, prov: write(run, out, prov)
 
 
-def lag1(d):
-    """Lag-1 autocorrelation of a series (nan if shorter than 3)."""
-    x = np.asarray(d) - np.mean(d)
-    return float(np.sum(x[1:] * x[:-1]) / np.sum(x * x)) if len(x) > 2 and np.any(x) else float("nan")
+def main(argv=None):
+    return scaffold.main(__doc__, "lammps_crosscheck", argv, compute, options=options)
 
 
-def stats(d):
-    """Mean, standard deviation and standard error of the mean of a per-period series.
-
-    The standard error allows for serial correlation: ``std/sqrt(N)`` is multiplied by
-    ``sqrt((1+ρ)/(1-ρ))`` with ρ the lag-1 autocorrelation when ρ > 0 (AR(1) model; with
-    ρ ≤ 0 the plain value is kept, which is then conservative).
-    """
-    d = np.asarray(d)
-    if len(d) < 2:
-        return float(d.mean()), float("nan"), float("nan")
-    sd = float(d.std(ddof=1))
-    rho = lag1(d)
-    inflate = math.sqrt((1 + rho) / (1 - rho)) if np.isfinite(rho) and 0 < rho < 1 else 1.0
-    return float(d.mean()), sd, sd / math.sqrt(len(d)) * inflate
+def within_run(d) -> tuple[float, float, float]:
+    """Mean, standard deviation and the within-run standard error (serial correlation
+    allowed for: :func:`jaxdamp.analysis.uncertainty.ar1_standard_error`) of a per-period
+    series."""
+    d = np.asarray(d, float)
+    sd = float(d.std(ddof=1)) if len(d) > 1 else math.nan
+    return float(d.mean()), sd, ar1_standard_error(d)
 
 
 KEY = "granular_loss_per_cycle"
@@ -355,8 +338,8 @@ def analyse_bed(b: dict, s: dict, T: float) -> dict:
     dets = [jstats.detect(x, min_discard=s["transient"], min_keep=keep) for x in series]
     start = int(w["start"])
     dl, dj = dl_all[start:], dj_all[start:]
-    ml, sl, el = stats(dl)
-    mj, sj, ej = stats(dj)
+    ml, sl, el = within_run(dl)
+    mj, sj, ej = within_run(dj)
     corr = float(np.corrcoef(dl, dj)[0, 1]) if len(dl) > 2 else float("nan")
     close = np.abs(dl - dj) <= 0.01 * np.abs(dj)
     first_apart = int(np.argmin(close)) if not close.all() else len(dl)
@@ -371,8 +354,9 @@ def analyse_bed(b: dict, s: dict, T: float) -> dict:
                 start_l=dets[0].period, start_j=dets[1].period,
                 stat_l=dets[0].stationary, stat_j=dets[1].stationary,
                 ml=ml, sl=sl, el=el, mj=mj, sj=sj, ej=ej, diff=ml - mj, comb=math.hypot(el, ej),
-                rel=(ml - mj) / mj, corr=corr, first_apart=first_apart, lag_l=lag1(dl),
-                lag_j=lag1(dj), zcm_diff=float(np.max(np.abs(zl - zj))),
+                rel=(ml - mj) / mj, corr=corr, first_apart=first_apart,
+                lag_l=lag1_autocorrelation(dl), lag_j=lag1_autocorrelation(dj),
+                zcm_diff=float(np.max(np.abs(zl - zj))),
                 zcm_span=float(zl.max() - zl.min()),
                 transient_l=float(b["lm"]["D"][n0]), transient_j=float(b["jd"]["D"][n0]),
                 el_max=float(np.max(b["lm"]["elastic"])), residual=b["jd"]["residual"],
@@ -413,30 +397,25 @@ def analyse_amplitude(A: float, c: dict, s: dict, T: float) -> dict:
                 rel=ed.mean / ej.mean, rel_hw=ed.ci95 / ej.mean)
 
 
-def write_outputs(out, cases, checks, closure, s, version, command, elapsed, checks_wall, mp0, T,
-                  jd_version):
-    import h5py
+def write(run: dict, out: str, prov: dict) -> None:
+    """``data.h5``, ``figure.png`` and ``summary.md`` of a finished :func:`compute`."""
+    _write_data(run, out, prov)
+    _figure(run, out)
+    _summary(run, out, prov)
 
+
+def _write_data(run: dict, out: str, prov: dict) -> None:
+    cases, table, s, seeds = run["cases"], run["table"], run["settings"], run["seeds"]
     amps = sorted(cases)
-    table = {A: analyse_amplitude(A, cases[A], s, T) for A in amps}
-    seeds = [b["seed"] for b in cases[amps[0]]["beds"]]
-
-    with h5py.File(os.path.join(out, "data.h5"), "w") as h:
-        h.attrs["command"] = command
-        h.attrs["lammps_version"] = version
-        h.attrs["jaxdamp_version"] = jd_version
-        h.attrs["preset"] = PRESET
-        h.attrs["transient_periods"] = s["transient"]
-        h.attrs["periods"] = s["periods"]
-        h.attrs["replicates"] = s["replicates"]
-        h.attrs["seeds"] = np.asarray(seeds)
-        h.attrs["elapsed"] = elapsed
-        h.attrs["mapping"] = json.dumps(mp0.as_dict())
-        h.attrs["checks"] = json.dumps(checks)
-        h.attrs["closure"] = json.dumps(closure)
-        h.attrs["paired"] = ("both codes start from the same bed: the difference is taken per "
-                             "bed, its interval is the Student-t 95 % one over the beds")
-        h.create_dataset("amplitude", data=np.asarray(amps)).attrs["units"] = "m"
+    J = "J per period"
+    with scaffold.data_file(
+            out, prov, lammps_version=run["version"], preset=PRESET,
+            mapping=run["mapping"].as_dict(), checks=run["checks"], closure=run["closure"],
+            paired="both codes start from the same bed: the difference is taken per bed, its "
+                   "interval is the Student-t 95 % one over the beds") as h:
+        h.attrs.update(transient_periods=s["transient"], periods=s["periods"],
+                       replicates=s["replicates"], seeds=np.asarray(seeds))
+        put(h, "amplitude", amps, "m")
         for A in amps:
             c, r = cases[A], table[A]
             g = h.create_group(f"A_{A * 100:g}cm")
@@ -450,12 +429,10 @@ def write_outputs(out, cases, checks, closure, s, version, command, elapsed, che
             bs = r["beds"]
             g.create_dataset("seed", data=np.asarray(seeds))
             g.create_dataset("stationary", data=np.asarray([x["stationary"] for x in bs]))
-            g.create_dataset("window_start", data=np.asarray([x["start"] for x in bs])
-                             ).attrs["units"] = "periods"
+            put(g, "window_start", [x["start"] for x in bs], "periods")
             for key, name in (("ml", "lammps/mean_per_bed"), ("mj", "jaxdamp/mean_per_bed"),
                               ("diff", "difference_per_bed")):
-                g.create_dataset(name, data=np.asarray([x[key] for x in bs])).attrs["units"] = \
-                    "J per period"
+                put(g, name, [x[key] for x in bs], J)
             for k, (b, x) in enumerate(zip(c["beds"], bs)):
                 gb = g.create_group(f"bed_{k}")
                 gb.attrs["config"] = b["jd"]["config"].to_json()
@@ -464,30 +441,28 @@ def write_outputs(out, cases, checks, closure, s, version, command, elapsed, che
                                 jaxdamp_wall_time=x["wall_j"], jaxdamp_elapsed=x["elapsed_j"],
                                 jaxdamp_balance_error=x["balance"], bed_settled=x["settled"])
                 for code, key in (("lammps", "d_lammps_all"), ("jaxdamp", "d_jaxdamp_all")):
-                    d = gb.create_dataset(f"{code}/dissipation_per_period", data=b[key])
-                    d.attrs["units"] = "J"
-                    d.attrs["note"] = "every period from t = 0; the window starts at window_start"
-                lm = b["lm"]
-                gb.create_dataset("lammps/cumulative_dissipation", data=lm["D"]).attrs["units"] = "J"
-                gb.create_dataset("lammps/input_work", data=lm["W"]).attrs["units"] = "J"
-                gb.create_dataset("lammps/mechanical_energy", data=lm["E"]).attrs["units"] = "J"
-                gb.create_dataset("lammps/elastic_energy", data=lm["elastic"]).attrs["units"] = "J"
-                gb.create_dataset("lammps/boundary_time", data=lm["t"]).attrs["units"] = "s"
+                    put(gb, f"{code}/dissipation_per_period", b[key], "J",
+                        note="every period from t = 0; the window starts at window_start")
+                lm, jd = b["lm"], b["jd"]
+                for name, data, unit in (
+                        ("lammps/cumulative_dissipation", lm["D"], "J"),
+                        ("lammps/input_work", lm["W"], "J"),
+                        ("lammps/mechanical_energy", lm["E"], "J"),
+                        ("lammps/elastic_energy", lm["elastic"], "J"),
+                        ("lammps/boundary_time", lm["t"], "s"),
+                        ("jaxdamp/cumulative_dissipation", jd["D"], "J"),
+                        ("jaxdamp/boundary_time", jd["t"], "s")):
+                    put(gb, name, data, unit)
                 if k == 0:  # the figure's bed (the others' thermo series stay in raw/beds)
                     gb.create_dataset("lammps/thermo", data=lm["thermo"], compression="gzip",
                                       shuffle=True).attrs["columns"] = \
                         "step time z_cm vz_cm W (box frame)"
-                gb.create_dataset("jaxdamp/cumulative_dissipation", data=b["jd"]["D"]
-                                  ).attrs["units"] = "J"
-                gb.create_dataset("jaxdamp/boundary_time", data=b["jd"]["t"]).attrs["units"] = "s"
 
-    # figure
-    import matplotlib
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axs = plt.subplots(2, 3, figsize=(17, 9))
+def _figure(run: dict, out: str) -> None:
+    cases, table, T, seeds = run["cases"], run["table"], run["T"], run["seeds"]
+    amps = sorted(cases)
+    fig, axs = scaffold.subplots(2, 3, (17, 9))
     axs = axs.ravel()
     rows = [table[A] for A in amps]
     a = np.array(amps) * 100
@@ -545,7 +520,8 @@ def write_outputs(out, cases, checks, closure, s, version, command, elapsed, che
         t0 = x["start"] * T
         ph, zl = phase_average(tab[:, 1], tab[:, 2], T, t0=t0)
         rec = b["jd"]["records"]
-        ph2, zj = phase_average(rec["t"], np.asarray(rec["z_cm"]) - np.asarray(rec["z_box"]), T, t0=t0)
+        ph2, zj = phase_average(rec["t"], np.asarray(rec["z_cm"]) - np.asarray(rec["z_box"]), T,
+                                t0=t0)
         line, = ax.plot(ph, zl * 100, "-", label=f"LAMMPS {A * 100:g} cm")
         ax.plot(ph2, zj * 100, "--", color=line.get_color(), label=f"jaxdamp {A * 100:g} cm")
     ax.set_xlabel("drive phase t/T mod 1 (box at its top at 0)")
@@ -562,24 +538,24 @@ def write_outputs(out, cases, checks, closure, s, version, command, elapsed, che
     ax.set_ylabel("J per period")
     ax.set_title("spread between beds vs one run's standard error")
     ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out, "figure.png"), dpi=110)
-    plt.close(fig)
+    scaffold.save_figure(fig, out, dpi=110)
 
-    # summary
+
+def _summary(run: dict, out: str, prov: dict) -> None:
+    cases, table, s, seeds = run["cases"], run["table"], run["settings"], run["seeds"]
+    checks, closure, mp0 = run["checks"], run["closure"], run["mapping"]
+    amps = sorted(cases)
+    beds = [x for A in amps for x in table[A]["beds"]]
     L = []
     w = L.append
     w("# LAMMPS cross-check of the 2023 reference damper\n")
-    w(f"Command: `{command}` ({'quick' if 'quick' in command else 'full'} mode). "
-      f"Machine: {platform.machine()}, 2 cores shared with another user's jobs; LAMMPS serial "
-      "(one MPI rank, `OMP_NUM_THREADS=1`), jaxdamp on the same machine "
-      f"(engine `{cases[amps[0]]['beds'][0]['jd']['config'].numerics.engine}`). Total elapsed "
-      f"{elapsed:.0f} s this invocation; "
-      f"{sum(x['reused'] for A in amps for x in table[A]['beds'])} of "
-      f"{sum(len(table[A]['beds']) for A in amps)} beds read back from `raw/beds` (their own "
-      f"compute: jaxdamp {sum(x['elapsed_j'] for A in amps for x in table[A]['beds']):.0f} s "
-      f"including settling, LAMMPS {sum(x['wall_l'] for A in amps for x in table[A]['beds']):.0f} s).\n")
-    w(f"LAMMPS: `{version}` (`lmp -h`, Debian package, GRANULAR). jaxdamp {jd_version}.\n")
+    w(scaffold.provenance_line(prov) + " LAMMPS serial (one MPI rank, `OMP_NUM_THREADS=1`), "
+      "jaxdamp on the same machine (engine "
+      f"`{cases[amps[0]]['beds'][0]['jd']['config'].numerics.engine}`); "
+      f"{sum(x['reused'] for x in beds)} of {len(beds)} beds read back from `raw/beds` (their "
+      f"own compute: jaxdamp {sum(x['elapsed_j'] for x in beds):.0f} s including settling, "
+      f"LAMMPS {sum(x['wall_l'] for x in beds):.0f} s).\n")
+    w(f"LAMMPS: `{run['version']}` (`lmp -h`, Debian package, GRANULAR).\n")
     w(f"System: preset `{PRESET}` — cube 8 cm, f = 70 Hz, 300 frictionless steel spheres "
       f"R = {mp0.R * 1e3:g} mm (m = {mp0.mass:.6g} kg each, granulate "
       f"{mp0.mass * 300:.5g} kg), E = {mp0.E:.3g} Pa, ν = {mp0.nu:g}, ε = 0.75 at 1 m/s "
@@ -601,56 +577,56 @@ def write_outputs(out, cases, checks, closure, s, version, command, elapsed, che
       "the later of the two (`stats.shared_window`) and runs to the end. A bed counts only if "
       "both series are stationary (the MSER minimum lies inside the search range).\n")
     w("## Mapping (jaxdamp → LAMMPS)\n")
-    w("| quantity | jaxdamp | LAMMPS input |\n| --- | --- | --- |")
-    w(f"| grain–grain | k_n = (4/3) E* sqrt(R/2) = {mp0.k_pp:.6g} N m^-3/2, γ_n = 1.5 A k_n = "
-      f"{mp0.gamma_pp:.6g} | `hertz/material {mp0.E:.6g} η_n0 {mp0.nu:g}`, η_n0 = γ_n/(m* sqrt(R*)) "
-      f"= 2 A E*/m* = {mp0.eta_pp:.6g} 1/(s m), m* = m/2 |")
-    w(f"| grain–wall | k_n = (4/3) E* sqrt(R) = {mp0.k_pw:.6g}, γ_n = 1.5 A k_n = {mp0.gamma_pw:.6g} "
-      f"| `fix wall/gran granular hertz/material {mp0.E_wall_lammps:.6g} η_n0 {mp0.nu:g}` "
-      f"(E/(1+ν): bug compensated), η_n0 = 2 A E*/m = {mp0.eta_pw:.6g}, m* = m |")
-    w(f"| E* (both) | 1/(c_i + c_j) = {mp0.E_star_pp:.6g} Pa | LAMMPS pair: 1/(2(1-ν²)/E); "
-      "wall: E_w/(2(1-ν)) with E_w = E/(1+ν) |")
-    w("| tangential | none (μ = 0, γ_s = 0) | `tangential linear_nohistory 0 0` |")
-    w("| clipping | F_n = max(0, ·) | `limit_damping` (pair and walls) |")
     dts = ", ".join(f"{cases[A]['mp'].dt:.6g} s ({A * 100:g} cm)" for A in amps)
-    w(f"| time step | params.dt | same: {dts} |")
-    w("| drive | walls move, z = A cos ωt | box frame: static walls, `fix gravity` with "
-      "g_eff = g − A ω² cos(ω t) |")
+    L += scaffold.table(("quantity", "jaxdamp", "LAMMPS input"), [
+        ("grain–grain", f"k_n = (4/3) E* sqrt(R/2) = {mp0.k_pp:.6g} N m^-3/2, γ_n = 1.5 A k_n = "
+         f"{mp0.gamma_pp:.6g}", f"`hertz/material {mp0.E:.6g} η_n0 {mp0.nu:g}`, η_n0 = "
+         f"γ_n/(m* sqrt(R*)) = 2 A E*/m* = {mp0.eta_pp:.6g} 1/(s m), m* = m/2"),
+        ("grain–wall", f"k_n = (4/3) E* sqrt(R) = {mp0.k_pw:.6g}, γ_n = 1.5 A k_n = "
+         f"{mp0.gamma_pw:.6g}", f"`fix wall/gran granular hertz/material "
+         f"{mp0.E_wall_lammps:.6g} η_n0 {mp0.nu:g}` (E/(1+ν): bug compensated), η_n0 = "
+         f"2 A E*/m = {mp0.eta_pw:.6g}, m* = m"),
+        ("E* (both)", f"1/(c_i + c_j) = {mp0.E_star_pp:.6g} Pa",
+         "LAMMPS pair: 1/(2(1-ν²)/E); wall: E_w/(2(1-ν)) with E_w = E/(1+ν)"),
+        ("tangential", "none (μ = 0, γ_s = 0)", "`tangential linear_nohistory 0 0`"),
+        ("clipping", "F_n = max(0, ·)", "`limit_damping` (pair and walls)"),
+        ("time step", "params.dt", f"same: {dts}"),
+        ("drive", "walls move, z = A cos ωt",
+         "box frame: static walls, `fix gravity` with g_eff = g − A ω² cos(ω t)")])
     w("")
     w("LAMMPS' viscoelastic damping force is η_n0 · a · m* · ξ' with a = sqrt(R* ξ) "
       "(pair_granular docs, `damping viscoelastic`; the same expression `damp_normal = a*meff` "
       "in `fix_wall_gran.cpp`), so η_n0 = γ_n / (m* sqrt(R*)) reproduces γ_n sqrt(ξ) ξ' exactly.\n")
-    w(f"## Mapping checks (LAMMPS runs, dt = {mp0.dt:.6g} s; {checks_wall:.1f} s wall)\n")
-    w("Binary head-on collisions (reference: `jaxdamp.physics.restitution.collision`, the exact "
-      "integral of the force law):\n")
-    w("| v [m/s] | ε LAMMPS | ε reference | rel. diff | overlap time LAMMPS [µs] | reference [µs] |")
-    w("| --- | --- | --- | --- | --- | --- |")
-    for r in checks["pair"]:
-        w(f"| {r['v']:g} | {r['restitution']:.5f} | {r['ref_restitution']:.5f} | "
-          f"{(r['restitution'] / r['ref_restitution'] - 1) * 100:+.3f} % | {r['duration'] * 1e6:.2f} | "
-          f"{r['ref_duration'] * 1e6:.2f} |")
-    w("\nSphere–floor collisions (reference: grain–wall pair, m* = m, R* = R):\n")
-    w("| v [m/s] | ε LAMMPS | ε reference | rel. diff | overlap time LAMMPS [µs] | reference [µs] |")
-    w("| --- | --- | --- | --- | --- | --- |")
-    for r in checks["wall"]:
-        w(f"| {r['v']:g} | {r['restitution']:.5f} | {r['ref_restitution']:.5f} | "
-          f"{(r['restitution'] / r['ref_restitution'] - 1) * 100:+.3f} % | {r['duration'] * 1e6:.2f} | "
-          f"{r['ref_duration'] * 1e6:.2f} |")
+    w(f"## Mapping checks (LAMMPS runs, dt = {mp0.dt:.6g} s; {run['checks_wall']:.1f} s wall)\n")
+    collisions = ("v [m/s]", "ε LAMMPS", "ε reference", "rel. diff", "overlap time LAMMPS [µs]",
+                  "reference [µs]")
+    for kind, what in (("pair", "Binary head-on collisions (reference: "
+                        "`jaxdamp.physics.restitution.collision`, the exact integral of the force "
+                        "law):\n"),
+                       ("wall", "\nSphere–floor collisions (reference: grain–wall pair, m* = m, "
+                        "R* = R):\n")):
+        w(what)
+        L += scaffold.table(collisions, [
+            (f"{r['v']:g}", f"{r['restitution']:.5f}", f"{r['ref_restitution']:.5f}",
+             f"{(r['restitution'] / r['ref_restitution'] - 1) * 100:+.3f} %",
+             f"{r['duration'] * 1e6:.2f}", f"{r['ref_duration'] * 1e6:.2f}")
+            for r in checks[kind]])
     w("\nStatic test: one sphere pressed on a wall by g = 9.8 m/s², damped to rest (0.1 s); "
       "equilibrium overlap vs Hertz (m g / k_n)^{2/3} = "
       f"{checks['static'][0]['hertz']:.6g} m:\n")
-    w("| wall | overlap [m] | overlap / Hertz | residual speed [m/s] |\n| --- | --- | --- | --- |")
-    for r in checks["static"]:
-        w(f"| {r['wall']} | {r['overlap']:.6g} | {r['ratio']:.5f} | {r['speed']:.2g} |")
     u = checks["static_uncompensated"]
-    w(f"| floor, wall given E as is (uncompensated) | {u['overlap']:.6g} | {u['ratio']:.5f} | "
-      f"{u['speed']:.2g} |")
-    w(f"\nWithout the compensation the floor is stiffer by (ratio)^(-3/2) = {u['ratio'] ** -1.5:.4f} "
-      f"(expected from the `E/(2(1-ν))` formula: 1+ν = {1 + mp0.nu:g}).\n")
+    L += scaffold.table(("wall", "overlap [m]", "overlap / Hertz", "residual speed [m/s]"), [
+        (name, f"{r['overlap']:.6g}", f"{r['ratio']:.5f}", f"{r['speed']:.2g}") for name, r in
+        [(r["wall"], r) for r in checks["static"]]
+        + [("floor, wall given E as is (uncompensated)", u)]])
+    w(f"\nWithout the compensation the floor is stiffer by (ratio)^(-3/2) = "
+      f"{u['ratio'] ** -1.5:.4f} (expected from the `E/(2(1-ν))` formula: 1+ν = "
+      f"{1 + mp0.nu:g}).\n")
     w(f"Energy accounting closure (LAMMPS, undamped bed — η_n0 = 0 for pairs and walls — "
-      f"A_d = {closure['amplitude'] * 100:g} cm, {closure['periods']} periods from the settled bed): "
+      f"A_d = {closure['amplitude'] * 100:g} cm, {closure['periods']} periods from the settled "
+      "bed): "
       f"input work − Δ(kinetic + gravitational + elastic) = "
-      f"{', '.join(fmt(x, 3) for x in closure['D'][1:])} J at the period boundaries, "
+      f"{', '.join(f'{x:.3g}' for x in closure['D'][1:])} J at the period boundaries, "
       f"{closure['relative'] * 100:.2g} % of the largest |ΔE| "
       f"({max(abs(x - closure['E'][0]) for x in closure['E']):.4g} J) and "
       f"{max(abs(x) for x in closure['D']) / table[closure['amplitude']]['ml']:.1e} "
@@ -661,78 +637,76 @@ def write_outputs(out, cases, checks, closure, s, version, command, elapsed, che
       "[Student-t 95 % half-width]), its share of jaxdamp's mean, the unpaired Welch 95 % "
       "interval of the two codes' bed means, and E_d = E / E_max (E_max = 4 m A_d² ω², SPEC §4; "
       "energy per period, not power) ± SE.\n")
-    w("| A_d [cm] | beds (stationary) | E_max [J] | LAMMPS [J] | jaxdamp [J] | LAMMPS − jaxdamp, paired [J] | "
-      "in % of jaxdamp | Welch 95 % (unpaired) [J] | E_d LAMMPS | E_d jaxdamp | interval |")
-    w("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
-    for A in amps:
-        r = table[A]
-        w(f"| {A * 100:g} | {r['R']} ({r['n']}) | {r['e_max']:.4g} | {r['ml']:.4g} ± {r['sel']:.2g} | "
-          f"{r['mj']:.4g} ± {r['sej']:.2g} | {r['d']:+.3g} ± {r['sed']:.2g} [± {r['hw']:.2g}] | "
-          f"{r['rel'] * 100:+.2f} ± {r['rel_hw'] * 100:.2f} % | {r['welch_d']:+.3g} ± {r['welch_hw']:.2g} | "
-          f"{r['ml'] / r['e_max']:.4f} ± {r['sel'] / r['e_max']:.2g} | "
-          f"{r['mj'] / r['e_max']:.4f} ± {r['sej'] / r['e_max']:.2g} | "
-          + ("contains 0" if r["agree"] else "excludes 0") + " |")
+    pm = scaffold.pm
+    L += scaffold.table(
+        ("A_d [cm]", "beds (stationary)", "E_max [J]", "LAMMPS [J]", "jaxdamp [J]",
+         "LAMMPS − jaxdamp, paired [J]", "in % of jaxdamp", "Welch 95 % (unpaired) [J]",
+         "E_d LAMMPS", "E_d jaxdamp", "interval"),
+        [(f"{A * 100:g}", f"{r['R']} ({r['n']})", f"{r['e_max']:.4g}", pm(r["ml"], r["sel"], 4),
+          pm(r["mj"], r["sej"], 4), f"{pm(r['d'], r['sed'], '+.3g')} [{r['hw']:.2g}]",
+          pm(r["rel"], r["rel_hw"], "+.2f", ".2f", "%", 100),
+          pm(r["welch_d"], r["welch_hw"], "+.3g"),
+          pm(r["ml"] / r["e_max"], r["sel"] / r["e_max"], ".4f"),
+          pm(r["mj"] / r["e_max"], r["sej"] / r["e_max"], ".4f"),
+          "contains 0" if r["agree"] else "excludes 0") for A, r in table.items()])
     w("\nSpread between beds against one run's error: the standard deviation of the beds' means "
       "(what a single run's mean scatters by) next to the mean within-run standard error of one "
       "bed's window mean (std over periods / sqrt(N), inflated by sqrt((1+ρ)/(1-ρ)) for a positive "
       "lag-1 autocorrelation ρ):\n")
-    w("| A_d [cm] | LAMMPS: std of bed means [J] | LAMMPS: within-run SE [J] | "
-      "jaxdamp: std of bed means [J] | jaxdamp: within-run SE [J] |")
-    w("| --- | --- | --- | --- | --- |")
-    for A in amps:
-        r = table[A]
-        w(f"| {A * 100:g} | {r['sdl']:.3g} | {r['within_l']:.3g} | {r['sdj']:.3g} | "
-          f"{r['within_j']:.3g} |")
+    L += scaffold.table(
+        ("A_d [cm]", "LAMMPS: std of bed means [J]", "LAMMPS: within-run SE [J]",
+         "jaxdamp: std of bed means [J]", "jaxdamp: within-run SE [J]"),
+        [[f"{A * 100:g}"] + [f"{r[k]:.3g}" for k in ("sdl", "within_l", "sdj", "within_j")]
+         for A, r in table.items()])
     w(f"\n(With R = {s['replicates']} beds the standard deviation of the bed means is itself "
       "uncertain by tens of percent.)\n")
     w("## Per bed\n")
     w("Window: the periods n of the common window (period n is [(n−1)T, nT]; in brackets the "
-      "first steady period detected in LAMMPS' / jaxdamp's series) and their number. Means ± standard deviation over the window's "
+      "first steady period detected in LAMMPS' / jaxdamp's series) and their number. Means ± "
+      "standard deviation over the window's "
       "periods (in brackets: the within-run standard error as above). Cross-correlation of the "
       "two codes' per-period values, the number of leading window periods that agree within "
       "1 %, and each series' lag-1 autocorrelation: the bed is chaotic, so the two codes' "
       "trajectories decorrelate and the comparison of one bed is statistical.\n")
-    w("| A_d [cm] | seed | window (starts L / J) | stationary | LAMMPS [J] | jaxdamp [J] | "
-      "LAMMPS − jaxdamp [J] | / combined within-run SE | cross-corr. | leading within 1 % | "
-      "lag-1 L / J |")
-    w("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
-    for A in amps:
-        for x in table[A]["beds"]:
-            w(f"| {A * 100:g} | {x['seed']} | {x['start'] + 1}–{x['start'] + x['kept']} "
-              f"({x['start_l'] + 1} / {x['start_j'] + 1}), {x['kept']} | "
-              f"{'yes' if x['stationary'] else 'NO'} | "
-              f"{x['ml']:.4g} ± {x['sl']:.3g} ({x['el']:.2g}) | "
-              f"{x['mj']:.4g} ± {x['sj']:.3g} ({x['ej']:.2g}) | {x['diff']:+.3g} "
-              f"({x['rel'] * 100:+.2f} %) | "
-              f"{abs(x['diff']) / x['comb'] if x['comb'] > 0 else float('nan'):.2g} | "
-              f"{x['corr']:.3f} | {x['first_apart']} of {x['kept']} | "
-              f"{x['lag_l']:.2f} / {x['lag_j']:.2f} |")
+    L += scaffold.table(
+        ("A_d [cm]", "seed", "window (starts L / J)", "stationary", "LAMMPS [J]", "jaxdamp [J]",
+         "LAMMPS − jaxdamp [J]", "/ combined within-run SE", "cross-corr.",
+         "leading within 1 %", "lag-1 L / J"),
+        [(f"{A * 100:g}", x["seed"], f"{x['start'] + 1}–{x['start'] + x['kept']} "
+          f"({x['start_l'] + 1} / {x['start_j'] + 1}), {x['kept']}",
+          "yes" if x["stationary"] else "NO",
+          f"{pm(x['ml'], x['sl'], 4, 3)} ({x['el']:.2g})",
+          f"{pm(x['mj'], x['sj'], 4, 3)} ({x['ej']:.2g})",
+          f"{x['diff']:+.3g} ({x['rel'] * 100:+.2f} %)",
+          f"{abs(x['diff']) / x['comb'] if x['comb'] > 0 else float('nan'):.2g}",
+          f"{x['corr']:.3f}", f"{x['first_apart']} of {x['kept']}",
+          f"{x['lag_l']:.2f} / {x['lag_j']:.2f}")
+         for A, r in table.items() for x in r["beds"]])
     w("\nOther observables per bed: largest difference between the codes of the phase-averaged "
       "centre-of-mass height (50 phase bins, window) and its swing over a period; dissipation "
       f"during the first {s['transient']} periods; mean dissipation per period in the first / "
       "second half of the window; largest elastic energy at a LAMMPS period boundary (included "
       "in the balance).\n")
-    w("| A_d [cm] | seed | z_cm difference [mm] | z_cm swing [mm] | transient L / J [J] | "
-      "halves LAMMPS [J] | halves jaxdamp [J] | elastic max [J] |")
-    w("| --- | --- | --- | --- | --- | --- | --- | --- |")
-    for A in amps:
-        for x in table[A]["beds"]:
-            w(f"| {A * 100:g} | {x['seed']} | {x['zcm_diff'] * 1e3:.2f} | {x['zcm_span'] * 1e3:.1f} | "
-              f"{x['transient_l']:.4g} / {x['transient_j']:.4g} | {x['halves_l'][0]:.4g} → "
-              f"{x['halves_l'][1]:.4g} | {x['halves_j'][0]:.4g} → {x['halves_j'][1]:.4g} | "
-              f"{x['el_max']:.3g} |")
+    L += scaffold.table(
+        ("A_d [cm]", "seed", "z_cm difference [mm]", "z_cm swing [mm]", "transient L / J [J]",
+         "halves LAMMPS [J]", "halves jaxdamp [J]", "elastic max [J]"),
+        [(f"{A * 100:g}", x["seed"], f"{x['zcm_diff'] * 1e3:.2f}", f"{x['zcm_span'] * 1e3:.1f}",
+          f"{x['transient_l']:.4g} / {x['transient_j']:.4g}",
+          f"{x['halves_l'][0]:.4g} → {x['halves_l'][1]:.4g}",
+          f"{x['halves_j'][0]:.4g} → {x['halves_j'][1]:.4g}", f"{x['el_max']:.3g}")
+         for A, r in table.items() for x in r["beds"]])
     w("\nWall times (stepping only; both on one core of a shared 2-core machine; a bed read back "
       "from `raw/beds` keeps the times of the run that made it):\n")
-    w("| A_d [cm] | seed | dt [s] | steps | LAMMPS [s] | LAMMPS loop [s] | LAMMPS [µs/step] | "
-      "jaxdamp stepping [s] | jaxdamp [µs/step] | jaxdamp incl. settling + compile [s] | "
-      "jaxdamp balance error | jaxdamp max abs(residual) [J] | jaxdamp residual per period [J] |")
-    w("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
-    for A in amps:
-        for x in table[A]["beds"]:
-            w(f"| {A * 100:g} | {x['seed']} | {x['dt']:.5g} | {x['steps']} | {x['wall_l']:.1f} | "
-              f"{x['loop_l']:.1f} | {x['us_l']:.1f} | {x['wall_j']:.1f} | {x['us_j']:.1f} | "
-              f"{x['elapsed_j']:.1f} | {x['balance']:.2g} | {x['residual']:.3g} | "
-              f"{x['resid_rate']:+.3g} ({x['resid_rate'] / x['mj'] * 100:+.2g} % of its dissipation) |")
+    L += scaffold.table(
+        ("A_d [cm]", "seed", "dt [s]", "steps", "LAMMPS [s]", "LAMMPS loop [s]",
+         "LAMMPS [µs/step]", "jaxdamp stepping [s]", "jaxdamp [µs/step]",
+         "jaxdamp incl. settling + compile [s]", "jaxdamp balance error",
+         "jaxdamp max abs(residual) [J]", "jaxdamp residual per period [J]"),
+        [[f"{A * 100:g}", x["seed"], f"{x['dt']:.5g}", x["steps"]]
+         + [f"{x[k]:.1f}" for k in ("wall_l", "loop_l", "us_l", "wall_j", "us_j", "elapsed_j")]
+         + [f"{x['balance']:.2g}", f"{x['residual']:.3g}",
+            f"{x['resid_rate']:+.3g} ({x['resid_rate'] / x['mj'] * 100:+.2g} % of its "
+            "dissipation)"] for A, r in table.items() for x in r["beds"]])
     w("\nLAMMPS wall time includes its input parsing, the one-period `run` segments and the "
       "snapshot writes; 'loop' is the sum of LAMMPS' own loop times. jaxdamp stepping is "
       "`summary['wall_time']` (chunks only; samples every T/500 here, which costs extra "
@@ -742,13 +716,11 @@ def write_outputs(out, cases, checks, closure, s, version, command, elapsed, che
       "steady drift, positive: the loss channels plus the energy change exceed the input). "
       "LAMMPS' dissipation is defined by its energy balance, so it has no such residual; its "
       "accounting closes to the closure test above."
-      + ("" if all(x["settled"] for A in amps for x in table[A]["beds"]) else
-         f" {sum(not x['settled'] for A in amps for x in table[A]['beds'])} of "
-         f"{sum(len(table[A]['beds']) for A in amps)} beds did not meet jaxdamp's settling "
-         "criterion (fastest grain below `numerics.settle_speed`) within the settle time: "
-         "fastest grain at the end of settling "
-         f"{min(x['max_speed'] for A in amps for x in table[A]['beds']):.2g}–"
-         f"{max(x['max_speed'] for A in amps for x in table[A]['beds']):.2g} m/s; both codes "
+      + ("" if all(x["settled"] for x in beds) else
+         f" {sum(not x['settled'] for x in beds)} of {len(beds)} beds did not meet jaxdamp's "
+         "settling criterion (fastest grain below `numerics.settle_speed`) within the settle "
+         f"time: fastest grain at the end of settling {min(x['max_speed'] for x in beds):.2g}–"
+         f"{max(x['max_speed'] for x in beds):.2g} m/s; both codes "
          "start from that same state, so the comparison is unaffected, and the transient "
          "periods are discarded."))
     w("\nFigure: `figure.png` — top: dissipation per period (mean ± 95 % over beds, dots: each "
@@ -757,7 +729,7 @@ def write_outputs(out, cases, checks, closure, s, version, command, elapsed, che
       f"phase-averaged centre-of-mass height above the floor for the bed of seed {seeds[0]}, and "
       "the spread of the bed means against one run's standard error.\n")
     w("## Verdict\n")
-    w(VERDICT_PLACEHOLDER)
+    w(verdict(table, amps, s, checks))
     w("")
     w("Data: `data.h5` (per amplitude: the across-bed estimates as attributes, per-bed means, "
       "seeds, windows, stationarity; per bed: the per-period dissipation of both codes, LAMMPS "
@@ -766,14 +738,7 @@ def write_outputs(out, cases, checks, closure, s, version, command, elapsed, che
       "mapping and checks as JSON attributes). LAMMPS inputs, logs and snapshots, and every bed's "
       "results (`raw/beds/*.npz`, reused by a re-run with the same settings): `raw/` "
       "(git-ignored).")
-    text = "\n".join(L) + "\n"
-    text = text.replace(VERDICT_PLACEHOLDER, verdict(table, amps, s, checks))
-    with open(os.path.join(out, "summary.md"), "w") as fh:
-        fh.write(text)
-    return table
-
-
-VERDICT_PLACEHOLDER = "@@VERDICT@@"
+    scaffold.write_summary(out, L)
 
 
 def verdict(table, amps, s, checks) -> str:
@@ -788,16 +753,17 @@ def verdict(table, amps, s, checks) -> str:
                   "only partly — see the check tables above (a check missed 0.1 %)."))
     for A in amps:
         r = table[A]
+        pm = scaffold.pm
         out.append(
             f"- A_d = {A * 100:g} cm ({r['n']} of {r['R']} beds stationary): LAMMPS "
-            f"{r['ml']:.4g} ± {r['sel']:.2g} J, jaxdamp {r['mj']:.4g} ± {r['sej']:.2g} J per "
-            f"period; paired difference LAMMPS − jaxdamp {r['d']:+.3g} ± {r['hw']:.2g} J "
-            f"(95 %; {r['rel'] * 100:+.2f} ± {r['rel_hw'] * 100:.2f} % of jaxdamp's mean): "
+            f"{pm(r['ml'], r['sel'], 4, unit='J')}, jaxdamp {pm(r['mj'], r['sej'], 4, unit='J')} "
+            f"per period; paired difference LAMMPS − jaxdamp {pm(r['d'], r['hw'], '+.3g')} J "
+            f"(95 %; {pm(r['rel'], r['rel_hw'], '+.2f', '.2f', scale=100)} % of jaxdamp's mean): "
             + ("the interval contains 0 — no difference between the codes is resolved."
                if r["agree"] else
                "the interval EXCLUDES 0 — the codes differ, a finding to explain (mapping, "
                "integrator, accounting), not to tune.")
-            + f" Welch (unpaired): {r['welch_d']:+.3g} ± {r['welch_hw']:.2g} J.")
+            + f" Welch (unpaired): {pm(r['welch_d'], r['welch_hw'], '+.3g', unit='J')}.")
     if all(table[A]["agree"] for A in amps):
         worst = max(table[A]["rel_hw"] for A in amps)
         out.append(f"- Overall: at every amplitude the paired 95 % interval of the difference "

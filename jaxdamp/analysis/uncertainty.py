@@ -36,6 +36,33 @@ def mean_se(x, axis: int = -1):
     return x.mean(axis=axis), standard_error(x, axis)
 
 
+def lag1_autocorrelation(x) -> float:
+    """Lag-1 autocorrelation ``ρ = Σ x'_k x'_{k+1} / Σ x'_k²`` of a series (``x'`` its
+    deviations from the mean); NaN for fewer than 3 values or a constant series."""
+    x = np.asarray(x, float) - np.mean(x)
+    if len(x) < 3 or not np.any(x):
+        return float("nan")
+    return float(np.sum(x[1:] * x[:-1]) / np.sum(x * x))
+
+
+def ar1_standard_error(x) -> float:
+    """Standard error of the mean of one serially correlated series (a within-run figure,
+    not an interval over realisations): :func:`standard_error` times ``√((1+ρ)/(1−ρ))`` with
+    ``ρ`` the :func:`lag1_autocorrelation` when ``0 < ρ < 1`` (an AR(1) model); with
+    ``ρ ≤ 0`` the plain value, which is then conservative. NaN for fewer than 2 values.
+
+    Example::
+
+        ar1_standard_error([1.0, 2.0, 3.0, 4.0])  # ρ = 0.25: 0.6455 · √(1.25/0.75) = 0.833
+    """
+    x = np.asarray(x, float)
+    if len(x) < 2:
+        return float("nan")
+    rho = lag1_autocorrelation(x)
+    inflate = math.sqrt((1 + rho) / (1 - rho)) if np.isfinite(rho) and 0 < rho < 1 else 1.0
+    return float(standard_error(x)) * inflate
+
+
 def pm(value, error=float("nan"), digits: int = 5, error_digits: int = 2, unit: str = "",
        scale: float = 1.0, compact: bool = False) -> str:
     """The one formatter of a value and its uncertainty: ``"1.2346 ± 0.0012 kg"``.
