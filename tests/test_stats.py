@@ -147,3 +147,24 @@ def test_ar1_standard_error_is_calibrated_on_correlated_series():
     est = np.mean([ar1_standard_error(s) for s in x])
     assert est == pytest.approx(spread, rel=0.10)
     assert np.mean([standard_error(s) for s in x]) < 0.6 * spread
+
+
+def test_replicate_extrema_refines_each_replicate_and_combines_them():
+    """Parabolas through exact quadratics recover each replicate's vertex; log axes return
+    values in the original units; a best sample at the grid's end is counted, not refined."""
+    from jaxdamp.analysis.stats import replicate_extrema
+
+    x = np.array([1.0, 2.0, 3.0, 4.0, 5.0])
+    Y = np.stack([-(x - c) ** 2 for c in (2.4, 2.6, 3.1)], axis=1)
+    e = replicate_extrema(x, Y, "max")
+    np.testing.assert_allclose(e.x, [2.4, 2.6, 3.1], rtol=1e-12)
+    np.testing.assert_allclose(e.y, 0.0, atol=1e-12)
+    assert e.estimate.mean == pytest.approx(np.mean([2.4, 2.6, 3.1]), rel=1e-12)
+    assert e.estimate.n == 3 and e.at_edge == 0
+    # a minimum of exp((log x - log 2.5)^2) in log x: the vertex at x = 2.5, the value 1
+    Z = np.exp((np.log(x) - np.log(2.5)) ** 2)[:, None]
+    m = replicate_extrema(x, np.log(Z), "min", log_x=True)
+    assert m.x[0] == pytest.approx(2.5, rel=1e-12)
+    assert replicate_extrema(x, Z, "min", log_x=True, log_y=True).y[0] == pytest.approx(1.0)
+    edge = replicate_extrema(x, x[:, None], "max")
+    assert edge.at_edge == 1 and edge.x[0] == 5.0 and np.isnan(edge.estimate.se)

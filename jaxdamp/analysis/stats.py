@@ -210,6 +210,57 @@ def across(values, batch_se=None, start=None, stationary=None) -> Estimate:
                     ok if stationary is None else np.asarray(stationary, bool))
 
 
+@dataclass(frozen=True)
+class ReplicateExtremum:
+    """The extremum of every replicate's sampled curve and its estimate over replicates
+    (:func:`replicate_extrema`).
+
+    Attributes:
+      x: abscissa of each replicate's extremum, ``(R,)`` (the parabola's vertex, or the best
+        sample where none is bracketed).
+      y: the curve's value there, ``(R,)``.
+      best: index of each replicate's best sample, ``(R,)``.
+      estimate: :class:`Estimate` of ``x`` over the replicates (mean, se, ci95, n).
+      at_edge: how many replicates have their best sample at either end of the grid (their
+        extremum is not bracketed: an interval of the optimum needs ``at_edge == 0``).
+    """
+
+    x: np.ndarray
+    y: np.ndarray
+    best: np.ndarray
+    estimate: Estimate
+    at_edge: int
+
+
+def replicate_extrema(x, Y, kind: str = "max", log_x: bool = False,
+                      log_y: bool = False) -> ReplicateExtremum:
+    """The ``kind`` (``"max"``/``"min"``) extremum of each column of ``Y`` ``(L, R)`` sampled
+    at ``x`` ``(L,)``, refined by :func:`jaxdamp.analysis.response.parabolic_extremum` (the
+    parabola through the best sample and its two neighbours), with ``log_x``/``log_y`` the
+    parabola in ``log x``/``log y`` (results returned in ``x``, ``y``); then the replicates'
+    extrema combined by :func:`across`. The one definition of "the optimum with an interval
+    over replicates" (the gap scans, the grain-number scan, the design studies).
+
+    Example::
+
+        x = np.array([1.0, 2.0, 3.0, 4.0])
+        Y = np.stack([-(x - 2.4) ** 2, -(x - 2.6) ** 2], axis=1)
+        replicate_extrema(x, Y).estimate.mean  # 2.5
+    """
+    from jaxdamp.analysis.response import parabolic_extremum
+
+    x, Y = np.asarray(x, float), np.asarray(Y, float)
+    u = np.log(x) if log_x else x
+    V = np.log(Y) if log_y else Y
+    v = [parabolic_extremum(u, V[:, r], kind) for r in range(V.shape[1])]
+    xs = np.array([a[0] for a in v])
+    ys = np.array([a[1] for a in v])
+    best = np.array([a[2] for a in v], int)
+    xs, ys = (np.exp(xs) if log_x else xs), (np.exp(ys) if log_y else ys)
+    return ReplicateExtremum(xs, ys, best, across(xs),
+                             int(np.sum((best == 0) | (best == len(x) - 1))))
+
+
 # ---------------------------------------------------------------------------------------------
 # per-period series from samples
 
