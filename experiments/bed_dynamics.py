@@ -1,11 +1,11 @@
-"""Nonlinear dynamics of the bed along the FRF of the thesis' optimal damper (thesis fig. 4.1, ch. 4).
+"""Nonlinear dynamics of the bed along the FRF of the thesis' optimal damper (fig. 4.1, ch. 4).
 
     python experiments/bed_dynamics.py            # full mode (see summary.md for its wall time)
     python experiments/bed_dynamics.py --quick    # < 1 min: 3 frequencies, 1.6 s each
 
 ``sanchez2012-optimal`` (N = 250, Lz = 0.1225 m, C = 7.6 N s/m) driven at every frequency of
-the list in one batched sweep (:func:`jaxdamp.studies.sweep.sweep`, samples every 1 ms). For each
-frequency, after a transient, the bed's centre of mass is classified
+the list in one batched sweep (:func:`jaxdamp.studies.sweep.sweep`, samples every 1 ms). For
+each frequency, after a transient, the bed's centre of mass is classified
 (:func:`jaxdamp.analysis.dynamics.classify`: periodic-k from the stroboscopic section, else Kantz's
 largest Lyapunov exponent and the spectrum decide between quasi-periodic and chaotic). The
 observable is the lab-frame ``z_cm`` (the thesis' "trayectoria del centro de masa", fig. 4.2);
@@ -26,15 +26,14 @@ goes to ``--out/raw/`` (not committed).
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import time
+from collections import Counter
 
 import h5py
 import numpy as np
 
-import jaxdamp
 from jaxdamp.analysis import dynamics as dyn
 from jaxdamp.analysis.response import frf_amplitude
 from jaxdamp.cases import presets
@@ -42,7 +41,11 @@ from jaxdamp.config import apply_overrides
 from jaxdamp.physics.model import grain_mass
 from jaxdamp.studies.sweep import reuse_or_run
 
-HERE = os.path.dirname(os.path.abspath(__file__))
+try:
+    from . import scaffold
+except ImportError:  # run as a file: python experiments/<name>.py
+    import scaffold
+
 #: Frequencies [Hz] of the full mode: the thesis' regions (periodic < 7.5, transition 7.5–11,
 #: chaos I 11–14, window 14.5–16, chaos II > 16.5) each sampled, with the five detail ones.
 F_FULL = (5.5, 7.0, 8.0, 9.5, 11.0, 12.0, 13.0, 14.0, 14.5, 15.5, 17.0, 21.0)
@@ -52,8 +55,14 @@ COLORS = {"periodic": "tab:green", "quasi-periodic": "tab:orange", "chaotic": "t
           "undetermined": "0.55"}
 #: thesis fig. 4.1 / ch. 4 regimes by frequency, for the comparison column
 THESIS_ZONES = ((0.0, 7.5, "periodic"), (7.5, 11.0, "transition (quasi-periodic / periodic)"),
-                (11.0, 14.5, "chaotic (zone I)"), (14.5, 16.0, "periodic window (2 impacts/period)"),
+                (11.0, 14.5, "chaotic (zone I)"),
+                (14.5, 16.0, "periodic window (2 impacts/period)"),
                 (16.0, 16.5, "edge of window"), (16.5, 99.0, "chaotic (zone II)"))
+#: per-observable numbers of the classification (``data.h5``: ``classification/<signal>/<key>``)
+CLASS_KEYS = ("period", "exponent", "lyapunov_per_period", "line_fraction", "d1", "dmin",
+              "k_loose", "dim", "delay", "peak_ratio", "stretch")
+CONTACT_KEYS = ("lid_hits_per_period", "floor_hits_per_period", "lid_contact_fraction",
+                "floor_contact_fraction", "free_fraction")
 
 
 def settings(quick: bool):
@@ -69,19 +78,20 @@ def settings(quick: bool):
 
 
 def thesis_zone(f):
-    for lo, hi, lab in THESIS_ZONES:
-        if lo <= f < hi:
-            return lab
-    return ""
+    return next((lab for lo, hi, lab in THESIS_ZONES if lo <= f < hi), "")
 
 
-def run_sweep(s: dict, raw_dir: str, progress: bool):
-    cfg = apply_overrides(presets.get("sanchez2012-optimal"), {
-        "numerics.duration": s["duration"], "numerics.settle_time": s["settle"],
-        "numerics.record_dt": s["record_dt"], "numerics.chunk": 0.2})
-    out = os.path.join(raw_dir, f"sweep_R{s['R']}.h5")
-    axes = {"frequency": list(s["freqs"])}
-    return reuse_or_run(cfg, axes, out, progress=progress, replicates=s["R"]), cfg
+def optimal_config(duration, settle, record_dt=1e-3, chunk=0.2):
+    """``sanchez2012-optimal`` with a run's numerics (also ``bed_dynamics_long``'s)."""
+    return apply_overrides(presets.get("sanchez2012-optimal"), {
+        "numerics.duration": duration, "numerics.settle_time": settle,
+        "numerics.record_dt": record_dt, "numerics.chunk": chunk})
+
+
+def run_sweep(s: dict, path: str, progress: bool):
+    cfg = optimal_config(s["duration"], s["settle"], s["record_dt"])
+    return reuse_or_run(cfg, {"frequency": list(s["freqs"])}, path, progress=progress,
+                        replicates=s["R"]), cfg
 
 
 def contact_stats(t, force_box, weight, frequency):
@@ -173,124 +183,117 @@ def details(res, s):
     out = {}
     for f in s["detail"]:
         i = res.point(freqs.index(f), 0)  # bed 0
-        t = rec["t"][i]
-        keep = t >= s["transient"]
-        t, z, v, zb = t[keep], rec["z_cm"][i][keep], rec["vz_cm"][i][keep], rec["z_box"][i][keep]
+        keep = rec["t"][i] >= s["transient"]
+        d = {k: rec[name][i][keep] for k, name in (
+            ("t", "t"), ("z", "z_cm"), ("v", "vz_cm"), ("z_box", "z_box"),
+            ("z_lowest", "z_lowest"), ("z_highest", "z_highest"), ("force_box", "force_box"))}
+        t, z = d["t"], d["z"]
         dt = (t[-1] - t[0]) / (len(t) - 1)
-        spp = 1.0 / (f * dt)
         sec = dyn.poincare_section(t, z, f)
-        vsec = dyn.poincare_section(t, v, f)  # recorded velocity at the section times
-        spec = dyn.power_spectrum(t, z, f)
+        vsec = dyn.poincare_section(t, d["v"], f)  # recorded velocity at the section times
         dim, delay, mi, fnn = embedding_of(z, f, dt)
-        lyap = dyn.lyapunov_kantz(z, dim, delay, dt=dt, theiler=max(int(round(spp)), dim * delay))
-        out[f] = dict(t=t, z=z, v=v, z_box=zb, z_lowest=rec["z_lowest"][i][keep],
-                      z_highest=rec["z_highest"][i][keep], force_box=rec["force_box"][i][keep],
-                      sec_t=sec.t, sec_z=sec.x, sec_v=vsec.x, spec=spec, mi=mi, delay=delay,
-                      fnn=fnn, dim=dim, lyap=lyap)
+        lyap = dyn.lyapunov_kantz(z, dim, delay, dt=dt,
+                                  theiler=max(int(round(1.0 / (f * dt))), dim * delay))
+        out[f] = dict(d, sec_t=sec.t, sec_z=sec.x, sec_v=vsec.x,
+                      spec=dyn.power_spectrum(t, z, f), mi=mi, delay=delay, fnn=fnn, dim=dim,
+                      lyap=lyap)
     return out
 
 
-def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--quick", action="store_true", help="3 frequencies, 1.6 s each")
-    ap.add_argument("--out", default=os.path.join(HERE, "bed_dynamics"))
-    ap.add_argument("--no-progress", action="store_true")
-    args = ap.parse_args(argv)
-    s = settings(args.quick)
-    os.makedirs(os.path.join(args.out, "raw"), exist_ok=True)
+def _reused_simulation_wall(raw: str, old: str, quick: bool):
+    """The simulation wall time kept in ``old`` (the previous ``data.h5`` of the same mode)
+    when its finished sweep ``raw`` is only read back now; None otherwise."""
+    if not (os.path.exists(raw) and os.path.exists(old)):
+        return None
+    with h5py.File(raw, "r") as h, h5py.File(old, "r") as g:
+        if (h.attrs.get("status") == "finished"
+                and g.attrs.get("command", "").endswith("--quick") == quick):
+            return float(g.attrs["wall_time_simulation"])
+    return None
+
+
+def compute(quick: bool, log, ctx):
+    s = settings(quick)
+    raw = ctx.raw(f"sweep_R{s['R']}.h5")
     t0 = time.perf_counter()
-    reused = None
-    raw = os.path.join(args.out, "raw", f"sweep_R{s['R']}.h5")
-    old = os.path.join(args.out, "data.h5")
-    if os.path.exists(raw) and os.path.exists(old):
-        with h5py.File(raw, "r") as h, h5py.File(old, "r") as g:
-            if h.attrs.get("status") == "finished" and g.attrs.get("command", "").endswith(
-                    "--quick") == args.quick:
-                reused = float(g.attrs["wall_time_simulation"])
-    res, cfg = run_sweep(s, os.path.join(args.out, "raw"), not args.no_progress)
+    reused = _reused_simulation_wall(raw, os.path.join(ctx.out, "data.h5"), quick)
+    res, cfg = run_sweep(s, raw, ctx.progress)
     wall_sim = time.perf_counter() - t0 if reused is None else reused
     m_p = grain_mass(cfg)
     res.weight = m_p * cfg.gravity
     t1 = time.perf_counter()
     reps = classify_all(res, s)
-    rows = [r[0] for r in reps]  # bed 0: the figures and the detail panels
     det = details(res, s)
     wall_analysis = time.perf_counter() - t1
-    wall = wall_sim + wall_analysis
-    command = "python experiments/bed_dynamics.py" + (" --quick" if args.quick else "")
-    _write(args.out, res, cfg, s, reps, det, m_p, dict(total=wall, simulation=wall_sim,
-                                                       analysis=wall_analysis), command)
-    _figures(args.out, res, cfg, s, rows, det, m_p)
-    _summary(args.out, res, cfg, s, reps, det, m_p, wall, wall_sim, wall_analysis, command)
-    return dict(result=res, config=cfg, rows=rows, replicates=reps, details=det, settings=s,
-                grain_mass=m_p)
+    walls = dict(total=wall_sim + wall_analysis, simulation=wall_sim, analysis=wall_analysis)
+    result = dict(result=res, config=cfg, rows=[r[0] for r in reps],  # bed 0: figures, details
+                  replicates=reps, details=det, settings=s, grain_mass=m_p)
+    return result, lambda out, prov: write(result, walls, out, prov)
 
 
-def _write(out, res, cfg, s, reps, det, m_p, walls, command):
-    with h5py.File(os.path.join(out, "data.h5"), "w") as h:
-        h.attrs["jaxdamp_version"] = jaxdamp.__version__
-        h.attrs["command"] = command
-        for k, v in walls.items():
-            h.attrs[f"wall_time_{k}"] = v
-        h.attrs["grain_mass"] = m_p
-        h.attrs["transient"] = s["transient"]
-        h.attrs["duration"] = s["duration"]
-        h.attrs["base_config"] = cfg.to_json()
-        h.attrs["configs"] = json.dumps([c.to_json() for c in res.configs])
-        h.attrs["observable"] = ("z_cm: lab-frame centre of mass of the bed (thesis' choice); "
-                                 "z_rel = z_cm - z_box: the bed relative to the box floor")
-        h.create_dataset("axes/frequency", data=np.asarray(res.axes["frequency"], float)).attrs["units"] = "Hz"
+def main(argv=None):
+    return scaffold.main(__doc__, "bed_dynamics", argv, compute)
+
+
+def write(r, walls, out, prov):
+    res, cfg, s, reps = r["result"], r["config"], r["settings"], r["replicates"]
+    with scaffold.data_file(
+            out, prov, base_config=cfg.to_json(),
+            configs=json.dumps([c.to_json() for c in res.configs]),
+            observable=("z_cm: lab-frame centre of mass of the bed (thesis' choice); "
+                        "z_rel = z_cm - z_box: the bed relative to the box floor")) as h:
+        h.attrs.update({f"wall_time_{k}": v for k, v in walls.items()})
+        h.attrs.update(grain_mass=r["grain_mass"], transient=s["transient"],
+                       duration=s["duration"], replicates=res.replicates)
+        h.create_dataset("axes/frequency", data=np.asarray(res.axes["frequency"], float)
+                         ).attrs["units"] = "Hz"
         for k, v in res.summary.items():
             if np.ndim(v):
                 h.create_dataset(f"summary/{k}", data=v)
-        h.attrs["replicates"] = res.replicates
         dims = "frequency, replicate"
         for k, v in res.replicate_summary.items():
             h.create_dataset(f"replicate_summary/{k}", data=v).attrs["dims"] = dims
+
+        def grid(fn, dtype=float):  # (frequency, replicate) of one number per bed
+            return np.array([[fn(x) for x in rr] for rr in reps], dtype)
+
         for sig in ("z_cm", "z_rel"):
             g = h.create_group(f"classification/{sig}")
-            g.create_dataset("label", data=np.array([[r[sig]["label"] for r in rr] for rr in reps],
-                                                    dtype="S16")).attrs["dims"] = dims
-            for k in ("period", "exponent", "lyapunov_per_period", "line_fraction", "d1", "dmin", "k_loose",
-                      "dim", "delay", "peak_ratio", "stretch"):
-                ds = g.create_dataset(k, data=np.array([[r[sig][k] for r in rr] for rr in reps],
-                                                       float))
-                ds.attrs.update(units={"exponent": "1/s", "delay": "samples"}.get(k, "1"),
-                                dims=dims)
-        g = h.create_group("contacts")
-        for k in ("lid_hits_per_period", "floor_hits_per_period", "lid_contact_fraction",
-                  "floor_contact_fraction", "free_fraction"):
-            g.create_dataset(k, data=np.array([[r[k] for r in rr] for rr in reps], float)
+            g.create_dataset("label", data=grid(lambda x: x[sig]["label"], "S16")
                              ).attrs["dims"] = dims
-        for f, d in det.items():
+            for k in CLASS_KEYS:
+                g.create_dataset(k, data=grid(lambda x: x[sig][k])).attrs.update(
+                    units={"exponent": "1/s", "delay": "samples"}.get(k, "1"), dims=dims)
+        for k in CONTACT_KEYS:
+            h.create_dataset(f"contacts/{k}", data=grid(lambda x: x[k])).attrs["dims"] = dims
+        for f, d in r["details"].items():
             g = h.create_group(f"detail/f{f:g}")
             g.attrs["frequency"] = f
             for k in ("t", "z", "v", "z_box", "z_lowest", "z_highest", "force_box"):
-                g.create_dataset(f"series/{k}", data=np.asarray(d[k], np.float32), compression="gzip")
-            g.create_dataset("section/t", data=d["sec_t"])
-            g.create_dataset("section/z_cm", data=d["sec_z"])
-            g.create_dataset("section/vz_cm", data=d["sec_v"])
-            g.create_dataset("spectrum/f", data=d["spec"].f)
+                g.create_dataset(f"series/{k}", data=np.asarray(d[k], np.float32),
+                                 compression="gzip")
+            for k, v in (("section/t", d["sec_t"]), ("section/z_cm", d["sec_z"]),
+                         ("section/vz_cm", d["sec_v"]), ("spectrum/f", d["spec"].f)):
+                g.create_dataset(k, data=v)
             g.create_dataset("spectrum/psd", data=d["spec"].psd).attrs["method"] = d["spec"].method
             g.create_dataset("mutual_information", data=d["mi"]).attrs["delay"] = d["delay"]
             g.create_dataset("fnn_fraction", data=d["fnn"]).attrs["dim"] = d["dim"]
             ly = d["lyap"]
-            k = g.create_dataset("kantz/S", data=ly.S)
-            k.attrs.update(exponent=ly.exponent, fit_range=list(ly.fit_range), dt=ly.dt,
-                           epsilon=ly.epsilon, theiler=ly.theiler, dim=ly.dim, delay=ly.delay)
+            g.create_dataset("kantz/S", data=ly.S).attrs.update(
+                exponent=ly.exponent, fit_range=list(ly.fit_range), dt=ly.dt, epsilon=ly.epsilon,
+                theiler=ly.theiler, dim=ly.dim, delay=ly.delay)
+    _figures(out, r)
+    _summary(out, r, walls, prov)
 
 
-def _figures(out, res, cfg, s, rows, det, m_p):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+def _figures(out, r):
+    res, cfg, rows, det, m_p = (r[k] for k in ("result", "config", "rows", "details",
+                                               "grain_mass"))
     p = cfg.primary
     f = np.asarray(res.axes["frequency"], float)
     Z = res.summary["amplitude"]
     ff = np.linspace(min(f.min(), 4.0) * 0.9, max(f.max(), 24.0) * 1.02, 500)
-    fig, ax = plt.subplots(figsize=(8.5, 5))
+    fig, ax = scaffold.subplots(figsize=(8.5, 5))
     ax.plot(ff, frf_amplitude(ff, p.M, p.K, p.C, p.U) / p.U, "-", color="tab:blue", lw=0.9,
             label=f"no grains, M = {p.M} kg")
     ax.plot(ff, frf_amplitude(ff, p.M + m_p, p.K, p.C, p.U) / p.U, "--", color="tab:blue", lw=0.9,
@@ -308,14 +311,11 @@ def _figures(out, res, cfg, s, rows, det, m_p):
                        label=f"DEM, z_cm {lab}")
     for fi, zi, r in zip(f, Z, rows):
         c = r["z_cm"]
-        txt = f"P{c['period']}" if c["label"] == "periodic" else ""
-        if r["z_rel"]["label"] != c["label"]:
-            txt += "*"
+        txt = (f"P{c['period']}" if c["label"] == "periodic" else "") + (
+            "*" if r["z_rel"]["label"] != c["label"] else "")
         if txt:
             ax.annotate(txt, (fi, zi / p.U), textcoords="offset points", xytext=(4, 6), fontsize=7)
-    ax.set_yscale("log")
-    ax.set_xlabel("excitation frequency f [Hz]")
-    ax.set_ylabel("amplitude ratio Z / U")
+    ax.set(yscale="log", xlabel="excitation frequency f [Hz]", ylabel="amplitude ratio Z / U")
     ax2 = ax.twinx()
     lam = np.array([r["z_cm"]["exponent"] for r in rows])
     ch = np.array([r["z_cm"]["label"] in ("chaotic", "undetermined") for r in rows])
@@ -326,15 +326,12 @@ def _figures(out, res, cfg, s, rows, det, m_p):
     h1, l1 = ax.get_legend_handles_labels()
     h2, l2 = ax2.get_legend_handles_labels()
     ax.legend(h1 + h2, l1 + l2, fontsize=7, loc="upper left")
-    ax.set_title("sanchez2012-optimal (Lz = 0.1225 m, C = 7.6 N s/m): regime of the bed's centre of mass\n"
-                 "grey: thesis fig. 4.1 zones (dark: transition, light: chaos); P-k: period k; "
-                 "*: z_cm − z_box disagrees", fontsize=8)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out, "fig4_1.png"), dpi=120)
-    plt.close(fig)
+    ax.set_title("sanchez2012-optimal (Lz = 0.1225 m, C = 7.6 N s/m): regime of the bed's "
+                 "centre of mass\ngrey: thesis fig. 4.1 zones (dark: transition, light: chaos); "
+                 "P-k: period k; *: z_cm − z_box disagrees", fontsize=8)
+    scaffold.save_figure(fig, out, "fig4_1.png", dpi=120)
 
-    n = len(det)
-    fig, axs = plt.subplots(n, 5, figsize=(20, 3.3 * n), squeeze=False)
+    fig, axs = scaffold.subplots(len(det), 5, figsize=(20, 3.3 * len(det)), squeeze=False)
     row_of = {r["frequency"]: r for r in rows}
     mm = 1e3
     for a, (fq, d) in zip(axs, det.items()):
@@ -352,8 +349,7 @@ def _figures(out, res, cfg, s, rows, det, m_p):
         a[1].scatter(d["sec_z"] * mm, d["sec_v"], c=d["sec_t"], s=8, cmap="viridis", zorder=3)
         a[1].set_title(f"Poincaré section ({len(d['sec_t'])} periods): "
                        f"{r['label']}{' P' + str(r['period']) if r['period'] else ''}", fontsize=8)
-        a[1].set_xlabel("z_cm [mm]")
-        a[1].set_ylabel("v_cm [m/s]")
+        a[1].set(xlabel="z_cm [mm]", ylabel="v_cm [m/s]")
         sp = d["spec"]
         band = sp.f <= 6 * fq
         a[2].semilogy(sp.f[band], sp.psd[band], "-", lw=0.8)
@@ -365,141 +361,134 @@ def _figures(out, res, cfg, s, rows, det, m_p):
         a[2].set_xlabel("frequency [Hz]")
         tau = d["delay"]
         a[3].plot(d["z"][:-tau] * mm, d["z"][tau:] * mm, "-", lw=0.2, color="tab:blue")
-        a[3].set_xlabel("z_cm(t) [mm]")
-        a[3].set_ylabel("z_cm(t + τ) [mm]")
+        a[3].set(xlabel="z_cm(t) [mm]", ylabel="z_cm(t + τ) [mm]")
         a[3].set_title(f"delay embedding: τ = {tau} ms (MI), FNN dim = {d['dim']}", fontsize=8)
         ly = d["lyap"]
         a[4].plot(ly.time, ly.S, "-", lw=1)
-        i0, i1 = ly.fit_range
-        tt = ly.time[i0:i1 + 1]
+        tt = ly.time[ly.fit_range[0]:ly.fit_range[1] + 1]
         a[4].plot(tt, ly.intercept + ly.exponent * tt, "r--", lw=1.2)
-        a[4].set_xlabel("Δt [s]")
-        a[4].set_ylabel("S(Δt)")
-        a[4].set_title(f"Kantz: slope λ = {ly.exponent:.3g} 1/s (λ/f = {ly.exponent / fq:.3g})", fontsize=8)
+        a[4].set(xlabel="Δt [s]", ylabel="S(Δt)")
+        a[4].set_title(f"Kantz: slope λ = {ly.exponent:.3g} 1/s (λ/f = {ly.exponent / fq:.3g})",
+                       fontsize=8)
         for x in a:
             x.grid(alpha=0.3)
             x.tick_params(labelsize=7)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out, "fig_details.png"), dpi=90)
-    plt.close(fig)
+    scaffold.save_figure(fig, out, "fig_details.png", dpi=90)
 
 
-def _summary(out, res, cfg, s, reps, det, m_p, wall, wall_sim, wall_analysis, command):
+def _regime(c):
+    return f"periodic-{c['period']}" if c["label"] == "periodic" else c["label"]
+
+
+def _regimes(rr, sig):
+    """The beds' regimes of ``sig``, e.g. ``periodic-1 ×2, chaotic``."""
+    n = Counter(_regime(r[sig]) for r in rr)
+    return ", ".join(f"{k} ×{v}" if v > 1 else k for k, v in n.most_common())
+
+
+def _over_beds(x, fmt):
+    """Mean ± SE over the beds' finite values (the value alone for one bed, — for none)."""
+    e = scaffold.across(x)
+    return "—" if e.n == 0 else scaffold.pm(e.mean, e.se, fmt, ".2g")
+
+
+def _summary(out, r, walls, prov):
+    res, cfg, s, reps, det = (r[k] for k in ("result", "config", "settings", "replicates",
+                                             "details"))
     p = cfg.primary
     f = np.asarray(res.axes["frequency"], float)
     R = res.replicates
     Zr = np.asarray(res.replicate_summary["amplitude"])  # (F, R)
-    bal = res.summary["balance_error"]
     duration = float(res.records["t"][0][-1])  # whole chunks: may exceed s["duration"]
     steady = duration - s["transient"]
     st = res.steady["amplitude"]
     stationary = np.asarray(st["stationary"], bool)
-    starts = np.asarray(st["start"], float)
-    late = int(np.sum(stationary & (starts > s["transient"])))
+    late = int(np.sum(stationary & (np.asarray(st["start"], float) > s["transient"])))
     lines = [
         "# Bed dynamics along the FRF of the optimal damper (thesis fig. 4.1, ch. 4)", "",
-        f"Command: `{command}` — wall time {wall / 60:.1f} min on 2 cores (simulation "
-        f"{wall_sim / 60:.1f} min, analysis {wall_analysis:.0f} s). Data: `data.h5`; figures: "
-        "`fig4_1.png`, `fig_details.png` (bed 0).", "",
-        f"Runs: `sanchez2012-optimal` (N = 250, Lz = {cfg.box.Lz} m, C = {p.C} N s/m, U = {p.U} m, "
-        "E = 2.03e9 via stiffness_scale 0.01), one batched sweep over "
+        f"Command: `{prov['command']}` — wall time {walls['total'] / 60:.1f} min on 2 cores "
+        f"(simulation {walls['simulation'] / 60:.1f} min, analysis {walls['analysis']:.0f} s). "
+        "Data: `data.h5`; figures: `fig4_1.png`, `fig_details.png` (bed 0).", "",
+        f"Runs: `sanchez2012-optimal` (N = 250, Lz = {cfg.box.Lz} m, C = {p.C} N s/m, "
+        f"U = {p.U} m, E = 2.03e9 via stiffness_scale 0.01), one batched sweep over "
         f"{len(f)} frequencies × **R = {R} independently poured beds** (seeds 0…{R - 1}), "
         f"{duration:g} s simulated per run after settling, samples every "
-        f"{s['record_dt'] * 1e3:g} ms. The first {s['transient']} s are dropped as transient (the thesis: "
-        f"~5 s of 196.83 s); the classifier sees the remaining {steady:g} s, i.e. "
-        f"{steady * f.min():.0f} drive periods at {f.min():g} Hz to {steady * f.max():.0f} at {f.max():g} Hz "
-        "(the thesis' series were 15× longer). Stationarity (MSER on the per-period amplitude and "
-        f"dissipation): {int(stationary.sum())} of {stationary.size} runs detected stationary, "
-        f"{late} of them only after the {s['transient']} s cut (their first steady periods are "
-        "still classified). Amplitude Z: half peak-to-peak of the box over the final 10 % of "
-        f"each run, mean ± SE over the beds. Balance error (max): {np.max(bal):.1e}.", "",
+        f"{s['record_dt'] * 1e3:g} ms. The first {s['transient']} s are dropped as transient "
+        f"(the thesis: ~5 s of 196.83 s); the classifier sees the remaining {steady:g} s, i.e. "
+        f"{steady * f.min():.0f} drive periods at {f.min():g} Hz to {steady * f.max():.0f} at "
+        f"{f.max():g} Hz (the thesis' series were 15× longer). Stationarity (MSER on the "
+        f"per-period amplitude and dissipation): {int(stationary.sum())} of {stationary.size} "
+        f"runs detected stationary, {late} of them only after the {s['transient']} s cut (their "
+        "first steady periods are still classified). Amplitude Z: half peak-to-peak of the box "
+        "over the final 10 % of each run, mean ± SE over the beds. Balance error (max): "
+        f"{np.max(res.summary['balance_error']):.1e}.", "",
         "Observable: the lab-frame centre of mass `z_cm` of the bed (what the thesis analyses); "
-        "`z_cm − z_box` (the bed in the box's frame) is classified as a cross-check — it is another "
-        "observable of the same deterministic system (the box position is a state variable in S1), "
-        "so the regimes should agree. Classifier: `jaxdamp.analysis.dynamics.classify` with its defaults "
-        "(periodic-k if the stroboscopic return map repeats after k ≤ 8 periods within 1e-2 of the "
-        "series' std; otherwise chaotic if λ/f > 0.02 and the harmonic-masked periodogram is broadband "
-        "(< 90 % of the rest in 20 lines), quasi-periodic if λ/f ≤ 0.02 and line spectrum, "
-        "undetermined if the two disagree). λ: Kantz, embedding passed to the classifier: delay "
-        "from the first minimum of the mutual information of prominence ≥ 0.2 of its range (the "
-        "plain first minimum is a spurious one-sample dip on these nearly sinusoidal series), "
-        "dimension from false nearest neighbours (< 1 %); Theiler window one drive period. "
-        "Every bed is classified on its own: a regime is a verdict of the beds, the table says "
-        "how many agree.", "",
-        "Contacts (from the interval-averaged force of the grains on the box, over the steady part): "
-        "each sample is lid (F > +0.5 m_p g), floor (F < −0.5 m_p g) or free flight (|F| < 0.2 m_p g); "
-        "an impact is an entry into lid or floor from another state (a bed that never leaves the "
-        "floor has none).", "",
+        "`z_cm − z_box` (the bed in the box's frame) is classified as a cross-check — it is "
+        "another observable of the same deterministic system (the box position is a state "
+        "variable in S1), so the regimes should agree. Classifier: "
+        "`jaxdamp.analysis.dynamics.classify` with its defaults (periodic-k if the stroboscopic "
+        "return map repeats after k ≤ 8 periods within 1e-2 of the series' std; otherwise "
+        "chaotic if λ/f > 0.02 and the harmonic-masked periodogram is broadband (< 90 % of the "
+        "rest in 20 lines), quasi-periodic if λ/f ≤ 0.02 and line spectrum, undetermined if the "
+        "two disagree). λ: Kantz, embedding passed to the classifier: delay from the first "
+        "minimum of the mutual information of prominence ≥ 0.2 of its range (the plain first "
+        "minimum is a spurious one-sample dip on these nearly sinusoidal series), dimension from "
+        "false nearest neighbours (< 1 %); Theiler window one drive period. Every bed is "
+        "classified on its own: a regime is a verdict of the beds, the table says how many "
+        "agree.", "",
+        "Contacts (from the interval-averaged force of the grains on the box, over the steady "
+        "part): each sample is lid (F > +0.5 m_p g), floor (F < −0.5 m_p g) or free flight "
+        "(|F| < 0.2 m_p g); an impact is an entry into lid or floor from another state (a bed "
+        "that never leaves the floor has none).", "",
         "Columns (mean ± SE over the beds where numeric): d1 = median distance between section "
         "points one period apart (return map, relative to the series' std; < 0.01 is "
         "periodic-1); 'k at 0.05' = the period k each bed's section shows at a 5× looser "
         "tolerance (a noisy period-k), 0 if none; lines = fraction of the non-harmonic power in "
-        "20 spectral lines.", "",
-        "| f [Hz] | Z/U | regime z_cm (beds) | λ [1/s] | λ/f | d1 | k at 0.05 | lines | "
-        "regime z_cm−z_box (beds) | lid hits/T | floor hits/T | thesis (fig. 4.1) |",
-        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |",
-    ]
-
-    def lab(c):
-        return f"periodic-{c['period']}" if c["label"] == "periodic" else c["label"]
-
-    def labs(rr, sig):
-        from collections import Counter
-
-        n = Counter(lab(r[sig]) for r in rr)
-        return ", ".join(f"{k} ×{v}" if v > 1 else k for k, v in n.most_common())
-
-    def ms(x, fmt):
-        x = np.asarray(x, float)
-        x = x[np.isfinite(x)]
-        if not len(x):
-            return "—"
-        if len(x) == 1:
-            return format(x[0], fmt)
-        return f"{format(x.mean(), fmt)} ± {format(x.std(ddof=1) / np.sqrt(len(x)), '.2g')}"
-
+        "20 spectral lines.", ""]
+    rows = []
     for i, (fi, rr) in enumerate(zip(f, reps)):
-        a = [r["z_cm"] for r in rr]
-        lines.append(
-            f"| {fi:g} | {ms(Zr[i] / p.U, '.2f')} | {labs(rr, 'z_cm')} | "
-            f"{ms([c['exponent'] for c in a], '.3g')} | "
-            f"{ms([c['lyapunov_per_period'] for c in a], '.3f')} | "
-            f"{ms([c['d1'] for c in a], '.2g')} | {', '.join(str(c['k_loose']) for c in a)} | "
-            f"{ms([c['line_fraction'] for c in a], '.2f')} | {labs(rr, 'z_rel')} | "
-            f"{ms([r['lid_hits_per_period'] for r in rr], '.2f')} | "
-            f"{ms([r['floor_hits_per_period'] for r in rr], '.2f')} | {thesis_zone(fi)} |")
-    lines += ["", "Detail frequencies (z_cm): MI delay, FNN dimension, Kantz exponent from the curve "
-              "in `fig_details.png` (the classifier's embedding; λ is computed for periodic points too, "
-              "where it should be ≈ 0 or negative).", "",
-              "| f [Hz] | section points | MI delay [ms] | FNN dim | Kantz λ [1/s] | fit range [s] |",
-              "| --- | --- | --- | --- | --- | --- |"]
-    for fq, d in det.items():
-        ly = d["lyap"]
-        lines.append(f"| {fq:g} | {len(d['sec_t'])} | {d['delay'] * s['record_dt'] * 1e3:.0f} | {d['dim']} | "
-                     f"{ly.exponent:.3g} | {ly.time[ly.fit_range[0]]:.3f}–{ly.time[ly.fit_range[1]]:.3f} |")
+        a = [x["z_cm"] for x in rr]
+        rows.append([
+            f"{fi:g}", _over_beds(Zr[i] / p.U, ".2f"), _regimes(rr, "z_cm"),
+            _over_beds([c["exponent"] for c in a], ".3g"),
+            _over_beds([c["lyapunov_per_period"] for c in a], ".3f"),
+            _over_beds([c["d1"] for c in a], ".2g"), ", ".join(str(c["k_loose"]) for c in a),
+            _over_beds([c["line_fraction"] for c in a], ".2f"), _regimes(rr, "z_rel"),
+            _over_beds([x["lid_hits_per_period"] for x in rr], ".2f"),
+            _over_beds([x["floor_hits_per_period"] for x in rr], ".2f"), thesis_zone(fi)])
+    lines += scaffold.table(
+        ["f [Hz]", "Z/U", "regime z_cm (beds)", "λ [1/s]", "λ/f", "d1", "k at 0.05", "lines",
+         "regime z_cm−z_box (beds)", "lid hits/T", "floor hits/T", "thesis (fig. 4.1)"], rows)
+    lines += ["", "Detail frequencies (z_cm): MI delay, FNN dimension, Kantz exponent from the "
+              "curve in `fig_details.png` (the classifier's embedding; λ is computed for periodic "
+              "points too, where it should be ≈ 0 or negative).", ""]
+    lines += scaffold.table(
+        ["f [Hz]", "section points", "MI delay [ms]", "FNN dim", "Kantz λ [1/s]", "fit range [s]"],
+        [[f"{fq:g}", len(d["sec_t"]), f"{d['delay'] * s['record_dt'] * 1e3:.0f}", d["dim"],
+          f"{d['lyap'].exponent:.3g}", f"{d['lyap'].time[d['lyap'].fit_range[0]]:.3f}–"
+          f"{d['lyap'].time[d['lyap'].fit_range[1]]:.3f}"] for fq, d in det.items()])
     lines += ["", "## Comparison with the thesis (SPEC §6), zone by zone", ""]
+    want = {"periodic": ("periodic",), "chaotic": ("chaotic",),
+            "transition": ("quasi-periodic", "periodic")}
     for lo, hi, zone in THESIS_ZONES:
         sel = [(fi, rr) for fi, rr in zip(f, reps) if lo <= fi < hi]
         if not sel:
             continue
-        want = {"periodic": ("periodic",), "chaotic": ("chaotic",),
-                "transition": ("quasi-periodic", "periodic")}
-        key = next((k for k in want if zone.startswith(k)), None)
-        if zone.startswith("periodic window"):
-            key = "periodic"
-        found = "; ".join(f"{fi:g} Hz {labs(rr, 'z_cm')}" for fi, rr in sel)
-        hits = [key is not None and r["z_cm"]["label"] in want[key] for _, rr in sel for r in rr]
+        key = "periodic" if zone.startswith("periodic window") else next(
+            (k for k in want if zone.startswith(k)), None)
+        found = "; ".join(f"{fi:g} Hz {_regimes(rr, 'z_cm')}" for fi, rr in sel)
+        hits = [key is not None and x["z_cm"]["label"] in want[key] for _, rr in sel for x in rr]
         verdict = "agrees" if all(hits) else "partly agrees" if any(hits) else "differs"
         lines.append(f"- thesis {zone} ({lo:g}–{hi:g} Hz): {found} — {verdict} "
                      f"({sum(hits)} of {len(hits)} bed-frequencies).")
-    lines += ["", "Caveats: the steady series are ~20× shorter than the thesis' (a weak exponent or a "
-              "slow drift of a torus is hard to tell from a transient on 50–200 periods); the modulus is "
-              "reduced 100× (collision outcomes kept, collisions 6.3× longer); the thesis' regime "
-              "boundaries are read from its text (fig. 4.1 itself is an image), so a frequency next to a "
-              "boundary may fall on either side. `undetermined` means the exponent and the spectrum "
-              "disagree — reported as such, not forced into a class.", ""]
-    with open(os.path.join(out, "summary.md"), "w") as fh:
-        fh.write("\n".join(lines) + "\n")
+    lines += ["", "Caveats: the steady series are ~20× shorter than the thesis' (a weak exponent "
+              "or a slow drift of a torus is hard to tell from a transient on 50–200 periods); "
+              "the modulus is reduced 100× (collision outcomes kept, collisions 6.3× longer); the "
+              "thesis' regime boundaries are read from its text (fig. 4.1 itself is an image), "
+              "so a frequency next to a boundary may fall on either side. `undetermined` means "
+              "the exponent and the spectrum disagree — reported as such, not forced into a "
+              "class.", ""]
+    scaffold.write_summary(out, lines)
 
 
 if __name__ == "__main__":

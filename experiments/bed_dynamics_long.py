@@ -40,25 +40,20 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 from collections import Counter
 
-import h5py
 import numpy as np
 
 from jaxdamp.analysis import dynamics as dyn
-from jaxdamp.analysis import stats
-from jaxdamp.cases import presets
-from jaxdamp.config import apply_overrides
 from jaxdamp.studies.grid import replicate_configs
 from jaxdamp.studies.twin import twin_sweep
 
 try:
+    from . import bed_dynamics as bd
     from . import scaffold
 except ImportError:  # run as a file: python experiments/<name>.py
+    import bed_dynamics as bd
     import scaffold
-
-HERE = os.path.dirname(os.path.abspath(__file__))
 F_FULL = (10.0, 10.5, 11.0, 13.0, 14.5, 21.0)
 #: thesis ch. 4 at these frequencies (SPEC §6 / thesis fig. 4.1)
 THESIS = {10.0: "period-2", 10.5: "torus, wrinkling", 11.0: "torus break-up → chaos",
@@ -113,21 +108,21 @@ def analyse_pair(t, ref: dict, twin: dict, f: float, s: dict) -> dict:
     return out
 
 
-def level(spread: float, harm: float) -> str:
-    """Period-k verdict at each tolerance: both measures within it."""
-    ok = [tol for tol in TOLERANCES if spread < tol and 1 - harm < tol]
-    return f"within {100 * ok[0]:g} %" if ok else "no"
-
-
 def within(spread: float, harm: float, tol: float) -> bool:
     """Period-k at tolerance ``tol``: the strobe spread and the off-line power both below it."""
     return bool(spread < tol and 1 - harm < tol)
 
 
+def level(spread: float, harm: float) -> str:
+    """Period-k verdict: the tightest tolerance within which it holds."""
+    ok = [tol for tol in TOLERANCES if within(spread, harm, tol)]
+    return f"within {100 * ok[0]:g} %" if ok else "no"
+
+
 def combine(beds: list[dict]) -> dict:
     """One frequency's beds (each :func:`analyse_pair`'s output) combined per signal: every
     measure's per-bed values with their mean, standard error over the beds and count
-    (:func:`jaxdamp.analysis.stats.across`; NaN left out); the period-k verdicts as counts of
+    (:func:`scaffold.across`; NaN left out); the period-k verdicts as counts of
     beds within each tolerance; the classifier's labels; how many twin exponents are only
     lower bounds (saturated within the first period), did not grow, or did not saturate."""
     out = {}
@@ -136,7 +131,7 @@ def combine(beds: list[dict]) -> dict:
         c = {"beds": len(ds)}
         for key, fn in MEASURES.items():
             v = np.array([fn(d) for d in ds], float)
-            e = stats.across(v)
+            e = scaffold.across(v)
             c[key] = dict(values=v, mean=e.mean, se=e.se, n=e.n)
         for k in (1, 2):
             for tol in TOLERANCES:
@@ -150,12 +145,10 @@ def combine(beds: list[dict]) -> dict:
     return out
 
 
-def compute(quick: bool, log, ctx, beds: int = BEDS):
+def compute(quick: bool, log, ctx):
     s = settings(quick)
-    s["beds"] = int(beds)
-    cfg = apply_overrides(presets.get("sanchez2012-optimal"), {
-        "numerics.duration": s["duration"], "numerics.settle_time": s["settle"],
-        "numerics.record_dt": 1e-3, "numerics.chunk": s["chunk"]})
+    s["beds"] = ctx.args.beds
+    cfg = bd.optimal_config(s["duration"], s["settle"], chunk=s["chunk"])
     bed_cfgs = replicate_configs([cfg], s["beds"])  # the package's replicate seeds
     s["seeds"] = [int(c.numerics.seed) for c in bed_cfgs]
     rows = {f: dict(beds=[], identical_before=[]) for f in s["freqs"]}
@@ -185,38 +178,32 @@ def compute(quick: bool, log, ctx, beds: int = BEDS):
         row["stats"] = combine(row["beds"])
     result = dict(rows=rows, config=cfg, wall=wall, balance=np.concatenate(balance),
                   beds=s["beds"], seeds=s["seeds"])
-    def writer(path, prov):
-        if s["beds"] != BEDS:  # the provenance's command line carries a non-default --beds
-            prov = dict(prov, command=prov["command"] + f" --beds {s['beds']}")
-        write(result, s, path, prov)
+    return result, lambda path, prov: write(result, s, path, prov)
 
-    return result, writer
+
+def _beds(text: str) -> int:
+    n = int(text)
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"{n}: need at least one bed per frequency")
+    return n
 
 
 def main(argv=None):
-    pre = argparse.ArgumentParser(add_help=False)
-    pre.add_argument("--beds", type=int, default=BEDS)
-    args, rest = pre.parse_known_args(argv)
-    if args.beds < 1:
-        pre.error(f"--beds {args.beds}: need at least one bed per frequency")
-    doc = (__doc__ + f"\n--beds R: independently poured beds per frequency (default {BEDS}; "
-           "≥ 2 for standard errors).")
-    return scaffold.main(doc, "bed_dynamics_long", rest,
-                         lambda quick, log, ctx: compute(quick, log, ctx, args.beds))
+    def options(ap):
+        ap.add_argument("--beds", type=_beds, default=BEDS, metavar="R",
+                        help=f"independently poured beds per frequency (default {BEDS}; ≥ 2 for "
+                             "standard errors)")
+
+    return scaffold.main(__doc__, "bed_dynamics_long", argv, compute, options)
 
 
 def write(r, s, out, prov):
-    with h5py.File(os.path.join(out, "data.h5"), "w") as h:
-        scaffold.stamp(h, dict(prov, sweep_wall_s=r["wall"]))
-        h.attrs["settings"] = json.dumps(s)
-        h.attrs["config"] = r["config"].to_json()
-        h.attrs["delta"] = DELTA
-        h.attrs["beds"] = r["beds"]
-        h.attrs["seeds"] = r["seeds"]
+    with scaffold.data_file(out, dict(prov, sweep_wall_s=r["wall"]), settings=json.dumps(s),
+                            config=r["config"].to_json()) as h:
+        h.attrs.update(delta=DELTA, beds=r["beds"], seeds=r["seeds"])
         for f, row in r["rows"].items():
             g = h.create_group(f"f_{f:g}")
-            g.attrs["frequency"] = f
-            g.attrs["identical_before_perturbation"] = row["identical_before"]
+            g.attrs.update(frequency=f, identical_before_perturbation=row["identical_before"])
             for name in SIGNALS:
                 c = row["stats"][name]
                 gs = g.create_group(f"over_beds/{name}")
@@ -227,12 +214,12 @@ def write(r, s, out, prov):
                     ds.attrs.update(mean=c[key]["mean"], se=c[key]["se"], n=c[key]["n"])
                 gs.attrs.update({k: v for k, v in c.items()
                                  if k.startswith("period") or k in ("bounds", "not_grown",
-                                                                    "not_reached", "beds")})
-                gs.attrs["labels"] = c["labels"]
+                                                                    "not_reached", "beds",
+                                                                    "labels")})
             for b, (bed, seed) in enumerate(zip(row["beds"], r["seeds"])):
                 gb = g.create_group(f"bed_{b}")
-                gb.attrs["seed"] = seed
-                gb.attrs["identical_before_perturbation"] = row["identical_before"][b]
+                gb.attrs.update(seed=seed,
+                                identical_before_perturbation=row["identical_before"][b])
                 for name in SIGNALS:
                     d = bed[name]
                     gg = gb.create_group(name)
@@ -245,13 +232,10 @@ def write(r, s, out, prov):
 
 
 def _figure(r, s, out):
-    import matplotlib
+    from matplotlib import rcParams
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axs = plt.subplots(1, 3, figsize=(15, 4.6))
-    colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    fig, axs = scaffold.subplots(1, 3, figsize=(15, 4.6))
+    colors = rcParams["axes.prop_cycle"].by_key()["color"]
     styles = ("-", "--", ":", "-.")
     for j, (f, row) in enumerate(r["rows"].items()):
         for b, bed in enumerate(row["beds"]):
@@ -262,8 +246,7 @@ def _figure(r, s, out):
                             label=f"{f:g} Hz" if b == 0 else None)
     for name, ax in zip(SIGNALS, axs[:2]):
         ax.axvline(s["t_perturb"], color="k", lw=0.6, ls=":")
-        ax.set_xlabel("time t [s]")
-        ax.set_ylabel(f"twin distance |Δ{name}| per period (max) [m]")
+        ax.set(xlabel="time t [s]", ylabel=f"twin distance |Δ{name}| per period (max) [m]")
         ax.set_title(f"{name}: twins, one grain moved {DELTA:g} m at t = {s['t_perturb']:g} s;"
                      f"\n{r['beds']} beds (line styles)", fontsize=9)
         ax.legend(fontsize=7)
@@ -283,22 +266,20 @@ def _figure(r, s, out):
     for tol in TOLERANCES:
         axs[2].axhline(tol, color="0.5", lw=0.7, ls="--")
     axs[2].set_xticks(x, [f"{f:g}" for f in fs])
-    axs[2].set_xlabel("drive frequency f [Hz]")
-    axs[2].set_ylabel("periodicity level of z_box [-] (dashed: 1 %, 5 % tolerances)")
+    axs[2].set(xlabel="drive frequency f [Hz]",
+               ylabel="periodicity level of z_box [-] (dashed: 1 %, 5 % tolerances)")
     axs[2].set_title(f"distance from a period-1 / period-2 orbit, {r['beds']} beds", fontsize=9)
     axs[2].legend(fontsize=7)
     scaffold.save_figure(fig, out, "figure.png")
 
 
-def pm(c: dict, digits: int = 2, bound: bool = False) -> str:
-    """``mean ± SE`` of a combined measure (``≥`` for a mean over lower bounds)."""
+def over_beds(c: dict, digits: int = 2, bound: bool = False) -> str:
+    """``mean ± SE`` of a combined measure (``≥`` for a mean over lower bounds), with the
+    count of beds where not every bed gave a value or there is no SE."""
     if not np.isfinite(c["mean"]):
         return "n/a"
-    ge = "≥ " if bound else ""
-    if not np.isfinite(c["se"]):
-        return f"{ge}{c['mean']:.{digits}g} (n = {c['n']})"
-    n = "" if c["n"] == len(c["values"]) else f" (n = {c['n']})"
-    return f"{ge}{c['mean']:.{digits}g} ± {c['se']:.2g}{n}"
+    n = ("" if np.isfinite(c["se"]) and c["n"] == len(c["values"]) else f" (n = {c['n']})")
+    return ("≥ " if bound else "") + scaffold.pm(c["mean"], c["se"], digits) + n
 
 
 def counts(c: dict, k: int) -> str:
@@ -319,7 +300,7 @@ def labels(c: dict) -> str:
 def saturation(c: dict) -> str:
     parts = []
     if np.isfinite(c["t_sat"]["mean"]):
-        parts.append(pm(c["t_sat"], 3))
+        parts.append(over_beds(c["t_sat"], 3))
     if c["bounds"]:
         parts.append(f"within the first period on {c['bounds']}")
     if c["not_reached"]:
@@ -372,34 +353,37 @@ def _summary(r, s, out, prov):
          "'Plateau / orbit size' says how far the separation reaches the observable: "
          "a bed whose grains diverge at once while z_box stays within ~1 % of its orbit is "
          "chaotic at the grain level and nearly periodic at the level of the damper.", ""]
+    levels = ["s₁", "s₂", "1 − h₁", "1 − h₂", "period-1", "period-2"]
     for name in SIGNALS:
-        L += [f"## {name}", "",
-              f"Mean ± SE over {R} beds; period-k: counts of beds.", "",
-              "| f [Hz] | thesis | s₁ | s₂ | 1 − h₁ | 1 − h₂ | period-1 | period-2 | "
-              "classifier (beds) | Kantz λ/f | twin λ [1/s] | twin λ/f | twin plateau at [s] "
-              "| plateau / orbit size |", "| --- " * 14 + "|"]
+        rows = []
         for f, row in r["rows"].items():
             c = row["stats"][name]
-            bd = c["bounds"] > 0
-            L.append(f"| {f:g} | {THESIS.get(f, '')} | {pm(c['s1'])} | {pm(c['s2'])} | "
-                     f"{pm(c['off1'])} | {pm(c['off2'])} | {counts(c, 1)} | {counts(c, 2)} | "
-                     f"{labels(c)} | {pm(c['kantz'], 3)} | {pm(c['twin'], 3, bd)} | "
-                     f"{pm(c['twin_per_period'], 3, bd)} | {saturation(c)} | "
-                     f"{pm(c['plateau_rel'])} |")
-        L += ["", f"Per bed ({name}):", "",
-              "| f [Hz] | bed (seed) | s₁ | s₂ | 1 − h₁ | 1 − h₂ | period-1 | period-2 | "
-              "classifier | Kantz λ/f (span [periods]) | twin λ [1/s] | twin λ/f | plateau at "
-              "[s] | plateau / orbit size |", "| --- " * 14 + "|"]
+            bound = c["bounds"] > 0
+            rows.append([f"{f:g}", THESIS.get(f, "")]
+                        + [over_beds(c[k]) for k in ("s1", "s2", "off1", "off2")]
+                        + [counts(c, 1), counts(c, 2), labels(c), over_beds(c["kantz"], 3),
+                           over_beds(c["twin"], 3, bound),
+                           over_beds(c["twin_per_period"], 3, bound), saturation(c),
+                           over_beds(c["plateau_rel"])])
+        L += [f"## {name}", "", f"Mean ± SE over {R} beds; period-k: counts of beds.", ""]
+        L += scaffold.table(["f [Hz]", "thesis"] + levels + [
+            "classifier (beds)", "Kantz λ/f", "twin λ [1/s]", "twin λ/f", "twin plateau at [s]",
+            "plateau / orbit size"], rows)
+        rows = []
         for f, row in r["rows"].items():
             for b, (bed, seed) in enumerate(zip(row["beds"], r["seeds"])):
                 d = bed[name]
-                lab = d["label"] + (f"-{d['period']}" if d["period"] else "")
-                L.append(f"| {f:g} | {b} ({seed}) | {_bed_cell(d, 's1')} | {_bed_cell(d, 's2')} "
-                         f"| {_bed_cell(d, 'off1')} | {_bed_cell(d, 'off2')} | "
-                         f"{level(d['spread1'], d['harm1'])} | {level(d['spread2'], d['harm2'])}"
-                         f" | {lab} | {d['kantz_per_period']:.3g} ({d['kantz_span_periods']:.1f})"
-                         f" | {_bed_cell(d, 'twin')} | {_bed_cell(d, 'twin_per_period')} | "
-                         f"{_bed_cell(d, 't_sat')} | {_bed_cell(d, 'plateau_rel')} |")
+                rows.append([f"{f:g}", f"{b} ({seed})"]
+                            + [_bed_cell(d, k) for k in ("s1", "s2", "off1", "off2")]
+                            + [level(d["spread1"], d["harm1"]), level(d["spread2"], d["harm2"]),
+                               d["label"] + (f"-{d['period']}" if d["period"] else ""),
+                               f"{d['kantz_per_period']:.3g} ({d['kantz_span_periods']:.1f})"]
+                            + [_bed_cell(d, k) for k in ("twin", "twin_per_period", "t_sat",
+                                                         "plateau_rel")])
+        L += ["", f"Per bed ({name}):", ""]
+        L += scaffold.table(["f [Hz]", "bed (seed)"] + levels + [
+            "classifier", "Kantz λ/f (span [periods])", "twin λ [1/s]", "twin λ/f",
+            "plateau at [s]", "plateau / orbit size"], rows)
         L.append("")
     L += ["What the twin exponent can and cannot tell: it is the growth rate of a perturbation "
           "of the whole simulated system (6N + 2 ≈ 1500 phase-space dimensions for N = 250), "

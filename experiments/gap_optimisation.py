@@ -35,27 +35,26 @@ Writes ``data.h5`` (every number; configurations as JSON attributes), ``figure.p
 
 from __future__ import annotations
 
-import argparse
 import json
-import os
 import time
 
-import h5py
 import jax
 import numpy as np
 
-import jaxdamp
+from jaxdamp.analysis.response import parabolic_extremum
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
-from jaxdamp.analysis.response import parabolic_extremum
-from jaxdamp.analysis.stats import t_quantile
 from jaxdamp.design import DEMProblem, Objective, S3Problem, optimize, scan_optimum
 from jaxdamp.design.surface import quadratic_optimum
 from jaxdamp.physics.model import primary_frequency
 from jaxdamp.studies.grid import steady_or_window
 from jaxdamp.studies.sweep import sweep
 
-HERE = os.path.dirname(os.path.abspath(__file__))
+try:
+    from . import scaffold
+except ImportError:  # run as a file: python experiments/<name>.py
+    import scaffold
+
 THESIS_LZ = 0.1225
 #: S3 at f0: the response is periodic (two impacts per period) up to about this gap [m] and
 #: irregular above (measured: the smooth and event-driven models' Z and dissipation jump).
@@ -80,7 +79,7 @@ def settings(quick: bool) -> dict:
         s3_objectives=("dissipation", "band"), s3_fd_gaps=(0.05, 0.0835, 0.12))
 
 
-def dem_part(s, raw, progress, log):
+def dem_part(s, ctx, log):
     base = apply_overrides(presets.get("sanchez2012-optimal"),
                            {"numerics.settle_time": s["settle"], "grains.0.count": s["grains"]})
     f0 = primary_frequency(base)
@@ -92,6 +91,10 @@ def dem_part(s, raw, progress, log):
     out["dt"] = prob.dt
     out["config"] = prob.config.to_json()
 
+    def central(e, lz, h):  # central difference of the window objective (native engine)
+        return (prob.window_values(e, lz + h, engine="auto")
+                - prob.window_values(e, lz - h, engine="auto")) / (2 * h)
+
     # 1. gradient vs window length, and 2. AD vs FD at three Lz
     ens_at = {}
     sim_windows = 0.0
@@ -100,31 +103,24 @@ def dem_part(s, raw, progress, log):
         sim_windows += ens_at[lz].sim_seconds
     rows = []
     ens = ens_at[THESIS_LZ]
-    h = 1e-5
     for w in s["windows"]:
         prob.set_window(w)
         t0 = time.perf_counter()
         v, d = prob.window_derivatives(ens)
         wall = time.perf_counter() - t0
-        fd = (prob.window_values(ens, THESIS_LZ + h, engine="auto")
-              - prob.window_values(ens, THESIS_LZ - h, engine="auto")) / (2 * h)
-        fd8 = (prob.window_values(ens, THESIS_LZ + 1e-8, engine="auto")
-               - prob.window_values(ens, THESIS_LZ - 1e-8, engine="auto")) / 2e-8
+        fd, fd8 = central(ens, THESIS_LZ, 1e-5), central(ens, THESIS_LZ, 1e-8)
         rows.append(dict(window=prob.window_seconds, values=v, ad=d, fd=fd, fd8=fd8, wall=wall))
-        log(f"window {prob.window_seconds * 1e3:.2f} ms: dD/dLz = {d.mean():.4g} ± "
-            f"{d.std(ddof=1) / np.sqrt(len(d)):.3g} (FD {fd.mean():.4g}), {wall:.1f} s")
+        log(f"window {prob.window_seconds * 1e3:.2f} ms: dD/dLz = "
+            f"{scaffold.pm(*scaffold.mean_se(d), 4, 3)} (FD {fd.mean():.4g}), {wall:.1f} s")
     out["windows"] = rows
     prob.set_window(s["window"])
     fd_rows = []
     for lz in s["fd_lz"]:
         e = ens_at[lz]
         v, d = prob.window_derivatives(e)
-        fds = {}
-        for hh in (1e-4, 1e-5, 1e-6, 1e-8):
-            fds[hh] = (prob.window_values(e, lz + hh, engine="auto")
-                       - prob.window_values(e, lz - hh, engine="auto")) / (2 * hh)
+        fds = {hh: central(e, lz, hh) for hh in (1e-4, 1e-5, 1e-6, 1e-8)}
         fd_rows.append(dict(lz=lz, values=v, ad=d, fd=fds))
-        log(f"Lz = {lz}: AD {d.mean():.4g} ± {d.std(ddof=1) / np.sqrt(len(d)):.3g}; FD "
+        log(f"Lz = {lz}: AD {scaffold.pm(*scaffold.mean_se(d), 4, 3)}; FD "
             + ", ".join(f"h={hh:g}: {x.mean():.4g}" for hh, x in fds.items()))
     out["fd"] = fd_rows
 
@@ -142,7 +138,6 @@ def dem_part(s, raw, progress, log):
         jax.block_until_ready(fn(*args))
         modes[mode] = dict(wall=time.perf_counter() - t0,
                            temp_bytes=float(getattr(mem, "temp_size_in_bytes", np.nan)))
-    fwd_fn = prob._fns.get(("values", "jax", prob.n_rec, prob.record_every))
     prob.window_values(ens, engine="jax")
     t0 = time.perf_counter()
     prob.window_values(ens, engine="jax")
@@ -150,7 +145,6 @@ def dem_part(s, raw, progress, log):
     t0 = time.perf_counter()
     prob.window_values(ens, engine="auto")
     modes["primal (native)"] = dict(wall=time.perf_counter() - t0, temp_bytes=np.nan)
-    del fwd_fn
     out["modes"] = modes
     out["mode_steps"] = float(ens.states.t.shape[0] * prob.n_rec * prob.record_every)
     log("modes: " + ", ".join(f"{k} {v['wall']:.2f} s" for k, v in modes.items()))
@@ -161,45 +155,30 @@ def dem_part(s, raw, progress, log):
                                       "numerics.record_dt": 1e-3, "numerics.chunk": 0.1})
     t0 = time.perf_counter()
     R = s["R"]
-    res = sweep(cfg_scan, {"box.Lz": list(s["scan_lz"])}, progress=progress, echo=None,
+    res = sweep(cfg_scan, {"box.Lz": list(s["scan_lz"])}, progress=ctx.progress, echo=None,
                 replicates=R)
     out["scan"] = scan_stats(s["scan_lz"], res)
     out["scan"].update(wall=time.perf_counter() - t0, config=cfg_scan.to_json(),
                        sim_seconds=R * (len(s["scan_lz"]) * s["scan_duration"] + prob.bed.time))
-    o = out["scan"]["opt_dissipation"]
-    log(f"scan optimum (dissipation) Lz = {o['mean']:.4g} ± {o['se']:.2g} m over {R} beds")
-
-    # 4b. optimiser from both starts
-    out["opt"] = {}
-    for lz0 in (0.07, 0.25):
-        r = optimize(prob, lz0, lr=s["lr"], decay=s["decay"], max_iter=s["opt_iter"],
-                     out=os.path.join(raw, f"dem_opt_{lz0:g}.h5"), progress=progress)
-        out["opt"][lz0] = r
-        log(f"DEM optimiser from {lz0}: Lz = {r.lz:.4g} ({r.reason}), {r.sim_seconds:.3g} sim s")
-    # 4c. the same with the amplitude objective (the designer's target at f0)
-    o = out["scan"]["opt_amplitude"]
-    log(f"scan optimum (Z) Lz = {o['mean']:.4g} ± {o['se']:.2g} m (95 %: ± {o['ci95']:.2g}) "
-        f"over {R} beds")
-    prob.objective = Objective("amplitude")
-    prob._fns.clear()
-    out["opt_amp"] = {}
-    for lz0 in (0.07, 0.25):
-        r = optimize(prob, lz0, lr=s["lr"], decay=s["decay"], max_iter=s["opt_iter"],
-                     out=os.path.join(raw, f"dem_opt_amplitude_{lz0:g}.h5"), progress=progress)
-        out["opt_amp"][lz0] = r
-        log(f"DEM amplitude optimiser from {lz0}: Lz = {r.lz:.4g} ({r.reason})")
+    # 4b. the optimiser from both starts; 4c. the same with the amplitude objective (the
+    # designer's target at f0)
+    for key, kind, raw in (("opt", "dissipation", "dem_opt"),
+                           ("opt_amp", "amplitude", "dem_opt_amplitude")):
+        o = out["scan"][f"opt_{kind}"]
+        log(f"scan optimum ({kind}) Lz = {scaffold.pm(o['mean'], o['se'], 4, 2)} m (95 %: ± "
+            f"{o['ci95']:.2g}) over {R} beds")
+        if kind == "amplitude":
+            prob.objective = Objective("amplitude")
+            prob._fns.clear()
+        out[key] = {}
+        for lz0 in (0.07, 0.25):
+            r = optimize(prob, lz0, lr=s["lr"], decay=s["decay"], max_iter=s["opt_iter"],
+                         out=ctx.raw(f"{raw}_{lz0:g}.h5"), progress=ctx.progress)
+            out[key][lz0] = r
+            log(f"DEM {kind} optimiser from {lz0}: Lz = {r.lz:.4g} ({r.reason}), "
+                f"{r.sim_seconds:.3g} sim s")
     out["sim_windows"] = sim_windows
     return out
-
-
-def _mean_se(x) -> tuple[float, float, float]:
-    """Mean, standard error and 95 % t half-width of independent values (NaN dropped)."""
-    x = np.asarray(x, float)
-    x = x[np.isfinite(x)]
-    if len(x) < 2:
-        return (float(x.mean()) if len(x) else np.nan), np.nan, np.nan
-    se = float(x.std(ddof=1) / np.sqrt(len(x)))
-    return float(x.mean()), se, t_quantile(0.975, len(x) - 1) * se
 
 
 def _optimum_over_beds(lz, J, kind):
@@ -211,7 +190,8 @@ def _optimum_over_beds(lz, J, kind):
     lz = np.asarray(lz, float)
     v = [parabolic_extremum(lz, J[:, r], kind) for r in range(J.shape[1])]
     vert = np.array([x[0] for x in v])
-    m, se, half = _mean_se(vert)
+    e = scaffold.across(vert)
+    m, half = e.mean, e.ci95
     at_edge = int(sum(x[2] in (0, len(lz) - 1) for x in v))
     mean_curve = scan_optimum(lz, J.mean(axis=1), kind == "max")
     # the same per-bed parabolas in log Lz: how far the interpolation model alone moves the
@@ -221,7 +201,7 @@ def _optimum_over_beds(lz, J, kind):
     k = int(np.argmax(J.mean(axis=1)) if kind == "max" else np.argmin(J.mean(axis=1)))
     k = min(max(k, 1), len(lz) - 2)
     q = quadratic_optimum(lz[k - 1:k + 2], J[k - 1:k + 2], maximise=kind == "max")
-    return dict(vertices=vert, mean=m, se=se, ci95=half, at_edge=at_edge,
+    return dict(vertices=vert, mean=m, se=e.se, ci95=half, at_edge=at_edge,
                 mean_curve=mean_curve, log_model=log_model,
                 surface=dict(x=q.x, se=q.se, lo=q.lo, hi=q.hi, interior=q.interior,
                              lz=lz[k - 1:k + 2]),
@@ -237,13 +217,10 @@ def scan_stats(lz, res) -> dict:
     W, fb_w = steady_or_window(res, "granular_loss_per_cycle")
     Z, fb_z = steady_or_window(res, "amplitude")
     W, Z = np.asarray(W, float), np.asarray(Z, float)
-    R = Z.shape[1]
-    def se(x):
-        return x.std(axis=1, ddof=1) / np.sqrt(R) if R > 1 else np.full(len(x), np.nan)
-
-    sc = dict(lz=np.asarray(lz, float), beds=R, dissipation_beds=W, amplitude_beds=Z,
+    sc = dict(lz=np.asarray(lz, float), beds=Z.shape[1], dissipation_beds=W, amplitude_beds=Z,
               dissipation=W.mean(axis=1), amplitude=Z.mean(axis=1),
-              dissipation_se=se(W), amplitude_se=se(Z),
+              dissipation_se=scaffold.standard_error(W, axis=1),
+              amplitude_se=scaffold.standard_error(Z, axis=1),
               balance=np.asarray(res.replicate_summary["balance_error"], float),
               stationary_amplitude=np.asarray(res.steady["amplitude"]["stationary"], bool),
               stationary_dissipation=np.asarray(
@@ -257,7 +234,7 @@ def scan_stats(lz, res) -> dict:
     return sc
 
 
-def s3_part(s, raw, progress, log):
+def s3_part(s, ctx, log):
     base = apply_overrides(presets.get("sanchez2012-impact"), {"numerics.analysis_window": 0.5})
     out = {}
     for kind in s["s3_objectives"]:
@@ -294,94 +271,67 @@ def s3_part(s, raw, progress, log):
         r["opt"] = {}
         for lz0 in (0.07, 0.25):
             o = optimize(prob, prob.from_lz(lz0), lr=0.015, decay=0.88, max_iter=s["s3_iter"],
-                         xtol=5e-5, out=os.path.join(raw, f"s3_{kind}_opt_{lz0:g}.h5"),
-                         progress=progress)
+                         xtol=5e-5, out=ctx.raw(f"s3_{kind}_opt_{lz0:g}.h5"),
+                         progress=ctx.progress)
             r["opt"][lz0] = o
             log(f"S3 {kind} from Lz0 {lz0}: gap {o.x:.5g} (scan {r['optimum']:.5g}), {o.reason}")
         out[kind] = r
     return out
 
 
-def _plt():
-    import matplotlib
+def compute(quick: bool, log, ctx):
+    s = settings(quick)
+    t0 = time.perf_counter()
+    s3 = s3_part(s, ctx, log)
+    t_s3 = time.perf_counter() - t0
+    dem = dem_part(s, ctx, log)
+    result = {"s3": s3, "dem": dem, "wall": time.perf_counter() - t0}
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    def write(out, prov):
+        _write_data(out, s, s3, dem, result["wall"], prov)
+        _figure(out, s3, dem)
+        _summary(out, s, s3, dem, result["wall"], t_s3, prov["command"], quick)
 
-    return plt
+    return result, write
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--quick", action="store_true", help="tiny settings (~1.5 min)")
-    ap.add_argument("--out", default=os.path.join(HERE, "gap_optimisation"))
-    ap.add_argument("--no-progress", action="store_true")
-    args = ap.parse_args(argv)
-    s = settings(args.quick)
-    raw = os.path.join(args.out, "raw")
-    os.makedirs(raw, exist_ok=True)
-    progress = not args.no_progress
-    lines = []
-
-    def log(msg):
-        lines.append(msg)
-        if progress:
-            print(msg, flush=True)
-
-    t0 = time.perf_counter()
-    s3 = s3_part(s, raw, progress, log)
-    t_s3 = time.perf_counter() - t0
-    dem = dem_part(s, raw, progress, log)
-    wall = time.perf_counter() - t0
-    command = "python experiments/gap_optimisation.py" + (" --quick" if args.quick else "")
-    _write_data(args.out, s, s3, dem, wall, command)
-    _figure(args.out, s3, dem)
-    _summary(args.out, s, s3, dem, wall, t_s3, command, args.quick)
-    return {"s3": s3, "dem": dem, "wall": wall}
+    return scaffold.main(__doc__, "gap_optimisation", argv, compute)
 
 
 def _hist_group(g, res):
     for k, v in res.history.items():
         g.create_dataset(k, data=v)
-    g.attrs["reason"] = res.reason
-    g.attrs["x"] = res.x
-    g.attrs["lz"] = res.lz
-    g.attrs["sim_seconds"] = res.sim_seconds
-    g.attrs["wall_time"] = res.wall
+    g.attrs.update(reason=res.reason, x=res.x, lz=res.lz, sim_seconds=res.sim_seconds,
+                   wall_time=res.wall)
 
 
-def _write_data(out, s, s3, dem, wall, command):
-    with h5py.File(os.path.join(out, "data.h5"), "w") as h:
-        h.attrs["jaxdamp_version"] = jaxdamp.__version__
-        h.attrs["command"] = command
+def _json(d: dict) -> str:
+    """``d`` as JSON, arrays as lists."""
+    return json.dumps({k: (np.asarray(v).tolist() if np.ndim(v) else v) for k, v in d.items()})
+
+
+def _write_data(out, s, s3, dem, wall, prov):
+    with scaffold.data_file(out, prov, settings=_json(s)) as h:
         h.attrs["wall_time"] = wall
-        h.attrs["settings"] = json.dumps({k: (np.asarray(v).tolist() if np.ndim(v) else v)
-                                          for k, v in s.items()})
         for kind, r in s3.items():
             g = h.create_group(f"s3/{kind}")
-            g.attrs["config"] = r["config"]
-            g.attrs["objective"] = r["objective"]
-            g.attrs["optimum_gap"] = r["optimum"]
-            g.attrs["optimum_gap_global"] = r["optimum_global"]
-            g.attrs["h_bed"] = r["h_bed"]
+            g.attrs.update(config=r["config"], objective=r["objective"],
+                           optimum_gap=r["optimum"], optimum_gap_global=r["optimum_global"],
+                           h_bed=r["h_bed"])
             for k in ("scan_gap", "scan_value", "fine_gap", "fine_value"):
                 g.create_dataset(k, data=r[k]).attrs["units"] = "m" if "gap" in k else ""
-            g.create_dataset("fd/gap", data=[x["gap"] for x in r["fd"]])
-            g.create_dataset("fd/ad", data=[x["ad"] for x in r["fd"]])
-            for hh in (1e-4, 1e-5, 1e-6):
-                g.create_dataset(f"fd/fd_h{hh:g}", data=[x[hh] for x in r["fd"]])
+            for k, name in [("gap", "gap"), ("ad", "ad")] + [(hh, f"fd_h{hh:g}")
+                                                             for hh in (1e-4, 1e-5, 1e-6)]:
+                g.create_dataset(f"fd/{name}", data=[x[k] for x in r["fd"]])
             for lz0, o in r["opt"].items():
                 _hist_group(g.create_group(f"opt_lz0_{lz0:g}"), o)
         g = h.create_group("dem")
-        g.attrs["config"] = dem["config"]
-        g.attrs["bed_height"] = dem["bed_height"]
-        g.attrs["dt"] = dem["dt"]
-        g.attrs["f0"] = dem["f0"]
+        g.attrs.update(config=dem["config"], bed_height=dem["bed_height"], dt=dem["dt"],
+                       f0=dem["f0"], modes=json.dumps(dem["modes"]))
         for i, r in enumerate(dem["windows"]):
             w = g.create_group(f"windows/{i}")
-            w.attrs["window"] = r["window"]
-            w.attrs["wall_time"] = r["wall"]
+            w.attrs.update(window=r["window"], wall_time=r["wall"])
             for k in ("values", "ad", "fd", "fd8"):
                 w.create_dataset(k, data=r[k])
         for r in dem["fd"]:
@@ -390,18 +340,15 @@ def _write_data(out, s, s3, dem, wall, command):
             w.create_dataset("ad", data=r["ad"])
             for hh, x in r["fd"].items():
                 w.create_dataset(f"fd_h{hh:g}", data=x)
-        g.attrs["modes"] = json.dumps(dem["modes"])
-        sc = g.create_group("scan")
         d = dem["scan"]
-        sc.attrs["config"] = d["config"]
-        sc.attrs["beds"] = d["beds"]
-        sc.attrs["optimum"] = d["optimum"]
-        sc.attrs["sim_seconds"] = d["sim_seconds"]
-        sc.attrs["wall_time"] = d["wall"]
-        sc.attrs["fallback_to_window"] = json.dumps(d["fallback"])
-        sc.attrs["note"] = ("*_beds, balance, stationary_*: (Lz, bed); dissipation, amplitude: "
-                            "mean over beds, *_se its standard error; steady values where "
-                            "detected, else the fixed window (last half)")
+        sc = g.create_group("scan")
+        sc.attrs.update(
+            config=d["config"], beds=d["beds"], optimum=d["optimum"],
+            optimum_amplitude=d["optimum_amplitude"], sim_seconds=d["sim_seconds"],
+            wall_time=d["wall"], fallback_to_window=json.dumps(d["fallback"]),
+            note=("*_beds, balance, stationary_*: (Lz, bed); dissipation, amplitude: mean over "
+                  "beds, *_se its standard error; steady values where detected, else the fixed "
+                  "window (last half)"))
         for k in ("lz", "dissipation", "amplitude", "dissipation_se", "amplitude_se",
                   "dissipation_beds", "amplitude_beds", "balance", "stationary_amplitude",
                   "stationary_dissipation"):
@@ -410,42 +357,39 @@ def _write_data(out, s, s3, dem, wall, command):
             o = d[name]
             og = sc.create_group(name)
             og.create_dataset("vertices", data=o["vertices"])
-            for k in ("mean", "se", "ci95", "at_edge", "mean_curve", "log_model"):
-                og.attrs[k] = o[k]
-            og.attrs["contains_thesis"] = str(o["contains_thesis"])
-            og.attrs["surface"] = json.dumps({k: (np.asarray(v).tolist() if np.ndim(v) else v)
-                                              for k, v in o["surface"].items()})
+            og.attrs.update({k: o[k] for k in ("mean", "se", "ci95", "at_edge", "mean_curve",
+                                               "log_model")})
+            og.attrs.update(contains_thesis=str(o["contains_thesis"]), surface=_json(o["surface"]))
         for lz0, o in dem["opt"].items():
             _hist_group(g.create_group(f"opt_lz0_{lz0:g}"), o)
         for lz0, o in dem["opt_amp"].items():
             _hist_group(g.create_group(f"opt_amplitude_lz0_{lz0:g}"), o)
-        sc.attrs["optimum_amplitude"] = dem["scan"]["optimum_amplitude"]
 
 
 def _figure(out, s3, dem):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(2, 3, figsize=(16, 8))
-    a = ax[0, 2]
+    fig, ax = scaffold.subplots(2, 3, figsize=(16, 8))
     sc = dem["scan"]
-    a.errorbar(sc["lz"], sc["amplitude"] * 1e3, yerr=sc["amplitude_se"] * 1e3, fmt="ko-",
-               capsize=3, label=f"scan (steady state, half p-p), mean ± SE of {sc['beds']} beds")
-    o = sc["opt_amplitude"]
-    if np.isfinite(o["ci95"]):
-        a.axvspan(o["mean"] - o["ci95"], o["mean"] + o["ci95"], color="k", alpha=0.12,
-                  label="95 % interval of the optimum")
-    for lz0, o in dem["opt_amp"].items():
-        a.plot(o.history["lz"], o.history["objective"] * 1e3, ".-",
-               label=f"optimiser from {lz0} m (window estimate)")
-    a.axvline(THESIS_LZ, color="g", ls="-.", lw=0.8, label="thesis 0.1225 m")
-    a.axvline(sc["optimum_amplitude"], color="k", ls=":", lw=0.8, label="scan optimum")
-    a.set_xlabel("Lz [m]")
-    a.set_ylabel("Z [mm]")
-    a.set_title("DEM at f0: amplitude objective", fontsize=9)
-    a.legend(fontsize=7)
+    # the scan (mean ± SE over beds) and the optimiser runs, dissipation and amplitude
+    for a, key, scale, runs, ylabel, title, what in (
+            (ax[0, 1], "dissipation", 1.0, dem["opt"], "granular dissipation per cycle [J]",
+             f"DEM at f0 = {dem['f0']:.3f} Hz", "scan (steady state)"),
+            (ax[0, 2], "amplitude", 1e3, dem["opt_amp"], "Z [mm]",
+             "DEM at f0: amplitude objective", "scan (steady state, half p-p)")):
+        a.errorbar(sc["lz"], sc[key] * scale, yerr=sc[f"{key}_se"] * scale, fmt="ko-",
+                   capsize=3, label=f"{what}, mean ± SE of {sc['beds']} beds")
+        o = sc["opt_amplitude"]
+        if key == "amplitude" and np.isfinite(o["ci95"]):
+            a.axvspan(o["mean"] - o["ci95"], o["mean"] + o["ci95"], color="k", alpha=0.12,
+                      label="95 % interval of the optimum")
+        for lz0, o in runs.items():
+            a.plot(o.history["lz"], o.history["objective"] * scale, ".-",
+                   label=f"optimiser from {lz0} m (window estimate)")
+        a.axvline(THESIS_LZ, color="g", ls="-.", lw=0.8, label="thesis 0.1225 m")
+        a.axvline(sc["optimum" if key == "dissipation" else "optimum_amplitude"], color="k",
+                  ls=":", lw=0.8, label="scan optimum")
+        a.set(xlabel="Lz [m]", ylabel=ylabel)
+        a.set_title(title, fontsize=9)
+        a.legend(fontsize=7)
     ax[1, 2].set_visible(False)
     a = ax[0, 0]
     w = np.array([r["window"] for r in dem["windows"]]) * 1e3
@@ -457,22 +401,8 @@ def _figure(out, s3, dem):
         if key == "ad":
             a.loglog(w, np.maximum(sd, 1e-3), "o:", color="C0", alpha=0.6,
                      label="std over windows (pathwise)")
-    a.set_xlabel("window length [ms]")
-    a.set_ylabel("|dD/dLz| [J per cycle / m]")
+    a.set(xlabel="window length [ms]", ylabel="|dD/dLz| [J per cycle / m]")
     a.set_title("DEM, Lz = 0.1225 m: the pathwise derivative vs window length", fontsize=9)
-    a.legend(fontsize=7)
-    a = ax[0, 1]
-    sc = dem["scan"]
-    a.errorbar(sc["lz"], sc["dissipation"], yerr=sc["dissipation_se"], fmt="ko-", capsize=3,
-               label=f"scan (steady state), mean ± SE of {sc['beds']} beds")
-    for lz0, o in dem["opt"].items():
-        a.plot(o.history["lz"], o.history["objective"], ".-", label=f"optimiser from {lz0} m "
-               "(window estimate)")
-    a.axvline(THESIS_LZ, color="g", ls="-.", lw=0.8, label="thesis 0.1225 m")
-    a.axvline(sc["optimum"], color="k", ls=":", lw=0.8, label="scan optimum")
-    a.set_xlabel("Lz [m]")
-    a.set_ylabel("granular dissipation per cycle [J]")
-    a.set_title(f"DEM at f0 = {dem['f0']:.3f} Hz", fontsize=9)
     a.legend(fontsize=7)
     for a, kind in zip((ax[1, 0], ax[1, 1]), ("dissipation", "band")):
         if kind not in s3:
@@ -486,14 +416,11 @@ def _figure(out, s3, dem):
                    label=f"optimiser from Lz0 = {lz0} m")
         a.axvline(r["optimum"], color="k", ls=":", lw=0.8, label="scan optimum")
         a.axvline(THESIS_LZ - r["h_bed"], color="g", ls="-.", lw=0.8, label="thesis 0.0835 m")
-        a.set_xlabel("gap [m]")
-        a.set_ylabel("impact loss per cycle [J]" if kind == "dissipation"
-                     else "smooth max of Z over 14–16 Hz [mm]")
+        a.set(xlabel="gap [m]", ylabel="impact loss per cycle [J]" if kind == "dissipation"
+              else "smooth max of Z over 14–16 Hz [mm]")
         a.set_title(f"S3 (smooth model, exact gradients): {kind}", fontsize=9)
         a.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(os.path.join(out, "figure.png"), dpi=110)
-    plt.close(fig)
+    scaffold.save_figure(fig, out, "figure.png", dpi=110)
 
 
 STEADY_LINK = ("- **The DEM estimator that works** is not pathwise: replicated steady states "
@@ -521,9 +448,9 @@ def _findings(s, s3, dem, quick):
              f"{_fmt(np.abs(dem['windows'][0]['ad']).max())} at "
              f"{dem['windows'][0]['window'] * 1e3:.2g} ms to {_fmt(np.abs(big['ad']).max())} at "
              f"{big['window'] * 1e3:.2g} ms (J per cycle per m; the steepest slope of the "
-             f"steady-state scan is {_fmt(slope)}). Only windows in which a grain touches the lid have a nonzero "
-             "derivative, so the ensemble is dominated by a few windows and its standard error "
-             "is as large as its mean.")
+             f"steady-state scan is {_fmt(slope)}). Only windows in which a grain touches the "
+             "lid have a nonzero derivative, so the ensemble is dominated by a few windows and its "
+             "standard error is as large as its mean.")
     L.append("- **Bias**: the window derivative holds the start states fixed. It measures what "
              "moving the lid does in the next milliseconds (e.g. grains pressed against the "
              "lid are pressed less when it rises), not how the bed's steady motion changes with "
@@ -551,11 +478,11 @@ def _findings(s, s3, dem, quick):
                  "runs (no error bar).")
     elif np.isfinite(oz["ci95"]):
         L.append(f"- **Scan minimum of Z at f0** over {R} independently poured beds: "
-                 f"{oz['mean']:.4g} ± {oz['se']:.2g} m, 95 % interval "
+                 f"{scaffold.pm(oz['mean'], oz['se'], 4, 2)} m, 95 % interval "
                  f"[{oz['mean'] - oz['ci95']:.4g}, {oz['mean'] + oz['ci95']:.4g}] m: the thesis' "
                  f"0.1225 m is {'inside' if oz['contains_thesis'] else 'outside'} it "
-                 + (f"({(THESIS_LZ - oz['mean']) / oz['se']:+.1f} SE from the mean)" if oz["se"] > 0
-                    else "(the beds' optima coincide: SE = 0)")
+                 + (f"({(THESIS_LZ - oz['mean']) / oz['se']:+.1f} SE from the mean)"
+                    if oz["se"] > 0 else "(the beds' optima coincide: SE = 0)")
                  + f"; {oz['at_edge']} of {R} beds' smallest Z at an end of the range. The "
                  f"interval is the beds' scatter only: a parabola in log Lz through the same "
                  f"samples puts the optimum at {oz['log_model']:.4g} m "
@@ -575,9 +502,10 @@ def _findings(s, s3, dem, quick):
                  "at f0 (or the band objective) is the one a designer minimises.")
     for kind, r in s3.items():
         for lz0, o in r["opt"].items():
-            L.append(f"- S3 {kind} from Lz0 = {lz0} m: gap {o.x:.4g} m vs scan {r['optimum']:.4g} m "
-                     f"({(o.x - r['optimum']) / r['optimum'] * 100:+.1f} %), {o.sim_seconds:.3g} "
-                     f"simulated s vs {r['scan_sim_seconds']:.3g} for the dense scan.")
+            L.append(f"- S3 {kind} from Lz0 = {lz0} m: gap {o.x:.4g} m vs scan "
+                     f"{r['optimum']:.4g} m ({(o.x - r['optimum']) / r['optimum'] * 100:+.1f} %), "
+                     f"{o.sim_seconds:.3g} simulated s vs {r['scan_sim_seconds']:.3g} for the "
+                     "dense scan.")
     if "dissipation" in s3:
         r = s3["dissipation"]
         lz_s3 = r["optimum"] + dem["bed_height"]
@@ -622,56 +550,47 @@ def _summary(out, s, s3, dem, wall, t_s3, command, quick):
               "numbers only show that every part runs. See the full mode for the findings.", ""]
     L += ["## S3: single particle, smooth model, exact gradients", ""]
     for kind, r in s3.items():
-        L += [f"### {kind} (runs of {r['duration']} s, analysis window: last half)", "",
-              "| gap [m] | jax.grad | FD h=1e-4 | FD h=1e-5 | FD h=1e-6 | rel. diff (1e-5) |",
-              "| --- | --- | --- | --- | --- | --- |"]
-        for x in r["fd"]:
-            rel = abs(x["ad"] - x[1e-5]) / max(abs(x[1e-5]), 1e-300)
-            L.append(f"| {x['gap']} | {_fmt(x['ad'])} | {_fmt(x[1e-4])} | {_fmt(x[1e-5])} | "
-                     f"{_fmt(x[1e-6])} | {rel:.2e} |")
-        L += ["", f"Dense scan ({len(r['scan_gap'])} gaps + {len(r['fine_gap'])} around the best): optimum gap in "
-              f"the periodic regime (gap ≤ {PERIODIC_GAP} m) **{r['optimum']:.5g} m** "
-              f"(Lz = {r['optimum'] + r['h_bed']:.5g} m; thesis gap 0.0835 m); over all gaps "
-              f"{r['optimum_global']:.5g} m.", "",
-              "| start Lz0 (gap0) | final gap | vs scan | iterates | stop | simulated s |",
-              "| --- | --- | --- | --- | --- | --- |"]
-        for lz0, o in r["opt"].items():
-            L.append(f"| {lz0} ({lz0 - r['h_bed']:.4g}) | {o.x:.5g} | "
-                     f"{(o.x - r['optimum']) / r['optimum'] * 100:+.2f} % | "
-                     f"{len(o.history['x'])} | {o.reason} | {o.sim_seconds:.3g} |")
+        L += [f"### {kind} (runs of {r['duration']} s, analysis window: last half)", ""]
+        L += scaffold.table(
+            ["gap [m]", "jax.grad", "FD h=1e-4", "FD h=1e-5", "FD h=1e-6", "rel. diff (1e-5)"],
+            [[x["gap"], _fmt(x["ad"]), _fmt(x[1e-4]), _fmt(x[1e-5]), _fmt(x[1e-6]),
+              f"{abs(x['ad'] - x[1e-5]) / max(abs(x[1e-5]), 1e-300):.2e}"] for x in r["fd"]])
+        L += ["", f"Dense scan ({len(r['scan_gap'])} gaps + {len(r['fine_gap'])} around the "
+              f"best): optimum gap in the periodic regime (gap ≤ {PERIODIC_GAP} m) "
+              f"**{r['optimum']:.5g} m** (Lz = {r['optimum'] + r['h_bed']:.5g} m; thesis gap "
+              f"0.0835 m); over all gaps {r['optimum_global']:.5g} m.", ""]
+        L += scaffold.table(
+            ["start Lz0 (gap0)", "final gap", "vs scan", "iterates", "stop", "simulated s"],
+            [[f"{lz0} ({lz0 - r['h_bed']:.4g})", f"{o.x:.5g}",
+              f"{(o.x - r['optimum']) / r['optimum'] * 100:+.2f} %", len(o.history["x"]),
+              o.reason, f"{o.sim_seconds:.3g}"] for lz0, o in r["opt"].items()])
         L += ["", f"Scan cost: {r['scan_sim_seconds']:.4g} simulated s.", ""]
     L += [f"## DEM (`sanchez2012-optimal`, N = {s['grains']}), dissipation per cycle at f0", "",
           f"Bed height {dem['bed_height']:.4g} m, dt = {dem['dt']:.3g} s, K = {s['K']} "
           "windows per ensemble, start phases stratified over the period.", "",
-          "### Pathwise derivative vs window length (Lz = 0.1225 m, same start states)", "",
-          "| window [ms] | mean dD/dLz ± SE (jvp) | max \\|per-window\\| | FD h=1e-8 mean | "
-          "FD h=1e-5 mean | windows with a nonzero derivative | window values: mean ± SE [J] "
-          "| wall [s] |",
-          "| --- | --- | --- | --- | --- | --- | --- | --- |"]
-    for r in dem["windows"]:
-        d = r["ad"]
-        se = d.std(ddof=1) / np.sqrt(len(d))
-        L.append(f"| {r['window'] * 1e3:.2f} | {_fmt(d.mean())} ± {_fmt(se)} | "
-                 f"{_fmt(np.abs(d).max())} | {_fmt(r['fd8'].mean())} | {_fmt(r['fd'].mean())} | "
-                 f"{int(np.count_nonzero(d))}/{len(d)} | {_fmt(r['values'].mean())} ± "
-                 f"{_fmt(r['values'].std(ddof=1) / np.sqrt(len(d)))} | {r['wall']:.1f} |")
+          "### Pathwise derivative vs window length (Lz = 0.1225 m, same start states)", ""]
+    L += scaffold.table(
+        ["window [ms]", "mean dD/dLz ± SE (jvp)", "max \\|per-window\\|", "FD h=1e-8 mean",
+         "FD h=1e-5 mean", "windows with a nonzero derivative", "window values: mean ± SE [J]",
+         "wall [s]"],
+        [[f"{r['window'] * 1e3:.2f}", scaffold.pm(*scaffold.mean_se(r["ad"]), 4, 4),
+          _fmt(np.abs(r["ad"]).max()), _fmt(r["fd8"].mean()), _fmt(r["fd"].mean()),
+          f"{int(np.count_nonzero(r['ad']))}/{len(r['ad'])}",
+          scaffold.pm(*scaffold.mean_se(r["values"]), 4, 4), f"{r['wall']:.1f}"]
+         for r in dem["windows"]])
     L += ["", "### AD vs central differences of the same averaged window objective", "",
           f"Window {s['window'] * 1e3:g} ms, same start states and engine inputs; FD with the "
-          "native engine (equal to the JAX engine to round-off).", "",
-          "| Lz [m] | jvp mean ± SE | FD h=1e-4 | FD h=1e-5 | FD h=1e-6 | FD h=1e-8 | "
-          "sign agrees (1e-8) |", "| --- | --- | --- | --- | --- | --- | --- |"]
-    for r in dem["fd"]:
-        d = r["ad"]
-        se = d.std(ddof=1) / np.sqrt(len(d))
-        f8 = r["fd"][1e-8].mean()
-        L.append(f"| {r['lz']} | {_fmt(d.mean())} ± {_fmt(se)} | {_fmt(r['fd'][1e-4].mean())} | "
-                 f"{_fmt(r['fd'][1e-5].mean())} | {_fmt(r['fd'][1e-6].mean())} | {_fmt(f8)} | "
-                 f"{_sign_agrees(d.mean(), f8)} |")
-    m = dem["modes"]
+          "native engine (equal to the JAX engine to round-off).", ""]
+    L += scaffold.table(
+        ["Lz [m]", "jvp mean ± SE", "FD h=1e-4", "FD h=1e-5", "FD h=1e-6", "FD h=1e-8",
+         "sign agrees (1e-8)"],
+        [[r["lz"], scaffold.pm(*scaffold.mean_se(r["ad"]), 4, 4), _fmt(r["fd"][1e-4].mean()),
+          _fmt(r["fd"][1e-5].mean()), _fmt(r["fd"][1e-6].mean()), _fmt(r["fd"][1e-8].mean()),
+          _sign_agrees(r["ad"].mean(), r["fd"][1e-8].mean())] for r in dem["fd"]])
     L += ["", "### Forward vs reverse mode (one ensemble, compiled, second call)", "",
           "| | wall [s] | µs per system-step | compiled temp memory [MB] |",
           "| --- | --- | --- | --- |"]
-    for k, v in m.items():
+    for k, v in dem["modes"].items():
         mb = v["temp_bytes"] / 1e6 if np.isfinite(v["temp_bytes"]) else float("nan")
         L.append(f"| {k} | {v['wall']:.2f} | {v['wall'] / dem['mode_steps'] * 1e6:.0f} | "
                  f"{mb:.1f} |")
@@ -687,16 +606,15 @@ def _summary(out, s, s3, dem, wall, t_s3, command, quick):
           "mean over the detected steady state (`steady_or_window`), the fixed window (last "
           f"half) where none was detected: {sc['fallback']['amplitude']} of {n_runs} runs fell "
           f"back for Z, {sc['fallback']['dissipation']} of {n_runs} for the dissipation. "
-          f"± = standard error over the {R} beds.", "",
-          "| Lz [m] | dissipation per cycle [J] | Z [mm] | Z per bed [mm] | steady state "
-          "detected (Z) | max balance error |",
-          "| --- | --- | --- | --- | --- | --- |"]
-    for i, lz in enumerate(sc["lz"]):
-        L.append(f"| {lz} | {sc['dissipation'][i]:.4g} ± {sc['dissipation_se'][i]:.2g} | "
-                 f"{sc['amplitude'][i] * 1e3:.3g} ± {sc['amplitude_se'][i] * 1e3:.2g} | "
-                 + ", ".join(f"{z * 1e3:.3g}" for z in sc["amplitude_beds"][i]) + " | "
-                 f"{int(sc['stationary_amplitude'][i].sum())}/{R} | "
-                 f"{np.max(sc['balance'][i]):.1e} |")
+          f"± = standard error over the {R} beds.", ""]
+    L += scaffold.table(
+        ["Lz [m]", "dissipation per cycle [J]", "Z [mm]", "Z per bed [mm]",
+         "steady state detected (Z)", "max balance error"],
+        [[lz, scaffold.pm(sc["dissipation"][i], sc["dissipation_se"][i], 4, 2),
+          scaffold.pm(sc["amplitude"][i], sc["amplitude_se"][i], 3, 2, scale=1e3),
+          ", ".join(f"{z * 1e3:.3g}" for z in sc["amplitude_beds"][i]),
+          f"{int(sc['stationary_amplitude'][i].sum())}/{R}", f"{np.max(sc['balance'][i]):.1e}"]
+         for i, lz in enumerate(sc["lz"])])
 
     def opt_text(o, what):
         q = o["surface"]
@@ -708,40 +626,37 @@ def _summary(out, s, s3, dem, wall, t_s3, command, quick):
             inside = "inside" if o["contains_thesis"] else "outside"
         return (f"{what}: per bed (parabola through the bed's best height and its two "
                 f"neighbours) " + ", ".join(f"{x:.4g}" for x in o["vertices"])
-                + f" m → **Lz = {o['mean']:.4g} ± {o['se']:.2g} m** (mean ± SE over {R} beds; "
-                f"95 % t-interval [{o['mean'] - o['ci95']:.4g}, {o['mean'] + o['ci95']:.4g}] m, "
-                f"thesis 0.1225 m {inside}); {o['at_edge']} of {R} beds' best sample at an end "
-                f"of the range. Cross-checks: the parabola through the beds' mean curve "
-                f"{o['mean_curve']:.4g} m; the same per-bed parabolas in log Lz (the "
-                f"interpolation model, not in the beds' interval) {o['log_model']:.4g} m; the "
-                f"package's jackknife response surface "
+                + f" m → **Lz = {scaffold.pm(o['mean'], o['se'], 4, 2)} m** (mean ± SE over "
+                f"{R} beds; 95 % t-interval [{o['mean'] - o['ci95']:.4g}, "
+                f"{o['mean'] + o['ci95']:.4g}] m, thesis 0.1225 m {inside}); {o['at_edge']} of "
+                f"{R} beds' best sample at an end of the range. Cross-checks: the parabola "
+                f"through the beds' mean curve {o['mean_curve']:.4g} m; the same per-bed "
+                "parabolas in log Lz (the interpolation model, not in the beds' interval) "
+                f"{o['log_model']:.4g} m; the package's jackknife response surface "
                 f"(`quadratic_optimum` on Lz = " + ", ".join(f"{x:g}" for x in q["lz"])
                 + f") {q['x']:.4g} m, 95 % [{q['lo']:.4g}, {q['hi']:.4g}] m"
                 + ("" if q["interior"] else " (not interior: no optimum inside these heights)")
                 + ".")
 
+    def opt_rows(runs, ref, ratio):  # optimiser runs against the scan optimum ``ref``
+        return [[lz0, f"{o.lz:.4g}", f"{(o.lz - ref) / ref * 100:+.1f} %",
+                 f"{(o.lz - THESIS_LZ) / THESIS_LZ * 100:+.1f} %", len(o.history["x"]),
+                 o.reason, f"{o.sim_seconds:.3g}"]
+                + ([f"{o.sim_seconds / sc['sim_seconds']:.2f}"] if ratio else [])
+                for lz0, o in runs.items()]
+
+    head = ["start Lz0", "final Lz", "vs scan optimum", "vs 0.1225", "iterates", "stop",
+            "simulated s"]
     L += ["", opt_text(sc["opt_dissipation"], "Scan optimum of the dissipation (maximum)"), "",
           "The optimiser runs below are **single runs** (one optimiser trajectory per start, no "
-          "error bar); their distance to the scan optimum is to its mean over beds.", "",
-          "| start Lz0 | final Lz | vs scan optimum | vs 0.1225 | iterates | stop | simulated s "
-          "| ratio to scan |", "| --- | --- | --- | --- | --- | --- | --- | --- |"]
-    for lz0, o in dem["opt"].items():
-        L.append(f"| {lz0} | {o.lz:.4g} | {(o.lz - sc['optimum']) / sc['optimum'] * 100:+.1f} % | "
-                 f"{(o.lz - THESIS_LZ) / THESIS_LZ * 100:+.1f} % | {len(o.history['x'])} | "
-                 f"{o.reason} | {o.sim_seconds:.3g} | {o.sim_seconds / sc['sim_seconds']:.2f} |")
+          "error bar); their distance to the scan optimum is to its mean over beds.", ""]
+    L += scaffold.table(head + ["ratio to scan"], opt_rows(dem["opt"], sc["optimum"], True))
     L += ["", "Amplitude objective (Z at f0, surrogate sqrt(2 <(z - z_s)²>) over the windows). "
           + opt_text(sc["opt_amplitude"], "Scan optimum of Z (minimum)"),
-          "", "Optimiser: single runs, no error bar.", "",
-          "| start Lz0 | final Lz | vs scan optimum | vs 0.1225 | iterates | stop | simulated s |",
-          "| --- | --- | --- | --- | --- | --- | --- |"]
-    for lz0, o in dem["opt_amp"].items():
-        L.append(f"| {lz0} | {o.lz:.4g} | "
-                 f"{(o.lz - sc['optimum_amplitude']) / sc['optimum_amplitude'] * 100:+.1f} % | "
-                 f"{(o.lz - THESIS_LZ) / THESIS_LZ * 100:+.1f} % | {len(o.history['x'])} | "
-                 f"{o.reason} | {o.sim_seconds:.3g} |")
+          "", "Optimiser: single runs, no error bar.", ""]
+    L += scaffold.table(head, opt_rows(dem["opt_amp"], sc["optimum_amplitude"], False))
     L += _findings(s, s3, dem, quick)
-    with open(os.path.join(out, "summary.md"), "w") as fh:
-        fh.write("\n".join(L) + "\n")
+    scaffold.write_summary(out, L)
 
 
 if __name__ == "__main__":

@@ -62,7 +62,6 @@ try:
 except ImportError:  # run as a file: python experiments/<name>.py
     import scaffold
 
-HERE = os.path.dirname(os.path.abspath(__file__))
 #: Box heights [m] of the thesis' scan (SPEC §5), its 0.117 and 0.282 m included.
 #: (0.072 and 0.222 m, on the earlier single-bed grid, are left out to afford three beds per
 #: point on two shared cores.)
@@ -99,14 +98,10 @@ def run_scan(C: float, s: dict, out: str, progress: bool):
     return reuse_or_run(cfg, axes, out, progress=progress, replicates=s["R"]), cfg
 
 
-def _t_interval(x) -> tuple[float, float, float]:
-    """Mean, standard error and 95 % t half-width of independent values (NaN dropped)."""
-    x = np.asarray(x, float)
-    x = x[np.isfinite(x)]
-    if len(x) < 2:
-        return (float(x.mean()) if len(x) else math.nan), math.nan, math.nan
-    se = float(scaffold.standard_error(x))
-    return float(x.mean()), se, t_quantile(0.975, len(x) - 1) * se
+def _pm(x, spec: str) -> str:
+    """Mean ± SE of the replicates' finite values (:func:`scaffold.across`), both ``spec``."""
+    e = scaffold.across(x)
+    return scaffold.pm(e.mean, e.se, spec, spec)
 
 
 def analyse(res, cfg, s) -> dict:
@@ -157,9 +152,9 @@ def analyse(res, cfg, s) -> dict:
     widen = {}
     if narrow_fits[RESIDUALS[0]] is not None:
         for w in RESIDUALS:
-            dM = [_t_interval(a["M_reps"] - b["M_reps"]) for a, b in zip(fits[w], narrow_fits[w])]
-            dC = [_t_interval(a["C_reps"] - b["C_reps"]) for a, b in zip(fits[w], narrow_fits[w])]
-            widen[w] = dict(dM=dM, dC=dC)
+            pairs = list(zip(fits[w], narrow_fits[w]))
+            widen[w] = {f"d{k}": [scaffold.across(a[f"{k}_reps"] - b[f"{k}_reps"])
+                                  for a, b in pairs] for k in ("M", "C")}
     stationary = np.asarray(res.steady["amplitude"]["stationary"], bool)
     starts = np.asarray(res.steady["amplitude"]["start"], float)
     force = force_coefficients(res, starts, stationary, s)
@@ -193,11 +188,11 @@ def force_coefficients(res, starts, stationary, s) -> dict:
 
 
 def _optimum_row(vertices, grid_best) -> dict:
-    m, se, half = _t_interval(vertices)
+    e = scaffold.across(vertices)
     return dict(vertices=[float(x) for x in vertices], grid_best=[float(x) for x in grid_best],
-                mean=m, se=se, ci95=half,
-                contains_thesis=bool(abs(THESIS_OPTIMUM - m) <= half) if np.isfinite(half)
-                else None)
+                mean=e.mean, se=e.se, ci95=e.ci95,
+                contains_thesis=bool(abs(THESIS_OPTIMUM - e.mean) <= e.ci95)
+                if np.isfinite(e.ci95) else None)
 
 
 def compute(quick: bool, log, ctx):
@@ -227,17 +222,13 @@ def main(argv=None):
 def write(results, s, out, prov):
     wall = sum(float(r["res"].summary["wall_time"]) for r in results.values())
     prov = dict(prov, sweep_wall_s=wall)
-    with h5py.File(os.path.join(out, "data.h5"), "w") as h:
-        scaffold.stamp(h, prov)
-        h.attrs["settings"] = json.dumps(s)
-        h.attrs["thesis_weighting"] = THESIS_WEIGHTING
+    with scaffold.data_file(out, prov, settings=json.dumps(s),
+                            thesis_weighting=THESIS_WEIGHTING) as h:
         for C, r in results.items():
             g = h.create_group(f"C_{C:g}")
-            g.attrs["base_config"] = r["cfg"].to_json()
-            g.attrs["optimum"] = json.dumps(r["optimum"])
-            g.attrs["tests"] = json.dumps(r["tests"])
-            g.attrs.update(grain_mass=r["m_p"], stationary=r["stationary"], runs=r["runs"],
-                           fallback=r["fallback"])
+            g.attrs.update(base_config=r["cfg"].to_json(), optimum=json.dumps(r["optimum"]),
+                           tests=json.dumps(r["tests"]), grain_mass=r["m_p"],
+                           stationary=r["stationary"], runs=r["runs"], fallback=r["fallback"])
             for k, v in r["res"].axes.items():
                 g.create_dataset(f"axes/{k}", data=np.asarray(v, float)).attrs["units"] = (
                     "Hz" if k == "frequency" else "m")
@@ -269,11 +260,6 @@ def write(results, s, out, prov):
 
 
 def _figures(out, results, s):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from jaxdamp.figures import frf_figure, save
 
     C0 = s["C"][0]
@@ -291,7 +277,7 @@ def _figures(out, results, s):
                     Z_se=scaffold.standard_error(Zr)),
          os.path.join(out, "fig3_6.png"))
 
-    fig, (a1, a2) = plt.subplots(2, 1, figsize=(7.5, 7.5), sharex=True)
+    fig, (a1, a2) = scaffold.subplots(2, 1, figsize=(7.5, 7.5), sharex=True)
     for C, r in results.items():
         for w, ls in zip(RESIDUALS, ("-", "--")):
             fi = r["fits"][w]
@@ -312,8 +298,7 @@ def _figures(out, results, s):
     m_p = results[s["C"][0]]["m_p"]
     a2.axhline(p.M, color="r", lw=0.8, ls="--", label="M")
     a2.axhline(p.M + m_p, color="r", lw=0.8, ls=":", label="M + m_p")
-    a2.set_ylabel("M_ef [kg]")
-    a2.set_xlabel("box height Lz [m]")
+    a2.set(ylabel="M_ef [kg]", xlabel="box height Lz [m]")
     for a in (a1, a2):
         a.set_xscale("log")
         a.axvline(THESIS_OPTIMUM, color="g", lw=0.6, ls="-.", label="thesis optimum, 0.1225 m")
@@ -331,12 +316,7 @@ def _figure_3_9(out, results, s):
     """Bed band and grain force against the box motion at the heights of the thesis' fig. 3.9
     (the frequency nearest each height's resonance, bed 0, the last three periods), and the
     impact phase and force-derived effective mass versus Lz."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from jaxdamp.figures import draw_band
+    from jaxdamp.figures import draw_band, figure
 
     C0 = s["C"][0]
     r = results[C0]
@@ -344,7 +324,7 @@ def _figure_3_9(out, results, s):
     lz = list(s["lz"])
     f = np.asarray(res.axes["frequency"], float)
     show = [L for L in FIG39_LZ if L in lz]
-    fig = plt.figure(figsize=(2.3 * max(len(show), 4), 7.5))
+    fig = figure((2.3 * max(len(show), 4), 7.5))
     gs = fig.add_gridspec(2, max(len(show), 4), height_ratios=[1.2, 1])
     rec = res.records
     for c, L in enumerate(show):
@@ -391,8 +371,7 @@ def _figure_3_9(out, results, s):
     a2.set_ylabel("effective mass [kg]")
     a2.legend(fontsize=7)
     for a in (a1, a2):
-        a.set_xscale("log")
-        a.set_xlabel("box height Lz [m]")
+        a.set(xscale="log", xlabel="box height Lz [m]")
     fig.suptitle(f"thesis fig. 3.9: C = {C0} N s/m, mean of R = {R} beds ± 2 SE", fontsize=9)
     scaffold.save_figure(fig, out, "fig3_9.png", dpi=110)
 
@@ -413,8 +392,8 @@ def _summary(out, results, s, prov):
     lines = [
         "# Box-height scan with replicates: FRFs, effective mass and damping, the optimum "
         "(thesis figs. 3.6–3.8)", "",
-        scaffold.provenance_line(prov, prov["sweep_wall_s"]) + " Native engine. Data `data.h5`; figures `fig3_6.png`, "
-        "`fig3_7_3_8.png`.", "",
+        scaffold.provenance_line(prov, prov["sweep_wall_s"]) + " Native engine. Data `data.h5`; "
+        "figures `fig3_6.png`, `fig3_7_3_8.png`.", "",
         f"**Runs.** `sanchez2012-optimal` (N = 250, E = 2.03e9 via stiffness_scale 0.01), "
         f"{len(s['freqs'])} frequencies {min(s['freqs'])}–{max(s['freqs'])} Hz × {len(s['lz'])} "
         f"heights × **R = {R} independently poured beds** (seeds 0…{R - 1}), {s['duration']} s "
@@ -437,22 +416,17 @@ def _summary(out, results, s, prov):
         f"Reference masses: M = {p0.M} kg, M + m_p = {p0.M + r0['m_p']:.4f} kg.", "",
     ]
     for C, r in results.items():
-        lines += [f"## C = {C} N s/m", "",
-                  "| Lz [m] | M_ef abs. [kg] | C_ef/C abs. | M_ef rel. [kg] | C_ef/C rel. | "
-                  "resonance [Hz] | peak Z/U | stationary runs |",
-                  "| --- | --- | --- | --- | --- | --- | --- | --- |"]
         fa, fr = r["fits"]["absolute"], r["fits"]["relative"]
-        for j, L in enumerate(s["lz"]):
-            fp = _t_interval(r["f_peak"][j])
-            zp = _t_interval(r["Z_peak"][j] / p0.U)
-            lines.append(
-                f"| {L} | {scaffold.pm(fa[j]['M_ef'], fa[j]['se_M'], '.3f', '.3f')} | "
-                f"{scaffold.pm(fa[j]['C_ef'] / C, fa[j]['se_C'] / C, '.2f', '.2f')} | "
-                f"{scaffold.pm(fr[j]['M_ef'], fr[j]['se_M'], '.3f', '.3f')} | "
-                f"{scaffold.pm(fr[j]['C_ef'] / C, fr[j]['se_C'] / C, '.2f', '.2f')} | "
-                f"{scaffold.pm(fp[0], fp[1], '.2f', '.2f')} | "
-                f"{scaffold.pm(zp[0], zp[1], '.2f', '.2f')} | "
-                f"{int(r['stationary_by_lz'][j])} of {len(s['freqs']) * R} |")
+        lines += [f"## C = {C} N s/m", ""] + scaffold.table(
+            ["Lz [m]", "M_ef abs. [kg]", "C_ef/C abs.", "M_ef rel. [kg]", "C_ef/C rel.",
+             "resonance [Hz]", "peak Z/U", "stationary runs"],
+            [[L, scaffold.pm(fa[j]["M_ef"], fa[j]["se_M"], ".3f", ".3f"),
+              scaffold.pm(fa[j]["C_ef"] / C, fa[j]["se_C"] / C, ".2f", ".2f"),
+              scaffold.pm(fr[j]["M_ef"], fr[j]["se_M"], ".3f", ".3f"),
+              scaffold.pm(fr[j]["C_ef"] / C, fr[j]["se_C"] / C, ".2f", ".2f"),
+              _pm(r["f_peak"][j], ".2f"), _pm(r["Z_peak"][j] / p0.U, ".2f"),
+              f"{int(r['stationary_by_lz'][j])} of {len(s['freqs']) * R}"]
+             for j, L in enumerate(s["lz"])])
         o = r["optimum"]
         lines += ["", "± = standard error over the replicates.", "",
                   "**The optimum (parabola in log Lz per replicate, mean ± SE, t-interval):**", ""]
@@ -483,33 +457,32 @@ def _summary(out, results, s, prov):
                   "frequency nearest each height's resonance: impact phase φ = arg(F̂/Ẑ) "
                   "(0°: the grains act as a mass, −90°: as a damper), and the effective mass "
                   "M + m_add and damping C + c_add measured without a fit (mean ± SE over the "
-                  f"beds), beside the {THESIS_WEIGHTING}-residual fit:", "",
-                  "| Lz [m] | f [Hz] | φ [deg] | M + m_add [kg] | M_ef fit [kg] | C + c_add "
-                  "[N s/m] | C_ef fit [N s/m] |", "| --- | --- | --- | --- | --- | --- | --- |"]
+                  f"beds), beside the {THESIS_WEIGHTING}-residual fit:", ""]
         fa = r["fits"][THESIS_WEIGHTING]
         fq = np.asarray(r["res"].axes["frequency"], float)
+        rows = []
         for j, L in enumerate(s["lz"]):
             i = near_resonance(r, j)
-            ph = _t_interval(np.degrees(fo["phase"][i, j]))
-            mf = _t_interval(p.M + fo["m_add"][i, j])
-            cf = _t_interval(p.C + fo["c_add"][i, j])
-            lines.append(f"| {L} | {fq[i]:g} | {scaffold.pm(ph[0], ph[1], '.0f', '.0f')} | "
-                         f"{scaffold.pm(mf[0], mf[1], '.3f', '.3f')} | "
-                         f"{scaffold.pm(fa[j]['M_ef'], fa[j]['se_M'], '.3f', '.3f')} | "
-                         f"{scaffold.pm(cf[0], cf[1], '.1f', '.1f')} | "
-                         f"{scaffold.pm(fa[j]['C_ef'], fa[j]['se_C'], '.1f', '.1f')} |")
+            rows.append([L, f"{fq[i]:g}", _pm(np.degrees(fo["phase"][i, j]), ".0f"),
+                         _pm(p.M + fo["m_add"][i, j], ".3f"),
+                         scaffold.pm(fa[j]["M_ef"], fa[j]["se_M"], ".3f", ".3f"),
+                         _pm(p.C + fo["c_add"][i, j], ".1f"),
+                         scaffold.pm(fa[j]["C_ef"], fa[j]["se_C"], ".1f", ".1f")])
+        lines += scaffold.table(["Lz [m]", "f [Hz]", "φ [deg]", "M + m_add [kg]",
+                                 "M_ef fit [kg]", "C + c_add [N s/m]", "C_ef fit [N s/m]"], rows)
         if r["widen"]:
             lines += ["", f"**Widened range.** Refitting on {F_NARROW[0]:g}–{F_NARROW[1]:g} Hz "
                       "only "
                       "(the earlier scan's range) changes the fits by (full − narrow, paired per "
                       "replicate, mean ± SE; * = significant at 95 %):", ""]
+            def star(e):  # significant at 95 %
+                return "*" if np.isfinite(e.ci95) and abs(e.mean) > e.ci95 else ""
+
             for w in RESIDUALS:
                 wd = r["widen"][w]
-                cells = []
-                for L, (m, se, h), (c, sec, hc) in zip(s["lz"], wd["dM"], wd["dC"]):
-                    star = lambda x, hh: "*" if np.isfinite(hh) and abs(x) > hh else ""  # noqa: E731
-                    cells.append(f"{L:g}: ΔM {m:+.3f}{star(m, h)} kg, ΔC {c:+.2f}{star(c, hc)}")
-                lines.append(f"- {w}: " + "; ".join(cells) + ".")
+                lines.append(f"- {w}: " + "; ".join(
+                    f"{L:g}: ΔM {m.mean:+.3f}{star(m)} kg, ΔC {c.mean:+.2f}{star(c)}"
+                    for L, m, c in zip(s["lz"], wd["dM"], wd["dC"])) + ".")
         lines.append("")
     scaffold.write_summary(out, lines)
 

@@ -51,7 +51,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
 
 import h5py
 import numpy as np
@@ -202,20 +201,10 @@ def circular_mean_deg(angles) -> float:
     return float(np.degrees(np.angle(np.mean(np.exp(1j * a))))) if a.size else math.nan
 
 
-def _t_interval(x) -> tuple[float, float, float]:
-    """Mean, standard error and 95 % t half-width of independent values (NaN dropped)."""
-    x = np.asarray(x, float)
-    x = x[np.isfinite(x)]
-    if len(x) < 2:
-        return (float(x.mean()) if len(x) else math.nan), math.nan, math.nan
-    se = float(x.std(ddof=1) / math.sqrt(len(x)))
-    return float(x.mean()), se, t_quantile(0.975, len(x) - 1) * se
-
-
-def _fmt(x, digits=3, unit="") -> str:
-    m, se, _ = _t_interval(x)
-    u = f" {unit}" if unit else ""
-    return f"{m:.{digits}g} ± {se:.2g}{u}" if np.isfinite(se) else f"{m:.{digits}g}{u}"
+def _pm(x, digits=3) -> str:
+    """Mean ± SE over the beds' finite values (:func:`scaffold.across`, :func:`scaffold.pm`)."""
+    e = scaffold.across(x)
+    return scaffold.pm(e.mean, e.se, digits)
 
 
 # ------------------------------------------------------------------------------ part 1: Lz scans
@@ -277,8 +266,8 @@ def compare(scans: dict, s: dict) -> dict:
     lz = np.asarray(s["lz"], float)
     out = {"optimum": {}, "pairs": {}}
     for n in ns:
-        m, se, h = _t_interval(scans[n]["opt"]["vertices"])
-        out["optimum"][n] = dict(mean=m, se=se, ci95=h,
+        e = scaffold.across(scans[n]["opt"]["vertices"])
+        out["optimum"][n] = dict(mean=e.mean, se=e.se, ci95=e.ci95,
                                  interior=bool(scans[n]["opt"]["interior"].all()))
     for a, b in zip(ns[:-1], ns[1:]):
         d, h = welch(scans[b]["opt"]["vertices"], scans[a]["opt"]["vertices"])
@@ -340,8 +329,9 @@ def compute(quick: bool, log, ctx):
     scans = {}
     for n in s["ns"]:
         scans[n] = scan(n, s, ctx)
-        o = _t_interval(scans[n]["opt"]["vertices"])
-        log(f"N = {n}: optimum (smallest Z_res) {o[0]:.4f} ± {o[2]:.4f} m (95 %); "
+        o = scaffold.across(scans[n]["opt"]["vertices"])
+        log(f"N = {n}: optimum (smallest Z_res) {scaffold.pm(o.mean, o.ci95, '.4f', '.4f')} m "
+            "(95 %); "
             f"{int(scans[n]['stationary'].sum())}/{scans[n]['stationary'].size} runs stationary")
     cmp_ = compare(scans, s)
     resp = response(s, ctx)
@@ -357,15 +347,12 @@ def write(result, out, prov):
     s, scans, resp = result["settings"], result["scans"], result["response"]
     wall = sum(x["wall"] for x in scans.values()) + resp["wall"]
     prov = dict(prov, sweep_wall_s=wall)
-    with h5py.File(os.path.join(out, "data.h5"), "w") as h:
-        scaffold.stamp(h, prov)
-        h.attrs["settings"] = json.dumps(s)
+    with scaffold.data_file(out, prov, settings=json.dumps(s)) as h:
         h.attrs.update(base=BASE, dt=DT, equivalence=EQUIVALENCE)
         for n, sc in scans.items():
             g = h.create_group(f"scan/N{n}")
-            g.attrs["base_config"] = sc["cfg"].to_json()
-            g.attrs.update(grain_mass=sc["m_p"], fallback=sc["fallback"],
-                           balance_error_max=sc["balance"])
+            g.attrs.update(base_config=sc["cfg"].to_json(), grain_mass=sc["m_p"],
+                           fallback=sc["fallback"], balance_error_max=sc["balance"])
             g.create_dataset("frequency", data=np.asarray(s["freqs"])).attrs["units"] = "Hz"
             g.create_dataset("Lz", data=np.asarray(s["lz"])).attrs["units"] = "m"
             for k, u, dims in (("Zr", "m", "frequency, Lz, replicate"),
@@ -400,30 +387,29 @@ def write(result, out, prov):
     _summary(result, out, prov)
 
 
+def _se2(x):
+    """Twice the standard error over the beds (the last axis): the figures' error bars."""
+    return 2 * scaffold.standard_error(x)
+
+
 def _figure(result, out):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     s, scans = result["settings"], result["scans"]
     lz = np.asarray(s["lz"], float)
     R = s["R"]
-    se2 = lambda x: 2 * np.std(x, axis=-1, ddof=1) / math.sqrt(R)  # noqa: E731
-    fig, (a1, a2, a3) = plt.subplots(1, 3, figsize=(16, 4.8))
+    fig, (a1, a2, a3) = scaffold.subplots(1, 3, figsize=(16, 4.8))
     for n, sc in scans.items():
         U = sc["cfg"].primary.U
-        line = a1.errorbar(lz, sc["Z_res"].mean(-1) / U, yerr=se2(sc["Z_res"] / U), fmt="o-",
+        line = a1.errorbar(lz, sc["Z_res"].mean(-1) / U, yerr=_se2(sc["Z_res"] / U), fmt="o-",
                            capsize=3, ms=4, label=f"N = {n}")
         o = result["compare"]["optimum"][n]
         if np.isfinite(o["ci95"]):
             a1.axvspan(o["mean"] - o["ci95"], o["mean"] + o["ci95"], alpha=0.15,
                        color=line[0].get_color())
         tot = sc["coll"] + sc["fric"]
-        a2.errorbar(lz, tot.mean(-1), yerr=se2(tot), fmt="o-", capsize=3, ms=4,
+        a2.errorbar(lz, tot.mean(-1), yerr=_se2(tot), fmt="o-", capsize=3, ms=4,
                     color=line[0].get_color(), label=f"N = {n}, total")
         share = sc["fric"] / tot
-        a3.errorbar(lz, share.mean(-1), yerr=se2(share), fmt="o-", capsize=3, ms=4,
+        a3.errorbar(lz, share.mean(-1), yerr=_se2(share), fmt="o-", capsize=3, ms=4,
                     color=line[0].get_color(), label=f"N = {n}")
     a1.set_ylabel("resonant amplitude Z_res / U [-]")
     a1.set_title(f"thesis fig. 3.2(a): mean of R = {R} beds ± 2 SE; band: 95 % interval of "
@@ -434,35 +420,26 @@ def _figure(result, out):
     a3.set_ylabel("frictional share of the loss at resonance [-]")
     a3.set_ylim(0, 1)
     for a in (a1, a2, a3):
-        a.set_xscale("log")
-        a.set_xlabel("box height Lz [m]")
+        a.set(xscale="log", xlabel="box height Lz [m]")
         a.legend(fontsize=7)
     scaffold.save_figure(fig, out)
 
 
 def _figure_response(result, out):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from jaxdamp.figures import draw_band
+    from jaxdamp.figures import draw_band, figure
 
     s, resp = result["settings"], result["response"]
     res, f, R = resp["res"], resp["f"], s["R"]
     show = [x for x in s["fig34"] if x in list(f)]
     ncol = max(len(show), 3)
-    fig = plt.figure(figsize=(2.6 * ncol, 7.5))
+    fig = figure((2.6 * ncol, 7.5))
     gs = fig.add_gridspec(2, ncol, height_ratios=[1, 1.1])
     ax = fig.add_subplot(gs[0, :])
-    se2 = lambda x: 2 * np.std(x, axis=-1, ddof=1) / math.sqrt(R)  # noqa: E731
     for key, label in (("collisional", "collisions (pp + pw, normal)"),
                        ("frictional", "friction (pp + pw, tangential)")):
         x = _arr(resp["measures"], key)
-        ax.errorbar(f, x.mean(-1), yerr=se2(x), fmt="o-", capsize=3, label=label)
-    ax.set_yscale("log")
-    ax.set_xlabel("frequency f [Hz]")
-    ax.set_ylabel("loss per cycle [J]")
+        ax.errorbar(f, x.mean(-1), yerr=_se2(x), fmt="o-", capsize=3, label=label)
+    ax.set(yscale="log", xlabel="frequency f [Hz]", ylabel="loss per cycle [J]")
     ax.set_title(f"thesis fig. 3.3: N = {resp['n']}, Lz = {LZ_RESPONSE} m, mean of R = {R} beds "
                  "± 2 SE", fontsize=9)
     ax.legend(fontsize=8)
@@ -512,27 +489,25 @@ def _summary(result, out, prov):
         f"Equivalence ('does not depend on N') means the 95 % interval of the relative "
         f"difference lies within ±{EQUIVALENCE:.0%}. Energy balance error ≤ "
         f"{max(max(sc['balance'] for sc in scans.values()), resp['balance']):.1e}.", "",
-        "## Settled beds (thesis table 3.2)", "",
-        "| N | thesis bed [m] | top of highest grain [m] | 2 × mean centre height [m] | "
-        "beds settled | grain mass [kg] |", "| --- | --- | --- | --- | --- | --- |"]
-    for n, sc in scans.items():
-        lines.append(f"| {n} | {THESIS_BED.get(n, math.nan)} | {_fmt(sc['bed_top'], 4)} | "
-                     f"{_fmt(sc['bed_cm'], 4)} | {int(np.sum(sc['settled']))} of "
-                     f"{len(sc['settled'])} | {sc['m_p']:.3f} |")
-    lines += ["", "## Resonant amplitude versus Lz (thesis fig. 3.2a)", "",
-              "| Lz [m] | " + " | ".join(f"Z_res/U, N = {n}" for n in scans) + " | "
-              + " | ".join(f"f_res [Hz], N = {n}" for n in scans) + " |",
-              "| --- " * (1 + 2 * len(scans)) + "|"]
-    for j, L in enumerate(s["lz"]):
-        U = next(iter(scans.values()))["cfg"].primary.U
-        lines.append(f"| {L} | " + " | ".join(_fmt(sc["Z_res"][j] / U) for sc in scans.values())
-                     + " | " + " | ".join(_fmt(sc["f_res"][j], 4) for sc in scans.values())
-                     + " |")
+        "## Settled beds (thesis table 3.2)", ""]
+    lines += scaffold.table(
+        ["N", "thesis bed [m]", "top of highest grain [m]", "2 × mean centre height [m]",
+         "beds settled", "grain mass [kg]"],
+        [[n, THESIS_BED.get(n, math.nan), _pm(sc["bed_top"], 4), _pm(sc["bed_cm"], 4),
+          f"{int(np.sum(sc['settled']))} of {len(sc['settled'])}", f"{sc['m_p']:.3f}"]
+         for n, sc in scans.items()])
+    U = next(iter(scans.values()))["cfg"].primary.U
+    lines += ["", "## Resonant amplitude versus Lz (thesis fig. 3.2a)", ""]
+    lines += scaffold.table(
+        ["Lz [m]"] + [f"Z_res/U, N = {n}" for n in scans] + [f"f_res [Hz], N = {n}" for n in scans],
+        [[L] + [_pm(sc["Z_res"][j] / U) for sc in scans.values()]
+         + [_pm(sc["f_res"][j], 4) for sc in scans.values()] for j, L in enumerate(s["lz"])])
     lines += ["", "**The optimum (smallest Z_res; parabola in log Lz per bed, mean ± SE, "
               "95 % t-interval):**", ""]
     for n in scans:
         o = cmp_["optimum"][n]
-        lines.append(f"- N = {n}: {o['mean']:.4f} ± {o['se']:.4f} m (95 %: ± {o['ci95']:.4f}; "
+        lines.append(f"- N = {n}: {scaffold.pm(o['mean'], o['se'], '.4f', '.4f', unit='m')} "
+                     f"(95 %: ± {o['ci95']:.4f}; "
                      f"beds' vertices {', '.join(f'{x:.4f}' for x in scans[n]['opt']['vertices'])};"
                      " " + ("interior to the grid in every bed" if o["interior"]
                             else "at an end of the grid in some bed") + ").")
@@ -547,33 +522,32 @@ def _summary(result, out, prov):
             verdict = ("significant" if np.isfinite(o["ci95"]) and abs(o["diff"]) > o["ci95"]
                        else "not significant")
             lines.append(f"- optimum of N = {k.split('-')[0]} minus N = {k.split('-')[1]}: "
-                         f"{o['diff']:+.4f} ± {o['ci95']:.4f} m (Welch 95 %, {verdict}).")
+                         f"{scaffold.pm(o['diff'], o['ci95'], '+.4f', '.4f', unit='m')} "
+                         f"(Welch 95 %, {verdict}).")
     lines += ["", "**Z_res between N at each height** (Welch 95 % of the difference, relative to "
               "the fewer grains; − / + : more grains give a significantly smaller / larger "
-              "resonant amplitude, n.s.: not significant; ≡ : equivalent within the tolerance):", ""]
+              "resonant amplitude, n.s.: not significant; ≡ : equivalent within the "
+              "tolerance):", ""]
     for k, rows in cmp_["pairs"].items():
         b, a = k.split("-")
         cells = []
         for r in rows:
             tag = {0: "n.s.", 1: "+", -1: "−"}[r["sign"]] + (" ≡" if r["equivalent"] else "")
-            cells.append(f"{r['Lz']:g}: {100 * r['rel']:+.1f} ± {100 * r['rel_ci']:.1f} % {tag}")
+            rel = scaffold.pm(r["rel"], r["rel_ci"], "+.1f", ".1f", unit="%", scale=100)
+            cells.append(f"{r['Lz']:g}: {rel} {tag}")
         lines.append(f"- N = {b} vs N = {a}: " + "; ".join(cells) + ".")
-    lines += ["", "## Loss at resonance (thesis fig. 3.2b)", "",
-              "| Lz [m] | " + " | ".join(f"loss/cycle [J], N = {n}" for n in scans) + " | "
-              + " | ".join(f"friction share, N = {n}" for n in scans) + " |",
-              "| --- " * (1 + 2 * len(scans)) + "|"]
-    for j, L in enumerate(s["lz"]):
-        lines.append(f"| {L} | " + " | ".join(_fmt(sc["coll"][j] + sc["fric"][j], 3)
-                                              for sc in scans.values()) + " | "
-                     + " | ".join(_fmt(sc["fric"][j] / (sc["coll"][j] + sc["fric"][j]), 2)
-                                  for sc in scans.values()) + " |")
-    lines += ["", "## Effective mass from the FRF fits (absolute residuals, U and K fixed)", "",
-              "| Lz [m] | " + " | ".join(f"M_ef [kg], N = {n}" for n in scans) + " |",
-              "| --- " * (1 + len(scans)) + "|"]
-    for j, L in enumerate(s["lz"]):
-        lines.append(f"| {L} | " + " | ".join(
-            f"{sc['fits'][j]['M_ef']:.2f} ± {sc['fits'][j]['se_M']:.2f}"
-            for sc in scans.values()) + " |")
+    lines += ["", "## Loss at resonance (thesis fig. 3.2b)", ""]
+    lines += scaffold.table(
+        ["Lz [m]"] + [f"loss/cycle [J], N = {n}" for n in scans]
+        + [f"friction share, N = {n}" for n in scans],
+        [[L] + [_pm(sc["coll"][j] + sc["fric"][j], 3) for sc in scans.values()]
+         + [_pm(sc["fric"][j] / (sc["coll"][j] + sc["fric"][j]), 2) for sc in scans.values()]
+         for j, L in enumerate(s["lz"])])
+    lines += ["", "## Effective mass from the FRF fits (absolute residuals, U and K fixed)", ""]
+    lines += scaffold.table(
+        ["Lz [m]"] + [f"M_ef [kg], N = {n}" for n in scans],
+        [[L] + [scaffold.pm(sc["fits"][j]["M_ef"], sc["fits"][j]["se_M"], ".2f", ".2f")
+                for sc in scans.values()] for j, L in enumerate(s["lz"])])
     sc0 = next(iter(scans.values()))
     lines += ["", f"M = {sc0['cfg'].primary.M} kg; M + m_p = "
               f"{sc0['cfg'].primary.M + sc0['m_p']:.2f} kg. The fit uses {len(s['freqs'])} "
@@ -585,19 +559,19 @@ def _summary(result, out, prov):
               "no grain touches the floor (airborne), fraction of time a grain touches the lid, "
               "fraction of time no grain touches floor or lid (free flight), "
               "lid and floor impacts per period, mean fraction of grains touching floor or lid, "
-              "stroboscopic spread of z_cm (mean ± SE over beds).", "",
-              "| N | Lz [m] | airborne | lid touched | free flight | lid impacts / period | "
-              "floor impacts / period | grains on floor or lid | strobe spread |",
-              "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+              "stroboscopic spread of z_cm (mean ± SE over beds).", ""]
     f = np.asarray(s["freqs"], float)
+    rows = []
     for n, sc in scans.items():
         for j, L in enumerate(s["lz"]):
             i = int(np.argmin(np.abs(f - np.mean(sc["f_res"][j]))))
-            ms = sc["measures"][i][j]
-            cells = [_fmt([m[k] for m in ms], 2) for k in
-                     ("airborne", "lid_touch", "free", "lid_impacts", "floor_impacts",
-                      "wall_grains", "strobe_spread")]
-            lines.append(f"| {n} | {L} ({f[i]:g} Hz) | " + " | ".join(cells) + " |")
+            rows.append([n, f"{L} ({f[i]:g} Hz)"] + [
+                _pm([m[k] for m in sc["measures"][i][j]], 2)
+                for k in ("airborne", "lid_touch", "free", "lid_impacts", "floor_impacts",
+                          "wall_grains", "strobe_spread")])
+    lines += scaffold.table(
+        ["N", "Lz [m]", "airborne", "lid touched", "free flight", "lid impacts / period",
+         "floor impacts / period", "grains on floor or lid", "strobe spread"], rows)
     lines += ["", "## Impact timing (thesis ch. 6 and §4.2.4)", "",
               "At the frequency sample nearest each bed's resonance: mean phase of the lid and "
               "floor impacts (episode onsets) against the box's first harmonic [deg], their "
@@ -614,10 +588,10 @@ def _summary(result, out, prov):
             ms = sc["measures"][i][j]
             lf = np.abs([m["lid_floor"] for m in ms])
             sep.append(float(np.nanmean(lf)))
-            lines.append(f"| {n} | {L} | {_fmt(sc['Z_res'][j] / U)} | "
-                         f"{_fmt([m['lid_phase'] for m in ms], 3)} | "
-                         f"{_fmt([m['floor_phase'] for m in ms], 3)} | {_fmt(lf, 3)} | "
-                         f"{_fmt([m['opposite'] for m in ms], 2)} |")
+            lines.append(f"| {n} | {L} | {_pm(sc['Z_res'][j] / U)} | "
+                         f"{_pm([m['lid_phase'] for m in ms], 3)} | "
+                         f"{_pm([m['floor_phase'] for m in ms], 3)} | {_pm(lf, 3)} | "
+                         f"{_pm([m['opposite'] for m in ms], 2)} |")
         j_best = int(np.argmin(sc["Z_res"].mean(-1)))
         sep = np.asarray(sep)
         j_cp = int(np.nanargmin(np.abs(sep - 180.0))) if np.isfinite(sep).any() else -1
@@ -626,23 +600,23 @@ def _summary(result, out, prov):
         lines.append(f"| {n} | smallest Z_res at {s['lz'][j_best]} m; impacts nearest "
                      f"counter-phase at {s['lz'][j_cp] if j_cp >= 0 else 'none'} m | | | | | |")
     lines += ["", f"## Frequency response of N = {resp['n']} at Lz = {LZ_RESPONSE} m "
-              "(thesis figs. 3.3, 3.4)", "",
-              "| f [Hz] | Z/U | collisional loss/cycle [J] | frictional [J] | collisional share | "
-              "airborne | lid touched | free flight | lid impacts / period | floor impacts / "
-              "period | extent / extent at rest | strobe spread |",
-              "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+              "(thesis figs. 3.3, 3.4)", ""]
     U = resp["cfg"].primary.U
+    rows = []
     for i, fq in enumerate(resp["f"]):
         ms = resp["measures"][i]
         col = np.array([m["collisional"] for m in ms])
         fr = np.array([m["frictional"] for m in ms])
         ext = np.array([m["extent"] / m["rest_extent"] for m in ms])
-        lines.append(f"| {fq:g} | {_fmt(resp['Zr'][i] / U)} | {_fmt(col)} | {_fmt(fr)} | "
-                     f"{_fmt(col / (col + fr), 2)} | "
-                     + " | ".join(_fmt([m[k] for m in ms], 2) for k in
-                                  ("airborne", "lid_touch", "free", "lid_impacts",
-                                   "floor_impacts"))
-                     + f" | {_fmt(ext, 2)} | {_fmt([m['strobe_spread'] for m in ms], 2)} |")
+        rows.append([f"{fq:g}", _pm(resp["Zr"][i] / U), _pm(col), _pm(fr),
+                     _pm(col / (col + fr), 2)]
+                    + [_pm([m[k] for m in ms], 2) for k in
+                       ("airborne", "lid_touch", "free", "lid_impacts", "floor_impacts")]
+                    + [_pm(ext, 2), _pm([m["strobe_spread"] for m in ms], 2)])
+    lines += scaffold.table(
+        ["f [Hz]", "Z/U", "collisional loss/cycle [J]", "frictional [J]", "collisional share",
+         "airborne", "lid touched", "free flight", "lid impacts / period",
+         "floor impacts / period", "extent / extent at rest", "strobe spread"], rows)
     lines += ["", f"'Appreciable' collisional loss: a share of at least {APPRECIABLE:.0%} of the "
               "granular loss (a stated convention; the thesis gives no number).", ""]
     scaffold.write_summary(out, lines)

@@ -27,9 +27,7 @@ from __future__ import annotations
 
 import json
 import math
-import os
 
-import h5py
 import numpy as np
 
 from jaxdamp.analysis.response import frf_amplitude, resonance
@@ -45,7 +43,6 @@ try:
 except ImportError:  # run as a file: python experiments/<name>.py
     import scaffold
 
-HERE = os.path.dirname(os.path.abspath(__file__))
 CASES = ((3660.0, 10980.0), (0.0, 10980.0), (3660.0, 0.0), (0.0, 0.0))
 F_FULL = (10.0, 12.0, 13.5, 14.5, 15.25, 16.0, 18.5, 23.0)
 SPLIT = ("pp_normal", "pw_normal", "pp_friction", "pw_friction")
@@ -145,11 +142,8 @@ def main(argv=None):
 
 def write(r, s, out, prov):
     a = r["dem"]
-    with h5py.File(os.path.join(out, "data.h5"), "w") as h:
-        scaffold.stamp(h, dict(prov, sweep_wall_s=r["wall"]))
-        h.attrs["settings"] = json.dumps(s)
-        h.attrs["verdicts"] = json.dumps(r["verdicts"])
-        h.attrs["config"] = r["cfg"].to_json()
+    with scaffold.data_file(out, dict(prov, sweep_wall_s=r["wall"]), settings=json.dumps(s),
+                            verdicts=json.dumps(r["verdicts"]), config=r["cfg"].to_json()) as h:
         h.create_dataset("frequency", data=np.asarray(s["freqs"])).attrs["units"] = "Hz"
         h.create_dataset("cases", data=np.asarray(s["cases"])).attrs.update(
             units="kg s^-1 m^-1/2", columns="gamma_n, gamma_s (thesis values)")
@@ -170,15 +164,10 @@ def write(r, s, out, prov):
 
 
 def _figure(out, r, s):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     a, p, m_p = r["dem"], r["cfg"].primary, r["m_p"]
     f = np.asarray(s["freqs"], float)
     R = s["R"]
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.8))
+    fig, (a1, a2) = scaffold.subplots(1, 2, figsize=(12, 4.8))
     ff = np.linspace(f.min() * 0.95, f.max() * 1.02, 400)
     a1.plot(ff, frf_amplitude(ff, p.M, p.K, p.C, p.U) / p.U, color="orange", ls="--", lw=0.9,
             label="analytic, M")
@@ -190,9 +179,7 @@ def _figure(out, r, s):
                     mfc="none", capsize=3, label=f"DEM γn = {gn:g}, γs = {gs:g}")
     a1.plot(f, r["s3"]["event"]["Z"] / p.U, "k-", lw=1.2, label="S3, e = 0 (event-driven)")
     a1.plot(f, r["s3"]["smooth"]["Z"] / p.U, "k:", lw=1.2, label="S3, e = 0 (smooth)")
-    a1.set_yscale("log")
-    a1.set_xlabel("excitation frequency f [Hz]")
-    a1.set_ylabel("amplitude ratio Z / U  [-]")
+    a1.set(yscale="log", xlabel="excitation frequency f [Hz]", ylabel="amplitude ratio Z / U  [-]")
     a1.set_title(f"(a) FRF at the optimal box, mean of R = {R} beds ± 2 SE (thesis fig. 5.2a)",
                  fontsize=9)
     a1.legend(fontsize=7)
@@ -208,8 +195,7 @@ def _figure(out, r, s):
                     color=col, ms=5, mfc="none", lw=1.2, capsize=2,
                     label=f"total, ({gn:g}, {gs:g})")
     a2.plot(f, r["s3"]["event"]["total"], "k-", lw=1.2, label="S3, e = 0")
-    a2.set_xlabel("excitation frequency f [Hz]")
-    a2.set_ylabel("granular loss per cycle [J]")
+    a2.set(xlabel="excitation frequency f [Hz]", ylabel="granular loss per cycle [J]")
     a2.set_title("(b) dissipation per cycle, collisional vs frictional (thesis fig. 5.2b)",
                  fontsize=9)
     a2.legend(fontsize=6, ncol=2)
@@ -233,20 +219,15 @@ def _summary(out, r, s, prov):
         f"10 % of each run. S3: `sanchez2012-impact` (m = {s3['event']['cfg'].impactor.mass:.4f} "
         f"kg, e = 0, gap = {s3['event']['cfg'].impactor.gap} m), {s['s3_duration']} s per "
         "frequency, deterministic (one realisation is exact).", "",
-        "Mean Z/U ± standard error over the beds:", "",
-        "| f [Hz] | " + " | ".join(f"({gn:g}, {gs:g})" for gn, gs in s["cases"])
-        + " | S3 event | S3 smooth | analytic M | analytic M + m_p |",
-        "| --- " * (len(s["cases"]) + 5) + "|"]
-    for i, fi in enumerate(f):
-        zc = a["Z"][:, i] / U  # (case, replicate)
-        cells = [scaffold.pm(*scaffold.mean_se(z), ".2f", ".2f") for z in zc]
-        lines.append(f"| {fi:g} | " + " | ".join(cells)
-                     + f" | {s3['event']['Z'][i] / U:.2f} | {s3['smooth']['Z'][i] / U:.2f} | "
-                     f"{frf_amplitude(fi, p.M, p.K, p.C, U) / U:.2f} | "
-                     f"{frf_amplitude(fi, p.M + m_p, p.K, p.C, U) / U:.2f} |")
-    lines += ["", "| case (γn, γs) | resonant Z/U (± SE) | change vs reference (Welch 95 %) | "
-              "frequencies differing at 95 % | collision share of loss at the peak | "
-              "balance error |", "| --- | --- | --- | --- | --- | --- |"]
+        "Mean Z/U ± standard error over the beds:", ""]
+    lines += scaffold.table(
+        ["f [Hz]"] + [f"({gn:g}, {gs:g})" for gn, gs in s["cases"]]
+        + ["S3 event", "S3 smooth", "analytic M", "analytic M + m_p"],
+        [[f"{fi:g}"] + [scaffold.pm(*scaffold.mean_se(z), ".2f", ".2f") for z in a["Z"][:, i] / U]
+         + [f"{s3['event']['Z'][i] / U:.2f}", f"{s3['smooth']['Z'][i] / U:.2f}",
+            f"{frf_amplitude(fi, p.M, p.K, p.C, U) / U:.2f}",
+            f"{frf_amplitude(fi, p.M + m_p, p.K, p.C, U) / U:.2f}"] for i, fi in enumerate(f)])
+    rows = []
     for c, row in enumerate(v["cases"]):
         k = int(np.argmax(a["Z"][c].mean(-1)))
         coll = sum(a["split"][x][c, k].mean() for x in ("pp_normal", "pw_normal"))
@@ -254,29 +235,32 @@ def _summary(out, r, s, prov):
         change = ("reference" if c == 0 else
                   f"{scaffold.pm(row['d_peak_rel'], row['d_peak_ci_rel'], '+.1%', '.1%')} — "
                   + ("**changed**" if row["peak_changed"] else "not significant"))
-        lines.append(f"| ({row['gamma_n']:g}, {row['gamma_s']:g}) | "
-                     f"{scaffold.pm(row['peak'], row['peak_se'], '.2f', '.2f')} | {change} | "
-                     + ("–" if c == 0 else f"{row['freqs_differing']} of {len(f)}")
-                     + f" | {f'{coll / tot:.0%}' if tot > 0 else '– (no loss)'} | "
-                     f"{float(np.max(a['balance'][c])):.1e} |")
+        rows.append([f"({row['gamma_n']:g}, {row['gamma_s']:g})",
+                     scaffold.pm(row["peak"], row["peak_se"], ".2f", ".2f"), change,
+                     "–" if c == 0 else f"{row['freqs_differing']} of {len(f)}",
+                     f"{coll / tot:.0%}" if tot > 0 else "– (no loss)",
+                     f"{float(np.max(a['balance'][c])):.1e}"])
     for m in ("event", "smooth"):
         d = v[f"s3_{m}"]
-        lines.append(f"| S3 e = 0 ({m}) | {resonance(f, s3[m]['Z'])[1] / U:.2f} | largest "
-                     f"\\|Z/Z_ref − 1\\| {d['max_rel_diff']:.1%} | {d['beyond_2se']} of {len(f)} "
-                     "beyond 2 SE of the DEM mean | – | – |")
-    lines += ["", "**Loss per cycle: the bed against S3's impact loss** (thesis §5.3.2, fig. 5.2b): "
-              "the granular loss per drive period of every damping case (mean ± SE over the "
+        rows.append([f"S3 e = 0 ({m})", f"{resonance(f, s3[m]['Z'])[1] / U:.2f}",
+                     f"largest \\|Z/Z_ref − 1\\| {d['max_rel_diff']:.1%}",
+                     f"{d['beyond_2se']} of {len(f)} beyond 2 SE of the DEM mean", "–", "–"])
+    lines += [""] + scaffold.table(
+        ["case (γn, γs)", "resonant Z/U (± SE)", "change vs reference (Welch 95 %)",
+         "frequencies differing at 95 %", "collision share of loss at the peak", "balance error"],
+        rows)
+    lines += ["", "**Loss per cycle: the bed against S3's impact loss** (thesis §5.3.2, fig. "
+              "5.2b): the granular loss per drive period of every damping case (mean ± SE over the "
               "beds, steady state) and S3's loss at its impacts (e = 0, event-driven; "
-              "deterministic); the last column is S3 over the reference case.", "",
-              "| f [Hz] | " + " | ".join(f"({gn:g}, {gs:g}) [J]" for gn, gs in s["cases"])
-              + " | S3 e = 0 [J] | S3 / reference |", "| --- " * (len(s["cases"]) + 3) + "|"]
-    for i, fi in enumerate(f):
-        cells = [scaffold.pm(*scaffold.mean_se(e), 3) for e in a["E"][:, i]]
-        ref = a["E"][0, i].mean()
-        ratio = s3["event"]["total"][i] / ref if ref > 0 else math.nan
-        lines.append(f"| {fi:g} | " + " | ".join(cells)
-                     + f" | {s3['event']['total'][i]:.3g} | {ratio:.2f} |")
+              "deterministic); the last column is S3 over the reference case.", ""]
     ratios = np.array([s3["event"]["total"][i] / a["E"][0, i].mean() for i in range(len(f))])
+    lines += scaffold.table(
+        ["f [Hz]"] + [f"({gn:g}, {gs:g}) [J]" for gn, gs in s["cases"]]
+        + ["S3 e = 0 [J]", "S3 / reference"],
+        [[f"{fi:g}"] + [scaffold.pm(*scaffold.mean_se(e), 3) for e in a["E"][:, i]]
+         + [f"{s3['event']['total'][i]:.3g}",
+            f"{ratios[i] if a['E'][0, i].mean() > 0 else math.nan:.2f}"]
+         for i, fi in enumerate(f)])
     lines += ["", f"S3's loss per cycle over the reference bed's: {ratios.min():.2f}–"
               f"{ratios.max():.2f} over {f.min():g}–{f.max():g} Hz (median "
               f"{np.median(ratios):.2f})."]

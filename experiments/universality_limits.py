@@ -29,10 +29,7 @@ Every comparison is a Welch 95 % interval across beds. Writes ``data.h5``, ``fig
 from __future__ import annotations
 
 import json
-import math
-import os
 
-import h5py
 import numpy as np
 
 from jaxdamp.analysis.response import resonance
@@ -47,7 +44,6 @@ try:
 except ImportError:  # run as a file: python experiments/<name>.py
     import scaffold
 
-HERE = os.path.dirname(os.path.abspath(__file__))
 GN, GS = 3660.0, 10980.0  # thesis values
 GAMMAS = (0.0, 2500.0, 5000.0, 10000.0)
 #: (name, density [kg/m³], E [Pa], ν): steel as the preset; lead and aluminium, handbook values
@@ -159,7 +155,8 @@ def compute(quick: bool, log, ctx):
     for row in r["few"]:
         d, h = welch(row["peak_off"], row["peak_on"])
         row.update(d_peak=d, d_peak_ci=h, changed=bool(abs(d) > h) if np.isfinite(h) else None)
-        log(f"N = {row['N']}: γ_n off changes the resonant Z/U by {d:+.2f} ± {h:.2f}")
+        log(f"N = {row['N']}: γ_n off changes the resonant Z/U by "
+            f"{scaffold.pm(d, h, '+.2f', '.2f')}")
     ref = r["materials"][0]
     for row in r["materials"]:
         d, h = welch(row["peak"], ref["peak"])
@@ -173,9 +170,7 @@ def main(argv=None):
 
 def write(r, s, out, prov):
     wall = sum(x["wall"] for k in ("gammas", "materials", "few") for x in r[k])
-    with h5py.File(os.path.join(out, "data.h5"), "w") as h:
-        scaffold.stamp(h, dict(prov, sweep_wall_s=wall))
-        h.attrs["settings"] = json.dumps(s)
+    with scaffold.data_file(out, dict(prov, sweep_wall_s=wall), settings=json.dumps(s)) as h:
         for i, row in enumerate(r["gammas"]):
             g = h.create_group(f"gammas/{i:02d}")
             g.attrs.update(Lz=row["Lz"], scan=row["scan"], gamma=row["gamma"], frequency=row["f"])
@@ -198,39 +193,33 @@ def write(r, s, out, prov):
 
 
 def _figure(r, s, out):
-    import matplotlib
+    def se(x):  # the error bars: twice the standard error over the beds
+        return 2 * scaffold.standard_error(x)
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    R = s["R"]
-    se = lambda x: 2 * np.std(x, ddof=1) / math.sqrt(R)  # noqa: E731
-    fig, axs = plt.subplots(1, 3, figsize=(15, 4.4))
+    fig, axs = scaffold.subplots(1, 3, figsize=(15, 4.4))
     for Lz, ls in zip(s["lz"], ("-", "--")):
         for scan, col in (("gamma_n", "tab:blue"), ("gamma_s", "tab:red")):
             rows = [x for x in r["gammas"] if x["Lz"] == Lz and x["scan"] == scan]
             axs[0].errorbar([x["gamma"] for x in rows], [np.mean(x["E"]) for x in rows],
                             yerr=[se(x["E"]) for x in rows], fmt="o", ls=ls, color=col,
                             capsize=3, label=f"{scan} scanned, Lz = {Lz} m")
-    axs[0].set_xlabel("contact damping γ [kg s⁻¹ m^-1/2] (thesis units)")
-    axs[0].set_ylabel("granular loss per cycle at resonance [J]")
+    axs[0].set(xlabel="contact damping γ [kg s⁻¹ m^-1/2] (thesis units)",
+               ylabel="granular loss per cycle at resonance [J]")
     axs[0].set_title("figs. 5.2(c,d), 5.5: loss at resonance vs γ", fontsize=9)
     axs[0].legend(fontsize=7)
     for row in r["materials"]:
         axs[1].errorbar(s["frf_freqs"], row["ZU"].mean(-1),
                         yerr=[se(z) for z in row["ZU"]], fmt="o-", capsize=3,
                         label=row["material"])
-    axs[1].set_xlabel("excitation frequency f [Hz]")
-    axs[1].set_ylabel("amplitude ratio Z / U  [-]")
+    axs[1].set(xlabel="excitation frequency f [Hz]", ylabel="amplitude ratio Z / U  [-]")
     axs[1].set_title("fig. 5.3: materials at equal M/m_p", fontsize=9)
     axs[1].legend(fontsize=7)
     ns = [x["N"] for x in r["few"]]
     for key, lab in (("peak_on", "γ_n on"), ("peak_off", "γ_n = 0")):
         axs[2].errorbar(ns, [np.mean(x[key]) for x in r["few"]],
                         yerr=[se(x[key]) for x in r["few"]], fmt="o-", capsize=3, label=lab)
-    axs[2].set_xscale("log")
-    axs[2].set_xlabel("number of grains N (same total mass)")
-    axs[2].set_ylabel("resonant amplitude ratio Z / U  [-]")
+    axs[2].set(xscale="log", xlabel="number of grains N (same total mass)",
+               ylabel="resonant amplitude ratio Z / U  [-]")
     axs[2].set_title("fig. 5.4: universality and the number of grains", fontsize=9)
     axs[2].legend(fontsize=7)
     scaffold.save_figure(fig, out, "figure.png")
@@ -238,7 +227,14 @@ def _figure(r, s, out):
 
 def _summary(r, s, out, prov, wall):
     R = s["R"]
-    m = lambda x: f"{np.mean(x):.3g} ± {np.std(x, ddof=1) / math.sqrt(R):.2g}"  # noqa: E731
+
+    def m(x):  # mean ± SE over the beds
+        return scaffold.pm(*scaffold.mean_se(x), 3, 2)
+
+    def change(x):  # the Welch difference of the resonant Z/U and its verdict
+        return (f"{scaffold.pm(x['d_peak'], x['d_peak_ci'], '+.2f', '.2f')} — "
+                + ("**changed**" if x["changed"] else "not significant"))
+
     L = ["# Limits of the universal response (thesis figs. 5.2c,d, 5.3, 5.4, 5.5)", "",
          scaffold.provenance_line(prov, wall), "",
          f"`sanchez2012-optimal`, R = {R} independently poured beds per point, {s['duration']} "
@@ -249,37 +245,32 @@ def _summary(r, s, out, prov, wall):
          + "; ".join(f"{part}: {k} of {n}" for part, k, n in r["stationarity"]) + ". "
          f"{s['duration']} s per run is what two shared cores afforded; where few runs are "
          "stationary, a verdict rests on runs that may still drift.", "",
-         "## Contact damping at resonance (figs. 5.2c,d; fig. 5.5 at Lz = 0.282 m)", "",
-         "| Lz [m] | scanned | γ | f [Hz] | loss per cycle [J] | collisional share | Z/U |",
-         "| --- | --- | --- | --- | --- | --- | --- |"]
+         "## Contact damping at resonance (figs. 5.2c,d; fig. 5.5 at Lz = 0.282 m)", ""]
     U = presets.get("sanchez2012-optimal").primary.U
-    for x in r["gammas"]:
-        L.append(f"| {x['Lz']} | {x['scan']} | {x['gamma']:g} | {x['f']:g} | {m(x['E'])} | "
-                 f"{m(x['coll_share'])} | {m(x['Z'] / U)} |")
+    L += scaffold.table(
+        ["Lz [m]", "scanned", "γ", "f [Hz]", "loss per cycle [J]", "collisional share", "Z/U"],
+        [[x["Lz"], x["scan"], f"{x['gamma']:g}", f"{x['f']:g}", m(x["E"]), m(x["coll_share"]),
+          m(x["Z"] / U)] for x in r["gammas"]])
     L += [""]
     for Lz in s["lz"]:
         for scan in ("gamma_n", "gamma_s"):
             rows = [x for x in r["gammas"] if x["Lz"] == Lz and x["scan"] == scan]
             d, h = welch(rows[-1]["E"], rows[0]["E"])
             L.append(f"- Lz = {Lz} m, {scan} from {rows[0]['gamma']:g} to {rows[-1]['gamma']:g}: "
-                     f"loss at resonance changes by {d:+.3g} ± {h:.2g} J (Welch 95 %) — "
+                     f"loss at resonance changes by {scaffold.pm(d, h, '+.3g', '.2g', unit='J')} "
+                     "(Welch 95 %) — "
                      + ("**changed**" if abs(d) > h else "constant within the interval") + ".")
-    L += ["", "## Materials at equal M/m_p (fig. 5.3)", "",
-          "| material | ρ [kg/m³] | E [Pa] | ν | M, K, C scale | resonant Z/U | vs steel |",
-          "| --- | --- | --- | --- | --- | --- | --- |"]
-    for x in r["materials"]:
-        vs = ("reference" if x is r["materials"][0] else
-              f"{x['d_peak']:+.2f} ± {x['d_peak_ci']:.2f} — "
-              + ("**changed**" if x["changed"] else "not significant"))
-        L.append(f"| {x['material']} | {x['density']:g} | {x['E']:.3g} | {x['nu']} | "
-                 f"{x['scale']:.3f} | {m(x['peak'])} | {vs} |")
-    L += ["", "## Few grains (fig. 5.4)", "",
-          "| N | radius [mm] | resonant Z/U, γ_n on | γ_n = 0 | change (Welch 95 %) |",
-          "| --- | --- | --- | --- | --- |"]
-    for x in r["few"]:
-        L.append(f"| {x['N']} | {1e3 * x['radius']:.2f} | {m(x['peak_on'])} | "
-                 f"{m(x['peak_off'])} | {x['d_peak']:+.2f} ± {x['d_peak_ci']:.2f} — "
-                 + ("**changed**" if x["changed"] else "not significant") + " |")
+    L += ["", "## Materials at equal M/m_p (fig. 5.3)", ""]
+    L += scaffold.table(
+        ["material", "ρ [kg/m³]", "E [Pa]", "ν", "M, K, C scale", "resonant Z/U", "vs steel"],
+        [[x["material"], f"{x['density']:g}", f"{x['E']:.3g}", x["nu"], f"{x['scale']:.3f}",
+          m(x["peak"]), "reference" if x is r["materials"][0] else change(x)]
+         for x in r["materials"]])
+    L += ["", "## Few grains (fig. 5.4)", ""]
+    L += scaffold.table(
+        ["N", "radius [mm]", "resonant Z/U, γ_n on", "γ_n = 0", "change (Welch 95 %)"],
+        [[x["N"], f"{1e3 * x['radius']:.2f}", m(x["peak_on"]), m(x["peak_off"]), change(x)]
+         for x in r["few"]])
     scaffold.write_summary(out, L)
 
 
