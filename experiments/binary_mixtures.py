@@ -39,21 +39,21 @@ import argparse
 import dataclasses
 import json
 import os
-import platform
-import sys
 import time
 
-import h5py
 import numpy as np
 
-import jaxdamp
 from jaxdamp.analysis import stats
 from jaxdamp.cases import presets
-from jaxdamp.figures import figure, save, snapshot_grid_figure
+from jaxdamp.figures import save, snapshot_grid_figure
 from jaxdamp.physics.model import grain_radii, grain_species
 from jaxdamp.studies import efficiency as ef
 
-HERE = os.path.dirname(os.path.abspath(__file__))
+try:
+    from . import scaffold
+except ImportError:  # run as a file: python experiments/<name>.py
+    import scaffold
+
 CLASS_NAMES = {"a": "class a (equal mass)", "b": "class b (equal number)",
                "c": "class c (equal number and mass)"}
 #: The paper's transition amplitude [m], the threshold of its "above A_opt" claims.
@@ -72,18 +72,17 @@ def settings(args):
                 low_amps=[0.02, 0.03, 0.04], replicates=args.replicates)
 
 
-def run_family(name, sigma, amps, raw, periods, transient, replicates, progress, settle=None):
+def run_family(name, sigma, amps, ctx, periods, transient, replicates, settle=None):
     """One family's amplitude sweep with ``replicates`` beds per amplitude (resumable file)."""
     cfg = presets.family(name, sigma)
     if settle is not None:  # quick mode: the transient period erases the start anyway
         cfg = cfg.replace(numerics=dataclasses.replace(cfg.numerics, settle_time=settle))
     tag = name.split("-")[1] + (f"_sigma{sigma:g}" if sigma is not None else "")
-    path = os.path.join(raw, f"{tag}_a{len(amps)}_t{transient}_p{periods}_R{replicates}.h5")
-    t0 = time.perf_counter()
+    path = ctx.raw(f"{tag}_a{len(amps)}_t{transient}_p{periods}_R{replicates}.h5")
     r = ef.measure(cfg, amps, periods=periods, transient=transient, out=path,
-                   progress=progress, echo=None, replicates=replicates)
+                   progress=ctx.progress, echo=None, replicates=replicates)
     return dict(name=name, sigma=sigma, result=r, periods=periods, transient=transient,
-                path=path, elapsed=time.perf_counter() - t0, klass=name.split("-")[1])
+                path=path, klass=name.split("-")[1])
 
 
 def fam_label(run):
@@ -144,27 +143,21 @@ def a_opt(run):
                      for r in range(y.shape[1])])
 
 
-def estimate(values):
-    """``(mean, se, ci95, n)`` of finite ``values`` across beds."""
-    e = stats.across(np.asarray(values, float))
-    return e.mean, e.se, e.ci95, e.n
-
-
 def fmt(values, digits=3):
-    m, se, _, n = estimate(values)
-    if not np.isfinite(m):
+    """Mean ± SE across beds (:func:`scaffold.across`), the count where there is no SE."""
+    e = scaffold.across(values)
+    if not np.isfinite(e.mean):
         return "n/a"
-    return f"{m:.{digits}g} ± {se:.2g}" if np.isfinite(se) else f"{m:.{digits}g} (n = {n})"
+    return scaffold.pm(e.mean, e.se, digits) + ("" if np.isfinite(e.se) else f" (n = {e.n})")
 
 
 def compare(x, y):
     """Ratio of means x̄/ȳ with its delta-method SE, and the Welch 95 % interval of x̄ − ȳ as
     ``(ratio, ratio_se, diff, half, verdict)``: ``verdict`` "above", "below" or "not
     significant" (the interval includes 0) or "undetermined" (fewer than 2 beds on a side)."""
-    mx, sx, _, nx = estimate(x)
-    my, sy, _, ny = estimate(y)
-    ratio = mx / my
-    rse = abs(ratio) * np.hypot(sx / mx, sy / my)
+    ex, ey = scaffold.across(x), scaffold.across(y)
+    ratio = ex.mean / ey.mean
+    rse = abs(ratio) * np.hypot(ex.se / ex.mean, ey.se / ey.mean)
     d, h = stats.welch(x, y)
     if not np.isfinite(h):
         verdict = "undetermined"
@@ -176,60 +169,60 @@ def compare(x, y):
 # ------------------------------------------------------------------------------------------
 
 
-def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__,
-                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--quick", action="store_true", help="test-sized settings (minutes)")
-    ap.add_argument("--sigmas", type=lambda t: [float(x) for x in t.split(",") if x],
-                    default=[0.3, 0.5, 0.7, 0.9],
+def options(ap):
+    sigmas = lambda t: [float(x) for x in t.split(",") if x]  # noqa: E731
+    ap.add_argument("--sigmas", type=sigmas, default=[0.3, 0.5, 0.7, 0.9],
                     help="size ratios on the full protocol (~6 min per σ and bed on 2 cores "
                          "at σ = 0.5, ~10 min at 0.3)")
-    ap.add_argument("--low-sigmas", type=lambda t: [float(x) for x in t.split(",") if x],
-                    default=[0.1], help="size ratios on the short protocol (3 amplitudes)")
-    ap.add_argument("--replicates", type=int, default=3,
+    ap.add_argument("--low-sigmas", type=sigmas, default=[0.1],
+                    help="size ratios on the short protocol (3 amplitudes)")
+    ap.add_argument("--replicates", type=_at_least_one, default=3,
                     help="independently seeded beds per amplitude (≥ 2 for intervals)")
     ap.add_argument("--periods", type=int, default=50)
     ap.add_argument("--transient", type=int, default=10)
     ap.add_argument("--low-periods", type=int, default=5)
     ap.add_argument("--low-transient", type=int, default=3)
     ap.add_argument("--classes", default="abc")
-    ap.add_argument("--out", default=os.path.join(HERE, "binary_mixtures"))
-    ap.add_argument("--no-progress", action="store_true")
-    args = ap.parse_args(argv)
-    if args.replicates < 1:
-        ap.error(f"--replicates {args.replicates}: at least 1 bed per amplitude")
-    s = settings(args)
-    raw = os.path.join(args.out, "raw")
-    os.makedirs(raw, exist_ok=True)
-    progress = not args.no_progress
-    t0 = time.perf_counter()
 
-    settle = 0.02 if args.quick else None
+
+def _at_least_one(text):
+    if int(text) < 1:
+        raise argparse.ArgumentTypeError(f"{text}: at least 1 bed per amplitude")
+    return int(text)
+
+
+def compute(quick, log, ctx):
+    args = ctx.args
+    s = settings(args)
+    settle = 0.02 if quick else None
     R = s["replicates"]
-    runs = [run_family("varela2023-reference", None, s["amps"], raw, s["periods"],
-                       s["transient"], R, progress, settle=settle)]
+    runs = [run_family("varela2023-reference", None, s["amps"], ctx, s["periods"],
+                       s["transient"], R, settle=settle)]
     for klass in args.classes:
         for sigma in s["sigmas"]:
-            runs.append(run_family(f"varela2023-{klass}", sigma, s["amps"], raw, s["periods"],
-                                   s["transient"], R, progress, settle=settle))
+            runs.append(run_family(f"varela2023-{klass}", sigma, s["amps"], ctx, s["periods"],
+                                   s["transient"], R, settle=settle))
         for sigma in s["low_sigmas"]:
-            runs.append(run_family(f"varela2023-{klass}", sigma, s["low_amps"], raw,
-                                   s["low_periods"], s["low_transient"], R, progress))
-    drift = [] if args.quick else balance_drift(progress)
-    elapsed = time.perf_counter() - t0
-    write_data(os.path.join(args.out, "data.h5"), runs)
-    figures(args.out, runs, args.classes)
-    write_summary(args, s, runs, elapsed, drift)
-    print(f"wrote {args.out}/summary.md ({elapsed:.0f} s; sweeps "
-          f"{sum(r['result'].wall_time for r in runs):.0f} s)")
-    return runs
+            runs.append(run_family(f"varela2023-{klass}", sigma, s["low_amps"], ctx,
+                                   s["low_periods"], s["low_transient"], R))
+    drift = [] if quick else balance_drift(ctx.progress)
+
+    def write(out, prov):
+        write_data(out, prov, runs)
+        figures(out, runs, args.classes)
+        write_summary(out, prov, s, runs, drift)
+        log(f"wrote {out}/summary.md ({prov['elapsed_s']:.0f} s; sweeps "
+            f"{sum(r['result'].wall_time for r in runs):.0f} s)")
+
+    return runs, write
 
 
-def write_data(path, runs):
-    with h5py.File(path, "w") as h:
-        h.attrs["jaxdamp_version"] = jaxdamp.__version__
-        h.attrs["command"] = " ".join(["python experiments/binary_mixtures.py"] + sys.argv[1:])
-        h.attrs["E_max"] = "4 m A_d^2 omega^2"
+def main(argv=None):
+    return scaffold.main(__doc__, "binary_mixtures", argv, compute, options)
+
+
+def write_data(out, prov, runs):
+    with scaffold.data_file(out, prov, E_max="4 m A_d^2 omega^2") as h:
         for run in runs:
             r = run["result"]
             sub = f"/sigma_{run['sigma']:g}" if run["sigma"] else ""
@@ -260,47 +253,48 @@ def _family_runs(runs, klass):
     return [r for r in runs if r["klass"] == klass]
 
 
+def _class_panels(classes, title, xlabel, ylabel, draw):
+    """One panel per class: ``draw(ax, klass)``, then the panel's title, labels and legend."""
+    fig, axes = scaffold.subplots(1, len(classes), figsize=(5 * len(classes), 4.2),
+                                  squeeze=False)
+    for ax, klass in zip(axes[0], classes):
+        draw(ax, klass)
+        ax.set_title(f"{CLASS_NAMES[klass]}{title}", fontsize=9)
+        ax.set(xlabel=xlabel, ylabel=ylabel)
+        ax.legend(fontsize=7)
+    return fig
+
+
 def figures(out, runs, classes):
     ref = runs[0]
-    # ⟨E_d⟩/m vs A_d, one panel per class (figs. 2, 6, 9)
-    fig = figure((5 * len(classes), 4.2), layout="tight")
-    axes = fig.subplots(1, len(classes), squeeze=False)
-    for ax, klass in zip(axes[0], classes):
+
+    def efficiency(ax, klass):  # ⟨E_d⟩/m vs A_d (figs. 2, 6, 9)
         for run in [ref] + _family_runs(runs, klass):
             st = run["result"].steady["E_d_per_mass"]
             ax.errorbar(run["result"].amplitudes * 100, st["mean"], yerr=st["ci95"],
                         fmt="o-" if run is not ref else "ks-", ms=3.5, capsize=2,
                         label=plot_label(run))
         ax.axvline(A_PAPER * 100, color="0.6", ls=":", lw=1)
-        ax.set_title(CLASS_NAMES[klass], fontsize=9)
-        ax.set_xlabel("drive amplitude A_d [cm] (dotted: the paper's A_opt)")
-        ax.set_ylabel("⟨E_d⟩ / m [1/kg] (mean, 95 % interval across beds)")
-        ax.legend(fontsize=7)
-    save(fig, os.path.join(out, "efficiency.png"))
 
-    # segregation index per period at 3 cm
-    fig = figure((5 * len(classes), 4.2), layout="tight")
-    axes = fig.subplots(1, len(classes), squeeze=False)
-    for ax, klass in zip(axes[0], classes):
+    def segregation(ax, klass):  # segregation index per period at 3 cm
         for run in _family_runs(runs, klass):
             r = run["result"]
-            k = at3(r)
-            seg = np.asarray(r.replicate_per_period["segregation"][k])  # (R, n)
+            seg = np.asarray(r.replicate_per_period["segregation"][at3(r)])  # (R, n)
             t = np.arange(1, seg.shape[1] + 1)
-            m = seg.mean(axis=0)
-            se = seg.std(axis=0, ddof=1) / np.sqrt(seg.shape[0]) if seg.shape[0] > 1 else 0 * m
+            m, se = seg.mean(axis=0), np.nan_to_num(scaffold.standard_error(seg, axis=0))
             (line,) = ax.plot(t, m, lw=1.2, label=plot_label(run))
             ax.fill_between(t, m - se, m + se, color=line.get_color(), alpha=0.25, lw=0)
         ax.axhline(0.0, color="0.5", lw=0.8)
-        ax.set_title(f"{CLASS_NAMES[klass]}, A_d = 3 cm", fontsize=9)
-        ax.set_xlabel("drive period (transient first)")
-        ax.set_ylabel("segregation index S [1] (mean ± SE)")
-        ax.legend(fontsize=7)
-    save(fig, os.path.join(out, "segregation.png"))
+
+    scaffold.save_figure(_class_panels(
+        classes, "", "drive amplitude A_d [cm] (dotted: the paper's A_opt)",
+        "⟨E_d⟩ / m [1/kg] (mean, 95 % interval across beds)", efficiency), out, "efficiency.png")
+    scaffold.save_figure(_class_panels(
+        classes, ", A_d = 3 cm", "drive period (transient first)",
+        "segregation index S [1] (mean ± SE)", segregation), out, "segregation.png")
 
     # contacts and force vs phase at A_d = 3 cm (figs. 4, 5, 7, 10, 11), replicate means
-    fig = figure((5 * len(classes), 7), layout="tight")
-    axes = fig.subplots(2, len(classes), squeeze=False)
+    fig, axes = scaffold.subplots(2, len(classes), figsize=(5 * len(classes), 7), squeeze=False)
     for j, klass in enumerate(classes):
         for run in [ref] + _family_runs(runs, klass):
             r = run["result"]
@@ -316,12 +310,12 @@ def figures(out, runs, classes):
         for i in range(2):
             axes[i, j].set_xlabel("phase t/T [1] (box at its top at 0)")
             axes[i, j].legend(fontsize=7)
-    save(fig, os.path.join(out, "contacts_force.png"))
+    scaffold.save_figure(fig, out, "contacts_force.png")
 
     # phase plots at σ = 0.5 (figs. 8, 12)
     pc = [k for k in "bc" if k in classes]
-    fig = figure((6 * max(len(pc), 1), 4.5), layout="tight")
-    axes = fig.subplots(1, max(len(pc), 1), squeeze=False)
+    fig, axes = scaffold.subplots(1, max(len(pc), 1), figsize=(6 * max(len(pc), 1), 4.5),
+                                  squeeze=False)
     for ax, klass in zip(axes[0], pc):
         for run in [ref] + [r for r in _family_runs(runs, klass) if r["sigma"] == 0.5]:
             r = run["result"]
@@ -333,10 +327,9 @@ def figures(out, runs, classes):
                         "k-" if run is ref else ("-" if sp == 0 else "--"), lw=1.2,
                         label=f"{plot_label(run)}: {spec.name}")
         ax.set_title(f"{CLASS_NAMES[klass]}: centre of mass, A_d = 3 cm", fontsize=9)
-        ax.set_xlabel("z [cm] (lab frame)")
-        ax.set_ylabel("v_z [m/s]")
+        ax.set(xlabel="z [cm] (lab frame)", ylabel="v_z [m/s]")
         ax.legend(fontsize=7)
-    save(fig, os.path.join(out, "phase_plots.png"))
+    scaffold.save_figure(fig, out, "phase_plots.png")
 
     # snapshots (fig. 3): reference and class a at the smallest σ run, first bed
     rows = []
@@ -393,19 +386,15 @@ def balance_drift(progress, amplitude=0.03, periods=5, transient=2, replicates=3
     return rows
 
 
-def write_summary(args, s, runs, elapsed, drift=()):
+def write_summary(out, prov, s, runs, drift=()):
     ref = runs[0]
     amps = ref["result"].amplitudes
     R = ref["result"].replicates
     lines = []
     P = lines.append
-    command = " ".join(["python experiments/binary_mixtures.py"]
-                       + [a for a in sys.argv[1:] if a != "--no-progress"])
     P("# Binary mixtures in a driven box — the 2023 paper's results, replicated\n")
-    P(f"Command: `{command}` — jaxdamp {jaxdamp.__version__}, machine: {os.cpu_count()} cores, "
-      f"{platform.processor() or platform.machine()}, float64, native engine. Wall time "
-      f"{elapsed / 60:.1f} min this invocation; the sweeps' own compute time (kept across "
-      "resumes) is listed per family below.\n")
+    P(scaffold.provenance_line(prov) + " Float64, native engine; the sweeps' own compute time "
+      "(kept across resumes) is listed per family below.\n")
     convention = presets.get("varela2023-reference").wall_damping
     P(f"Grain–wall damping: `wall_damping = \"{convention}\"` "
       "(the wall's constant, calibrated on 2.5 mm grains, mixed with each grain's; the paper does "
@@ -426,21 +415,21 @@ def write_summary(args, s, runs, elapsed, drift=()):
     P("Stationary beds (detected / run, over all amplitudes): "
       + "; ".join(f"{k} {a}/{b}" for k, (a, b) in n_stat.items()) + ".\n")
     P("## ⟨E_d⟩/m [1/kg] per family (mean ± SE across beds)\n")
-    P("| family | N | m [kg] | dt [s] | periods | " + " | ".join(f"{a * 100:g} cm" for a in amps)
-      + " | A_opt [cm] | sweep wall [s] |")
-    P("|" + "---|" * (len(amps) + 7))
+    rows = []
     for run in runs:
         r = run["result"]
-        y = per_mass(run)
-        cells = {round(a, 6): fmt(y[i]) for i, a in enumerate(r.amplitudes)}
+        cells = {round(a, 6): fmt(per_mass(run)[i]) for i, a in enumerate(r.amplitudes)}
         steps = (run["transient"] + run["periods"]) / r.config.frequency / r.config.numerics.dt
         ao = a_opt(run)
-        P(f"| {fam_label(run)} | {r.config.n_grains} | {r.summary['mass'][0]:.4f} | "
-          f"{r.config.numerics.dt:.3g} | {run['transient']} + {run['periods']} | "
-          + " | ".join(cells.get(round(a, 6), "–") for a in amps)
-          + f" | {fmt(ao * 100) if np.isfinite(ao).any() else '–'} | "
-          f"{r.wall_time:.0f} ({r.wall_time / steps / len(r.amplitudes) / R * 1e6:.1f} "
-          "µs/system-step) |")
+        rows.append([fam_label(run), r.config.n_grains, f"{r.summary['mass'][0]:.4f}",
+                     f"{r.config.numerics.dt:.3g}", f"{run['transient']} + {run['periods']}"]
+                    + [cells.get(round(a, 6), "–") for a in amps]
+                    + [fmt(ao * 100) if np.isfinite(ao).any() else "–",
+                       f"{r.wall_time:.0f} ({r.wall_time / steps / len(r.amplitudes) / R * 1e6:.1f}"
+                       " µs/system-step)"])
+    lines += scaffold.table(["family", "N", "m [kg]", "dt [s]", "periods"]
+                            + [f"{a * 100:g} cm" for a in amps]
+                            + ["A_opt [cm]", "sweep wall [s]"], rows)
     low = [run for run in runs if run["periods"] != s["periods"]]
 
     def projected(run):  # minutes for the full protocol at this run's cost per period
@@ -468,7 +457,8 @@ def write_summary(args, s, runs, elapsed, drift=()):
           "over the analysed periods / energy dissipated in them): "
           + "; ".join(f"dt = t_c/{d['dt_per_collision']}: {fmt(d['drift'])} (⟨E_d⟩ "
                       f"{fmt(d['E_d'], 4)}, {d['wall']:.0f} s wall)" for d in drift)
-          + f". ⟨E_d⟩ at t_c/50 minus t_c/100: {dd:+.4f} ± {hd:.4f} (Welch 95 %: {vd}).\n")
+          + f". ⟨E_d⟩ at t_c/50 minus t_c/100: {scaffold.pm(dd, hd, '+.4f', '.4f')} "
+          f"(Welch 95 %: {vd}).\n")
     P("## The paper's claims\n")
     for line in claims(runs, s):
         P(f"- {line}")
@@ -477,33 +467,32 @@ def write_summary(args, s, runs, elapsed, drift=()):
     P("Every column: mean ± SE across beds. Mean contacts and S over the analysed periods; "
       "peak contacts, peak abs(F_z) and the largest centre-of-mass speed from each bed's own "
       "phase curve (averaged over its analysed periods).\n")
-    P("| family | ⟨E_d⟩/m | E_pw/(E_pp+E_pw) | mean contacts | contacts per species | peak "
-      "contacts | peak abs(F_z) [N] | max abs(v_z) COM per species [m/s] | S | "
-      "S trend [1/period] |")
-    P("|---|---|---|---|---|---|---|---|---|---|")
+    rows = []
     for run in runs:
         r = run["result"]
         k = at3(r)
         rs = r.replicate_summary
         b = bed_phase(run, k)
         seg = segregation_at3(run)
-        P(f"| {fam_label(run)} | {fmt(per_mass(run)[k])} | {fmt(rs['wall_fraction'][k])} | "
-          f"{fmt(rs['contacts_mean'][k])} | "
-          + ", ".join(f"{spec.name} {fmt(c)}" for spec, c
-                      in zip(r.config.grains, b["contacts_species"].T))
-          + f" | {fmt(b['contacts_peak'])} | {fmt(b['force_peak'], 4)} | "
-          + ", ".join(f"{spec.name} {fmt(v)}" for spec, v in zip(r.config.grains, b["vz_max"].T))
-          + f" | {seg['S']} | {seg['trend']} |")
+        per_species = lambda x: ", ".join(  # noqa: E731
+            f"{spec.name} {fmt(c)}" for spec, c in zip(r.config.grains, x.T))
+        rows.append([fam_label(run), fmt(per_mass(run)[k]), fmt(rs["wall_fraction"][k]),
+                     fmt(rs["contacts_mean"][k]), per_species(b["contacts_species"]),
+                     fmt(b["contacts_peak"]), fmt(b["force_peak"], 4), per_species(b["vz_max"]),
+                     seg["S"], seg["trend"]])
+    lines += scaffold.table(["family", "⟨E_d⟩/m", "E_pw/(E_pp+E_pw)", "mean contacts",
+                             "contacts per species", "peak contacts", "peak abs(F_z) [N]",
+                             "max abs(v_z) COM per species [m/s]", "S", "S trend [1/period]"],
+                            rows)
     P("")
     P("S trend: each bed's least-squares slope of S over its analysed periods, mean ± SE "
       "across beds; a slope whose interval includes 0 means S is steady (the bed is not still "
       "segregating or mixing).\n")
     P("Figures: `efficiency.png` (figs. 2, 6, 9), `segregation.png` (S per period), "
       "`contacts_force.png` (figs. 4, 5, 7, 10, 11), `phase_plots.png` (figs. 8, 12), "
-      "`snapshots.png` (fig. 3, first bed). Data: `data.h5`.\n")
-    with open(os.path.join(args.out, "summary.md"), "w") as fh:
-        fh.write("\n".join(lines))
-    with open(os.path.join(args.out, "claims.json"), "w") as fh:
+      "`snapshots.png` (fig. 3, first bed). Data: `data.h5`.")  # the file's last line
+    scaffold.write_summary(out, lines)
+    with open(os.path.join(out, "claims.json"), "w") as fh:
         json.dump({fam_label(r): {"A_opt_cm": [float(x) for x in a_opt(r) * 100]} for r in runs},
                   fh, indent=1)
 
@@ -544,12 +533,11 @@ def claims(runs, s):
     # A_opt ≈ 2.8 cm for every σ
     rows, inside = [], 0
     for run in full:
-        m, se, ci, n = estimate(a_opt(run))
-        if not np.isfinite(m):
+        e = scaffold.across(a_opt(run))
+        if not np.isfinite(e.mean):
             continue
-        ok = np.isfinite(ci) and abs(m - A_PAPER) <= ci
-        inside += ok
-        rows.append(f"{fam_label(run)} {m * 100:.3f} ± {se * 100:.3f}")
+        inside += np.isfinite(e.ci95) and abs(e.mean - A_PAPER) <= e.ci95
+        rows.append(f"{fam_label(run)} {scaffold.pm(e.mean, e.se, '.3f', '.3f', scale=100)}")
     out.append("**A_opt ≈ 2.8 cm for every σ** (each bed's largest ⟨E_d⟩/m, parabola through "
                "its top three amplitudes; mean ± SE across beds, cm): " + "; ".join(rows)
                + f". The paper's 2.8 cm lies inside the 95 % interval for {inside} of "
@@ -572,7 +560,7 @@ def claims(runs, s):
                 f"{n_exp} of {len(verdicts)} amplitudes {EXPECT[klass]} (Welch 95 %), the rest "
                 + (", ".join(sorted({v for v in verdicts if v != EXPECT[klass]})) or "none")
                 + "; ratio to the reference ")
-        head += ", ".join(f"{c[0]:.3f} ± {c[1]:.3f}" for c in ratios)
+        head += ", ".join(scaffold.pm(c[0], c[1], ".3f", ".3f") for c in ratios)
         head += f" at {', '.join(f'{a * 100:g}' for a in amps[above])} cm."
         mass_ratio = run["result"].summary["mass"][0] / ref["result"].summary["mass"][0]
         plain = []
@@ -601,7 +589,8 @@ def diagnostics(runs):
 
     def versus(x, y, unit, digits=4):
         ratio, rse, d, h, verdict = compare(x, y)
-        return (f"{fmt(x, digits)} vs {fmt(y, digits)} {unit} (difference {d:+.4g} ± {h:.2g}, "
+        return (f"{fmt(x, digits)} vs {fmt(y, digits)} {unit} (difference "
+                f"{scaffold.pm(d, h, '+.4g')}, "
                 f"Welch 95 %: {verdict})")
 
     for run in runs[1:]:  # every class and σ (the paper shows σ = 0.5)
@@ -613,8 +602,9 @@ def diagnostics(runs):
         want = {"a": "above", "b": "below", "c": "below"}[klass]
         text = (f"**class {klass} (σ = {run['sigma']:g}) at 3 cm, wall contacts**: {fmt(c)} "
                 f"grains on floor "
-                f"or lid on average vs {fmt(c_ref)} for the reference (difference {d:+.2f} ± "
-                f"{h:.2f}, Welch 95 %: {verdict}; paper: {'more' if want == 'above' else 'fewer'}; "
+                f"or lid on average vs {fmt(c_ref)} for the reference (difference "
+                f"{scaffold.pm(d, h, '+.2f', '.2f')}, Welch 95 %: {verdict}; paper: "
+                f"{'more' if want == 'above' else 'fewer'}; "
                 f"{'as the paper' if verdict == want else 'not as the paper'})")
         b = bed_phase(run, k)
         text += ("; per species " + ", ".join(f"{sp.name} {fmt(x)}" for sp, x
@@ -638,9 +628,10 @@ def diagnostics(runs):
         sg = segregation_at3(run)
         if sg["values"] is None:
             continue
-        m, se, ci, n = estimate(sg["values"])
-        sign = ("large grains higher" if m - ci > 0 else "large grains lower" if m + ci < 0
-                else "not distinguishable from 0") if np.isfinite(ci) else "undetermined"
+        e = scaffold.across(sg["values"])
+        sign = ("large grains higher" if e.mean - e.ci95 > 0 else "large grains lower"
+                if e.mean + e.ci95 < 0 else "not distinguishable from 0"
+                ) if np.isfinite(e.ci95) else "undetermined"
         seg_rows.append(f"{fam_label(run)} {sg['S']} ({sign})")
     if seg_rows:
         out.append("**Size segregation at 3 cm** (index S over the analysed periods, mean ± SE "

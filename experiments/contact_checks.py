@@ -25,11 +25,8 @@ engines) and ``summary.md``.
 
 from __future__ import annotations
 
-import json
 import math
-import os
 
-import h5py
 import numpy as np
 
 from jaxdamp.cases import presets
@@ -124,8 +121,7 @@ def main(argv=None):
 
 
 def write(result, out, prov):
-    with h5py.File(os.path.join(out, "data.h5"), "w") as h:
-        scaffold.stamp(h, prov)
+    with scaffold.data_file(out, prov, mixed_A=result["mixed"]) as h:
         for r in result["runs"]:
             g = h.create_group(f"sliding/{r['engine']}")
             g.attrs["config"] = r["config"]
@@ -133,18 +129,8 @@ def write(result, out, prov):
                            friction_loss=r["friction_loss"], loss_expected=r["loss_expected"])
             g.create_dataset("t", data=r["t"]).attrs["units"] = "s"
             g.create_dataset("work", data=r["work"]).attrs["units"] = "J"
-        h.attrs["mixed_A"] = json.dumps(result["mixed"])
-    _figure(result, out)
-    _summary(result, out, prov)
 
-
-def _figure(result, out):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(6.5, 4))
+    fig, ax = scaffold.subplots(figsize=(6.5, 4))
     for r, ls in zip(result["runs"], ("-", "--")):
         loss = r["work"][:, CH["pw_friction"]]
         # kinetic energy left: ½ m v0² minus the friction loss; in units of the initial one
@@ -153,36 +139,31 @@ def _figure(result, out):
     ax.axhline(5 / 7, color="0.4", lw=0.8, ls=":", label="rolling at 5/7 v0: 5/7 of it")
     tr = 2 * V0 / (7 * result["runs"][0]["mu"] * result["runs"][0]["g"]) * 1e3
     ax.axvline(tr, color="0.6", lw=0.8, ls="-.", label=f"t = 2 v0 / (7 μ g) = {tr:.2f} ms")
-    ax.set_xlabel("time t [ms]")
-    ax.set_ylabel("kinetic energy / initial kinetic energy [-]")
+    ax.set(xlabel="time t [ms]", ylabel="kinetic energy / initial kinetic energy [-]")
     ax.set_title("a sphere launched sliding on the floor (SPEC §2)", fontsize=9)
     ax.legend(fontsize=8)
     scaffold.save_figure(fig, out)
 
-
-def _summary(result, out, prov):
     L = ["# Single-contact checks: sliding to rolling, mixed A", "",
          scaffold.provenance_line(prov), "",
          "Deterministic computations: one sphere, one contact table — no spread between "
          "realisations, so no replicate interval; the numbers are given to their digits.", "",
          "## Sliding to rolling (SPEC §2)", "",
          f"Steel sphere (thesis material, stiffness_scale 0.01), R = {R * 1e3:g} mm, "
-         f"v0 = {V0} m/s, ω0 = 0, μ = {result['runs'][0]['mu']}, 30 ms.", "",
-         "| engine | dt [s] | v_end / v0 | (v_end / v0) / (5/7) − 1 | R ω_end / v_end − 1 | "
-         "friction loss [J] | "
-         "(2/7) ½ m v0² [J] |", "| --- | --- | --- | --- | --- | --- | --- |"]
-    for r in result["runs"]:
-        L.append(f"| {r['engine']} | {r['dt']:.3g} | {r['ratio']:.6f} | "
-                 f"{r['ratio'] * 7 / 5 - 1:.1e} | "
-                 f"{r['no_slip']:.1e} | {r['friction_loss']:.4e} | {r['loss_expected']:.4e} |")
-    L += ["", "## Mixed dissipative constant A (paper §2)", "",
-          "| preset | radii [mm] | A of the species [s] | A of the mixed pair [s] | their mean | "
-          "mixed / mean − 1 | ε of the mixed pair at 1 m/s |",
-          "| --- | --- | --- | --- | --- | --- | --- |"]
-    for m in result["mixed"]:
-        L.append(f"| {m['preset']} | {', '.join(f'{1e3 * x:g}' for x in m['radii'])} | "
-                 f"{m['A'][0]:.4e}, {m['A'][1]:.4e} | {m['A_mixed']:.4e} | {m['mean']:.4e} | "
-                 f"{m['rel_diff']:.1e} | {m['restitution_mixed']:.4f} |")
+         f"v0 = {V0} m/s, ω0 = 0, μ = {result['runs'][0]['mu']}, 30 ms.", ""]
+    L += scaffold.table(
+        ["engine", "dt [s]", "v_end / v0", "(v_end / v0) / (5/7) − 1", "R ω_end / v_end − 1",
+         "friction loss [J]", "(2/7) ½ m v0² [J]"],
+        [[r["engine"], f"{r['dt']:.3g}", f"{r['ratio']:.6f}", f"{r['ratio'] * 7 / 5 - 1:.1e}",
+          f"{r['no_slip']:.1e}", f"{r['friction_loss']:.4e}", f"{r['loss_expected']:.4e}"]
+         for r in result["runs"]])
+    L += ["", "## Mixed dissipative constant A (paper §2)", ""]
+    L += scaffold.table(
+        ["preset", "radii [mm]", "A of the species [s]", "A of the mixed pair [s]", "their mean",
+         "mixed / mean − 1", "ε of the mixed pair at 1 m/s"],
+        [[m["preset"], ", ".join(f"{1e3 * x:g}" for x in m["radii"]),
+          f"{m['A'][0]:.4e}, {m['A'][1]:.4e}", f"{m['A_mixed']:.4e}", f"{m['mean']:.4e}",
+          f"{m['rel_diff']:.1e}", f"{m['restitution_mixed']:.4f}"] for m in result["mixed"]])
     L += ["", "Each species' A is calibrated to ε = 0.75 at 1 m/s on its own like pair; the "
           "mixed pair takes the arithmetic mean (the presets' `mixing = \"arithmetic\"`), so its "
           "restitution at 1 m/s is not exactly 0.75.", ""]

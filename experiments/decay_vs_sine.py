@@ -22,17 +22,15 @@ its Z, interpolated in log Z for every decay bed); frequencies are not matched (
 cycles run at the damped frequency, 14.4–15.3 Hz; the sine points sit at their drive
 frequency). Sensitivity: the decay curve also with each cycle at its starting peak ``X_k``
 (``ζ_g = ΔW/(2πK X_k²)``); where ζ_g(Z) is steep and a cycle loses much of its amplitude the
-two conventions differ, and the summary gives the verdicts under both. Verdicts: the Welch 95 % interval of ζ_g(sine) − ζ_g(decay) across beds, at each
-base amplitude's resonant point (largest Z of its frequencies) and at every point.
+two conventions differ, and the summary gives the verdicts under both. Verdicts: the Welch
+95 % interval of ζ_g(sine) − ζ_g(decay) across beds, at each base amplitude's resonant point
+(largest Z of its frequencies) and at every point.
 
 Writes ``data.h5``, ``figure.png``, ``summary.md``.
 """
 
 from __future__ import annotations
 
-import os
-
-import h5py
 import numpy as np
 
 from jaxdamp.analysis.decay import on_amplitudes
@@ -148,11 +146,9 @@ def verdict(d, h, covered) -> str:
 
 def write(r, out, prov):
     s = r["settings"]
-    with h5py.File(os.path.join(out, "data.h5"), "w") as h:
-        scaffold.stamp(h, prov)
-        h.attrs["convention"] = "zeta_g = dW / (2 pi K Z^2), dW granular loss per cycle"
-        h.attrs["cycle_amplitude"] = ("mean: Z = sqrt(X_k X_k+1) (main); start: Z = X_k, the "
-                                      "cycle's starting peak (sensitivity)")
+    with scaffold.data_file(out, prov, convention="zeta_g = dW / (2 pi K Z^2), dW granular "
+                            "loss per cycle", cycle_amplitude="mean: Z = sqrt(X_k X_k+1) (main); "
+                            "start: Z = X_k, the cycle's starting peak (sensitivity)") as h:
         for k, unit in (("U", "m"), ("f", "Hz"), ("Z", "m"), ("W", "J"), ("zeta_sine", "1")):
             h.create_dataset(f"sine/{k}", data=r[k]).attrs["units"] = unit
         for name, cm in r["cmp"].items():
@@ -162,10 +158,7 @@ def write(r, out, prov):
         for k in ("Z", "zeta", "zeta_se", "zeta_g", "zeta_g_se", "f", "f_se", "n"):
             h.create_dataset(f"decay/{k}", data=c[k]).attrs["units"] = (
                 "m" if k == "Z" else "Hz" if k.startswith("f") else "1")
-    from jaxdamp.figures import figure
-
-    fig = figure((7.5, 4.5), layout="constrained")
-    ax = fig.subplots()
+    fig, ax = scaffold.subplots(figsize=(7.5, 4.5))
     Zc = np.asarray(c["Z"]) * 1e3
     ax.plot(Zc, 100 * c["zeta_g"], "k-", lw=1.2,
             label=f"free decay, cycle at Z = √(X_k X_k+1) (mean of {s['R']} beds)")
@@ -180,14 +173,14 @@ def write(r, out, prov):
         ym = 100 * r["zeta_sine"][i].mean(axis=-1)
         ye = 200 * scaffold.standard_error(r["zeta_sine"][i])
         ax.errorbar(zm, ym, yerr=ye, fmt="o", ms=4, capsize=2,
-                    label=f"stepped sine, U = {U * 1e3:g} mm ({', '.join(f'{x:g}' for x in r['f'])} Hz)")
-    ax.set_xscale("log")
-    ax.set_xlabel("amplitude of the primary Z [mm]")
-    ax.set_ylabel("grains' damping ratio ζ_g = ΔW/(2πKZ²) [%]")
+                    label=f"stepped sine, U = {U * 1e3:g} mm "
+                          f"({', '.join(f'{x:g}' for x in r['f'])} Hz)")
+    ax.set(xscale="log", xlabel="amplitude of the primary Z [mm]",
+           ylabel="grains' damping ratio ζ_g = ΔW/(2πKZ²) [%]")
     ax.set_title("thesis damper: free decay vs stepped sine (± 2 SE over beds)", fontsize=9)
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=7)
-    fig.savefig(os.path.join(out, "figure.png"), dpi=120)
+    scaffold.save_figure(fig, out)
 
     L = ["# Free decay against stepped sine (issue 16)", "",
          scaffold.provenance_line(prov), "",
@@ -210,11 +203,8 @@ def write(r, out, prov):
          f"Z = {1e3 * np.nanmin(c['Z']):.2f}–{1e3 * np.nanmax(c['Z']):.2f} mm.", "",
          "## At each base amplitude's resonant point (largest Z over its frequencies)", "",
          "Two decay columns: each cycle at Z = √(X_k X_k+1) (the main convention) and at its "
-         "starting peak X_k (sensitivity).", "",
-         "| U [mm] | f [Hz] | Z [mm] | ζ_g sine [%] | ζ_g decay at Z, √(X_k X_k+1) [%] | "
-         "difference [%] | verdict | ζ_g decay at Z, X_k [%] | difference [%] | verdict |",
-         "|---|---|---|---|---|---|---|---|---|---|"]
-    agree = total = 0
+         "starting peak X_k (sensitivity).", ""]
+    rows, agree, total = [], 0, 0
     for i, U in enumerate(r["U"]):
         Zm = r["Z"][i].mean(axis=-1)
         j = int(np.argmax(Zm))
@@ -233,9 +223,11 @@ def write(r, out, prov):
                 diff_txt = scaffold.pm(cm["diff"][i, j], cm["half"][i, j], "+.3f", scale=100)
             cells += [dec_txt, diff_txt, v]
         z_amp = scaffold.pm(Zm[j], scaffold.standard_error(r["Z"][i, j]), ".2f", scale=1e3)
-        L.append(f"| {U * 1e3:g} | {r['f'][j]:g} | {z_amp} | "
-                 f"{scaffold.pm(*scaffold.mean_se(zs), '.3f', scale=100)} | "
-                 + " | ".join(cells) + " |")
+        rows.append([f"{U * 1e3:g}", f"{r['f'][j]:g}", z_amp,
+                     scaffold.pm(*scaffold.mean_se(zs), ".3f", scale=100)] + cells)
+    L += scaffold.table(["U [mm]", "f [Hz]", "Z [mm]", "ζ_g sine [%]",
+                         "ζ_g decay at Z, √(X_k X_k+1) [%]", "difference [%]", "verdict",
+                         "ζ_g decay at Z, X_k [%]", "difference [%]", "verdict"], rows)
     counts = {}
     for name, cm in r["cmp"].items():
         every = [verdict(cm["diff"][k], cm["half"][k], cm["covered"][k])

@@ -28,11 +28,9 @@ system-seconds against the scan's. Writes ``data.h5``, ``figure.png``, ``summary
 from __future__ import annotations
 
 import json
-import os
 import sys
 import time
 
-import h5py
 import numpy as np
 
 from jaxdamp.analysis.stats import t_quantile
@@ -46,15 +44,15 @@ try:
 except ImportError:  # run as a file: python experiments/<name>.py
     import scaffold
 
-HERE = os.path.dirname(os.path.abspath(__file__))
 THESIS_LZ = 0.1225
+#: quick mode's damper: 24 grains in a 2 cm box on a light primary (design_starts_and_variables)
+QUICK = {"grains.0.count": 24, "box.Lx": 0.02, "box.Ly": 0.02, "primary.M": 0.3,
+         "primary.K": 2720.0, "primary.C": 1.0, "numerics.settle_time": 0.15}
 
 
 def settings(quick: bool) -> dict:
     if quick:
-        return dict(overrides={"grains.0.count": 24, "box.Lx": 0.02, "box.Ly": 0.02,
-                               "primary.M": 0.3, "primary.K": 2720.0, "primary.C": 1.0,
-                               "numerics.settle_time": 0.15},
+        return dict(overrides=QUICK,
                     ref_lz=(0.03, 0.04), R_ref=3, ref_duration=0.4, R=2, duration=0.3,
                     reps=2, h=0.003, lo=0.03, hi=0.15, coarse=3, fine=1, trust_seeds=(100,),
                     fd_starts=(0.03,), fd_budget=3.0, radius=0.005, min_radius=0.002,
@@ -67,9 +65,12 @@ def settings(quick: bool) -> dict:
                 s3_gaps=41, s3_duration=3.0)
 
 
-def _problem(base, s, seed, R, duration):
+def problem(base, s, seed, R=None, duration=None):
+    """The steady C_eq problem from seed ``seed`` with ``R`` replicates of ``duration`` [s]
+    (default ``s["R"]``, ``s["duration"]``)."""
     cfg = apply_overrides(base, {"numerics.seed": seed})
-    return SteadyProblem(cfg, Objective("damping"), h=s["h"], replicates=R, duration=duration)
+    return SteadyProblem(cfg, Objective("damping"), h=s["h"], replicates=R or s["R"],
+                         duration=duration or s["duration"])
 
 
 def run(s: dict, log) -> dict:
@@ -77,7 +78,7 @@ def run(s: dict, log) -> dict:
     out = {"settings": s}
 
     # 1. the reference derivative (seeds 0 .. R_ref-1)
-    ref = _problem(base, s, 0, s["R_ref"], s["ref_duration"])
+    ref = problem(base, s, 0, s["R_ref"], s["ref_duration"])
     rows = []
     for lz in s["ref_lz"]:
         e, _ = ref.evaluate(lz)
@@ -85,8 +86,8 @@ def run(s: dict, log) -> dict:
         half = t_quantile(0.975, len(g) - 1) * e.grad_se
         rows.append(dict(lz=lz, grad=e.grad, se=e.grad_se, half=half, pairs=g, value=e.value,
                          value_se=e.value_se, not_stationary=e.extra["not_stationary"]))
-        log(f"reference at Lz = {lz}: dC_eq/dLz = {e.grad:.4g} ± {half:.3g} (95 %), "
-            f"C_eq = {e.value:.4g} ± {e.value_se:.2g}; {e.extra['not_stationary']} runs not "
+        log(f"reference at Lz = {lz}: dC_eq/dLz = {scaffold.pm(e.grad, half, 4, 3)} (95 %), "
+            f"C_eq = {scaffold.pm(e.value, e.value_se, 4)}; {e.extra['not_stationary']} runs not "
             "stationary")
     out["reference"] = rows
     out["reference_sim"] = ref.sim_seconds
@@ -95,17 +96,18 @@ def run(s: dict, log) -> dict:
     #    middle point with disjoint seed sets
     est_rows = []
     for k in range(s["reps"]):
-        prob = _problem(base, s, s["seed_stride"] * (k + 1), s["R"], s["duration"])
+        prob = problem(base, s, s["seed_stride"] * (k + 1))
         points = s["ref_lz"] if k == 0 else (s["ref_lz"][len(s["ref_lz"]) // 2],)
         for lz in points:
             e, _ = prob.evaluate(lz)
             est_rows.append(dict(rep=k, lz=lz, grad=e.grad, se=e.grad_se, value=e.value,
                                  sim=e.sim_seconds))
-            log(f"estimator (R = {s['R']}, rep {k}) at {lz}: {e.grad:.4g} ± {e.grad_se:.3g}")
+            log(f"estimator (R = {s['R']}, rep {k}) at {lz}: "
+                f"{scaffold.pm(e.grad, e.grad_se, 4, 3)}")
     out["estimator"] = est_rows
 
     # 3. the baseline scan (seed set 50)
-    scan_prob = _problem(base, s, 50 * s["seed_stride"], s["R"], s["duration"])
+    scan_prob = problem(base, s, 50 * s["seed_stride"])
     lo = scan_prob.bounds()[0] if s["lo"] is None else s["lo"]
     hi = s["hi"]
     t0 = time.perf_counter()
@@ -118,7 +120,7 @@ def run(s: dict, log) -> dict:
     # 4. multi-fidelity trust region from the S3 proposal
     trust = []
     for seed in s["trust_seeds"]:
-        prob = _problem(base, s, seed * s["seed_stride"], s["R"], s["duration"])
+        prob = problem(base, s, seed * s["seed_stride"])
         p = propose(prob.config, prob.objective, prob.bed_height, lo, hi, n=s["s3_gaps"],
                     duration=s["s3_duration"])
         r = trust_region(prob, p["lz"], lo, hi, radius=s["radius"], min_radius=s["min_radius"],
@@ -132,7 +134,7 @@ def run(s: dict, log) -> dict:
     # 5. the pure finite-difference optimiser
     fd = []
     for lz0 in s["fd_starts"]:
-        prob = _problem(base, s, 77 * s["seed_stride"], s["R"], s["duration"])
+        prob = problem(base, s, 77 * s["seed_stride"])
         r = optimize(prob, lz0, lr=0.01, decay=0.85, max_iter=20, xtol=5e-4, lo=lo, hi=hi,
                      progress=False, budget=s["fd_budget"])
         fd.append(dict(lz0=lz0, result=r))
@@ -184,22 +186,23 @@ def verdicts(out: dict) -> dict:
     return v
 
 
+def encode(x) -> str:
+    """JSON of results holding numpy arrays and booleans (the verdicts, settings)."""
+    return json.dumps(x, default=lambda y: y.tolist() if hasattr(y, "tolist")
+                      else bool(y) if isinstance(y, np.bool_) else str(y))
+
+
 def write(out: dict, v: dict, path: str, prov: dict) -> None:
-    with h5py.File(os.path.join(path, "data.h5"), "w") as h:
-        scaffold.stamp(h, prov)
-        h.attrs["settings"] = json.dumps(out["settings"])
-        h.attrs["objective"] = "C_eq = E/(pi Omega Z^2) at f0 [N s/m], maximised"
-        g = h.create_group("reference")
+    with scaffold.data_file(path, prov, settings=out["settings"], verdicts=encode(v),
+                            objective="C_eq = E/(pi Omega Z^2) at f0 [N s/m], maximised") as h:
         for k in ("lz", "grad", "se", "half", "value", "value_se"):
-            g.create_dataset(k, data=np.array([r[k] for r in out["reference"]]))
-        g.create_dataset("pairs", data=np.stack([r["pairs"] for r in out["reference"]]))
-        g["lz"].attrs["units"] = "m"
-        for k in ("grad", "se", "half"):
-            g[k].attrs["units"] = "N s/m^2"
-        g.attrs["sim_seconds"] = out["reference_sim"]
-        g = h.create_group("estimator")
+            d = h.create_dataset(f"reference/{k}", data=np.array([r[k] for r in out["reference"]]))
+            if k in ("lz", "grad", "se", "half"):
+                d.attrs["units"] = "m" if k == "lz" else "N s/m^2"
+        h.create_dataset("reference/pairs", data=np.stack([r["pairs"] for r in out["reference"]]))
+        h["reference"].attrs["sim_seconds"] = out["reference_sim"]
         for k in ("rep", "lz", "grad", "se", "value", "sim"):
-            g.create_dataset(k, data=np.array([e[k] for e in out["estimator"]]))
+            h.create_dataset(f"estimator/{k}", data=np.array([e[k] for e in out["estimator"]]))
         for name, r in [("scan", out["scan"])] + [(f"trust_{t['seed']}", t["result"])
                                                   for t in out["trust"]]:
             g = h.create_group(name)
@@ -214,21 +217,12 @@ def write(out: dict, v: dict, path: str, prov: dict) -> None:
             for k, val in r.history.items():
                 g.create_dataset(k, data=val)
             g.attrs.update(reason=r.reason, x_average=r.x_average, sim_seconds=r.sim_seconds)
-        h.attrs["verdicts"] = json.dumps(v, default=lambda x: x.tolist() if hasattr(x, "tolist")
-                                         else bool(x) if isinstance(x, np.bool_) else str(x))
-    _figure(out, v, os.path.join(path, "figure.png"))
-    _summary(out, v, os.path.join(path, "summary.md"), prov)
+    _figure(out, v, path)
+    _summary(out, v, path, prov)
 
 
 def _figure(out, v, path):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from jaxdamp.figures import save
-
-    fig, (a1, a2, a3) = plt.subplots(1, 3, figsize=(16, 4.5))
+    fig, (a1, a2, a3) = scaffold.subplots(1, 3, figsize=(16, 4.5))
     sc = out["scan"]
     order = np.argsort(sc.x)
     a1.errorbar(sc.x[order], sc.mean[order], yerr=2 * sc.se[order], fmt="ko-", ms=3, capsize=2,
@@ -239,8 +233,7 @@ def _figure(out, v, path):
         a1.plot(r.x, r.mean, "s", color=c, ms=4, label=f"trust region, seeds {t['seed']}")
         a1.axvline(t["proposal"], color=c, ls=":", lw=0.8)
     a1.axvline(THESIS_LZ, color="g", ls="-.", lw=0.8, label="thesis 0.1225 m")
-    a1.set_xlabel("box height Lz [m]")
-    a1.set_ylabel("C_eq at f0 [N s/m]")
+    a1.set(xlabel="box height Lz [m]", ylabel="C_eq at f0 [N s/m]")
     a1.legend(fontsize=7)
     ref = out["reference"]
     a2.errorbar([r["lz"] for r in ref], [r["grad"] for r in ref], yerr=[r["half"] for r in ref],
@@ -250,22 +243,17 @@ def _figure(out, v, path):
                 yerr=[1.96 * e["se"] for e in est], fmt="o", ms=3, capsize=2, color="C3",
                 label=f"estimator R = {out['settings']['R']} (± 1.96 SE), repetitions")
     a2.axhline(0, color="0.6", lw=0.8)
-    a2.set_xlabel("Lz [m]")
-    a2.set_ylabel("dC_eq/dLz [N s/m²]")
+    a2.set(xlabel="Lz [m]", ylabel="dC_eq/dLz [N s/m²]")
     a2.legend(fontsize=7)
-    labels, sims = ["scan"], [out["scan"].sim_seconds]
-    for t in out["trust"]:
-        labels.append(f"trust {t['seed']}")
-        sims.append(t["result"].sim_seconds)
-    for f in out["fd"]:
-        labels.append(f"FD from {f['lz0']:g}")
-        sims.append(f["result"].sim_seconds)
-    a3.bar(range(len(sims)), sims, color=["k"] + ["C0"] * len(out["trust"]) + ["C3"] * len(out["fd"]))
+    labels = (["scan"] + [f"trust {t['seed']}" for t in out["trust"]]
+              + [f"FD from {f['lz0']:g}" for f in out["fd"]])
+    sims = [r.sim_seconds for r in [out["scan"]] + [x["result"] for x in out["trust"] + out["fd"]]]
+    a3.bar(range(len(sims)), sims,
+           color=["k"] + ["C0"] * len(out["trust"]) + ["C3"] * len(out["fd"]))
     a3.set_xticks(range(len(sims)), labels, rotation=30, fontsize=7)
     a3.set_ylabel("DEM simulated system-seconds")
     fig.suptitle("sanchez2012-optimal: maximise C_eq at f0 over Lz", fontsize=9)
-    fig.tight_layout()
-    save(fig, path)
+    scaffold.save_figure(fig, path)
 
 
 def _summary(out, v, path, prov):
@@ -278,35 +266,35 @@ def _summary(out, v, path, prov):
          "central differences Lz ± h with common random numbers inside each pair "
          f"(h = {s['h']} m). Intervals are Student-t 95 % across replicates; optimum intervals "
          "are jackknife-t over replicates of a quadratic response surface.", "",
-         "## 1–2. Reference derivative and the estimator", "",
-         f"| Lz [m] | reference dC_eq/dLz ({s['R_ref']} pairs, {s['ref_duration']} s) | "
-         f"estimator (R = {s['R']}, {s['duration']} s) | z | within 95 % |",
-         "| --- | --- | --- | --- | --- |"]
+         "## 1–2. Reference derivative and the estimator", ""]
     ref = {r["lz"]: r for r in out["reference"]}
-    for a in v["estimator_agrees"]:
-        r = ref[a["lz"]]
-        e = [x for x in out["estimator"] if x["rep"] == 0 and x["lz"] == a["lz"]][0]
-        L.append(f"| {a['lz']:g} | {r['grad']:.4g} ± {r['half']:.3g} | {e['grad']:.4g} ± "
-                 f"{1.96 * e['se']:.3g} | {a['z']:+.2f} | {'yes' if a['inside'] else 'no'} |")
+    first = {e["lz"]: e for e in out["estimator"] if e["rep"] == 0}
+    yes = lambda x: "yes" if x else "no"  # noqa: E731
+    L += scaffold.table(
+        ["Lz [m]", f"reference dC_eq/dLz ({s['R_ref']} pairs, {s['ref_duration']} s)",
+         f"estimator (R = {s['R']}, {s['duration']} s)", "z", "within 95 %"],
+        [[f"{a['lz']:g}", scaffold.pm(ref[a["lz"]]["grad"], ref[a["lz"]]["half"], 4, 3),
+          scaffold.pm(first[a["lz"]]["grad"], 1.96 * first[a["lz"]]["se"], 4, 3),
+          f"{a['z']:+.2f}", yes(a["inside"])] for a in v["estimator_agrees"]])
     z = v["calibration_z"]
     L += ["", f"Calibration at Lz = {out['reference'][len(out['reference']) // 2]['lz']:g} m: "
           f"{len(z)} repetitions with disjoint seeds, z = (estimate − reference)/√(SE² + "
           f"SE_ref²) = {', '.join(f'{x:+.2f}' for x in z)}; spread (std) "
           f"{v['calibration_spread']:.2f} (a calibrated error gives ≈ 1; with R = {s['R']} the "
           "t-distribution's spread is larger, √(3) for 3 degrees of freedom).", "",
-          "## 3–5. Searches", "",
-          "| method | optimum Lz [m] | 95 % interval [m] | DEM system-seconds | ratio to scan | "
-          "inside scan interval |", "| --- | --- | --- | --- | --- | --- |",
-          f"| replicated adaptive scan ({s['coarse']} + {s['fine']} points) | {v['scan']['x']:.4g} "
-          f"| [{v['scan']['lo']:.4g}, {v['scan']['hi']:.4g}] | {v['scan']['sim']:.4g} | 1 | – |"]
-    for t in v["trust"]:
-        L.append(f"| trust region from S3 proposal, seeds {t['seed']} | {t['x']:.4g} | "
-                 f"[{t['lo']:.4g}, {t['hi']:.4g}] | {t['dem_sim']:.4g} (+ {t['s3_sim']:.3g} S3) | "
-                 f"{t['ratio']:.2f} | {'yes' if t['inside_scan_ci'] else 'no'} |")
-    for f in v["fd"]:
-        L.append(f"| FD Adam from {f['lz0']:g} m (iterate average; {f['reason']}) | {f['x']:.4g} "
-                 f"| – | {f['sim']:.4g} | {f['sim'] / v['scan']['sim']:.2f} | "
-                 f"{'yes' if f['inside_scan_ci'] else 'no'} |")
+          "## 3–5. Searches", ""]
+    sc = v["scan"]
+    L += scaffold.table(
+        ["method", "optimum Lz [m]", "95 % interval [m]", "DEM system-seconds", "ratio to scan",
+         "inside scan interval"],
+        [[f"replicated adaptive scan ({s['coarse']} + {s['fine']} points)", f"{sc['x']:.4g}",
+          f"[{sc['lo']:.4g}, {sc['hi']:.4g}]", f"{sc['sim']:.4g}", 1, "–"]]
+        + [[f"trust region from S3 proposal, seeds {t['seed']}", f"{t['x']:.4g}",
+            f"[{t['lo']:.4g}, {t['hi']:.4g}]", f"{t['dem_sim']:.4g} (+ {t['s3_sim']:.3g} S3)",
+            f"{t['ratio']:.2f}", yes(t["inside_scan_ci"])] for t in v["trust"]]
+        + [[f"FD Adam from {f['lz0']:g} m (iterate average; {f['reason']})", f"{f['x']:.4g}",
+            "–", f"{f['sim']:.4g}", f"{f['sim'] / sc['sim']:.2f}", yes(f["inside_scan_ci"])]
+           for f in v["fd"]])
     if v["trust"]:
         L += ["", f"Trust-region end points averaged over seed sets: {v['trust_mean']:.4g} m, "
               f"{'inside' if v['trust_mean_inside'] else 'outside'} the scan's interval; mean DEM "
@@ -323,8 +311,7 @@ def _summary(out, v, path, prov):
           "1/SE² of the replicate means; optimum interval = jackknife over replicates with "
           "t_{0.975, R−1}; steady state = MSER on per-period amplitude and dissipation (at "
           "least 1 period dropped, 5 kept)."]
-    with open(path, "w") as fh:
-        fh.write("\n".join(L) + "\n")
+    scaffold.write_summary(path, L)
 
 
 def main(argv=None):

@@ -23,8 +23,6 @@ Writes ``data.h5``, ``figure.png``, ``summary.md``.
 
 from __future__ import annotations
 
-import json
-import math
 import os
 import sys
 import time
@@ -32,18 +30,20 @@ import time
 import h5py
 import numpy as np
 
-from jaxdamp.analysis.stats import t_quantile
+from jaxdamp.analysis.stats import welch
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
-from jaxdamp.design import Objective, SteadyProblem, adaptive_scan, trust_region
+from jaxdamp.design import Objective, adaptive_scan, trust_region
 from jaxdamp.design.space import DesignProblem
 from jaxdamp.design.spsa import random_search, spsa
 from jaxdamp.design.surrogate import descend
 
 try:
     from . import scaffold
+    from .design_optimisation import QUICK, encode, problem
 except ImportError:  # run as a file: python experiments/<name>.py
     import scaffold
+    from design_optimisation import QUICK, encode, problem
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCAN_FILE = os.path.join(HERE, "design_optimisation", "data.h5")
@@ -52,15 +52,11 @@ VARS = ("Lz", "base", "friction")
 
 def settings(quick: bool) -> dict:
     if quick:
-        return dict(overrides={"grains.0.count": 24, "box.Lx": 0.02, "box.Ly": 0.02,
-                               "primary.M": 0.3, "primary.K": 2720.0, "primary.C": 1.0,
-                               "numerics.settle_time": 0.15},
-                    starts=(0.03, 0.12), seeds=(1,), R=2, duration=0.3, h=0.003, lo=0.025,
-                    hi=0.15, radius=0.005, min_radius=0.002, tol=0.004, max_rounds=2,
-                    own_scan=True, coarse=3, fine=1, s3=dict(max_iter=6, duration=1.5),
-                    bounds={"Lz": (0.03, 0.1)}, spsa=dict(pairs=2, replicates=2, max_iter=2,
-                                                          duration=0.3),
-                    confirm=2)
+        return dict(overrides=QUICK, starts=(0.03, 0.12), seeds=(1,), R=2, duration=0.3,
+                    h=0.003, lo=0.025, hi=0.15, radius=0.005, min_radius=0.002, tol=0.004,
+                    max_rounds=2, own_scan=True, coarse=3, fine=1,
+                    s3=dict(max_iter=6, duration=1.5), bounds={"Lz": (0.03, 0.1)},
+                    spsa=dict(pairs=2, replicates=2, max_iter=2, duration=0.3), confirm=2)
     return dict(overrides={"numerics.settle_time": 0.3},
                 starts=(0.07, 0.25), seeds=(400, 500, 600, 700, 800), R=4, duration=3.0,
                 h=0.005, lo=None, hi=0.30, radius=0.01, min_radius=0.0025, tol=0.003,
@@ -69,18 +65,12 @@ def settings(quick: bool) -> dict:
                 confirm=8)
 
 
-def _steady(base, s, seed):
-    cfg = apply_overrides(base, {"numerics.seed": seed})
-    return SteadyProblem(cfg, Objective("damping"), h=s["h"], replicates=s["R"],
-                         duration=s["duration"])
-
-
 def part_a(base, s, log) -> dict:
-    first = _steady(base, s, s["seeds"][0] * 1000)
+    first = problem(base, s, s["seeds"][0] * 1000)
     lo = first.bounds()[0] if s["lo"] is None else s["lo"]
     hi = s["hi"]
     if s["own_scan"] or not os.path.exists(SCAN_FILE):
-        sc = adaptive_scan(_steady(base, s, 50_000), lo, hi, n_coarse=s["coarse"],
+        sc = adaptive_scan(problem(base, s, 50_000), lo, hi, n_coarse=s["coarse"],
                            n_fine=s["fine"], echo=log)
         scan = dict(x=sc.optimum.x, lo=sc.optimum.lo, hi=sc.optimum.hi,
                     sim_seconds=sc.sim_seconds, source="run here")
@@ -99,7 +89,7 @@ def part_a(base, s, log) -> dict:
         log(f"S3 from {lz0}: {d['lz']:.5g} m, {d['iterates']} iterates ({d['fallbacks']} "
             f"fallbacks; {d['reason']}), {time.perf_counter() - t0:.1f} s wall")
         for seed in s["seeds"]:
-            prob = first if seed == s["seeds"][0] and not runs else _steady(base, s, seed * 1000)
+            prob = first if seed == s["seeds"][0] and not runs else problem(base, s, seed * 1000)
             r = trust_region(prob, d["lz"], lo, hi, radius=s["radius"],
                              min_radius=s["min_radius"], tol=s["tol"],
                              max_rounds=s["max_rounds"])
@@ -130,19 +120,11 @@ def part_b(base, s, log) -> dict:
     X = np.stack([x_thesis, res.x_average, np.asarray(rs.best["x"])])
     conf = prob.evaluate(X, s["confirm"])
     log(f"confirmation ({s['confirm']} beds): " + ", ".join(
-        f"{m:.4g} ± {c:.2g}" for m, c in zip(conf["mean"], conf["ci95"])))
+        scaffold.pm(m, c, 4) for m, c in zip(conf["mean"], conf["ci95"])))
     return {"space": prob.space.describe(), "spsa": res, "spsa_cost": spsa_cost, "random": rs,
             "random_cost": rs_cost, "confirm": conf, "X": X,
             "labels": ["thesis design", "SPSA (average of last 3 iterates)",
                        "best of the Latin hypercube"]}
-
-
-def _diff(conf, i, j):
-    """Mean difference ``J_i − J_j`` on independent beds and its Welch 95 % half-width."""
-    a, b = conf["J"][i], conf["J"][j]
-    va, vb = a.var(ddof=1) / len(a), b.var(ddof=1) / len(b)
-    dof = (va + vb) ** 2 / (va ** 2 / (len(a) - 1) + vb ** 2 / (len(b) - 1))
-    return float(a.mean() - b.mean()), float(t_quantile(0.975, dof) * math.sqrt(va + vb))
 
 
 def verdicts(a: dict, b: dict) -> dict:
@@ -157,9 +139,9 @@ def verdicts(a: dict, b: dict) -> dict:
             each_interval_covers=sum(r["lo"] <= a["scan"]["x"] <= r["hi"] for r in rr),
             runs=len(rr), mean_dem_seconds=sim, ratio=sim / a["scan"]["sim_seconds"],
             s3_seconds=rr[0]["s3_sim"])
-    d_rs, h_rs = _diff(b["confirm"], 1, 2)
-    d_th, h_th = _diff(b["confirm"], 1, 0)
-    d_rt, h_rt = _diff(b["confirm"], 2, 0)
+    J = b["confirm"]["J"]  # confirmed on independent beds: Welch 95 % of the differences
+    (d_rs, h_rs), (d_th, h_th), (d_rt, h_rt) = (welch(J[i], J[j])
+                                                for i, j in ((1, 2), (1, 0), (2, 0)))
     v["three"] = dict(spsa_minus_random=d_rs, spsa_minus_random_ci=h_rs,
                       at_least_as_good=bool(d_rs + h_rs >= 0),
                       better_than_random=bool(d_rs - h_rs > 0),
@@ -170,47 +152,34 @@ def verdicts(a: dict, b: dict) -> dict:
 
 
 def write(a, b, v, path, prov):
-    enc = lambda x: json.dumps(x, default=lambda y: y.tolist() if hasattr(y, "tolist")
-                               else bool(y) if isinstance(y, np.bool_) else str(y))
-    with h5py.File(os.path.join(path, "data.h5"), "w") as h:
-        h.attrs.update({k: enc(x) if not isinstance(x, str) else x for k, x in prov.items()})
-        h.attrs["objective"] = "C_eq = E/(pi Omega Z^2) at f0 [N s/m], maximised"
-        h.attrs["verdicts"] = enc(v)
+    with scaffold.data_file(path, prov, objective="C_eq = E/(pi Omega Z^2) at f0 [N s/m], "
+                            "maximised", verdicts=encode(v)) as h:
         g = h.create_group("starts")
-        g.attrs["scan"] = enc(a["scan"])
+        g.attrs["scan"] = encode(a["scan"])
         for k in ("lz0", "seed", "s3_lz", "s3_sim", "x", "lo", "hi", "sim", "rounds"):
-            g.create_dataset(k, data=np.array([r[k] for r in a["runs"]], float))
-        for k in ("lz0", "s3_lz", "x", "lo", "hi"):
-            g[k].attrs["units"] = "m"
-        g["sim"].attrs["units"] = "s (simulated DEM system-seconds)"
+            d = g.create_dataset(k, data=np.array([r[k] for r in a["runs"]], float))
+            if k in ("lz0", "s3_lz", "x", "lo", "hi", "sim"):
+                d.attrs["units"] = "m" if k != "sim" else "s (simulated DEM system-seconds)"
         g = h.create_group("three_variables")
-        g.attrs["space"] = enc(b["space"])
-        g.attrs["labels"] = enc(b["labels"])
-        g.attrs["units"] = enc(b["space"]["units"])
+        g.attrs.update(space=encode(b["space"]), labels=encode(b["labels"]),
+                       units=encode(b["space"]["units"]))
         it = g.create_group("spsa")
         for k, val in b["spsa"].history.items():
             it.create_dataset(k, data=val)
-        it.attrs.update(settings=enc(b["spsa"].settings), reason=b["spsa"].reason,
+        it.attrs.update(settings=encode(b["spsa"].settings), reason=b["spsa"].reason,
                         sim_seconds=b["spsa_cost"])
-        rs = g.create_group("random")
         for k in ("X", "mean", "se", "J"):
-            rs.create_dataset(k, data=getattr(b["random"], k))
-        rs.attrs["sim_seconds"] = b["random_cost"]
-        c = g.create_group("confirmation")
-        c.create_dataset("X", data=b["X"])
+            g.create_dataset(f"random/{k}", data=getattr(b["random"], k))
+        g["random"].attrs["sim_seconds"] = b["random_cost"]
+        g.create_dataset("confirmation/X", data=b["X"])
         for k in ("mean", "ci95", "J"):
-            c.create_dataset(k, data=b["confirm"][k]).attrs["units"] = "N s/m"
-    _figure(a, b, v, os.path.join(path, "figure.png"))
-    _summary(a, b, v, os.path.join(path, "summary.md"), prov)
+            g.create_dataset(f"confirmation/{k}", data=b["confirm"][k]).attrs["units"] = "N s/m"
+    _figure(a, b, v, path)
+    _summary(a, b, v, path, prov)
 
 
 def _figure(a, b, v, path):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, (a1, a2, a3) = plt.subplots(1, 3, figsize=(15, 4.5))
+    fig, (a1, a2, a3) = scaffold.subplots(1, 3, figsize=(15, 4.5))
     sc = a["scan"]
     a1.axvspan(sc["lo"], sc["hi"], color="0.85", label="scan optimum, 95 %")
     for k, lz0 in enumerate(sorted({r["lz0"] for r in a["runs"]})):
@@ -219,17 +188,14 @@ def _figure(a, b, v, path):
         a1.errorbar([r["x"] for r in rr], y,
                     xerr=[[r["x"] - r["lo"] for r in rr], [r["hi"] - r["x"] for r in rr]],
                     fmt="o", ms=4, label=f"from Lz0 = {lz0:g} m (seed sets)")
-    a1.set_xlabel("optimum Lz [m]")
-    a1.set_ylabel("run")
-    a1.set_title("A. multi-fidelity optimiser, 95 % intervals")
+    a1.set(xlabel="optimum Lz [m]", ylabel="run",
+           title="A. multi-fidelity optimiser, 95 % intervals")
     a1.legend(fontsize=8)
     h = b["spsa"].history
     a2.errorbar(np.arange(len(h["value"])), h["value"], yerr=1.96 * h["value_se"], fmt="o-",
                 label="SPSA iterates (pair averages ± 1.96 SE)")
     a2.axhline(b["confirm"]["mean"][0], color="k", ls="--", label="thesis design (confirmed)")
-    a2.set_xlabel("iterate")
-    a2.set_ylabel("C_eq [N s/m]")
-    a2.set_title("B. three variables: SPSA")
+    a2.set(xlabel="iterate", ylabel="C_eq [N s/m]", title="B. three variables: SPSA")
     a2.legend(fontsize=8)
     rs = b["random"]
     a3.errorbar(np.arange(len(rs.mean)), np.sort(rs.mean)[::-1], fmt=".", color="0.5",
@@ -240,13 +206,10 @@ def _figure(a, b, v, path):
                 label="confirmed on fresh beds, 95 %")
     for x, m, t in zip([-3, -2, -1], c["mean"], lab):
         a3.annotate(t, (x, m), textcoords="offset points", xytext=(4, 4), fontsize=8)
-    a3.set_xlabel("design (rank)")
-    a3.set_ylabel("C_eq [N s/m]")
-    a3.set_title("B. equal-budget random search vs SPSA")
+    a3.set(xlabel="design (rank)", ylabel="C_eq [N s/m]",
+           title="B. equal-budget random search vs SPSA")
     a3.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    scaffold.save_figure(fig, path)
 
 
 def _summary(a, b, v, path, prov):
@@ -260,12 +223,12 @@ def _summary(a, b, v, path, prov):
          "## A. Multi-fidelity optimiser (S3 exact-gradient descent from Lz0, then DEM trust "
          "region)", "",
          f"Reference: replicated adaptive scan, optimum {sc['x']:.4g} m [{sc['lo']:.4g}, "
-         f"{sc['hi']:.4g}], {sc['sim_seconds']:.4g} DEM system-seconds ({sc['source']}).", "",
-         "| Lz0 [m] | seed set | S3 optimum [m] | DEM optimum [m] | 95 % interval [m] | DEM "
-         "system-seconds | rounds |", "| --- | --- | --- | --- | --- | --- | --- |"]
-    for r in a["runs"]:
-        L.append(f"| {r['lz0']:g} | {r['seed']} | {r['s3_lz']:.4g} | {r['x']:.4g} | "
-                 f"[{r['lo']:.4g}, {r['hi']:.4g}] | {r['sim']:.4g} | {r['rounds']} |")
+         f"{sc['hi']:.4g}], {sc['sim_seconds']:.4g} DEM system-seconds ({sc['source']}).", ""]
+    L += scaffold.table(
+        ["Lz0 [m]", "seed set", "S3 optimum [m]", "DEM optimum [m]", "95 % interval [m]",
+         "DEM system-seconds", "rounds"],
+        [[f"{r['lz0']:g}", r["seed"], f"{r['s3_lz']:.4g}", f"{r['x']:.4g}",
+          f"[{r['lo']:.4g}, {r['hi']:.4g}]", f"{r['sim']:.4g}", r["rounds"]] for r in a["runs"]])
     L.append("")
     for lz0, w in v["starts"].items():
         L.append(f"- From {lz0} m: average end point {w['average']:.4g} m — "
@@ -287,29 +250,25 @@ def _summary(a, b, v, path, prov):
           f"{b['spsa'].settings['lr']} (normalised coordinates); {len(b['spsa'].history['u'])} "
           f"iterates ({b['spsa'].reason}). Random search: {len(b['random'].X)} Latin-hypercube "
           f"designs × {b['random'].J.shape[1]} beds. Costs include settling (every design has "
-          "its own beds).", "",
-          "| design | " + " | ".join(names) + " | search DEM system-seconds | confirmed C_eq "
-          f"[N s/m] ({c['J'].shape[1]} fresh beds, 95 %) |",
-          "| --- | " + " | ".join("---" for _ in names) + " | --- | --- |"]
+          "its own beds).", ""]
     costs = ["–", f"{b['spsa_cost']:.4g}", f"{b['random_cost']:.4g}"]
-    for lab, x, cost, m, h in zip(b["labels"], b["X"], costs, c["mean"], c["ci95"]):
-        L.append(f"| {lab} | " + " | ".join(f"{val:.4g}" for val in x) + f" | {cost} | "
-                 f"{m:.4g} ± {h:.2g} |")
-    L += ["", f"- SPSA − random best: {t['spsa_minus_random']:+.3g} ± "
-          f"{t['spsa_minus_random_ci']:.2g} N s/m (Welch 95 %): SPSA "
+    L += scaffold.table(
+        ["design"] + list(names) + ["search DEM system-seconds",
+                                    f"confirmed C_eq [N s/m] ({c['J'].shape[1]} fresh beds, 95 %)"],
+        [[lab] + [f"{val:.4g}" for val in x] + [cost, scaffold.pm(m, h, 4)]
+         for lab, x, cost, m, h in zip(b["labels"], b["X"], costs, c["mean"], c["ci95"])])
+    pm = lambda k: scaffold.pm(t[k], t[k + "_ci"], "+.3g", unit="N s/m")  # noqa: E731
+    L += ["", f"- SPSA − random best: {pm('spsa_minus_random')} (Welch 95 %): SPSA "
           + ("better" if t["better_than_random"] else "at least as good (within the interval)"
              if t["at_least_as_good"] else "worse") + ".",
-          f"- SPSA − thesis design: {t['spsa_minus_thesis']:+.3g} ± "
-          f"{t['spsa_minus_thesis_ci']:.2g} N s/m: "
+          f"- SPSA − thesis design: {pm('spsa_minus_thesis')}: "
           + ("better than the thesis' design" if t["better_than_thesis"]
              else "not significantly better than the thesis' design") + ".",
-          f"- random best − thesis design: {t['random_minus_thesis']:+.3g} ± "
-          f"{t['random_minus_thesis_ci']:.2g} N s/m.", "",
+          f"- random best − thesis design: {pm('random_minus_thesis')}.", "",
           "Conventions: the in-search value of the random search's best design is a "
           "best-of-n mean (biased up: winner's curse), so every verdict uses the confirmation "
           "on fresh beds; SPSA's design is the average of its last 3 iterates."]
-    with open(path, "w") as f:
-        f.write("\n".join(L) + "\n")
+    scaffold.write_summary(path, L)
 
 
 def main(argv=None):

@@ -28,9 +28,7 @@ Welch 95 % intervals (the lowest and highest amplitude). Writes ``data.h5``, ``f
 
 from __future__ import annotations
 
-import json
 import math
-import os
 
 import h5py
 import numpy as np
@@ -109,50 +107,29 @@ def main(argv=None):
 def write(r, out, prov):
     s, m = r["s"], r["m"]
     prov = dict(prov, sweep_wall_s=r["wall"])
-    with h5py.File(os.path.join(out, "data.h5"), "w") as h:
-        scaffold.stamp(h, prov)
-        h.attrs["settings"] = json.dumps(s)
-        h.attrs["base_config"] = r["cfg"].to_json()
+    with scaffold.data_file(out, prov, settings=s, base_config=r["cfg"].to_json()) as h:
         h.create_dataset("amplitude", data=np.asarray(s["amps"])).attrs["units"] = "m"
         for k, u in (("contact", "1"), ("excursion", "1"), ("com_amp", "1"),
                      ("com_phase", "deg"), ("E_d", "1")):
             h.create_dataset(k, data=m[k]).attrs.update(units=u, dims="amplitude, replicate")
         h.create_dataset("bed_height_rest", data=r["rest"]).attrs["units"] = "m"
-    _figure(r, out)
-    _summary(r, out, prov)
 
-
-def _figure(r, out):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    s, m = r["s"], r["m"]
     A = np.asarray(s["amps"]) * 100
-    se2 = lambda x: 2 * np.std(x, axis=-1, ddof=1) / math.sqrt(s["R"])  # noqa: E731
-    fig, axs = plt.subplots(1, 4, figsize=(16, 3.8))
+    fig, axs = scaffold.subplots(1, 4, figsize=(16, 3.8))
     for ax, (k, lab) in zip(axs, (("contact", "grains touching floor or lid [fraction]"),
                                    ("excursion", "relative excursion of the bed [-]"),
                                    ("com_amp", "c.o.m. first harmonic / A_d [-]"),
                                    ("E_d", "efficiency ⟨E_d⟩ [-]"))):
-        ax.errorbar(A, m[k].mean(-1), yerr=se2(m[k]), fmt="o-", capsize=3)
+        ax.errorbar(A, m[k].mean(-1), yerr=2 * scaffold.standard_error(m[k]), fmt="o-",
+                    capsize=3)
         ax.axvline(A_OPT_OURS * 100, color="tab:green", ls="--", lw=0.8, label="our A_opt")
         ax.axvline(A_OPT_PAPER * 100, color="tab:red", ls=":", lw=0.8, label="paper's A_opt")
-        ax.set_xlabel("drive amplitude A_d [cm]")
-        ax.set_ylabel(lab)
+        ax.set(xlabel="drive amplitude A_d [cm]", ylabel=lab)
     axs[0].legend(fontsize=7)
     fig.suptitle(f"varela2023-reference, mean of R = {s['R']} beds ± 2 SE", fontsize=9)
     scaffold.save_figure(fig, out)
 
-
-def _summary(r, out, prov):
-    s, m, R = r["s"], r["m"], r["s"]["R"]
-
-    def fmt(x, d=3):
-        se = np.std(x, ddof=1) / math.sqrt(len(x))
-        return f"{np.mean(x):.{d}g} ± {se:.2g}"
-
+    R = s["R"]
     L = ["# The two regimes of the driven box (2023 paper §4, §5.2)", "",
          scaffold.provenance_line(prov, prov["sweep_wall_s"]) + " Native engine.", "",
          f"`varela2023-reference`, {len(s['amps'])} amplitudes × **R = {R} independently "
@@ -161,15 +138,16 @@ def _summary(r, out, prov):
          f"95 % (t = {t_quantile(0.975, max(R - 1, 1)):.2f} per side). Stationarity: "
          f"{r['stationary']} of {len(s['amps']) * R} runs detected stationary by MSER on the "
          f"per-period amplitude and dissipation (the measures below use the analysed periods "
-         f"of every run). Energy balance error ≤ {r['balance']:.1e}.", "",
-         "| A_d [cm] | grains touching floor or lid | relative excursion | c.o.m. harmonic / A_d "
-         "| c.o.m. phase vs box [deg] | ⟨E_d⟩ |", "| --- | --- | --- | --- | --- | --- |"]
-    for i, A in enumerate(s["amps"]):
-        L.append(f"| {A * 100:g} | {fmt(m['contact'][i])} | {fmt(m['excursion'][i])} | "
-                 f"{fmt(m['com_amp'][i])} | {fmt(m['com_phase'][i])} | {fmt(m['E_d'][i])} |")
+         f"of every run). Energy balance error ≤ {r['balance']:.1e}.", ""]
+    L += scaffold.table(
+        ["A_d [cm]", "grains touching floor or lid", "relative excursion",
+         "c.o.m. harmonic / A_d", "c.o.m. phase vs box [deg]", "⟨E_d⟩"],
+        [[f"{a * 100:g}"] + [scaffold.pm(*scaffold.mean_se(m[k][i]), 3) for k in
+                             ("contact", "excursion", "com_amp", "com_phase", "E_d")]
+         for i, a in enumerate(s["amps"])])
     c = r["comp"]
     L += ["", f"Highest minus lowest amplitude ({s['amps'][-1] * 100:g} − {s['amps'][0] * 100:g} "
-          "cm), Welch 95 %: " + "; ".join(f"{k} {c[k]['diff']:+.3g} ± {c[k]['ci95']:.2g}"
+          "cm), Welch 95 %: " + "; ".join(f"{k} {scaffold.pm(c[k]['diff'], c[k]['ci95'], '+.3g')}"
                                           for k in ("contact", "excursion", "com_amp")) + ".",
           "", f"Our A_opt for this system is {A_OPT_OURS * 100:g} cm (`binary_mixtures`, 3 beds); "
           f"the paper's ≈ {A_OPT_PAPER * 100:g} cm. 'Relative excursion' = half the peak-to-peak "

@@ -23,7 +23,6 @@ resolved — a limit stated in the summary. Writes ``data.h5``, ``figure.png``, 
 
 from __future__ import annotations
 
-import json
 import os
 
 import h5py
@@ -83,32 +82,18 @@ def main(argv=None):
 
 
 def write(r, out, prov):
-    with h5py.File(os.path.join(out, "data.h5"), "w") as h:
-        scaffold.stamp(h, prov)
-        h.attrs["source"] = json.dumps(r["source"])
+    with scaffold.data_file(out, prov, source=r["source"], comparisons=r["comp"]) as h:
         h.create_dataset("Lz", data=r["lz"]).attrs["units"] = "m"
         for w in RESIDUALS:
             h.create_dataset(f"misfit_{w}", data=r["mis"][w]).attrs.update(
                 units="1 (per U)" if w == "absolute" else "1", dims="Lz, replicate")
-        h.attrs["comparisons"] = json.dumps(r["comp"])
-    _figure(r, out)
-    _summary(r, out, prov)
 
-
-def _figure(r, out):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 4.4))
-    se2 = lambda x: 2 * scaffold.standard_error(x)  # noqa: E731
+    fig, (a1, a2) = scaffold.subplots(1, 2, figsize=(12, 4.4))
     for w, ls in zip(RESIDUALS, ("-", "--")):
-        a1.errorbar(r["lz"], r["mis"][w].mean(-1), yerr=se2(r["mis"][w]), fmt="o", ls=ls,
-                    capsize=3, label=f"{w} residuals")
-    a1.set_xscale("log")
-    a1.set_xlabel("box height Lz [m]")
-    a1.set_ylabel("RMS misfit of the 1-DOF FRF [-] (per U, or relative)")
+        a1.errorbar(r["lz"], r["mis"][w].mean(-1), yerr=2 * scaffold.standard_error(r["mis"][w]),
+                    fmt="o", ls=ls, capsize=3, label=f"{w} residuals")
+    a1.set(xscale="log", xlabel="box height Lz [m]",
+           ylabel="RMS misfit of the 1-DOF FRF [-] (per U, or relative)")
     a1.set_title("misfit of each bed's own fit, mean of 3 beds ± 2 SE", fontsize=9)
     a1.legend(fontsize=8)
     fine = np.linspace(r["f"].min(), r["f"].max(), 400)
@@ -118,28 +103,24 @@ def _figure(r, out):
         M, C = (x[j].mean() for x in r["fits"]["absolute"])
         a2.plot(fine, frf_amplitude(fine, M, r["K"], C, r["U"]) / r["U"], "-", lw=0.8,
                 color=line[0].get_color())
-    a2.set_xlabel("excitation frequency f [Hz]")
-    a2.set_ylabel("amplitude ratio Z / U [-]")
+    a2.set(xlabel="excitation frequency f [Hz]", ylabel="amplitude ratio Z / U [-]")
     a2.set_title("data (mean of the beds) and the absolute-residual fit", fontsize=9)
     a2.legend(fontsize=8)
     scaffold.save_figure(fig, out)
 
-
-def _summary(r, out, prov):
-    R = r["R"]
     fmt = lambda x: scaffold.pm(*scaffold.mean_se(x), 3)  # noqa: E731
     L = ["# How well the 1-DOF FRF describes the damper at each height (thesis §3.2.1, fig. 3.5)",
          "", scaffold.provenance_line(prov), "",
          f"Data: `experiments/gap_scan/data.h5` (gap scan at commit {r['source']['git']}: "
          f"C = 7.6 N s/m, {len(r['lz'])} heights × {len(r['f'])} frequencies "
-         f"{r['f'].min():g}–{r['f'].max():g} Hz × **R = {R} independently poured beds**; steady "
-         "amplitudes after the MSER-detected start, the gap scan's summary counts the runs "
-         "that fell back to a fixed window). Each bed's misfit is against its own fit; ± is "
-         "the standard error over the beds.", "",
-         "| Lz [m] | RMS (Z_model − Z)/U, absolute fit (the thesis') | RMS Z_model/Z − 1, "
-         "relative fit |", "| --- | --- | --- |"]
-    for j, Lz in enumerate(r["lz"]):
-        L.append(f"| {Lz:g} | {fmt(r['mis']['absolute'][j])} | {fmt(r['mis']['relative'][j])} |")
+         f"{r['f'].min():g}–{r['f'].max():g} Hz × **R = {r['R']} independently poured beds**; "
+         "steady amplitudes after the MSER-detected start, the gap scan's summary counts the "
+         "runs that fell back to a fixed window). Each bed's misfit is against its own fit; ± "
+         "is the standard error over the beds.", ""]
+    L += scaffold.table(["Lz [m]", "RMS (Z_model − Z)/U, absolute fit (the thesis')",
+                         "RMS Z_model/Z − 1, relative fit"],
+                        [[f"{Lz:g}", fmt(r["mis"]["absolute"][j]), fmt(r["mis"]["relative"][j])]
+                         for j, Lz in enumerate(r["lz"])])
     L += ["", "**Intermediate against extreme heights** (Welch 95 % of the difference of the "
           "misfits; positive: the intermediate height fits worse):", ""]
     for w in RESIDUALS:

@@ -26,13 +26,10 @@ Writes ``data.h5``, ``figure.png``, ``summary.md``.
 
 from __future__ import annotations
 
-import os
-
-import h5py
 import numpy as np
 
 from jaxdamp.analysis.response import parabolic_extremum
-from jaxdamp.analysis.stats import across
+from jaxdamp.analysis.stats import across, welch
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.physics.model import primary_frequency
@@ -112,9 +109,7 @@ def verdict(iv: dict) -> str:
 def write(r, out, prov):
     s, lz, Z = r["settings"], r["lz"], r["Z"]
     R = Z.shape[1]
-    with h5py.File(os.path.join(out, "data.h5"), "w") as h5:
-        scaffold.stamp(h5, prov)
-        h5.attrs["config"] = r["config"]
+    with scaffold.data_file(out, prov, config=r["config"]) as h5:
         h5.attrs["f0"] = r["f0"]
         h5.create_dataset("Lz", data=lz).attrs["units"] = "m"
         h5.create_dataset("Z", data=Z).attrs["units"] = "m"
@@ -124,14 +119,11 @@ def write(r, out, prov):
             d.attrs["units"] = "m"
             d.attrs.update({k: r[name][k] for k in ("mean", "se", "lo", "hi")})
 
-    from jaxdamp.figures import figure
-
-    fig = figure((7.0, 4.5), layout="constrained")
-    ax = fig.subplots()
+    fig, ax = scaffold.subplots()
     for b in range(R):
         ax.plot(1e3 * lz, 1e3 * Z[:, b], "o-", ms=3, lw=0.8, alpha=0.6, label=f"bed {b}")
     m = Z.mean(axis=1)
-    e = scaffold.standard_error(Z, axis=1) if R > 1 else np.zeros(len(lz))
+    e = np.nan_to_num(scaffold.standard_error(Z, axis=1))
     ax.errorbar(1e3 * lz, 1e3 * m, yerr=2e3 * e, fmt="ks-", ms=4, capsize=2,
                 label=f"mean of {R} beds ± 2 SE")
     for name, style in (("local", "C3"), ("quadratic", "C2")):
@@ -140,13 +132,12 @@ def write(r, out, prov):
             ax.axvspan(1e3 * iv["lo"], 1e3 * iv["hi"], color=style, alpha=0.2,
                        label=f"minimum, {name} model: 95 % interval")
     ax.axvline(1e3 * THESIS_LZ, color="k", ls=":", label="thesis optimum 122.5 mm")
-    ax.set_xlabel("gap height Lz [mm]")
-    ax.set_ylabel("amplitude of the primary Z at f0 [mm]")
+    ax.set(xlabel="gap height Lz [mm]", ylabel="amplitude of the primary Z at f0 [mm]")
     ax.set_title(f"thesis damper at f0 = {r['f0']:.3g} Hz: Z(Lz), {s['duration']:g} s runs",
                  fontsize=9)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
-    fig.savefig(os.path.join(out, "figure.png"), dpi=120)
+    scaffold.save_figure(fig, out)
 
     n_stat = int(r["stationary"].sum())
     L = ["# The gap height of the smallest resonant amplitude, fine scan (F7)", "",
@@ -157,23 +148,22 @@ def write(r, out, prov):
          f"(one batched sweep, the package's replicate seeds), {s['duration']:g} s per run. "
          f"Steady state detected (MSER on the per-period amplitude) in {n_stat} of {Z.size} "
          "runs; the others use the last half of the run. Compute: "
-         f"{r['wall']:.0f} s (settling excluded).", "",
-         "| Lz [m] | Z [mm] (mean ± SE over beds) | Z per bed [mm] | stationary |",
-         "|---|---|---|---|"]
-    for i, x in enumerate(lz):
-        L.append(f"| {x:g} | {scaffold.pm(*scaffold.mean_se(Z[i]), '.3f', scale=1e3)} | "
-                 + ", ".join(f"{1e3 * z:.2f}" for z in Z[i])
-                 + f" | {int(r['stationary'][i].sum())}/{R} |")
+         f"{r['wall']:.0f} s (settling excluded).", ""]
+    L += scaffold.table(
+        ["Lz [m]", "Z [mm] (mean ± SE over beds)", "Z per bed [mm]", "stationary"],
+        [[f"{x:g}", scaffold.pm(*scaffold.mean_se(Z[i]), ".3f", scale=1e3),
+          ", ".join(f"{1e3 * z:.2f}" for z in Z[i]), f"{int(r['stationary'][i].sum())}/{R}"]
+         for i, x in enumerate(lz)])
     L += ["", "Minimum of Z over Lz per bed, mean ± SE over beds and Student-t 95 % interval:",
-          "", "| model | per bed [m] | mean ± SE [m] | 95 % interval [m] | verdict on 0.1225 m |",
-          "|---|---|---|---|---|"]
-    for name, label in (("local", "local parabola (best sample and its neighbours)"),
-                        ("quadratic", "least-squares quadratic over Lz = "
-                                      + ", ".join(f"{x:g}" for x in r["fit_lz"]) + " m")):
-        iv = r[name]
-        L.append(f"| {label} | " + ", ".join(f"{x:.4g}" for x in iv["values"])
-                 + f" | {scaffold.pm(iv['mean'], iv['se'], 4)} | [{iv['lo']:.4g}, {iv['hi']:.4g}] "
-                 f"| {verdict(iv)} |")
+          ""]
+    L += scaffold.table(
+        ["model", "per bed [m]", "mean ± SE [m]", "95 % interval [m]", "verdict on 0.1225 m"],
+        [[label, ", ".join(f"{x:.4g}" for x in r[name]["values"]),
+          scaffold.pm(r[name]["mean"], r[name]["se"], 4),
+          f"[{r[name]['lo']:.4g}, {r[name]['hi']:.4g}]", verdict(r[name])]
+         for name, label in (("local", "local parabola (best sample and its neighbours)"),
+                             ("quadratic", "least-squares quadratic over Lz = "
+                              + ", ".join(f"{x:g}" for x in r["fit_lz"]) + " m"))])
     found = [r[k]["contains_thesis"] for k in ("local", "quadratic")
              if r[k]["contains_thesis"] is not None]
     conclusion = ("no model gives an interval: **not settled**" if not found else
@@ -187,8 +177,6 @@ def write(r, out, prov):
     L += ["", f"{r['local_at_edge']} of {R} beds' smallest sample at an end of the range. "
           f"Verdict: {conclusion}."]
     if THESIS_LZ in list(lz):
-        from jaxdamp.analysis.stats import welch
-
         k, j = int(np.argmin(Z.mean(axis=1))), list(lz).index(THESIS_LZ)
         d, h = welch(Z[j], Z[k])
         L += ["", f"How much it matters: Z at 0.1225 m exceeds Z at the smallest sampled mean "

@@ -20,9 +20,6 @@ Writes ``data.h5``, ``figure.png``, ``summary.md``.
 
 from __future__ import annotations
 
-import os
-
-import h5py
 import numpy as np
 
 from jaxdamp.analysis.response import fit_frf_replicates, frf_amplitude, parabolic_extremum
@@ -91,9 +88,8 @@ def compute(quick: bool, log, ctx):
 def write(r, out, prov):
     s = r["settings"]
     f = r["f"]
-    with h5py.File(os.path.join(out, "data.h5"), "w") as h5:
-        scaffold.stamp(h5, prov)
-        h5.attrs["fit"] = "relative residuals (fit_frf_replicates), one fit per bed"
+    with scaffold.data_file(out, prov, fit="relative residuals (fit_frf_replicates), one fit "
+                            "per bed") as h5:
         h5.create_dataset("f", data=f).attrs["units"] = "Hz"
         for name, d in r["runs"].items():
             g = h5.create_group(name)
@@ -102,10 +98,7 @@ def write(r, out, prov):
                 g.create_dataset(k, data=d[k]).attrs["units"] = unit
             g.create_dataset("M_ef", data=d["fit"]["M_reps"]).attrs["units"] = "kg"
             g.create_dataset("C_ef", data=d["fit"]["C_reps"]).attrs["units"] = "N s/m"
-    from jaxdamp.figures import figure
-
-    fig = figure((7.0, 4.5), layout="constrained")
-    ax = fig.subplots()
+    fig, ax = scaffold.subplots()
     fine = np.linspace(f.min(), f.max(), 300)
     for name, d in r["runs"].items():
         m, e = scaffold.mean_se(d["Z"], axis=1)
@@ -117,12 +110,11 @@ def write(r, out, prov):
                       f"{d['fit']['C_ef']:.3g} N s/m")
     ax.plot(fine, 1e3 * frf_amplitude(fine, r["M"] + r["m_p"], r["K"], r["C"], r["U"]), "k:",
             lw=1, label="grains as dead mass (M + m_p, C)")
-    ax.set_xlabel("drive frequency f [Hz]")
-    ax.set_ylabel("amplitude of the primary Z [mm]")
+    ax.set(xlabel="drive frequency f [Hz]", ylabel="amplitude of the primary Z [mm]")
     ax.set_title("thesis damper, U = 4.5 mm: vertical vs horizontal base motion", fontsize=9)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
-    fig.savefig(os.path.join(out, "figure.png"), dpi=120)
+    scaffold.save_figure(fig, out)
 
     runs = r["runs"]
     n_runs = sum(d["Z"].size for d in runs.values())
@@ -146,31 +138,26 @@ def write(r, out, prov):
          "Fit: the 1-DOF analytic FRF with M_ef, C_ef per bed, **relative residuals** "
          "(each frequency weighted equally in log amplitude); the peak by a parabola through "
          "each bed's three largest points. Verdict: Welch 95 % interval of horizontal − "
-         "vertical across beds.", "",
-         "| quantity | vertical | horizontal | horizontal − vertical | verdict |",
-         "|---|---|---|---|---|"]
-    rows = (("M_ef [kg]", "M_ef", lambda d: d["fit"]["M_reps"], 1.0),
+         "vertical across beds.", ""]
+    quantities = (("M_ef [kg]", "M_ef", lambda d: d["fit"]["M_reps"], 1.0),
             ("C_ef [N s/m]", "C_ef", lambda d: d["fit"]["C_reps"], 1.0),
             ("peak Z [mm]", "Z_peak", lambda d: d["Z_peak"], 1e3),
             ("peak frequency [Hz]", "f_peak", lambda d: d["f_peak"], 1.0))
-    for label, key, get, k in rows:
-        mv, ev = scaffold.mean_se(get(runs["vertical"]))
-        mh, eh = scaffold.mean_se(get(runs["horizontal"]))
+    rows = []
+    for label, key, get, k in quantities:
         d, hw = r["cmp"][key]
         verdict = ("no interval" if not np.isfinite(hw) else "same" if abs(d) <= hw
                    else "horizontal higher" if d > 0 else "horizontal lower")
-        L.append(f"| {label} | {scaffold.pm(mv, ev, 4, scale=k)} | "
-                 f"{scaffold.pm(mh, eh, 4, scale=k)} | {scaffold.pm(d, hw, '+.3g', scale=k)} | "
-                 f"{verdict} |")
+        rows.append([label] + [scaffold.pm(*scaffold.mean_se(get(runs[name])), 4, scale=k)
+                               for name in ("vertical", "horizontal")]
+                    + [scaffold.pm(d, hw, "+.3g", scale=k), verdict])
+    L += scaffold.table(["quantity", "vertical", "horizontal", "horizontal − vertical",
+                         "verdict"], rows)
     L += ["", f"Grains as dead mass: M + m_p = {r['M'] + r['m_p']:.4g} kg, C = {r['C']} N s/m.",
-          "", "## Amplitude per frequency (mean ± SE over beds) [mm]", "",
-          "| f [Hz] | vertical | horizontal |", "|---|---|---|"]
-    for j, x in enumerate(f):
-        cells = []
-        for name in ("vertical", "horizontal"):
-            m, e = scaffold.mean_se(runs[name]["Z"][j])
-            cells.append(scaffold.pm(m, e, 4, scale=1e3))
-        L.append(f"| {x:g} | " + " | ".join(cells) + " |")
+          "", "## Amplitude per frequency (mean ± SE over beds) [mm]", ""]
+    L += scaffold.table(["f [Hz]", "vertical", "horizontal"], [
+        [f"{x:g}"] + [scaffold.pm(*scaffold.mean_se(runs[name]["Z"][j]), 4, scale=1e3)
+                      for name in ("vertical", "horizontal")] for j, x in enumerate(f)])
     L += ["", "Figure: `figure.png`. Data: `data.h5`."]
     scaffold.write_summary(out, L)
 

@@ -17,10 +17,6 @@ and the distance from the wall on a log scale) and ``summary.md``.
 
 from __future__ import annotations
 
-import json
-import os
-
-import h5py
 import numpy as np
 
 from jaxdamp.s3.collapse import E_CRITICAL, collapse_sequence, critical_restitution, cycle_ratio
@@ -30,7 +26,6 @@ try:
 except ImportError:  # run as a file: python experiments/<name>.py
     import scaffold
 
-HERE = os.path.dirname(os.path.abspath(__file__))
 RESTITUTIONS = (0.01, 0.05, 0.1, 0.15, 0.17, 0.18, 0.3)
 FIGURE_E = 0.1
 
@@ -59,47 +54,31 @@ def main(argv=None):
 
 
 def write(r, out, prov):
-    with h5py.File(os.path.join(out, "data.h5"), "w") as h:
-        scaffold.stamp(h, prov)
-        h.attrs["rows"] = json.dumps(r["rows"])
+    s = r["figure"]
+    with scaffold.data_file(out, prov, rows=r["rows"]) as h:
         h.attrs.update(e_critical=r["e_c"], e_critical_exact=E_CRITICAL,
                        initial="X = 1 m, V = 1 m/s: the near particle hits the wall at t = 0")
-        s = r["figure"]
         g = h.create_group(f"sequence_e{FIGURE_E:g}")
         for k, u in (("t", "s"), ("x1", "m"), ("x2", "m"), ("v1", "m/s"), ("v2", "m/s")):
             g.create_dataset(k, data=getattr(s, k)).attrs["units"] = u
         g.create_dataset("kind", data=s.kind.astype("S1")).attrs["what"] = "W wall, P pair"
-    _figure(r, out)
-    _summary(r, out, prov)
 
-
-def _figure(r, out):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    s = r["figure"]
-    t = np.r_[0.0, s.t]
-    x1 = np.r_[0.0, s.x1]
-    x2 = np.r_[1.0, s.x2]
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 4.2))
-    a1.plot(x1, t, "b-", lw=1, label="near particle x₁")
-    a1.plot(x2, t, "r-", lw=1, label="far particle x₂")
+    fig, (a1, a2) = scaffold.subplots(1, 2, figsize=(11, 4.2))
+    a1.plot(np.r_[0.0, s.x1], np.r_[0.0, s.t], "b-", lw=1, label="near particle x₁")
+    a1.plot(np.r_[1.0, s.x2], np.r_[0.0, s.t], "r-", lw=1, label="far particle x₂")
     a1.axhline(s.t_end, color="0.4", ls=":", lw=0.8, label=f"t∞ = {s.t_end:.4f} s")
-    a1.set_xlabel("distance from the wall x [m]")
-    a1.set_ylabel("time t [s]")
+    a1.set(xlabel="distance from the wall x [m]", ylabel="time t [s]")
     a1.set_title(f"space-time trajectories, e = {FIGURE_E} (thesis fig. 5.1)", fontsize=9)
     a1.legend(fontsize=7)
     keep = s.t < s.t_end
     a2.semilogy(s.t_end - s.t[keep], np.maximum(s.x2[keep], 1e-300), "r.", ms=3,
                 label="x₂ at each collision")
-    a2.set_xscale("log")
-    a2.set_xlabel("time before the collapse t∞ − t [s]")
-    a2.set_ylabel("far particle's distance from the wall x₂ [m]")
+    a2.set(xscale="log", xlabel="time before the collapse t∞ − t [s]",
+           ylabel="far particle's distance from the wall x₂ [m]")
     a2.set_title("self-similar approach to the collapse (log–log)", fontsize=9)
     a2.legend(fontsize=7)
-    scaffold.save_figure(fig, out, "figure.png")
+    scaffold.save_figure(fig, out)
+    _summary(r, out, prov)
 
 
 def _summary(r, out, prov):
@@ -108,16 +87,14 @@ def _summary(r, out, prov):
          "Event-driven, exact up to round-off, with the S3 collision rule "
          "(`jaxdamp.s3.common.collide`); start as in the thesis: the near particle hits the "
          "wall with V = 1 m/s while the far one, X = 1 m away, approaches with V. "
-         "Deterministic: no replicates are needed.", "",
-         "| e | outcome | collisions | t_end [s] | cycle ratio, measured | λ₂/λ₁ (exact) | 4e² "
-         "(thesis) | t∞ by the thesis' formula [s] | its error |",
-         "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
-    for row in r["rows"]:
-        L.append(f"| {row['e']:g} | {row['outcome']} | {row['events']} | {row['t_end']:.6g} | "
-                 f"{row['ratio']:.6g} | {row['exact_ratio']:.6g} | {row['thesis_ratio']:.4g} | "
-                 f"{row['t_formula']:.6g} | "
-                 + (f"{100 * row['formula_error']:+.3g} %" if np.isfinite(row["formula_error"])
-                    else "–") + " |")
+         "Deterministic: no replicates are needed.", ""]
+    L += scaffold.table(
+        ["e", "outcome", "collisions", "t_end [s]", "cycle ratio, measured", "λ₂/λ₁ (exact)",
+         "4e² (thesis)", "t∞ by the thesis' formula [s]", "its error"],
+        [[f"{x['e']:g}", x["outcome"], x["events"], f"{x['t_end']:.6g}", f"{x['ratio']:.6g}",
+          f"{x['exact_ratio']:.6g}", f"{x['thesis_ratio']:.4g}", f"{x['t_formula']:.6g}",
+          f"{100 * x['formula_error']:+.3g} %" if np.isfinite(x["formula_error"]) else "–"]
+         for x in r["rows"]])
     L += ["",
           "- **Collapse reproduced**: for every e ≤ 0.17 the collisions never stop and "
           "accumulate at a finite t∞; the measured ratio of successive cycle durations equals "

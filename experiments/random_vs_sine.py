@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import os
 
-import h5py
 import numpy as np
 
 from jaxdamp.analysis.stats import welch
@@ -123,10 +122,8 @@ def verdict(d, h) -> str:
 
 def write(r, out, prov):
     s = r["settings"]
-    with h5py.File(os.path.join(out, "data.h5"), "w") as h:
-        scaffold.stamp(h, prov)
-        h.attrs["convention"] = ("amplitudes matched by the RMS of z: sqrt(2) z_rms(random) vs "
-                                 "the sine's resonant Z, within 25 %")
+    with scaffold.data_file(out, prov, convention="amplitudes matched by the RMS of z: sqrt(2) "
+                            "z_rms(random) vs the sine's resonant Z, within 25 %") as h:
         for k, unit in (("f", "Hz"), ("U", "m"), ("Z", "m"), ("ratio", "1"), ("mag", "1"),
                         ("mag_pooled", "1"), ("coh", "1"), ("z_rms", "m"), ("a_rms", "m/s^2")):
             h.create_dataset(k, data=r[k]).attrs["units"] = unit
@@ -150,7 +147,8 @@ def write(r, out, prov):
     L = ["# Random excitation against stepped sine (issue 16)", "",
          scaffold.provenance_line(prov), "",
          f"Damper: `sanchez2012-optimal` (250 grains, Lz = 0.1225 m). Random base motion: flat "
-         f"acceleration density {s['S']} (m/s²)²/Hz × scale {', '.join(f'{x:g}' for x in s['scales'])} "
+         f"acceleration density {s['S']} (m/s²)²/Hz × scale "
+         f"{', '.join(f'{x:g}' for x in s['scales'])} "
          f"over {s['band'][0]:g}–{s['band'][1]:g} Hz, random-phase multisine with lines every "
          f"{s['resolution']} Hz (period {r['period']:g} s), {s['random_s']} s per run; stepped "
          f"sine at U = {', '.join(f'{1e3 * u:g}' for u in s['U'])} mm × f = "
@@ -167,40 +165,41 @@ def write(r, out, prov):
          "frequencies matched exactly (the sine's frequencies are lines of the multisine). "
          "Verdict: Welch 95 % interval of |H1| − Z/U across realisations (|H1| of each "
          "realisation from its own periods).", "",
-         "## Random levels", "",
-         "| scale | a_rms [m/s²] | √2 z_rms [mm] | " + " | ".join(
-             f"\\|H1\\| {x:g} Hz (γ²)" for x in f) + " |",
-         "|---|---|---|" + "---|" * len(f)]
+         "## Random levels", ""]
+    rows = []
     for i, sc in enumerate(s["scales"]):
-        zm, ze = scaffold.mean_se(np.sqrt(2) * r["z_rms"][i])
         m, e = scaffold.mean_se(r["mag"][i])
-        cells = [f"{m[j]:.3g} ± {e[j]:.2g} ({r['coh'][i, j]:.3f})" for j in range(len(f))]
-        L.append(f"| {sc:g} | {r['a_rms'][i]:.3g} | {1e3 * zm:.3g} ± {1e3 * ze:.2g} | "
-                 + " | ".join(cells) + " |")
-    L += ["", "## Stepped sine", "",
-          "| U [mm] | resonant Z [mm] | " + " | ".join(f"Z/U {x:g} Hz" for x in f) + " |",
-          "|---|---|" + "---|" * len(f)]
+        rows.append([f"{sc:g}", f"{r['a_rms'][i]:.3g}",
+                     scaffold.pm(*scaffold.mean_se(np.sqrt(2) * r["z_rms"][i]), 3, scale=1e3)]
+                    + [f"{scaffold.pm(m[j], e[j], 3)} ({r['coh'][i, j]:.3f})"
+                       for j in range(len(f))])
+    L += scaffold.table(["scale", "a_rms [m/s²]", "√2 z_rms [mm]"]
+                        + [f"\\|H1\\| {x:g} Hz (γ²)" for x in f], rows)
+    L += ["", "## Stepped sine", ""]
+    rows = []
     for u, U in enumerate(s["U"]):
         m, e = scaffold.mean_se(r["ratio"][u])
-        L.append(f"| {1e3 * U:g} | {1e3 * r['Z_res'][u]:.3g} | "
-                 + " | ".join(f"{m[j]:.3g} ± {e[j]:.2g}" for j in range(len(f))) + " |")
+        rows.append([f"{1e3 * U:g}", f"{1e3 * r['Z_res'][u]:.3g}"]
+                    + [scaffold.pm(m[j], e[j], 3) for j in range(len(f))])
+    L += scaffold.table(["U [mm]", "resonant Z [mm]"] + [f"Z/U {x:g} Hz" for x in f], rows)
     L += ["", "## Matched pairs", ""]
     n_agree = n_all = 0
     if not r["pairs"]:
         L.append(f"No random level's √2 z_rms lies within {100 * MATCH:g} % of a sine's "
                  "resonant Z: no matched pair (see the tables).")
     else:
-        L += ["| scale | U [mm] | √2 z_rms / Z_res | " + " | ".join(
-              f"{x:g} Hz: \\|H1\\| − Z/U" for x in f) + " |", "|---|---|---|" + "---|" * len(f)]
+        rows = []
         for p in r["pairs"]:
             cells = []
             for (d, h) in p["rows"]:
                 v = verdict(d, h)
                 n_all += 1
                 n_agree += v == "agree"
-                cells.append(f"{d:+.3g} ± {h:.2g} ({v})")
-            L.append(f"| {s['scales'][p['level']]:g} | {1e3 * s['U'][p['U']]:g} | "
-                     f"{p['amp'] / r['Z_res'][p['U']]:.2f} | " + " | ".join(cells) + " |")
+                cells.append(f"{scaffold.pm(d, h, '+.3g')} ({v})")
+            rows.append([f"{s['scales'][p['level']]:g}", f"{1e3 * s['U'][p['U']]:g}",
+                         f"{p['amp'] / r['Z_res'][p['U']]:.2f}"] + cells)
+        L += scaffold.table(["scale", "U [mm]", "√2 z_rms / Z_res"]
+                            + [f"{x:g} Hz: \\|H1\\| − Z/U" for x in f], rows)
         L += ["", f"Matched lines that agree within the 95 % interval: {n_agree} of {n_all}."]
     L += ["", "Figure: `figure.png` (|H1| ± 2 SE of each random level with its coherence, sine "
           "points ± 2 SE). Data: `data.h5`."]

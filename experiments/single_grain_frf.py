@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import os
 
-import h5py
 import numpy as np
 
 from jaxdamp.analysis.response import secondary_maxima
@@ -104,9 +103,8 @@ def run_dem(s, ctx):
                        progress=ctx.progress, replicates=s["R"])
     Z, fallback = steady_or_window(res, "amplitude")  # (F, R)
     Z = Z / cfg.primary.U
-    R = Z.shape[1]
-    mean = Z.mean(axis=1)
-    se = Z.std(axis=1, ddof=1) / np.sqrt(R) if R > 1 else np.zeros_like(mean)
+    mean, se = scaffold.mean_se(Z, axis=1)
+    se = np.nan_to_num(se)  # one bed: no spread
     return dict(cfg=cfg, Z=Z, mean=mean, se=se, fallback=fallback, runs=Z.size,
                 wall=float(res.summary["wall_time"]), jag=secondary_maxima(mean, se))
 
@@ -127,40 +125,31 @@ def compute(quick, log, ctx):
 
 
 def write(r, out, prov):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     s, s3, dem = r["s"], r["s3"], r["dem"]
-    with h5py.File(os.path.join(out, "data.h5"), "w") as h:
-        scaffold.stamp(h, prov)
+    with scaffold.data_file(out, prov) as h:
         h.attrs["Lz_m"], h.attrs["h_bed_m"] = LZ, H_BED
-        for e, x in s3.items():
-            g = h.create_group(f"s3_e{e:g}")
+        for name, x, freqs in [(f"s3_e{e:g}", x, s["s3_freqs"]) for e, x in s3.items()] + [
+                ("dem", dem, s["dem_freqs"])]:
+            g = h.create_group(name)
             g.attrs["config"] = x["cfg"].to_json()
-            g.create_dataset("frequency", data=s["s3_freqs"]).attrs["units"] = "Hz"
+            g.create_dataset("frequency", data=freqs).attrs["units"] = "Hz"
+            g.create_dataset("significant_maxima", data=x["jag"]["peaks"])
             g.create_dataset("Z_over_U", data=x["Z"]).attrs["units"] = "1"
+            if name == "dem":
+                g["Z_over_U"].attrs["dims"] = "frequency, replicate"
+                continue
             g.create_dataset("Z_over_U_err", data=x["err"]).attrs.update(
                 units="1", meaning="half the difference of the two half-window amplitudes")
             g.create_dataset("impacts_per_cycle", data=x["impacts"]).attrs["units"] = "1"
-            g.create_dataset("significant_maxima", data=x["jag"]["peaks"])
-        g = h.create_group("dem")
-        g.attrs["config"] = dem["cfg"].to_json()
-        g.create_dataset("frequency", data=s["dem_freqs"]).attrs["units"] = "Hz"
-        g.create_dataset("Z_over_U", data=dem["Z"]).attrs.update(units="1",
-                                                                  dims="frequency, replicate")
-        g.create_dataset("significant_maxima", data=dem["jag"]["peaks"])
 
-    fig, ax = plt.subplots(figsize=(8.5, 4.8))
+    fig, ax = scaffold.subplots(figsize=(8.5, 4.8))
     for e, x, style in ((0.8, s3[0.8], "-"), (0.0, s3[0.0], "--")):
         ax.plot(s["s3_freqs"], x["Z"], style, lw=1.1, label=f"one grain (S3), e = {e:g}")
         pk = x["jag"]["peaks"]
         ax.plot(s["s3_freqs"][pk], x["Z"][pk], "v", ms=5, color=ax.lines[-1].get_color())
     ax.errorbar(s["dem_freqs"], dem["mean"], yerr=2 * dem["se"], fmt="ko", ms=4, capsize=2,
                 label=f"N = 250 bed (DEM), {s['R']} beds ± 2 SE")
-    ax.set_xlabel("excitation frequency f [Hz]")
-    ax.set_ylabel("amplitude ratio Z / U [1]")
+    ax.set(xlabel="excitation frequency f [Hz]", ylabel="amplitude ratio Z / U [1]")
     ax.set_title(f"thesis fig. 6.1: Lz = {LZ} m (triangles: significant maxima)", fontsize=10)
     ax.legend(fontsize=8)
     scaffold.save_figure(fig, out)
@@ -196,8 +185,8 @@ def write(r, out, prov):
         f"energy balance error ≤ {e8['balance']:.1e}.",
         f"- **one grain, e = 0** (the universal model): {jag_text(e0['jag'])}; largest Z/U "
         f"{e0['Z'].max():.2f} at {s['s3_freqs'][np.argmax(e0['Z'])]:g} Hz.",
-        f"- **N = 250 bed**: {jag_text(dem['jag'])}; largest Z/U {dem['mean'].max():.2f} ± "
-        f"{dem['se'][np.argmax(dem['mean'])]:.2f} at "
+        f"- **N = 250 bed**: {jag_text(dem['jag'])}; largest Z/U "
+        f"{scaffold.pm(dem['mean'].max(), dem['se'][np.argmax(dem['mean'])], '.2f', '.2f')} at "
         f"{s['dem_freqs'][np.argmax(dem['mean'])]:g} Hz.",
     ]
     for e, c in r["coarse"].items():

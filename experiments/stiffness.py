@@ -22,9 +22,7 @@ Writes ``data.h5``, ``figure.png`` and ``summary.md`` in ``--out``; raw sweeps i
 
 from __future__ import annotations
 
-import json
 import math
-import os
 
 import h5py
 import numpy as np
@@ -42,7 +40,6 @@ try:
 except ImportError:  # run as a file: python experiments/<name>.py
     import scaffold
 
-HERE = os.path.dirname(os.path.abspath(__file__))
 SCALES = (1.0, 0.01, 0.001)
 
 
@@ -101,9 +98,7 @@ def main(argv=None):
 
 def write(rows, s, k15, out, prov):
     wall = sum(r["wall"] for r in rows.values())  # the sweeps' compute time (settling excluded)
-    with h5py.File(os.path.join(out, "data.h5"), "w") as h:
-        scaffold.stamp(h, dict(prov, sweep_wall_s=wall))
-        h.attrs["settings"] = json.dumps(s)
+    with scaffold.data_file(out, dict(prov, sweep_wall_s=wall), settings=s) as h:
         h.create_dataset("frequency", data=np.asarray(s["freqs"])).attrs["units"] = "Hz"
         for scale, r in rows.items():
             g = h.create_group(f"scale_{scale:g}")
@@ -117,30 +112,23 @@ def write(rows, s, k15, out, prov):
             g.create_dataset("Z_peak", data=r["Z_peak"]).attrs["units"] = "m"
             g.create_dataset("balance_error", data=r["balance"]).attrs["units"] = "1"
 
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     U = rows[s["scales"][0]]["config"].primary.U
     R = s["R"]
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4))
+    fig, (a1, a2) = scaffold.subplots(1, 2, figsize=(10, 4))
+    se = lambda x: 2 * scaffold.standard_error(x)  # noqa: E731
     for scale, r in rows.items():
-        se = lambda x: 2 * scaffold.standard_error(x)  # noqa: E731
         a1.errorbar(s["freqs"], r["Z"].mean(-1) / U, yerr=se(r["Z"]) / U, fmt="o-", capsize=3,
                     label=f"E = {r['E']:.3g} Pa (dt = {r['dt']:.2g} s)")
         a2.errorbar(s["freqs"], r["loss"].mean(-1), yerr=se(r["loss"]), fmt="o-", capsize=3,
                     label=f"E = {r['E']:.3g} Pa")
-    a1.set_xlabel("excitation frequency f [Hz]")
-    a1.set_ylabel("amplitude ratio Z / U  [-]")
-    a2.set_xlabel("excitation frequency f [Hz]")
-    a2.set_ylabel("granular loss per cycle [J]")
+    a1.set(xlabel="excitation frequency f [Hz]", ylabel="amplitude ratio Z / U  [-]")
+    a2.set(xlabel="excitation frequency f [Hz]", ylabel="granular loss per cycle [J]")
     a1.set_title(f"optimal box (Lz = 0.1225 m, C = 7.6 N s/m): response, R = {R} beds ± 2 SE",
                  fontsize=9)
     a2.set_title("energy dissipated by the grains per period", fontsize=9)
     for a in (a1, a2):
         a.legend(fontsize=7)
-    scaffold.save_figure(fig, out, "figure.png")
+    scaffold.save_figure(fig, out)
 
     def verdict(r, name):
         if r[f"{name}_changed"] is None:
@@ -166,20 +154,17 @@ def write(rows, s, k15, out, prov):
                  f"(amplitude), {r['fallback']} fixed-window values in all"
                  for r in rows.values())
              + ". The verdicts below therefore rest partly on runs that were still drifting; "
-             "longer runs are the remedy (the thesis modulus costs 6.3× the others).", "",
-             f"| E [Pa] | t_c at 1 m/s [s] | dt [s] | Z/U per frequency | resonant Z/U | "
-             f"change of resonant Z | loss per cycle at {s['freqs'][k15]:g} Hz [J] | change of "
-             "loss | stationary runs | balance error | wall [s] |",
-             "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
-    for scale, r in rows.items():
-        zp = r["Z_peak"] / U
-        lines.append(
-            f"| {r['E']:.3g} | {r['t_c']:.3g} | {r['dt']:.3g} | "
-            f"{', '.join(f'{z / U:.2f}' for z in r['Z'].mean(-1))} | "
-            f"{scaffold.pm(*scaffold.mean_se(zp), '.3f', '.3f')} | {verdict(r, 'peak')} | "
-            f"{scaffold.pm(*scaffold.mean_se(r['loss15']), '.3f', '.3f')} | "
-            f"{verdict(r, 'loss')} | {r['stationary']} of {r['runs']} | "
-            f"{float(np.max(r['balance'])):.1e} | {r['wall']:.0f} |")
+             "longer runs are the remedy (the thesis modulus costs 6.3× the others).", ""]
+    lines += scaffold.table(
+        ["E [Pa]", "t_c at 1 m/s [s]", "dt [s]", "Z/U per frequency", "resonant Z/U",
+         "change of resonant Z", f"loss per cycle at {s['freqs'][k15]:g} Hz [J]",
+         "change of loss", "stationary runs", "balance error", "wall [s]"],
+        [[f"{r['E']:.3g}", f"{r['t_c']:.3g}", f"{r['dt']:.3g}",
+          ", ".join(f"{z / U:.2f}" for z in r["Z"].mean(-1)),
+          scaffold.pm(*scaffold.mean_se(r["Z_peak"] / U), ".3f", ".3f"), verdict(r, "peak"),
+          scaffold.pm(*scaffold.mean_se(r["loss15"]), ".3f", ".3f"), verdict(r, "loss"),
+          f"{r['stationary']} of {r['runs']}", f"{float(np.max(r['balance'])):.1e}",
+          f"{r['wall']:.0f}"] for r in rows.values()])
     scaffold.write_summary(out, lines)
 
 

@@ -22,8 +22,8 @@ the two-mode transmissibility of a classically damped chain,
 (complex residuals weighted by the coherence; ``A_k``, ``ω_k``, ``ζ_k`` free — the grains add
 mass and move the modes) per realisation; the damper's **added damping** of mode k is
 ``ζ_k - ζ_k(empty)`` with the empty structure's ratio ``ζ_k(empty) = c ω_k/(2k)`` (stiffness-
-proportional; computed from the preset's matrices). Verdicts: Welch 95 % intervals across realisations, placement against
-placement for each mode.
+proportional; computed from the preset's matrices). Verdicts: Welch 95 % intervals across
+realisations, placement against placement for each mode.
 
 Writes ``data.h5``, ``figure.png``, ``summary.md``.
 """
@@ -33,7 +33,6 @@ from __future__ import annotations
 import math
 import os
 
-import h5py
 import numpy as np
 
 from jaxdamp.analysis.stats import welch
@@ -140,22 +139,20 @@ def compute(quick: bool, log, ctx):
 def write(r, out, prov):
     s = r["settings"]
     runs = r["runs"]
-    with h5py.File(os.path.join(out, "data.h5"), "w") as h5:
-        scaffold.stamp(h5, prov)
-        h5.attrs["fit"] = ("H = 1 + sum_k A_k w^2 / (w_k^2 - w^2 + 2i z_k w_k w), complex "
-                           "least squares weighted by sqrt(coherence), per realisation")
+    with scaffold.data_file(out, prov, fit="H = 1 + sum_k A_k w^2 / (w_k^2 - w^2 + 2i z_k w_k "
+                            "w), complex least squares weighted by sqrt(coherence), per "
+                            "realisation") as h5:
         h5.create_dataset("f_empty", data=r["f_empty"]).attrs["units"] = "Hz"
         h5.create_dataset("zeta_empty", data=r["z_empty"]).attrs["units"] = "1"
         for dof, d in runs.items():
-            g = h5.create_group(f"dof{dof}")
-            g.create_dataset("f", data=d["level"]["f"]).attrs["units"] = "Hz"
-            g.create_dataset("H_re", data=d["level"]["H"].real).attrs["units"] = "1"
-            g.create_dataset("H_im", data=d["level"]["H"].imag).attrs["units"] = "1"
-            g.create_dataset("coherence", data=d["level"]["coherence"]).attrs["units"] = "1"
-            fits = d["fits"]
+            lev, fits = d["level"], d["fits"]
+            data = {"f": (lev["f"], "Hz"), "H_re": (lev["H"].real, "1"),
+                    "H_im": (lev["H"].imag, "1"), "coherence": (lev["coherence"], "1")}
             for j, (name, unit) in enumerate((("f1", "Hz"), ("zeta1", "1"), ("f2", "Hz"),
                                               ("zeta2", "1"), ("A1", "1"), ("A2", "1"))):
-                g.create_dataset(name, data=fits[:, j]).attrs["units"] = unit
+                data[name] = (fits[:, j], unit)
+            for name, (x, unit) in data.items():
+                h5.create_dataset(f"dof{dof}/{name}", data=x).attrs["units"] = unit
     from jaxdamp.figures import random_figure
 
     dofs = list(runs)
@@ -193,25 +190,26 @@ def write(r, out, prov):
          "Fit: H1 of the box per realisation against 1 + Σ_k A_k ω²/(ω_k² − ω² + 2iζ_kω_kω), "
          "complex residuals weighted by √coherence, all six parameters free. Added damping: "
          "ζ_k − ζ_k(empty) with the empty chain's ratio at its own frequency. Verdict: Welch "
-         "95 % interval of DOF 1 − DOF 0 across realisations.", "",
-         "| quantity | empty | damper on DOF 1 | damper on DOF 0 | DOF 1 − DOF 0 | verdict |",
-         "|---|---|---|---|---|---|"]
+         "95 % interval of DOF 1 − DOF 0 across realisations.", ""]
+    rows = []
     for mode, (cf, cz) in ((1, (0, 1)), (2, (2, 3))):
         fe, ze = r["f_empty"][mode - 1], r["z_empty"][mode - 1]
         m1, e1 = scaffold.mean_se(runs[1]["fits"][:, cf])
         m0, e0 = scaffold.mean_se(runs[0]["fits"][:, cf])
-        L.append(f"| f_{mode} [Hz] | {fe:.3f} | {m1:.3f} ± {e1:.2g} | {m0:.3f} ± {e0:.2g} | "
-                 f"{m1 - m0:+.3f} | – |")
+        rows.append([f"f_{mode} [Hz]", f"{fe:.3f}", scaffold.pm(m1, e1, ".3f"),
+                     scaffold.pm(m0, e0, ".3f"), f"{m1 - m0:+.3f}", "–"])
         m1, e1 = scaffold.mean_se(runs[1]["fits"][:, cz])
         m0, e0 = scaffold.mean_se(runs[0]["fits"][:, cz])
         d, h = r["cmp"][mode]
         verdict = ("no interval" if not np.isfinite(h) else "same" if abs(d) <= h else
                    "more on DOF 1" if d > 0 else "more on DOF 0")
-        L.append(f"| ζ_{mode} [%] | {100 * ze:.3f} | {100 * m1:.3f} ± {100 * e1:.2g} | "
-                 f"{100 * m0:.3f} ± {100 * e0:.2g} | {100 * d:+.3f} ± {100 * h:.2g} | "
-                 f"{verdict} |")
-        L.append(f"| added ζ_{mode} [%] | – | {100 * (m1 - ze):.3f} | {100 * (m0 - ze):.3f} | "
-                 "– | – |")
+        rows.append([f"ζ_{mode} [%]", f"{100 * ze:.3f}", scaffold.pm(m1, e1, ".3f", scale=100),
+                     scaffold.pm(m0, e0, ".3f", scale=100),
+                     scaffold.pm(d, h, "+.3f", scale=100), verdict])
+        rows.append([f"added ζ_{mode} [%]", "–", f"{100 * (m1 - ze):.3f}",
+                     f"{100 * (m0 - ze):.3f}", "–", "–"])
+    L += scaffold.table(["quantity", "empty", "damper on DOF 1", "damper on DOF 0",
+                         "DOF 1 − DOF 0", "verdict"], rows)
     L += ["", "RMS of the box's displacement relative to the base: " + ", ".join(
         f"DOF {k}: {1e3 * d['y_rms'].mean():.3g} mm" for k, d in runs.items()) + ".", "",
         "Figure: `figure.png` (|H1| ± 2 SE per placement, the fitted two-mode curves, "

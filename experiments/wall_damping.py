@@ -19,11 +19,9 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import sys
 import time
 
-import h5py
 import numpy as np
 
 from jaxdamp.analysis.stats import welch
@@ -38,7 +36,6 @@ try:
 except ImportError:  # run as a file: python experiments/<name>.py
     import scaffold
 
-HERE = os.path.dirname(os.path.abspath(__file__))
 CONVENTIONS = ("mixed", "calibrated")
 
 
@@ -82,7 +79,7 @@ def run(s: dict, log) -> list:
                              stationary=st["stationary"], wall=time.perf_counter() - t0,
                              mass=float(r.summary["mass"][0])))
             log(f"{name} {conv}: ε_wall = {np.round(rows[-1]['eps_wall'], 4)}, ⟨E_d⟩ = "
-                + ", ".join(f"{m:.4g} ± {c:.2g}" for m, c in zip(st["mean"], st["ci95"]))
+                + ", ".join(scaffold.pm(m, c, 4) for m, c in zip(st["mean"], st["ci95"]))
                 + f" J ({time.perf_counter() - t0:.0f} s)")
     return rows
 
@@ -107,10 +104,7 @@ def verdicts(rows: list, amps) -> list:
 
 
 def write(rows, v, s, path, prov):
-    with h5py.File(os.path.join(path, "data.h5"), "w") as h:
-        scaffold.stamp(h, prov)
-        h.attrs["settings"] = json.dumps(s)
-        h.attrs["verdicts"] = json.dumps(v)
+    with scaffold.data_file(path, prov, settings=s, verdicts=v) as h:
         for r in rows:
             g = h.create_group(f"{r['family']}/{r['convention']}")
             g.create_dataset("amplitude", data=np.asarray(s["amps"])).attrs["units"] = "m"
@@ -119,62 +113,44 @@ def write(rows, v, s, path, prov):
             g.create_dataset("stationary", data=r["stationary"])
             g.create_dataset("eps_wall", data=np.asarray(r["eps_wall"]))
             g.attrs.update(wall_time=r["wall"], mass=r["mass"], sigma=json.dumps(r["sigma"]))
-    _figure(rows, s, os.path.join(path, "figure.png"))
-    _summary(rows, v, s, os.path.join(path, "summary.md"), prov)
-
-
-def _figure(rows, s, path):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
     fams = list(dict.fromkeys(r["family"] for r in rows))
-    fig, axes = plt.subplots(1, len(fams), figsize=(5 * len(fams), 3.8), squeeze=False)
+    fig, axes = scaffold.subplots(1, len(fams), figsize=(5 * len(fams), 3.8), squeeze=False)
     a = 100 * np.asarray(s["amps"])
     for ax, fam in zip(axes[0], fams):
         for k, r in enumerate(r for r in rows if r["family"] == fam):
             ax.errorbar(a + (k - 0.5) * 0.03, r["mean"], yerr=r["ci95"], fmt="o-", capsize=3,
                         label=f"wall_damping = {r['convention']} (ε_wall at 1 m/s: "
                               + ", ".join(f"{e:.3f}" for e in r["eps_wall"]) + ")")
-        ax.set_xlabel("drive amplitude A_d [cm]")
-        ax.set_ylabel("⟨E_d⟩ per period [J]")
-        ax.set_title(fam)
+        ax.set(xlabel="drive amplitude A_d [cm]", ylabel="⟨E_d⟩ per period [J]", title=fam)
         ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    scaffold.save_figure(fig, path)
 
-
-def _summary(rows, v, s, path, prov):
     L = ["# Grain–wall damping convention: mixed vs calibrated (issue 13, item 5)", "",
          scaffold.provenance_line(prov), "",
          f"Protocol: {s['transient']} transient + {s['periods']} analysed periods at 70 Hz, "
          f"{s['R']} independent beds per point; ⟨E_d⟩ = steady mean of the per-period "
          "dissipation after the MSER-detected start; intervals Student-t 95 % across beds, "
-         "differences Welch 95 %.", "",
-         "| family | convention | ε grain–wall at 1 m/s (per species) | " + " | ".join(
-             f"⟨E_d⟩ at {100 * a:g} cm [J]" for a in s["amps"]) + " | stationary beds |",
-         "| --- | --- | --- | " + " | ".join("---" for _ in s["amps"]) + " | --- |"]
-    for r in rows:
-        L.append(f"| {r['family']} | {r['convention']} | "
-                 + ", ".join(f"{e:.3f}" for e in r["eps_wall"]) + " | "
-                 + " | ".join(f"{m:.4g} ± {c:.2g}" for m, c in zip(r["mean"], r["ci95"]))
-                 + f" | {int(np.sum(r['stationary']))} of {np.size(r['stationary'])} |")
+         "differences Welch 95 %.", ""]
+    L += scaffold.table(
+        ["family", "convention", "ε grain–wall at 1 m/s (per species)"]
+        + [f"⟨E_d⟩ at {100 * a:g} cm [J]" for a in s["amps"]] + ["stationary beds"],
+        [[r["family"], r["convention"], ", ".join(f"{e:.3f}" for e in r["eps_wall"])]
+         + [scaffold.pm(m, c, 4) for m, c in zip(r["mean"], r["ci95"])]
+         + [f"{int(np.sum(r['stationary']))} of {np.size(r['stationary'])}"] for r in rows])
     L += ["", "Relative change of ⟨E_d⟩, calibrated vs mixed:", ""]
     for d in v:
         if d["significant"] is None:
             L.append(f"- {d['family']} at {100 * d['amplitude']:g} cm: undetermined — "
                      f"stationary beds (calibrated, mixed) = {d['n']}, need ≥ 2 each.")
             continue
-        L.append(f"- {d['family']} at {100 * d['amplitude']:g} cm: {100 * d['rel']:+.2f} % ± "
-                 f"{100 * d['rel_ci']:.2f} % — "
+        L.append(f"- {d['family']} at {100 * d['amplitude']:g} cm: "
+                 f"{scaffold.pm(d['rel'], d['rel_ci'], '+.2f', '.2f', '%', 100)} — "
                  + ("significant" if d["significant"] else "not significant at 95 %")
                  + f" ({d['n'][0]} and {d['n'][1]} stationary beds).")
     L += ["", "Every preset uses `wall_damping = \"mixed\"`; summaries of the driven box "
           "(binary mixtures, efficiency) depend on that choice by the amounts above."]
-    with open(path, "w") as f:
-        f.write("\n".join(L) + "\n")
+    scaffold.write_summary(path, L)
 
 
 def main(argv=None):
