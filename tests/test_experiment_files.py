@@ -9,7 +9,6 @@ import pytest
 
 EXPERIMENTS = pathlib.Path(__file__).parent.parent / "experiments"
 STUDIES = sorted(p.stem for p in EXPERIMENTS.glob("*.py") if p.stem not in ("__init__", "scaffold"))
-PROVENANCE = ("command", "jaxdamp_version", "git", "machine", "elapsed_s")
 
 
 @pytest.mark.parametrize("name", STUDIES)
@@ -24,10 +23,34 @@ def test_every_study_is_a_module_on_the_scaffold(name):
 
 @pytest.mark.parametrize("path", sorted(EXPERIMENTS.glob("*/data.h5")),
                          ids=lambda p: p.parent.name)
-def test_every_stored_result_carries_its_provenance(path):
+def test_every_stored_result_is_a_study_file_with_its_provenance(path):
+    """One layout (:mod:`jaxdamp.io.study`): the format, the provenance, and ``jaxdamp info``
+    describes it."""
+    from jaxdamp.io.describe import describe
+    from jaxdamp.io.study import FORMAT, PROVENANCE
+
     with h5py.File(path, "r") as h:
-        missing = [k for k in PROVENANCE if k not in h.attrs]
+        missing = [k for k in PROVENANCE + ("format", "units", "created") if k not in h.attrs]
+        assert h.attrs.get("format") == FORMAT
     assert not missing, f"{path}: no {missing}"
+    assert "(study results)" in describe(str(path))
+
+
+def test_a_study_file_is_written_and_described(tmp_path):
+    from jaxdamp.io.common import put
+    from jaxdamp.io.describe import describe
+    from jaxdamp.io.study import create
+
+    prov = dict(command="python experiments/x.py --quick", jaxdamp_version="0", git="abc",
+                machine="here", elapsed_s=90.0)
+    with create(tmp_path / "data.h5", prov, settings={"R": 2}) as h:
+        put(h, "amplitude", [0.01, 0.02], "m")
+        h.create_group("beds")
+    text = describe(str(tmp_path / "data.h5"))
+    assert "jaxdamp-study/1" in text and "x.py --quick" in text and "1.5 min wall" in text
+    assert "amplitude: (2,) [m]" in text and "settings" in text and "beds/" in text
+    with pytest.raises(ValueError, match="git"):
+        create(tmp_path / "bad.h5", {k: v for k, v in prov.items() if k != "git"})
 
 
 def _sources():

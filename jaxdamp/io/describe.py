@@ -17,6 +17,7 @@ FAMILIES = {
     "jaxdamp-sweep": ("a sweep file (jaxdamp frf, decay, random or efficiency --out, or run "
                       "--replicates --out)", "sweepfile"),
     "jaxdamp-optimize": ("an optimiser log (jaxdamp optimize --out)", "optimisation"),
+    "jaxdamp-study": ("a study's results (python experiments/<name>.py)", "study"),
 }
 
 
@@ -39,9 +40,9 @@ def what_file(h) -> str:
 
 
 def describe(path: str) -> str:
-    """Overview of the run, sweep (``frf``, ``efficiency``, replicated runs) or optimiser file
-    ``path``; a :class:`ConfigError` naming the problem for a missing, non-HDF5, truncated or
-    foreign file."""
+    """Overview of the run, sweep (``frf``, ``efficiency``, replicated runs), optimiser or
+    study file ``path``; a :class:`ConfigError` naming the problem for a missing, non-HDF5,
+    truncated or foreign file."""
     import h5py
 
     if not os.path.exists(path):
