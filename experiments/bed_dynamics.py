@@ -35,9 +35,11 @@ import h5py
 import numpy as np
 
 from jaxdamp.analysis import dynamics as dyn
+from jaxdamp.analysis.impacts import force_states
 from jaxdamp.analysis.response import frf_amplitude
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
+from jaxdamp.figures.response import draw_band
 from jaxdamp.physics.model import grain_mass
 from jaxdamp.studies.sweep import reuse_or_run
 
@@ -61,8 +63,15 @@ THESIS_ZONES = ((0.0, 7.5, "periodic"), (7.5, 11.0, "transition (quasi-periodic 
 #: per-observable numbers of the classification (``data.h5``: ``classification/<signal>/<key>``)
 CLASS_KEYS = ("period", "exponent", "lyapunov_per_period", "line_fraction", "d1", "dmin",
               "k_loose", "dim", "delay", "peak_ratio", "stretch")
+#: of these, the classifier's evidence (NaN where it has none: a periodic verdict)
+EVIDENCE = {"lyapunov_per_period": "lyapunov_per_period", "line_fraction": "line_fraction",
+            "peak_ratio": "strongest_peak_ratio", "stretch": "section_stretch"}
+#: :func:`jaxdamp.analysis.impacts.force_states`' numbers (``data.h5``: ``contacts/<key>``)
 CONTACT_KEYS = ("lid_hits_per_period", "floor_hits_per_period", "lid_contact_fraction",
                 "floor_contact_fraction", "free_fraction")
+#: the detail frequencies' steady series (``data.h5``: ``detail/f<f>/series/<key>``) -> record
+SERIES = {"t": "t", "z": "z_cm", "v": "vz_cm", "z_box": "z_box", "z_lowest": "z_lowest",
+          "z_highest": "z_highest", "force_box": "force_box"}
 
 
 def settings(quick: bool):
@@ -77,10 +86,6 @@ def settings(quick: bool):
                 record_dt=1e-3, R=3)
 
 
-def thesis_zone(f):
-    return next((lab for lo, hi, lab in THESIS_ZONES if lo <= f < hi), "")
-
-
 def optimal_config(duration, settle, record_dt=1e-3, chunk=0.2):
     """``sanchez2012-optimal`` with a run's numerics (also ``bed_dynamics_long``'s)."""
     return apply_overrides(presets.get("sanchez2012-optimal"), {
@@ -88,115 +93,47 @@ def optimal_config(duration, settle, record_dt=1e-3, chunk=0.2):
         "numerics.record_dt": record_dt, "numerics.chunk": chunk})
 
 
-def run_sweep(s: dict, path: str, progress: bool):
-    cfg = optimal_config(s["duration"], s["settle"], s["record_dt"])
-    return reuse_or_run(cfg, {"frequency": list(s["freqs"])}, path, progress=progress,
-                        replicates=s["R"]), cfg
-
-
-def contact_stats(t, force_box, weight, frequency):
-    """Impacts per drive period from the interval-averaged vertical force of the grains on the
-    box ``F``: each sample is *lid* (``F > +0.5 m_p g``: grains push the lid up), *floor*
-    (``F < -0.5 m_p g``) or *free* (``|F| < 0.2 m_p g``: the bed in flight), ambiguous samples
-    keep the previous state. An impact is a change of state into lid or floor (a bed resting on
-    the floor all the time has no floor impacts). Also the fraction of samples in each state."""
-    F = np.asarray(force_box) / weight
-    periods = (t[-1] - t[0]) * frequency
-    code = np.where(F > 0.5, 2, np.where(F < -0.5, 1, np.where(np.abs(F) < 0.2, 0, -1)))
-    idx = np.where(code >= 0, np.arange(code.size), 0)
-    np.maximum.accumulate(idx, out=idx)
-    state = code[idx]  # forward-filled (a leading ambiguous run takes the first sample's code)
-    if state[0] < 0:
-        state = np.where(state < 0, 1, state)
-    enter = np.r_[False, state[1:] != state[:-1]]
-    return dict(lid_hits_per_period=np.count_nonzero(enter & (state == 2)) / periods,
-                floor_hits_per_period=np.count_nonzero(enter & (state == 1)) / periods,
-                lid_contact_fraction=float(np.mean(code == 2)),
-                floor_contact_fraction=float(np.mean(code == 1)),
-                free_fraction=float(np.mean(code == 0)))
-
-
-def embedding_of(x, frequency, dt):
-    """Delay [samples] from the first *prominent* minimum of the mutual information
-    (``min_prominence=0.2``: the histogram estimate of the nearly sinusoidal ``z_cm`` has
-    spurious one-sample dips, which with the plain first minimum give τ = 1 ms and a
-    degenerate embedding) and dimension from false nearest neighbours. Returns
-    ``(dim, delay, mi, fnn)``."""
-    spp = 1.0 / (frequency * dt)
-    delay, mi = dyn.mutual_information_delay(x, max_lag=max(4, int(2 * spp)), min_prominence=0.2)
-    # short (--quick) series: dimensions whose delay vectors, after the classifier's Theiler
-    # window (max(one period, dim·delay) each side), leave < 40 samples for the Kantz horizon
-    # are not tried (never binds on the full mode's 12 000 samples)
-    n = len(x)
-    max_dim = 1
-    while max_dim < 8 and (n - max_dim * delay - 2 * max(spp, (max_dim + 1) * delay) - 3 >= 40
-                           and n - (max_dim + 1) * delay >= 2 * delay + 3):
-        max_dim += 1
-    fnn, dim = dyn.false_nearest_neighbours(x, delay, max_dim=max_dim)
-    return dim, delay, mi, fnn
-
-
-def classify_all(res, s):
-    """Classification of every frequency and bed, for ``z_cm`` and ``z_cm - z_box``: a list
-    over frequencies of lists over the beds."""
-    return [[classify_one(res, s, i, f, r) for r in range(res.replicates)]
-            for i, f in enumerate(res.axes["frequency"])]
-
-
 def classify_one(res, s, i, f, r):
-    """One frequency ``i`` and bed ``r``: regime of both observables and the contact counts."""
-    rec = res.records
-    k = res.point(i, r)
+    """One frequency ``i`` and bed ``r``: regime of ``z_cm`` and ``z_cm - z_box`` (the
+    classifier given the embedding of :func:`jaxdamp.analysis.dynamics.embedding_parameters`;
+    ``k_loose``: the smallest k with ``d_k < 0.05``, the period at a looser section tolerance,
+    0 if none) and the contact counts (:func:`jaxdamp.analysis.impacts.force_states`)."""
+    rec, k = res.records, res.point(i, r)
     t = rec["t"][k]
     keep = t >= s["transient"]
     row = dict(frequency=float(f), replicate=r)
     for name, x in (("z_cm", rec["z_cm"][k]), ("z_rel", rec["z_cm"][k] - rec["z_box"][k])):
         t0 = time.perf_counter()
-        dim, delay, _, _ = embedding_of(x[keep], f, t[1] - t[0])
+        dim, delay, _, _ = dyn.embedding_parameters(x[keep], f, t[1] - t[0])
         c = dyn.classify(t[keep], x[keep], f, embedding=(dim, delay))
-        ev = c.evidence
+        ev, d = c.evidence, c.evidence["return_distances"]
         row[name] = dict(label=c.label, period=c.period or 0,
                          exponent=np.nan if c.exponent is None else c.exponent,
-                         lyapunov_per_period=ev.get("lyapunov_per_period", np.nan),
-                         line_fraction=ev.get("line_fraction", np.nan),
-                         d1=float(ev["return_distances"][0]),
-                         dmin=float(np.min(ev["return_distances"])),
-                         k_loose=_first_below(ev["return_distances"], 0.05),
+                         d1=float(d[0]), dmin=float(np.min(d)),
+                         k_loose=next((j + 1 for j, dj in enumerate(d) if dj < 0.05), 0),
                          dim=ev.get("dim", 0), delay=ev.get("delay", 0),
-                         peak_ratio=ev.get("strongest_peak_ratio", np.nan),
-                         stretch=ev.get("section_stretch", np.nan),
+                         **{key: ev.get(e, np.nan) for key, e in EVIDENCE.items()},
                          seconds=time.perf_counter() - t0)
-    row.update(contact_stats(t[keep], rec["force_box"][k][keep], res.weight, f))
+    row.update(force_states(t[keep], rec["force_box"][k][keep], res.weight, f))
     return row
-
-
-def _first_below(d, tol):
-    """Smallest k with d_k < tol (0 if none): the period at a looser section tolerance."""
-    hit = np.nonzero(np.asarray(d) < tol)[0]
-    return int(hit[0] + 1) if hit.size else 0
 
 
 def details(res, s):
     """Section, spectrum, MI delay, FNN and Kantz curve of ``z_cm`` at the detail frequencies."""
-    rec = res.records
-    freqs = list(res.axes["frequency"])
-    out = {}
+    rec, freqs, out = res.records, list(res.axes["frequency"]), {}
     for f in s["detail"]:
         i = res.point(freqs.index(f), 0)  # bed 0
         keep = rec["t"][i] >= s["transient"]
-        d = {k: rec[name][i][keep] for k, name in (
-            ("t", "t"), ("z", "z_cm"), ("v", "vz_cm"), ("z_box", "z_box"),
-            ("z_lowest", "z_lowest"), ("z_highest", "z_highest"), ("force_box", "force_box"))}
+        d = {k: rec[name][i][keep] for k, name in SERIES.items()}
         t, z = d["t"], d["z"]
         dt = (t[-1] - t[0]) / (len(t) - 1)
         sec = dyn.poincare_section(t, z, f)
-        vsec = dyn.poincare_section(t, d["v"], f)  # recorded velocity at the section times
-        dim, delay, mi, fnn = embedding_of(z, f, dt)
+        dim, delay, mi, fnn = dyn.embedding_parameters(z, f, dt)
         lyap = dyn.lyapunov_kantz(z, dim, delay, dt=dt,
                                   theiler=max(int(round(1.0 / (f * dt))), dim * delay))
-        out[f] = dict(d, sec_t=sec.t, sec_z=sec.x, sec_v=vsec.x,
-                      spec=dyn.power_spectrum(t, z, f), mi=mi, delay=delay, fnn=fnn, dim=dim,
-                      lyap=lyap)
+        out[f] = dict(d, sec_t=sec.t, sec_z=sec.x, spec=dyn.power_spectrum(t, z, f), mi=mi,
+                      sec_v=dyn.poincare_section(t, d["v"], f).x,  # recorded v at sec_t
+                      delay=delay, fnn=fnn, dim=dim, lyap=lyap)
     return out
 
 
@@ -217,12 +154,15 @@ def compute(quick: bool, log, ctx):
     raw = ctx.raw(f"sweep_R{s['R']}.h5")
     t0 = time.perf_counter()
     reused = _reused_simulation_wall(raw, os.path.join(ctx.out, "data.h5"), quick)
-    res, cfg = run_sweep(s, raw, ctx.progress)
+    cfg = optimal_config(s["duration"], s["settle"], s["record_dt"])
+    res = reuse_or_run(cfg, {"frequency": list(s["freqs"])}, raw, progress=ctx.progress,
+                       replicates=s["R"])
     wall_sim = time.perf_counter() - t0 if reused is None else reused
     m_p = grain_mass(cfg)
     res.weight = m_p * cfg.gravity
     t1 = time.perf_counter()
-    reps = classify_all(res, s)
+    reps = [[classify_one(res, s, i, f, r) for r in range(res.replicates)]  # (frequency, bed)
+            for i, f in enumerate(res.axes["frequency"])]
     det = details(res, s)
     wall_analysis = time.perf_counter() - t1
     walls = dict(total=wall_sim + wall_analysis, simulation=wall_sim, analysis=wall_analysis)
@@ -242,9 +182,9 @@ def write(r, walls, out, prov):
             configs=json.dumps([c.to_json() for c in res.configs]),
             observable=("z_cm: lab-frame centre of mass of the bed (thesis' choice); "
                         "z_rel = z_cm - z_box: the bed relative to the box floor")) as h:
-        h.attrs.update({f"wall_time_{k}": v for k, v in walls.items()})
         h.attrs.update(grain_mass=r["grain_mass"], transient=s["transient"],
-                       duration=s["duration"], replicates=res.replicates)
+                       duration=s["duration"], replicates=res.replicates,
+                       **{f"wall_time_{k}": v for k, v in walls.items()})
         h.create_dataset("axes/frequency", data=np.asarray(res.axes["frequency"], float)
                          ).attrs["units"] = "Hz"
         for k, v in res.summary.items():
@@ -269,7 +209,7 @@ def write(r, walls, out, prov):
         for f, d in r["details"].items():
             g = h.create_group(f"detail/f{f:g}")
             g.attrs["frequency"] = f
-            for k in ("t", "z", "v", "z_box", "z_lowest", "z_highest", "force_box"):
+            for k in SERIES:
                 g.create_dataset(f"series/{k}", data=np.asarray(d[k], np.float32),
                                  compression="gzip")
             for k, v in (("section/t", d["sec_t"]), ("section/z_cm", d["sec_z"]),
@@ -294,10 +234,10 @@ def _figures(out, r):
     Z = res.summary["amplitude"]
     ff = np.linspace(min(f.min(), 4.0) * 0.9, max(f.max(), 24.0) * 1.02, 500)
     fig, ax = scaffold.subplots(figsize=(8.5, 5))
-    ax.plot(ff, frf_amplitude(ff, p.M, p.K, p.C, p.U) / p.U, "-", color="tab:blue", lw=0.9,
-            label=f"no grains, M = {p.M} kg")
-    ax.plot(ff, frf_amplitude(ff, p.M + m_p, p.K, p.C, p.U) / p.U, "--", color="tab:blue", lw=0.9,
-            label=f"rigid grains, M + m_p = {p.M + m_p:.3f} kg")
+    for M, ls, lab in ((p.M, "-", f"no grains, M = {p.M} kg"),
+                       (p.M + m_p, "--", f"rigid grains, M + m_p = {p.M + m_p:.3f} kg")):
+        ax.plot(ff, frf_amplitude(ff, M, p.K, p.C, p.U) / p.U, ls, color="tab:blue", lw=0.9,
+                label=lab)
     for lo, hi, lab in THESIS_ZONES:  # thesis fig. 4.1 shading
         if "chaotic" in lab:
             ax.axvspan(lo, min(hi, ff[-1]), color="0.88", zorder=0)
@@ -336,13 +276,9 @@ def _figures(out, r):
     mm = 1e3
     for a, (fq, d) in zip(axs, det.items()):
         r = row_of[fq]["z_cm"]
-        t = d["t"]
-        w = t >= t[-1] - 4.0 / fq
-        a[0].fill_between(t[w], d["z_lowest"][w] * mm, d["z_highest"][w] * mm, color="tab:orange",
-                          alpha=0.45, lw=0)
-        a[0].plot(t[w], d["z_box"][w] * mm, "k-", lw=1)
-        a[0].plot(t[w], (d["z_box"][w] + cfg.box.Lz) * mm, "k--", lw=1)
-        a[0].plot(t[w], d["z"][w] * mm, "-", color="tab:red", lw=1)
+        w = d["t"] >= d["t"][-1] - 4.0 / fq
+        draw_band(a[0], *(d[k][w] for k in ("t", "z_box", "z_lowest", "z_highest", "z")),
+                  cfg.box.Lz)
         a[0].set_ylabel(f"f = {fq:g} Hz\nz [mm]")
         a[0].set_title("floor, lid, grain band, z_cm (last 4 periods)", fontsize=8)
         a[1].plot(d["z"] * mm, d["v"], "-", color="0.85", lw=0.3)
@@ -376,14 +312,16 @@ def _figures(out, r):
     scaffold.save_figure(fig, out, "fig_details.png", dpi=90)
 
 
-def _regime(c):
+def regime(c: dict) -> str:
+    """``periodic-k`` or the classifier's label of one bed and observable (``label``,
+    ``period``: 0 unless periodic)."""
     return f"periodic-{c['period']}" if c["label"] == "periodic" else c["label"]
 
 
-def _regimes(rr, sig):
-    """The beds' regimes of ``sig``, e.g. ``periodic-1 ×2, chaotic``."""
-    n = Counter(_regime(r[sig]) for r in rr)
-    return ", ".join(f"{k} ×{v}" if v > 1 else k for k, v in n.most_common())
+def tally(items, ones: bool = False) -> str:
+    """The distinct ``items`` by count, most common first: ``periodic-1 ×2, chaotic`` (with
+    ``ones``: ``chaotic ×1``)."""
+    return ", ".join(f"{k} ×{v}" if v > 1 or ones else k for k, v in Counter(items).most_common())
 
 
 def _over_beds(x, fmt):
@@ -449,13 +387,14 @@ def _summary(out, r, walls, prov):
     for i, (fi, rr) in enumerate(zip(f, reps)):
         a = [x["z_cm"] for x in rr]
         rows.append([
-            f"{fi:g}", _over_beds(Zr[i] / p.U, ".2f"), _regimes(rr, "z_cm"),
-            _over_beds([c["exponent"] for c in a], ".3g"),
-            _over_beds([c["lyapunov_per_period"] for c in a], ".3f"),
-            _over_beds([c["d1"] for c in a], ".2g"), ", ".join(str(c["k_loose"]) for c in a),
-            _over_beds([c["line_fraction"] for c in a], ".2f"), _regimes(rr, "z_rel"),
-            _over_beds([x["lid_hits_per_period"] for x in rr], ".2f"),
-            _over_beds([x["floor_hits_per_period"] for x in rr], ".2f"), thesis_zone(fi)])
+            f"{fi:g}", _over_beds(Zr[i] / p.U, ".2f"), tally(regime(x["z_cm"]) for x in rr),
+            *(_over_beds([c[k] for c in a], fmt) for k, fmt in (
+                ("exponent", ".3g"), ("lyapunov_per_period", ".3f"), ("d1", ".2g"))),
+            ", ".join(str(c["k_loose"]) for c in a),
+            _over_beds([c["line_fraction"] for c in a], ".2f"),
+            tally(regime(x["z_rel"]) for x in rr),
+            *(_over_beds([x[k] for x in rr], ".2f") for k in CONTACT_KEYS[:2]),
+            next((lab for lo, hi, lab in THESIS_ZONES if lo <= fi < hi), "")])
     lines += scaffold.table(
         ["f [Hz]", "Z/U", "regime z_cm (beds)", "λ [1/s]", "λ/f", "d1", "k at 0.05", "lines",
          "regime z_cm−z_box (beds)", "lid hits/T", "floor hits/T", "thesis (fig. 4.1)"], rows)
@@ -465,8 +404,8 @@ def _summary(out, r, walls, prov):
     lines += scaffold.table(
         ["f [Hz]", "section points", "MI delay [ms]", "FNN dim", "Kantz λ [1/s]", "fit range [s]"],
         [[f"{fq:g}", len(d["sec_t"]), f"{d['delay'] * s['record_dt'] * 1e3:.0f}", d["dim"],
-          f"{d['lyap'].exponent:.3g}", f"{d['lyap'].time[d['lyap'].fit_range[0]]:.3f}–"
-          f"{d['lyap'].time[d['lyap'].fit_range[1]]:.3f}"] for fq, d in det.items()])
+          f"{ly.exponent:.3g}", f"{ly.time[ly.fit_range[0]]:.3f}–{ly.time[ly.fit_range[1]]:.3f}"]
+         for fq, d, ly in ((fq, d, d["lyap"]) for fq, d in det.items())])
     lines += ["", "## Comparison with the thesis (SPEC §6), zone by zone", ""]
     want = {"periodic": ("periodic",), "chaotic": ("chaotic",),
             "transition": ("quasi-periodic", "periodic")}
@@ -476,7 +415,7 @@ def _summary(out, r, walls, prov):
             continue
         key = "periodic" if zone.startswith("periodic window") else next(
             (k for k in want if zone.startswith(k)), None)
-        found = "; ".join(f"{fi:g} Hz {_regimes(rr, 'z_cm')}" for fi, rr in sel)
+        found = "; ".join(f"{fi:g} Hz {tally(regime(x['z_cm']) for x in rr)}" for fi, rr in sel)
         hits = [key is not None and x["z_cm"]["label"] in want[key] for _, rr in sel for x in rr]
         verdict = "agrees" if all(hits) else "partly agrees" if any(hits) else "differs"
         lines.append(f"- thesis {zone} ({lo:g}–{hi:g} Hz): {found} — {verdict} "

@@ -40,7 +40,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-from collections import Counter
 
 import numpy as np
 
@@ -71,6 +70,10 @@ MEASURES = {"s1": lambda d: d["spread1"], "s2": lambda d: d["spread2"],
             "plateau_rel": lambda d: d["div_plateau_rel"],
             "t_sat": lambda d: (d["div_t_sat"] if d["div_saturated"] and not d["div_bound"]
                                 else math.nan)}
+#: :func:`jaxdamp.analysis.dynamics.divergence_exponent`'s numbers kept as ``div_<key>``
+DIVERGENCE = ("exponent", "per_period", "saturated", "t_sat", "grew")
+#: counts of beds kept with the combined measures (``data.h5``: ``over_beds`` attributes)
+COUNTS = ("beds", "labels", "bounds", "not_grown", "not_reached")
 
 
 def settings(quick: bool) -> dict:
@@ -99,11 +102,9 @@ def analyse_pair(t, ref: dict, twin: dict, f: float, s: dict) -> dict:
         out[name] = dict(scale=scale, spread1=float(spread[0]), spread2=float(spread[1]),
                          harm1=h1, harm2=h2, label=c.label, period=c.period or 0,
                          kantz_per_period=(c.exponent / f) if c.exponent is not None else math.nan,
-                         kantz_span_periods=span, div_exponent=div["exponent"],
-                         div_per_period=div["per_period"], div_saturated=div["saturated"],
-                         div_t_sat=div["t_sat"], div_periods=div["periods_fitted"],
-                         div_grew=div["grew"], div_plateau_rel=div["plateau"] / scale,
-                         div_bound=div["lower_bound"],
+                         kantz_span_periods=span, div_periods=div["periods_fitted"],
+                         div_plateau_rel=div["plateau"] / scale, div_bound=div["lower_bound"],
+                         **{f"div_{k}": div[k] for k in DIVERGENCE},
                          D=div["D"], t_D=div["t_D"], n_section=len(sec.t))
     return out
 
@@ -133,11 +134,9 @@ def combine(beds: list[dict]) -> dict:
             v = np.array([fn(d) for d in ds], float)
             e = scaffold.across(v)
             c[key] = dict(values=v, mean=e.mean, se=e.se, n=e.n)
-        for k in (1, 2):
-            for tol in TOLERANCES:
-                c[f"period{k}_{tol:g}"] = sum(within(d[f"spread{k}"], d[f"harm{k}"], tol)
-                                              for d in ds)
-        c["labels"] = [d["label"] + (f"-{d['period']}" if d["period"] else "") for d in ds]
+        c.update({f"period{k}_{tol:g}": sum(within(d[f"spread{k}"], d[f"harm{k}"], tol)
+                                            for d in ds) for k in (1, 2) for tol in TOLERANCES})
+        c["labels"] = [bd.regime(d) for d in ds]
         c["bounds"] = sum(bool(d["div_bound"]) for d in ds)
         c["not_grown"] = sum(not d["div_grew"] for d in ds)
         c["not_reached"] = sum(bool(d["div_grew"] and not d["div_saturated"]) for d in ds)
@@ -165,11 +164,11 @@ def compute(quick: bool, log, ctx):
             a, b = 2 * i, 2 * i + 1
             t = rec["t"][a]
             pre = t < s["t_perturb"] - 1e-9
-            same = float(np.max(np.abs(rec["z_box"][a][pre] - rec["z_box"][b][pre])))
+            rows[f]["identical_before"].append(
+                float(np.max(np.abs(rec["z_box"][a][pre] - rec["z_box"][b][pre]))))
             an = analyse_pair(t, {k: rec[k][a] for k in SIGNALS},
                               {k: rec[k][b] for k in SIGNALS}, f, s)
             rows[f]["beds"].append(an)
-            rows[f]["identical_before"].append(same)
             zb = an["z_box"]
             log(f"  {f:g} Hz: z_box spread1 {zb['spread1']:.3g}, spread2 {zb['spread2']:.3g}, "
                 f"harmonic {zb['harm1']:.4f}; twin exponent {zb['div_exponent']:.3g} 1/s "
@@ -213,9 +212,7 @@ def write(r, s, out, prov):
                     ds = gs.create_dataset(key, data=c[key]["values"])
                     ds.attrs.update(mean=c[key]["mean"], se=c[key]["se"], n=c[key]["n"])
                 gs.attrs.update({k: v for k, v in c.items()
-                                 if k.startswith("period") or k in ("bounds", "not_grown",
-                                                                    "not_reached", "beds",
-                                                                    "labels")})
+                                 if k.startswith("period") or k in COUNTS})
             for b, (bed, seed) in enumerate(zip(row["beds"], r["seeds"])):
                 gb = g.create_group(f"bed_{b}")
                 gb.attrs.update(seed=seed,
@@ -232,17 +229,12 @@ def write(r, s, out, prov):
 
 
 def _figure(r, s, out):
-    from matplotlib import rcParams
-
     fig, axs = scaffold.subplots(1, 3, figsize=(15, 4.6))
-    colors = rcParams["axes.prop_cycle"].by_key()["color"]
-    styles = ("-", "--", ":", "-.")
     for j, (f, row) in enumerate(r["rows"].items()):
         for b, bed in enumerate(row["beds"]):
             for name, ax in zip(SIGNALS, axs[:2]):
-                d = bed[name]
-                ax.semilogy(d["t_D"], d["D"], color=colors[j % len(colors)],
-                            ls=styles[b % len(styles)], lw=0.9,
+                ax.semilogy(bed[name]["t_D"], bed[name]["D"], color=f"C{j}",
+                            ls=("-", "--", ":", "-.")[b % 4], lw=0.9,
                             label=f"{f:g} Hz" if b == 0 else None)
     for name, ax in zip(SIGNALS, axs[:2]):
         ax.axvline(s["t_perturb"], color="k", lw=0.6, ls=":")
@@ -293,20 +285,12 @@ def counts(c: dict, k: int) -> str:
     return f"within 1 % on {n1}, within 5 % on {n5} of {R} beds"
 
 
-def labels(c: dict) -> str:
-    return ", ".join(f"{lab} ×{n}" for lab, n in Counter(c["labels"]).most_common())
-
-
 def saturation(c: dict) -> str:
-    parts = []
-    if np.isfinite(c["t_sat"]["mean"]):
-        parts.append(over_beds(c["t_sat"], 3))
-    if c["bounds"]:
-        parts.append(f"within the first period on {c['bounds']}")
-    if c["not_reached"]:
-        parts.append(f"not reached on {c['not_reached']}")
-    if c["not_grown"]:
-        parts.append(f"did not grow on {c['not_grown']}")
+    parts = [over_beds(c["t_sat"], 3)] if np.isfinite(c["t_sat"]["mean"]) else []
+    for key, text in (("bounds", "within the first period"), ("not_reached", "not reached"),
+                      ("not_grown", "did not grow")):
+        if c[key]:
+            parts.append(f"{text} on {c[key]}")
     return "; ".join(parts)
 
 
@@ -354,36 +338,33 @@ def _summary(r, s, out, prov):
          "a bed whose grains diverge at once while z_box stays within ~1 % of its orbit is "
          "chaotic at the grain level and nearly periodic at the level of the damper.", ""]
     levels = ["s₁", "s₂", "1 − h₁", "1 − h₂", "period-1", "period-2"]
+    twin = ["twin λ [1/s]", "twin λ/f"]
     for name in SIGNALS:
-        rows = []
+        rows, per_bed = [], []
         for f, row in r["rows"].items():
             c = row["stats"][name]
             bound = c["bounds"] > 0
-            rows.append([f"{f:g}", THESIS.get(f, "")]
-                        + [over_beds(c[k]) for k in ("s1", "s2", "off1", "off2")]
-                        + [counts(c, 1), counts(c, 2), labels(c), over_beds(c["kantz"], 3),
-                           over_beds(c["twin"], 3, bound),
-                           over_beds(c["twin_per_period"], 3, bound), saturation(c),
-                           over_beds(c["plateau_rel"])])
+            rows.append([f"{f:g}", THESIS.get(f, ""),
+                         *(over_beds(c[k]) for k in ("s1", "s2", "off1", "off2")),
+                         counts(c, 1), counts(c, 2), bd.tally(c["labels"], ones=True),
+                         over_beds(c["kantz"], 3), over_beds(c["twin"], 3, bound),
+                         over_beds(c["twin_per_period"], 3, bound), saturation(c),
+                         over_beds(c["plateau_rel"])])
+            for b, (d, seed) in enumerate(zip((bed[name] for bed in row["beds"]), r["seeds"])):
+                per_bed.append([f"{f:g}", f"{b} ({seed})",
+                                *(_bed_cell(d, k) for k in ("s1", "s2", "off1", "off2")),
+                                *(level(d[f"spread{k}"], d[f"harm{k}"]) for k in (1, 2)),
+                                bd.regime(d),
+                                f"{d['kantz_per_period']:.3g} ({d['kantz_span_periods']:.1f})",
+                                *(_bed_cell(d, k) for k in ("twin", "twin_per_period", "t_sat",
+                                                            "plateau_rel"))])
         L += [f"## {name}", "", f"Mean ± SE over {R} beds; period-k: counts of beds.", ""]
-        L += scaffold.table(["f [Hz]", "thesis"] + levels + [
-            "classifier (beds)", "Kantz λ/f", "twin λ [1/s]", "twin λ/f", "twin plateau at [s]",
-            "plateau / orbit size"], rows)
-        rows = []
-        for f, row in r["rows"].items():
-            for b, (bed, seed) in enumerate(zip(row["beds"], r["seeds"])):
-                d = bed[name]
-                rows.append([f"{f:g}", f"{b} ({seed})"]
-                            + [_bed_cell(d, k) for k in ("s1", "s2", "off1", "off2")]
-                            + [level(d["spread1"], d["harm1"]), level(d["spread2"], d["harm2"]),
-                               d["label"] + (f"-{d['period']}" if d["period"] else ""),
-                               f"{d['kantz_per_period']:.3g} ({d['kantz_span_periods']:.1f})"]
-                            + [_bed_cell(d, k) for k in ("twin", "twin_per_period", "t_sat",
-                                                         "plateau_rel")])
+        L += scaffold.table(["f [Hz]", "thesis", *levels, "classifier (beds)", "Kantz λ/f",
+                             *twin, "twin plateau at [s]", "plateau / orbit size"], rows)
         L += ["", f"Per bed ({name}):", ""]
-        L += scaffold.table(["f [Hz]", "bed (seed)"] + levels + [
-            "classifier", "Kantz λ/f (span [periods])", "twin λ [1/s]", "twin λ/f",
-            "plateau at [s]", "plateau / orbit size"], rows)
+        L += scaffold.table(["f [Hz]", "bed (seed)", *levels, "classifier",
+                             "Kantz λ/f (span [periods])", *twin, "plateau at [s]",
+                             "plateau / orbit size"], per_bed)
         L.append("")
     L += ["What the twin exponent can and cannot tell: it is the growth rate of a perturbation "
           "of the whole simulated system (6N + 2 ≈ 1500 phase-space dimensions for N = 250), "

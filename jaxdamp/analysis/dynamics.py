@@ -7,7 +7,8 @@ For a uniformly sampled scalar series such as the bed's centre of mass ``z_cm(t)
   (:func:`power_spectrum`);
 - delay embedding: delay from the first minimum of the average mutual information
   (:func:`mutual_information_delay`), dimension from false nearest neighbours
-  (:func:`false_nearest_neighbours`), the delay vectors themselves (:func:`embed`);
+  (:func:`false_nearest_neighbours`), both for a driven series (:func:`embedding_parameters`),
+  the delay vectors themselves (:func:`embed`);
 - largest Lyapunov exponent by Kantz's method (:func:`lyapunov_kantz`), fitted over more than
   one drive period, and the exponent of two simulated trajectories' separation
   (:func:`divergence_exponent`);
@@ -314,6 +315,40 @@ def false_nearest_neighbours(x, delay, max_dim=8, rtol=10.0, atol=2.0, theiler=N
         frac[m - 1] = np.mean(false)
     below = np.nonzero(frac < threshold)[0]
     return frac, int(below[0] + 1) if below.size else int(max_dim)
+
+
+def embedding_parameters(x, frequency, dt=1.0, min_prominence=0.2, max_dim=8, min_horizon=40):
+    """Delay and dimension of the delay embedding of a driven series ``x`` (drive ``frequency``
+    [Hz], samples ``dt`` [s] apart, ``p = 1/(f dt)`` samples per drive period).
+
+    Delay τ: the first minimum of the mutual information of prominence ``min_prominence`` of
+    its range, lags up to ``max(4, ⌊2p⌋)`` (:func:`mutual_information_delay`; the histogram
+    estimate of a nearly sinusoidal series has spurious one-sample dips, which with the plain
+    first minimum give τ = 1 sample and a degenerate embedding). Dimension: the first with
+    < 1 % false nearest neighbours (:func:`false_nearest_neighbours`), trying ``m + 1`` after
+    ``m < max_dim`` only while the series leaves room for it: ``N − mτ`` delay vectors less two
+    Theiler windows ``max(p, (m + 1)τ)`` (one drive period or one embedding window, as
+    :func:`classify` uses) less 3 keep at least ``min_horizon`` samples for Kantz's curve, and
+    FNN's test has ``N − (m + 1)τ ≥ 2τ + 3`` vectors. The limit binds on short series only.
+
+    Returns ``(dim, delay, mi, fnn)``: delay [samples], the mutual information
+    ``(max_lag + 1,)`` [nats] and the false-neighbour fractions for m = 1, 2, ....
+
+    >>> import numpy as np
+    >>> t = np.arange(0.0, 100.0, 0.005)  # 2 Hz, 100 samples per period
+    >>> dim, delay, mi, fnn = embedding_parameters(np.sin(4 * np.pi * t + 0.1), 2.0, 0.005)
+    >>> abs(delay - 25) <= 2, len(fnn)  # a quarter period; a long series tries 8 dimensions
+    (True, 8)
+    """
+    spp = 1.0 / (frequency * dt)
+    delay, mi = mutual_information_delay(x, max_lag=max(4, int(2 * spp)),
+                                         min_prominence=min_prominence)
+    n, m = len(x), 1
+    while m < max_dim and (n - m * delay - 2 * max(spp, (m + 1) * delay) - 3 >= min_horizon
+                           and n - (m + 1) * delay >= 2 * delay + 3):
+        m += 1
+    fnn, dim = false_nearest_neighbours(x, delay, max_dim=m)
+    return dim, delay, mi, fnn
 
 
 # --------------------------------------------------------------------------- Lyapunov (Kantz)
