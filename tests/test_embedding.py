@@ -1,5 +1,5 @@
-"""Library pieces the bed-dynamics studies share (``experiments/bed_dynamics*.py``), against
-series whose answer is known."""
+"""The choice of a delay embedding (:func:`jaxdamp.analysis.dynamics.embedding_parameters`,
+used by the bed-dynamics studies), against series whose answer is known."""
 
 from __future__ import annotations
 
