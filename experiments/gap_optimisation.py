@@ -38,14 +38,14 @@ from __future__ import annotations
 import json
 import time
 
-import jax
 import numpy as np
 
-from jaxdamp.analysis.response import parabolic_extremum
+from jaxdamp.analysis.stats import replicate_extrema
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.design import DEMProblem, Objective, S3Problem, optimize, scan_optimum
-from jaxdamp.design.surface import quadratic_optimum
+from jaxdamp.design.surface import local_quadratic_optimum
+from jaxdamp.figures.response import draw_interval
 from jaxdamp.physics.model import primary_frequency
 from jaxdamp.studies.grid import steady_or_window
 from jaxdamp.studies.sweep import sweep
@@ -59,6 +59,8 @@ THESIS_LZ = 0.1225
 #: S3 at f0: the response is periodic (two impacts per period) up to about this gap [m] and
 #: irregular above (measured: the smooth and event-driven models' Z and dissipation jump).
 PERIODIC_GAP = 0.13
+#: S3: the steps of the central differences checked against ``jax.grad`` [m].
+FD_S3 = (1e-4, 1e-5, 1e-6)
 
 
 def settings(quick: bool) -> dict:
@@ -66,168 +68,126 @@ def settings(quick: bool) -> dict:
         return dict(
             grains=60, settle=0.2, burn_in=0.15, warm=0.05, K=3, windows=(0.0005,), window=0.0005,
             fd_lz=(0.07, 0.1225, 0.25), scan_lz=(0.07, 0.1225, 0.25), scan_duration=0.2, R=2,
-            opt_iter=2, lr=0.02, decay=0.85,
-            s3_duration=1.5, s3_scan=np.linspace(0.02, 0.15, 27), s3_iter=4,
-            s3_objectives=("dissipation",), s3_fd_gaps=(0.05, 0.0835, 0.12))
+            opt_iter=2, lr=0.02, decay=0.85, s3_duration=1.5, s3_scan=np.linspace(0.02, 0.15, 27),
+            s3_iter=4, s3_objectives=("dissipation",), s3_fd_gaps=(0.05, 0.0835, 0.12))
     return dict(
         grains=250, settle=0.3, burn_in=0.8, warm=0.3, K=8,
-        windows=(0.0005, 0.001, 0.002, 0.004, 0.008, 0.016, 0.032),
-        window=0.002, fd_lz=(0.07, 0.1225, 0.25),
-        scan_lz=(0.06, 0.07, 0.085, 0.1, 0.1225, 0.15, 0.2, 0.25), scan_duration=1.5, R=5,
-        opt_iter=6, lr=0.02, decay=0.85,
-        s3_duration=3.0, s3_scan=np.linspace(0.02, 0.2, 145), s3_iter=25,
-        s3_objectives=("dissipation", "band"), s3_fd_gaps=(0.05, 0.0835, 0.12))
+        windows=(0.0005, 0.001, 0.002, 0.004, 0.008, 0.016, 0.032), window=0.002,
+        fd_lz=(0.07, 0.1225, 0.25), scan_lz=(0.06, 0.07, 0.085, 0.1, 0.1225, 0.15, 0.2, 0.25),
+        scan_duration=1.5, R=5, opt_iter=6, lr=0.02, decay=0.85, s3_duration=3.0,
+        s3_scan=np.linspace(0.02, 0.2, 145), s3_iter=25, s3_objectives=("dissipation", "band"),
+        s3_fd_gaps=(0.05, 0.0835, 0.12))
+
+
+def _optimise(prob, ctx, log, raw, label, **kw):
+    """The optimiser from Lz0 = 0.07 and 0.25 m (raw logs ``raw/<raw>_<Lz0>.h5``)."""
+    runs = {}
+    for lz0 in (0.07, 0.25):
+        runs[lz0] = o = optimize(prob, prob.from_lz(lz0), out=ctx.raw(f"{raw}_{lz0:g}.h5"),
+                                 progress=ctx.progress, **kw)
+        log(f"{label} from Lz0 = {lz0}: {o.x:.5g} ({o.reason}), {o.sim_seconds:.3g} sim s")
+    return runs
 
 
 def dem_part(s, ctx, log):
     base = apply_overrides(presets.get("sanchez2012-optimal"),
                            {"numerics.settle_time": s["settle"], "grains.0.count": s["grains"]})
-    f0 = primary_frequency(base)
-    obj = Objective("dissipation")
-    out = {"f0": f0}
-    prob = DEMProblem(base, obj, window=s["window"], n_windows=s["K"], burn_in=s["burn_in"],
-                      warm_burn_in=s["warm"])
-    out["bed_height"] = prob.bed.height
-    out["dt"] = prob.dt
-    out["config"] = prob.config.to_json()
-
-    def central(e, lz, h):  # central difference of the window objective (native engine)
-        return (prob.window_values(e, lz + h, engine="auto")
-                - prob.window_values(e, lz - h, engine="auto")) / (2 * h)
-
-    # 1. gradient vs window length, and 2. AD vs FD at three Lz
-    ens_at = {}
-    sim_windows = 0.0
-    for lz in s["fd_lz"]:
-        ens_at[lz] = prob.start_states(lz)
-        sim_windows += ens_at[lz].sim_seconds
-    rows = []
+    prob = DEMProblem(base, Objective("dissipation"), window=s["window"], n_windows=s["K"],
+                      burn_in=s["burn_in"], warm_burn_in=s["warm"])
+    out = {"f0": primary_frequency(base), "bed_height": prob.bed.height, "dt": prob.dt,
+           "config": prob.config.to_json()}
+    # 1. gradient vs window length, and 2. AD vs FD (native engine) at three Lz
+    ens_at = {lz: prob.start_states(lz) for lz in s["fd_lz"]}
+    out["sim_windows"] = sum(e.sim_seconds for e in ens_at.values())
     ens = ens_at[THESIS_LZ]
+    out["windows"] = []
     for w in s["windows"]:
         prob.set_window(w)
         t0 = time.perf_counter()
         v, d = prob.window_derivatives(ens)
-        wall = time.perf_counter() - t0
-        fd, fd8 = central(ens, THESIS_LZ, 1e-5), central(ens, THESIS_LZ, 1e-8)
-        rows.append(dict(window=prob.window_seconds, values=v, ad=d, fd=fd, fd8=fd8, wall=wall))
-        log(f"window {prob.window_seconds * 1e3:.2f} ms: dD/dLz = "
-            f"{scaffold.pm(*scaffold.mean_se(d), 4, 3)} (FD {fd.mean():.4g}), {wall:.1f} s")
-    out["windows"] = rows
+        r = dict(window=prob.window_seconds, values=v, ad=d, wall=time.perf_counter() - t0,
+                 fd=prob.central_difference(ens, 1e-5), fd8=prob.central_difference(ens, 1e-8))
+        out["windows"].append(r)
+        log(f"window {r['window'] * 1e3:.2f} ms: dD/dLz = {scaffold.pm(*scaffold.mean_se(d), 4, 3)}"
+            f" (FD {r['fd'].mean():.4g}), {r['wall']:.1f} s")
     prob.set_window(s["window"])
-    fd_rows = []
-    for lz in s["fd_lz"]:
-        e = ens_at[lz]
+    out["fd"] = []
+    for lz, e in ens_at.items():
         v, d = prob.window_derivatives(e)
-        fds = {hh: central(e, lz, hh) for hh in (1e-4, 1e-5, 1e-6, 1e-8)}
-        fd_rows.append(dict(lz=lz, values=v, ad=d, fd=fds))
+        fds = {hh: prob.central_difference(e, hh) for hh in (1e-4, 1e-5, 1e-6, 1e-8)}
+        out["fd"].append(dict(lz=lz, values=v, ad=d, fd=fds))
         log(f"Lz = {lz}: AD {scaffold.pm(*scaffold.mean_se(d), 4, 3)}; FD "
             + ", ".join(f"h={hh:g}: {x.mean():.4g}" for hh, x in fds.items()))
-    out["fd"] = fd_rows
-
     # 3. forward vs reverse mode: time (second call, compiled) and compiled temp memory
-    import jax.numpy as jnp
-
-    modes = {}
-    for mode in ("forward", "reverse"):
-        fn = prob._derivative_fn(mode)
-        B = ens.states.t.shape[0]
-        args = (jnp.full((B,), ens.lz), ens.states, prob._windows(ens).nbrs, ens.params)
-        mem = fn.lower(*args).compile().memory_analysis()
-        jax.block_until_ready(fn(*args))
+    modes = out["modes"] = {m: prob.derivative_cost(ens, m) for m in ("forward", "reverse")}
+    prob.window_values(ens, engine="jax")  # compiled before it is timed
+    for name, engine in (("primal (JAX)", "jax"), ("primal (native)", "auto")):
         t0 = time.perf_counter()
-        jax.block_until_ready(fn(*args))
-        modes[mode] = dict(wall=time.perf_counter() - t0,
-                           temp_bytes=float(getattr(mem, "temp_size_in_bytes", np.nan)))
-    prob.window_values(ens, engine="jax")
-    t0 = time.perf_counter()
-    prob.window_values(ens, engine="jax")
-    modes["primal (JAX)"] = dict(wall=time.perf_counter() - t0, temp_bytes=np.nan)
-    t0 = time.perf_counter()
-    prob.window_values(ens, engine="auto")
-    modes["primal (native)"] = dict(wall=time.perf_counter() - t0, temp_bytes=np.nan)
-    out["modes"] = modes
+        prob.window_values(ens, engine=engine)
+        modes[name] = dict(wall=time.perf_counter() - t0, temp_bytes=np.nan)
     out["mode_steps"] = float(ens.states.t.shape[0] * prob.n_rec * prob.record_every)
     log("modes: " + ", ".join(f"{k} {v['wall']:.2f} s" for k, v in modes.items()))
 
     # 4a. brute-force scan (one batched sweep, native engine, R independently poured beds)
-    cfg_scan = apply_overrides(base, {"frequency": f0, "numerics.duration": s["scan_duration"],
-                                      "numerics.analysis_window": 0.5,
-                                      "numerics.record_dt": 1e-3, "numerics.chunk": 0.1})
-    t0 = time.perf_counter()
-    R = s["R"]
+    cfg_scan = apply_overrides(base, {
+        "frequency": out["f0"], "numerics.duration": s["scan_duration"],
+        "numerics.analysis_window": 0.5, "numerics.record_dt": 1e-3, "numerics.chunk": 0.1})
+    t0, R = time.perf_counter(), s["R"]
     res = sweep(cfg_scan, {"box.Lz": list(s["scan_lz"])}, progress=ctx.progress, echo=None,
                 replicates=R)
-    out["scan"] = scan_stats(s["scan_lz"], res)
-    out["scan"].update(wall=time.perf_counter() - t0, config=cfg_scan.to_json(),
-                       sim_seconds=R * (len(s["scan_lz"]) * s["scan_duration"] + prob.bed.time))
+    sc = out["scan"] = scan_stats(s["scan_lz"], res)
+    sc.update(wall=time.perf_counter() - t0, config=cfg_scan.to_json(),
+              sim_seconds=R * (len(s["scan_lz"]) * s["scan_duration"] + prob.bed.time))
     # 4b. the optimiser from both starts; 4c. the same with the amplitude objective (the
     # designer's target at f0)
     for key, kind, raw in (("opt", "dissipation", "dem_opt"),
                            ("opt_amp", "amplitude", "dem_opt_amplitude")):
-        o = out["scan"][f"opt_{kind}"]
+        o = sc[f"opt_{kind}"]
         log(f"scan optimum ({kind}) Lz = {scaffold.pm(o['mean'], o['se'], 4, 2)} m (95 %: ± "
             f"{o['ci95']:.2g}) over {R} beds")
         if kind == "amplitude":
             prob.objective = Objective("amplitude")
             prob._fns.clear()
-        out[key] = {}
-        for lz0 in (0.07, 0.25):
-            r = optimize(prob, lz0, lr=s["lr"], decay=s["decay"], max_iter=s["opt_iter"],
-                         out=ctx.raw(f"{raw}_{lz0:g}.h5"), progress=ctx.progress)
-            out[key][lz0] = r
-            log(f"DEM {kind} optimiser from {lz0}: Lz = {r.lz:.4g} ({r.reason}), "
-                f"{r.sim_seconds:.3g} sim s")
-    out["sim_windows"] = sim_windows
+        out[key] = _optimise(prob, ctx, log, raw, f"DEM {kind} optimiser, Lz", lr=s["lr"],
+                             decay=s["decay"], max_iter=s["opt_iter"])
     return out
 
 
 def _optimum_over_beds(lz, J, kind):
-    """The optimum of ``J`` ``(L, R)`` per bed (parabola through the bed's best sample and its
-    neighbours in Lz, :func:`parabolic_extremum`; the sample itself at either end of the
+    """The optimum of ``J`` ``(L, R)`` per bed (:func:`replicate_extrema`: the parabola through
+    the bed's best sample and its neighbours in Lz; the sample itself at either end of the
     range), its mean ± SE and 95 % t half-width over beds, how many beds' best sample is at an
     end of the range, and the package's jackknife quadratic (``quadratic_optimum``) on the three
-    heights around the best of the beds' mean curve."""
+    heights around the best of the beds' mean curve (``local_quadratic_optimum``)."""
     lz = np.asarray(lz, float)
-    v = [parabolic_extremum(lz, J[:, r], kind) for r in range(J.shape[1])]
-    vert = np.array([x[0] for x in v])
-    e = scaffold.across(vert)
-    m, half = e.mean, e.ci95
-    at_edge = int(sum(x[2] in (0, len(lz) - 1) for x in v))
-    mean_curve = scan_optimum(lz, J.mean(axis=1), kind == "max")
-    # the same per-bed parabolas in log Lz: how far the interpolation model alone moves the
-    # optimum (a systematic error that the beds' interval does not contain)
-    log_model = float(np.mean(np.exp([parabolic_extremum(np.log(lz), J[:, r], kind)[0]
-                                      for r in range(J.shape[1])])))
-    k = int(np.argmax(J.mean(axis=1)) if kind == "max" else np.argmin(J.mean(axis=1)))
-    k = min(max(k, 1), len(lz) - 2)
-    q = quadratic_optimum(lz[k - 1:k + 2], J[k - 1:k + 2], maximise=kind == "max")
-    return dict(vertices=vert, mean=m, se=e.se, ci95=half, at_edge=at_edge,
-                mean_curve=mean_curve, log_model=log_model,
-                surface=dict(x=q.x, se=q.se, lo=q.lo, hi=q.hi, interior=q.interior,
-                             lz=lz[k - 1:k + 2]),
+    ex = replicate_extrema(lz, J, kind)
+    e = ex.estimate
+    q, around = local_quadratic_optimum(lz, J, maximise=kind == "max")
+    return dict(vertices=ex.x, mean=e.mean, se=e.se, ci95=e.ci95, at_edge=ex.at_edge,
+                mean_curve=scan_optimum(lz, J.mean(axis=1), kind == "max"),
+                # the same per-bed parabolas in log Lz: how far the interpolation model alone
+                # moves the optimum (a systematic error that the beds' interval does not contain)
+                log_model=float(np.mean(replicate_extrema(lz, J, kind, log_x=True).x)),
+                surface=dict(x=q.x, se=q.se, lo=q.lo, hi=q.hi, interior=q.interior, lz=around),
                 # an interval of an optimum only when every bed's optimum is bracketed
-                contains_thesis=(bool(abs(THESIS_LZ - m) <= half)
-                                 if np.isfinite(half) and at_edge == 0 else None))
+                contains_thesis=(bool(abs(THESIS_LZ - e.mean) <= e.ci95)
+                                 if np.isfinite(e.ci95) and ex.at_edge == 0 else None))
 
 
 def scan_stats(lz, res) -> dict:
     """Per height and bed (``(L, R)``) the steady dissipation per cycle and Z
     (``steady_or_window``), the energy-balance error, whether the steady state was detected;
     the beds' mean ± SE per height; the optima over beds (``_optimum_over_beds``)."""
-    W, fb_w = steady_or_window(res, "granular_loss_per_cycle")
-    Z, fb_z = steady_or_window(res, "amplitude")
-    W, Z = np.asarray(W, float), np.asarray(Z, float)
-    sc = dict(lz=np.asarray(lz, float), beds=Z.shape[1], dissipation_beds=W, amplitude_beds=Z,
-              dissipation=W.mean(axis=1), amplitude=Z.mean(axis=1),
-              dissipation_se=scaffold.standard_error(W, axis=1),
-              amplitude_se=scaffold.standard_error(Z, axis=1),
-              balance=np.asarray(res.replicate_summary["balance_error"], float),
-              stationary_amplitude=np.asarray(res.steady["amplitude"]["stationary"], bool),
-              stationary_dissipation=np.asarray(
-                  res.steady["granular_loss_per_cycle"]["stationary"], bool),
-              fallback=dict(amplitude=fb_z, dissipation=fb_w))
-    sc["opt_dissipation"] = _optimum_over_beds(lz, W, "max")
-    sc["opt_amplitude"] = _optimum_over_beds(lz, Z, "min")
+    sc = dict(lz=np.asarray(lz, float), fallback={},
+              balance=np.asarray(res.replicate_summary["balance_error"], float))
+    for name, key, kind in (("amplitude", "amplitude", "min"),
+                            ("dissipation", "granular_loss_per_cycle", "max")):
+        Y, sc["fallback"][name] = steady_or_window(res, key)
+        Y = np.asarray(Y, float)
+        sc.update({f"{name}_beds": Y, name: Y.mean(axis=1), "beds": Y.shape[1],
+                   f"{name}_se": scaffold.standard_error(Y, axis=1),
+                   f"stationary_{name}": np.asarray(res.steady[key]["stationary"], bool),
+                   f"opt_{name}": _optimum_over_beds(lz, Y, kind)})
     # scalars used by the optimiser comparisons: the mean over beds of the per-bed optima
     sc["optimum"] = sc["opt_dissipation"]["mean"]
     sc["optimum_amplitude"] = sc["opt_amplitude"]["mean"]
@@ -241,13 +201,12 @@ def s3_part(s, ctx, log):
         obj = Objective(kind, band=(14.0, 14.5, 15.0, 15.5, 16.0) if kind == "band" else None)
         dur = min(s["s3_duration"], 2.0) if kind == "band" else s["s3_duration"]
         prob = S3Problem(base, obj, duration=dur, gradient="transient")
-        r = {"duration": dur, "h_bed": prob.h_bed, "config": prob.config.to_json(),
-             "objective": obj.to_json(prob.config)}
+        r = out[kind] = {"duration": dur, "h_bed": prob.h_bed, "config": prob.config.to_json(),
+                         "objective": obj.to_json(prob.config)}
         t0 = time.perf_counter()
         gaps = np.asarray(s["s3_scan"])
         r["scan_gap"], r["scan_value"] = gaps, prob.scan(gaps)
         r["scan_wall"] = time.perf_counter() - t0
-        r["scan_sim_seconds"] = len(gaps) * dur * len(prob.freqs)
         # the scan's optimum: a parabola through the best sample, then a fine local scan. Over
         # the periodic regime (gap <= PERIODIC_GAP; beyond it the response at f0 is irregular and
         # the dissipation per cycle jumps around — larger, with a larger Z) and over all gaps.
@@ -258,24 +217,15 @@ def s3_part(s, ctx, log):
         fine = np.linspace(g0 - 2 * step, g0 + 2 * step, 21 if len(gaps) < 50 else 41)
         r["fine_gap"], r["fine_value"] = fine, prob.scan(fine)
         r["optimum"] = scan_optimum(fine, r["fine_value"], obj.maximise)
-        r["scan_sim_seconds"] += len(fine) * dur * len(prob.freqs)
-        fd = []
+        r["scan_sim_seconds"] = sum(len(x) * dur * len(prob.freqs) for x in (gaps, fine))
+        r["fd"] = []
         for g in s["s3_fd_gaps"]:
             e, _ = prob.evaluate(g)
-            row = {"gap": g, "ad": e.grad}
-            for h in (1e-4, 1e-5, 1e-6):
-                row[h] = (prob.value(g + h) - prob.value(g - h)) / (2 * h)
-            fd.append(row)
-            log(f"S3 {kind} gap {g}: AD {e.grad:.6g}, FD(1e-5) {row[1e-5]:.6g}")
-        r["fd"] = fd
-        r["opt"] = {}
-        for lz0 in (0.07, 0.25):
-            o = optimize(prob, prob.from_lz(lz0), lr=0.015, decay=0.88, max_iter=s["s3_iter"],
-                         xtol=5e-5, out=ctx.raw(f"s3_{kind}_opt_{lz0:g}.h5"),
-                         progress=ctx.progress)
-            r["opt"][lz0] = o
-            log(f"S3 {kind} from Lz0 {lz0}: gap {o.x:.5g} (scan {r['optimum']:.5g}), {o.reason}")
-        out[kind] = r
+            r["fd"].append({"gap": g, "ad": e.grad, **{
+                h: (prob.value(g + h) - prob.value(g - h)) / (2 * h) for h in FD_S3}})
+            log(f"S3 {kind} gap {g}: AD {e.grad:.6g}, FD(1e-5) {r['fd'][-1][1e-5]:.6g}")
+        r["opt"] = _optimise(prob, ctx, log, f"s3_{kind}_opt", f"S3 {kind}, gap", lr=0.015,
+                             decay=0.88, max_iter=s["s3_iter"], xtol=5e-5)
     return out
 
 
@@ -299,16 +249,25 @@ def main(argv=None):
     return scaffold.main(__doc__, "gap_optimisation", argv, compute)
 
 
-def _hist_group(g, res):
-    for k, v in res.history.items():
-        g.create_dataset(k, data=v)
-    g.attrs.update(reason=res.reason, x=res.x, lz=res.lz, sim_seconds=res.sim_seconds,
-                   wall_time=res.wall)
-
-
 def _json(d: dict) -> str:
     """``d`` as JSON, arrays as lists."""
     return json.dumps({k: (np.asarray(v).tolist() if np.ndim(v) else v) for k, v in d.items()})
+
+
+def _put(g, d, keys=None, **attrs):
+    """Datasets ``keys`` (default: all) of ``d`` and the attributes ``attrs`` in the group
+    ``g``; returns ``g``."""
+    for k in d if keys is None else keys:
+        g.create_dataset(k, data=d[k])
+    g.attrs.update(attrs)
+    return g
+
+
+def _put_runs(g, prefix, runs):
+    """One group ``<prefix>_<Lz0>`` per optimiser run: its history, stop and cost."""
+    for lz0, o in runs.items():
+        _put(g.create_group(f"{prefix}_{lz0:g}"), o.history, reason=o.reason, x=o.x, lz=o.lz,
+             sim_seconds=o.sim_seconds, wall_time=o.wall)
 
 
 def _write_data(out, s, s3, dem, wall, prov):
@@ -321,49 +280,37 @@ def _write_data(out, s, s3, dem, wall, prov):
                            h_bed=r["h_bed"])
             for k in ("scan_gap", "scan_value", "fine_gap", "fine_value"):
                 g.create_dataset(k, data=r[k]).attrs["units"] = "m" if "gap" in k else ""
-            for k, name in [("gap", "gap"), ("ad", "ad")] + [(hh, f"fd_h{hh:g}")
-                                                             for hh in (1e-4, 1e-5, 1e-6)]:
+            for k, name in [("gap", "gap"), ("ad", "ad")] + [(hh, f"fd_h{hh:g}") for hh in FD_S3]:
                 g.create_dataset(f"fd/{name}", data=[x[k] for x in r["fd"]])
-            for lz0, o in r["opt"].items():
-                _hist_group(g.create_group(f"opt_lz0_{lz0:g}"), o)
+            _put_runs(g, "opt_lz0", r["opt"])
         g = h.create_group("dem")
         g.attrs.update(config=dem["config"], bed_height=dem["bed_height"], dt=dem["dt"],
                        f0=dem["f0"], modes=json.dumps(dem["modes"]))
         for i, r in enumerate(dem["windows"]):
-            w = g.create_group(f"windows/{i}")
-            w.attrs.update(window=r["window"], wall_time=r["wall"])
-            for k in ("values", "ad", "fd", "fd8"):
-                w.create_dataset(k, data=r[k])
+            _put(g.create_group(f"windows/{i}"), r, ("values", "ad", "fd", "fd8"),
+                 window=r["window"], wall_time=r["wall"])
         for r in dem["fd"]:
-            w = g.create_group(f"fd/lz_{r['lz']:g}")
-            w.create_dataset("values", data=r["values"])
-            w.create_dataset("ad", data=r["ad"])
-            for hh, x in r["fd"].items():
-                w.create_dataset(f"fd_h{hh:g}", data=x)
+            _put(g.create_group(f"fd/lz_{r['lz']:g}"), dict(
+                values=r["values"], ad=r["ad"], **{f"fd_h{h:g}": x for h, x in r["fd"].items()}))
         d = dem["scan"]
-        sc = g.create_group("scan")
-        sc.attrs.update(
+        sc = _put(
+            g.create_group("scan"), d, ("lz", "dissipation", "amplitude", "dissipation_se",
+                                        "amplitude_se", "dissipation_beds", "amplitude_beds",
+                                        "balance", "stationary_amplitude",
+                                        "stationary_dissipation"),
             config=d["config"], beds=d["beds"], optimum=d["optimum"],
             optimum_amplitude=d["optimum_amplitude"], sim_seconds=d["sim_seconds"],
             wall_time=d["wall"], fallback_to_window=json.dumps(d["fallback"]),
             note=("*_beds, balance, stationary_*: (Lz, bed); dissipation, amplitude: mean over "
                   "beds, *_se its standard error; steady values where detected, else the fixed "
                   "window (last half)"))
-        for k in ("lz", "dissipation", "amplitude", "dissipation_se", "amplitude_se",
-                  "dissipation_beds", "amplitude_beds", "balance", "stationary_amplitude",
-                  "stationary_dissipation"):
-            sc.create_dataset(k, data=d[k])
         for name in ("opt_dissipation", "opt_amplitude"):
             o = d[name]
-            og = sc.create_group(name)
-            og.create_dataset("vertices", data=o["vertices"])
-            og.attrs.update({k: o[k] for k in ("mean", "se", "ci95", "at_edge", "mean_curve",
-                                               "log_model")})
-            og.attrs.update(contains_thesis=str(o["contains_thesis"]), surface=_json(o["surface"]))
-        for lz0, o in dem["opt"].items():
-            _hist_group(g.create_group(f"opt_lz0_{lz0:g}"), o)
-        for lz0, o in dem["opt_amp"].items():
-            _hist_group(g.create_group(f"opt_amplitude_lz0_{lz0:g}"), o)
+            _put(sc.create_group(name), o, ("vertices",), contains_thesis=str(o["contains_thesis"]),
+                 surface=_json(o["surface"]),
+                 **{k: o[k] for k in ("mean", "se", "ci95", "at_edge", "mean_curve", "log_model")})
+        _put_runs(g, "opt_lz0", dem["opt"])
+        _put_runs(g, "opt_amplitude_lz0", dem["opt_amp"])
 
 
 def _figure(out, s3, dem):
@@ -377,39 +324,34 @@ def _figure(out, s3, dem):
              "DEM at f0: amplitude objective", "scan (steady state, half p-p)")):
         a.errorbar(sc["lz"], sc[key] * scale, yerr=sc[f"{key}_se"] * scale, fmt="ko-",
                    capsize=3, label=f"{what}, mean ± SE of {sc['beds']} beds")
-        o = sc["opt_amplitude"]
-        if key == "amplitude" and np.isfinite(o["ci95"]):
-            a.axvspan(o["mean"] - o["ci95"], o["mean"] + o["ci95"], color="k", alpha=0.12,
-                      label="95 % interval of the optimum")
-        for lz0, o in runs.items():
-            a.plot(o.history["lz"], o.history["objective"] * scale, ".-",
+        o = sc[f"opt_{key}"]
+        if key == "amplitude":
+            draw_interval(a, o["mean"], o["ci95"], color="k", alpha=0.12,
+                          label="95 % interval of the optimum")
+        for lz0, r in runs.items():
+            a.plot(r.history["lz"], r.history["objective"] * scale, ".-",
                    label=f"optimiser from {lz0} m (window estimate)")
         a.axvline(THESIS_LZ, color="g", ls="-.", lw=0.8, label="thesis 0.1225 m")
-        a.axvline(sc["optimum" if key == "dissipation" else "optimum_amplitude"], color="k",
-                  ls=":", lw=0.8, label="scan optimum")
+        a.axvline(o["mean"], color="k", ls=":", lw=0.8, label="scan optimum")
         a.set(xlabel="Lz [m]", ylabel=ylabel)
         a.set_title(title, fontsize=9)
-        a.legend(fontsize=7)
     ax[1, 2].set_visible(False)
     a = ax[0, 0]
     w = np.array([r["window"] for r in dem["windows"]]) * 1e3
     for key, mk, lab in (("ad", "o-", "pathwise (jvp)"), ("fd8", "^--", "central FD, h = 1e-8 m"),
                          ("fd", "s--", "central FD, h = 1e-5 m")):
         m = np.array([np.mean(np.abs(r[key])) for r in dem["windows"]])
-        sd = np.array([np.std(r[key]) for r in dem["windows"]])
         a.loglog(w, np.maximum(m, 1e-3), mk, label=f"mean |dD/dLz|, {lab}")
         if key == "ad":
-            a.loglog(w, np.maximum(sd, 1e-3), "o:", color="C0", alpha=0.6,
-                     label="std over windows (pathwise)")
+            a.loglog(w, np.maximum([np.std(r[key]) for r in dem["windows"]], 1e-3), "o:",
+                     color="C0", alpha=0.6, label="std over windows (pathwise)")
     a.set(xlabel="window length [ms]", ylabel="|dD/dLz| [J per cycle / m]")
     a.set_title("DEM, Lz = 0.1225 m: the pathwise derivative vs window length", fontsize=9)
-    a.legend(fontsize=7)
     for a, kind in zip((ax[1, 0], ax[1, 1]), ("dissipation", "band")):
         if kind not in s3:
             a.set_visible(False)
             continue
-        r = s3[kind]
-        scale = 1e3 if kind == "band" else 1.0
+        r, scale = s3[kind], 1e3 if kind == "band" else 1.0
         a.plot(r["scan_gap"], r["scan_value"] * scale, "k-", lw=0.8, label="dense scan")
         for lz0, o in r["opt"].items():
             a.plot(o.history["x"], o.history["objective"] * scale, ".-",
@@ -419,66 +361,67 @@ def _figure(out, s3, dem):
         a.set(xlabel="gap [m]", ylabel="impact loss per cycle [J]" if kind == "dissipation"
               else "smooth max of Z over 14–16 Hz [mm]")
         a.set_title(f"S3 (smooth model, exact gradients): {kind}", fontsize=9)
-        a.legend(fontsize=7)
+    for a in ax.flat:
+        if a.get_visible():
+            a.legend(fontsize=7)
     scaffold.save_figure(fig, out, "figure.png", dpi=110)
 
 
-STEADY_LINK = ("- **The DEM estimator that works** is not pathwise: replicated steady states "
-               "with central differences (`jaxdamp.design.SteadyProblem`) and the searches "
-               "built on it are in `experiments/design_optimisation.py`. The findings below are "
-               "those of the pathwise window estimator.")
+_fmt = "{:.4g}".format
 
 
-def _fmt(x):
-    return f"{x:.4g}"
+def _rel(x, ref, digits=0):
+    """``x`` against ``ref``: the signed difference in per cent."""
+    return f"{(x - ref) / ref * 100:+.{digits}f} %"
+
+
+def _list(xs, spec=".4g"):
+    return ", ".join(f"{x:{spec}}" for x in xs)
 
 
 def _findings(s, s3, dem, quick):
     """Interpretation, computed from the numbers above (re-generated with every run)."""
-    L = ["", "## Findings", "", STEADY_LINK]
-    ok = [r for r in dem["windows"]
+    sc, win = dem["scan"], dem["windows"]
+    R, oz = sc["beds"], sc["opt_amplitude"]
+    ok = [r["window"] for r in win
           if abs(r["ad"].mean() - r["fd8"].mean()) <= 0.05 * abs(r["fd8"].mean()) + 1e-6]
-    last_ok = max((r["window"] for r in ok), default=float("nan"))
-    big = max(dem["windows"], key=lambda r: r["window"])
-    sc = dem["scan"]
+    big = max(win, key=lambda r: r["window"])
     slope = np.max(np.abs(np.diff(sc["dissipation"]) / np.diff(sc["lz"])))
-    L.append(f"- **Pathwise DEM derivatives** equal central differences (h = 1e-8 m, same start "
-             f"states) of the window objective up to windows of {last_ok * 1e3:.2g} ms; the "
-             f"largest per-window derivative grows from "
-             f"{_fmt(np.abs(dem['windows'][0]['ad']).max())} at "
-             f"{dem['windows'][0]['window'] * 1e3:.2g} ms to {_fmt(np.abs(big['ad']).max())} at "
-             f"{big['window'] * 1e3:.2g} ms (J per cycle per m; the steepest slope of the "
-             f"steady-state scan is {_fmt(slope)}). Only windows in which a grain touches the "
-             "lid have a nonzero derivative, so the ensemble is dominated by a few windows and its "
-             "standard error is as large as its mean.")
-    L.append("- **Bias**: the window derivative holds the start states fixed. It measures what "
-             "moving the lid does in the next milliseconds (e.g. grains pressed against the "
-             "lid are pressed less when it rises), not how the bed's steady motion changes with "
-             "the free height (grains thrown higher hit harder), which takes a flight time "
-             "(~a period, 66 ms) to show — beyond the windows where the derivative is still "
-             "meaningful (above: where it leaves the finite differences and grows by orders of "
-             "magnitude; the bed is chaotic).")
-    for lz0, o in dem["opt"].items():
-        L.append(f"- DEM optimiser from {lz0} m ended at Lz = {o.lz:.4g} m "
-                 f"({(o.lz - sc['optimum']) / sc['optimum'] * 100:+.0f} % from the scan's "
-                 f"optimum {sc['optimum']:.4g} m, {(o.lz - THESIS_LZ) / THESIS_LZ * 100:+.0f} % "
-                 f"from 0.1225 m): {o.reason}; {o.sim_seconds:.3g} simulated s = "
-                 f"{o.sim_seconds / sc['sim_seconds']:.2f} × the scan's.")
-    for lz0, o in dem["opt_amp"].items():
-        L.append(f"- DEM amplitude optimiser from {lz0} m ended at Lz = {o.lz:.4g} m "
-                 f"({(o.lz - sc['optimum_amplitude']) / sc['optimum_amplitude'] * 100:+.0f} % "
-                 f"from the scan's Z optimum {sc['optimum_amplitude']:.4g} m): {o.reason}.")
-    R = sc["beds"]
-    oz = sc["opt_amplitude"]
+    L = ["", "## Findings", "",
+         "- **The DEM estimator that works** is not pathwise: replicated steady states with "
+         "central differences (`jaxdamp.design.SteadyProblem`) and the searches built on it are "
+         "in `experiments/design_optimisation.py`. The findings below are those of the pathwise "
+         "window estimator.",
+         f"- **Pathwise DEM derivatives** equal central differences (h = 1e-8 m, same start "
+         f"states) of the window objective up to windows of "
+         f"{max(ok, default=float('nan')) * 1e3:.2g} ms; the largest per-window derivative "
+         f"grows from {_fmt(np.abs(win[0]['ad']).max())} at {win[0]['window'] * 1e3:.2g} ms to "
+         f"{_fmt(np.abs(big['ad']).max())} at {big['window'] * 1e3:.2g} ms (J per cycle per m; "
+         f"the steepest slope of the steady-state scan is {_fmt(slope)}). Only windows in which "
+         "a grain touches the lid have a nonzero derivative, so the ensemble is dominated by a "
+         "few windows and its standard error is as large as its mean.",
+         "- **Bias**: the window derivative holds the start states fixed. It measures what "
+         "moving the lid does in the next milliseconds (e.g. grains pressed against the "
+         "lid are pressed less when it rises), not how the bed's steady motion changes with "
+         "the free height (grains thrown higher hit harder), which takes a flight time "
+         "(~a period, 66 ms) to show — beyond the windows where the derivative is still "
+         "meaningful (above: where it leaves the finite differences and grows by orders of "
+         "magnitude; the bed is chaotic)."]
+    L += [f"- DEM optimiser from {lz0} m ended at Lz = {o.lz:.4g} m "
+          f"({_rel(o.lz, sc['optimum'])} from the scan's optimum {sc['optimum']:.4g} m, "
+          f"{_rel(o.lz, THESIS_LZ)} from 0.1225 m): {o.reason}; {o.sim_seconds:.3g} simulated "
+          f"s = {o.sim_seconds / sc['sim_seconds']:.2f} × the scan's."
+          for lz0, o in dem["opt"].items()]
+    L += [f"- DEM amplitude optimiser from {lz0} m ended at Lz = {o.lz:.4g} m "
+          f"({_rel(o.lz, sc['optimum_amplitude'])} from the scan's Z optimum "
+          f"{sc['optimum_amplitude']:.4g} m): {o.reason}." for lz0, o in dem["opt_amp"].items()]
+    head = f"- **Scan minimum of Z at f0** over {R} independently poured beds: "
     if oz["at_edge"]:
-        L.append(f"- **Scan minimum of Z at f0** over {R} independently poured beds: "
-                 f"{oz['at_edge']} of {R} beds' smallest Z at an end of the scanned range "
-                 f"(per bed " + ", ".join(f"{x:.4g}" for x in oz["vertices"]) + " m): the "
-                 "scan does not bracket the optimum, no interval. The optimiser runs are single "
-                 "runs (no error bar).")
+        L.append(head + f"{oz['at_edge']} of {R} beds' smallest Z at an end of the scanned range "
+                 f"(per bed {_list(oz['vertices'])} m): the scan does not bracket the optimum, "
+                 "no interval. The optimiser runs are single runs (no error bar).")
     elif np.isfinite(oz["ci95"]):
-        L.append(f"- **Scan minimum of Z at f0** over {R} independently poured beds: "
-                 f"{scaffold.pm(oz['mean'], oz['se'], 4, 2)} m, 95 % interval "
+        L.append(head + f"{scaffold.pm(oz['mean'], oz['se'], 4, 2)} m, 95 % interval "
                  f"[{oz['mean'] - oz['ci95']:.4g}, {oz['mean'] + oz['ci95']:.4g}] m: the thesis' "
                  f"0.1225 m is {'inside' if oz['contains_thesis'] else 'outside'} it "
                  + (f"({(THESIS_LZ - oz['mean']) / oz['se']:+.1f} SE from the mean)"
@@ -487,12 +430,10 @@ def _findings(s, s3, dem, quick):
                  f"interval is the beds' scatter only: a parabola in log Lz through the same "
                  f"samples puts the optimum at {oz['log_model']:.4g} m "
                  f"({(oz['log_model'] - oz['mean']) * 1e3:+.1f} mm), and the three samples "
-                 f"around it are Lz = " + ", ".join(f"{x:g}" for x in oz["surface"]["lz"])
-                 + " m. The optimiser runs are single runs (no error bar).")
-    k = int(np.argmax(sc["dissipation"]))
-    if k == len(sc["lz"]) - 1:
-        W = sc["dissipation_beds"]
-        grows = int(np.sum(np.all(np.diff(W, axis=0) > 0, axis=0)))
+                 f"around it are Lz = {_list(oz['surface']['lz'], 'g')} m. The optimiser runs "
+                 "are single runs (no error bar).")
+    if int(np.argmax(sc["dissipation"])) == len(sc["lz"]) - 1:
+        grows = int(np.sum(np.all(np.diff(sc["dissipation_beds"], axis=0) > 0, axis=0)))
         L.append(f"- The dissipation per cycle at f0 grows up to the tallest box scanned "
                  f"({sc['lz'][-1]} m; in {grows} of {R} beds monotonically over all heights, "
                  f"{sc['opt_dissipation']['at_edge']} of {R} beds' largest value at an end), "
@@ -500,25 +441,22 @@ def _findings(s, s3, dem, quick):
                  "its smallest value (means over beds): more dissipation per cycle there means "
                  "more energy pumped in at a larger amplitude, so it is a poor design target; Z "
                  "at f0 (or the band objective) is the one a designer minimises.")
-    for kind, r in s3.items():
-        for lz0, o in r["opt"].items():
-            L.append(f"- S3 {kind} from Lz0 = {lz0} m: gap {o.x:.4g} m vs scan "
-                     f"{r['optimum']:.4g} m ({(o.x - r['optimum']) / r['optimum'] * 100:+.1f} %), "
-                     f"{o.sim_seconds:.3g} simulated s vs {r['scan_sim_seconds']:.3g} for the "
-                     "dense scan.")
+    L += [f"- S3 {kind} from Lz0 = {lz0} m: gap {o.x:.4g} m vs scan {r['optimum']:.4g} m "
+          f"({_rel(o.x, r['optimum'], 1)}), {o.sim_seconds:.3g} simulated s vs "
+          f"{r['scan_sim_seconds']:.3g} for the dense scan."
+          for kind, r in s3.items() for lz0, o in r["opt"].items()]
     if "dissipation" in s3:
         r = s3["dissipation"]
         lz_s3 = r["optimum"] + dem["bed_height"]
         L.append(f"- S3 as a surrogate (thesis §5.3.2: S3 with e = 0 matches the bed at the "
                  f"optimum): its optimum gap {r['optimum']:.4g} m + the DEM bed's height "
-                 f"{dem['bed_height']:.4g} m = Lz {lz_s3:.4g} m, "
-                 f"{(lz_s3 - sc['optimum']) / sc['optimum'] * 100:+.0f} % from the DEM scan's "
-                 "optimum of the same objective.")
-    m = dem["modes"]
-    L.append(f"- Forward mode (`jax.jvp`, the default) took {m['forward']['wall']:.2f} s and "
-             f"{m['forward']['temp_bytes'] / 1e6:.1f} MB of compiled temporaries; reverse mode "
-             f"(`jax.grad` with `jax.checkpoint` per {25} steps) {m['reverse']['wall']:.2f} s and "
-             f"{m['reverse']['temp_bytes'] / 1e6:.1f} MB (its memory grows with the window, "
+                 f"{dem['bed_height']:.4g} m = Lz {lz_s3:.4g} m, {_rel(lz_s3, sc['optimum'])} "
+                 "from the DEM scan's optimum of the same objective.")
+    fw, rv = dem["modes"]["forward"], dem["modes"]["reverse"]
+    L.append(f"- Forward mode (`jax.jvp`, the default) took {fw['wall']:.2f} s and "
+             f"{fw['temp_bytes'] / 1e6:.1f} MB of compiled temporaries; reverse mode "
+             f"(`jax.grad` with `jax.checkpoint` per 25 steps) {rv['wall']:.2f} s and "
+             f"{rv['temp_bytes'] / 1e6:.1f} MB (its memory grows with the window, "
              "forward mode's does not). One parameter: forward mode wins on both.")
     if not quick:
         per_sim = sc["wall"] / (len(sc["lz"]) * R * s["scan_duration"])
@@ -535,9 +473,27 @@ def _findings(s, s3, dem, quick):
 
 
 def _sign_agrees(ad, fd):
-    if ad == 0 and fd == 0:
-        return "n/a (no lid contact in any window)"
-    return "yes" if np.sign(ad) == np.sign(fd) else "no"
+    return ("n/a (no lid contact in any window)" if ad == 0 and fd == 0
+            else "yes" if np.sign(ad) == np.sign(fd) else "no")
+
+
+def _opt_text(o, what, R):
+    """A scan optimum over beds (``_optimum_over_beds``) and its cross-checks, in words."""
+    q = o["surface"]
+    inside = ("not testable: the optimum is not bracketed by the scan" if o["at_edge"]
+              else "not testable (one bed)" if o["contains_thesis"] is None
+              else "inside" if o["contains_thesis"] else "outside")
+    return (f"{what}: per bed (parabola through the bed's best height and its two neighbours) "
+            f"{_list(o['vertices'])} m → **Lz = {scaffold.pm(o['mean'], o['se'], 4, 2)} m** "
+            f"(mean ± SE over {R} beds; 95 % t-interval [{o['mean'] - o['ci95']:.4g}, "
+            f"{o['mean'] + o['ci95']:.4g}] m, thesis 0.1225 m {inside}); {o['at_edge']} of "
+            f"{R} beds' best sample at an end of the range. Cross-checks: the parabola "
+            f"through the beds' mean curve {o['mean_curve']:.4g} m; the same per-bed "
+            "parabolas in log Lz (the interpolation model, not in the beds' interval) "
+            f"{o['log_model']:.4g} m; the package's jackknife response surface "
+            f"(`quadratic_optimum` on Lz = {_list(q['lz'], 'g')}) {q['x']:.4g} m, 95 % "
+            f"[{q['lo']:.4g}, {q['hi']:.4g}] m"
+            + ("" if q["interior"] else " (not interior: no optimum inside these heights)") + ".")
 
 
 def _summary(out, s, s3, dem, wall, t_s3, command, quick):
@@ -553,7 +509,7 @@ def _summary(out, s, s3, dem, wall, t_s3, command, quick):
         L += [f"### {kind} (runs of {r['duration']} s, analysis window: last half)", ""]
         L += scaffold.table(
             ["gap [m]", "jax.grad", "FD h=1e-4", "FD h=1e-5", "FD h=1e-6", "rel. diff (1e-5)"],
-            [[x["gap"], _fmt(x["ad"]), _fmt(x[1e-4]), _fmt(x[1e-5]), _fmt(x[1e-6]),
+            [[x["gap"], _fmt(x["ad"]), *(_fmt(x[h]) for h in FD_S3),
               f"{abs(x['ad'] - x[1e-5]) / max(abs(x[1e-5]), 1e-300):.2e}"] for x in r["fd"]])
         L += ["", f"Dense scan ({len(r['scan_gap'])} gaps + {len(r['fine_gap'])} around the "
               f"best): optimum gap in the periodic regime (gap ≤ {PERIODIC_GAP} m) "
@@ -561,22 +517,22 @@ def _summary(out, s, s3, dem, wall, t_s3, command, quick):
               f"0.0835 m); over all gaps {r['optimum_global']:.5g} m.", ""]
         L += scaffold.table(
             ["start Lz0 (gap0)", "final gap", "vs scan", "iterates", "stop", "simulated s"],
-            [[f"{lz0} ({lz0 - r['h_bed']:.4g})", f"{o.x:.5g}",
-              f"{(o.x - r['optimum']) / r['optimum'] * 100:+.2f} %", len(o.history["x"]),
-              o.reason, f"{o.sim_seconds:.3g}"] for lz0, o in r["opt"].items()])
+            [[f"{lz0} ({lz0 - r['h_bed']:.4g})", f"{o.x:.5g}", _rel(o.x, r["optimum"], 2),
+              len(o.history["x"]), o.reason, f"{o.sim_seconds:.3g}"]
+             for lz0, o in r["opt"].items()])
         L += ["", f"Scan cost: {r['scan_sim_seconds']:.4g} simulated s.", ""]
     L += [f"## DEM (`sanchez2012-optimal`, N = {s['grains']}), dissipation per cycle at f0", "",
           f"Bed height {dem['bed_height']:.4g} m, dt = {dem['dt']:.3g} s, K = {s['K']} "
           "windows per ensemble, start phases stratified over the period.", "",
           "### Pathwise derivative vs window length (Lz = 0.1225 m, same start states)", ""]
+    pm = lambda x: scaffold.pm(*scaffold.mean_se(x), 4, 4)  # noqa: E731
     L += scaffold.table(
         ["window [ms]", "mean dD/dLz ± SE (jvp)", "max \\|per-window\\|", "FD h=1e-8 mean",
          "FD h=1e-5 mean", "windows with a nonzero derivative", "window values: mean ± SE [J]",
          "wall [s]"],
-        [[f"{r['window'] * 1e3:.2f}", scaffold.pm(*scaffold.mean_se(r["ad"]), 4, 4),
-          _fmt(np.abs(r["ad"]).max()), _fmt(r["fd8"].mean()), _fmt(r["fd"].mean()),
-          f"{int(np.count_nonzero(r['ad']))}/{len(r['ad'])}",
-          scaffold.pm(*scaffold.mean_se(r["values"]), 4, 4), f"{r['wall']:.1f}"]
+        [[f"{r['window'] * 1e3:.2f}", pm(r["ad"]), _fmt(np.abs(r["ad"]).max()),
+          _fmt(r["fd8"].mean()), _fmt(r["fd"].mean()),
+          f"{int(np.count_nonzero(r['ad']))}/{len(r['ad'])}", pm(r["values"]), f"{r['wall']:.1f}"]
          for r in dem["windows"]])
     L += ["", "### AD vs central differences of the same averaged window objective", "",
           f"Window {s['window'] * 1e3:g} ms, same start states and engine inputs; FD with the "
@@ -584,19 +540,15 @@ def _summary(out, s, s3, dem, wall, t_s3, command, quick):
     L += scaffold.table(
         ["Lz [m]", "jvp mean ± SE", "FD h=1e-4", "FD h=1e-5", "FD h=1e-6", "FD h=1e-8",
          "sign agrees (1e-8)"],
-        [[r["lz"], scaffold.pm(*scaffold.mean_se(r["ad"]), 4, 4), _fmt(r["fd"][1e-4].mean()),
-          _fmt(r["fd"][1e-5].mean()), _fmt(r["fd"][1e-6].mean()), _fmt(r["fd"][1e-8].mean()),
+        [[r["lz"], pm(r["ad"]), *(_fmt(x.mean()) for x in r["fd"].values()),
           _sign_agrees(r["ad"].mean(), r["fd"][1e-8].mean())] for r in dem["fd"]])
     L += ["", "### Forward vs reverse mode (one ensemble, compiled, second call)", "",
           "| | wall [s] | µs per system-step | compiled temp memory [MB] |",
           "| --- | --- | --- | --- |"]
-    for k, v in dem["modes"].items():
-        mb = v["temp_bytes"] / 1e6 if np.isfinite(v["temp_bytes"]) else float("nan")
-        L.append(f"| {k} | {v['wall']:.2f} | {v['wall'] / dem['mode_steps'] * 1e6:.0f} | "
-                 f"{mb:.1f} |")
+    L += [f"| {k} | {v['wall']:.2f} | {v['wall'] / dem['mode_steps'] * 1e6:.0f} | "
+          f"{v['temp_bytes'] / 1e6:.1f} |" for k, v in dem["modes"].items()]
     sc = dem["scan"]
-    R = sc["beds"]
-    n_runs = sc["amplitude_beds"].size
+    R, n_runs = sc["beds"], sc["amplitude_beds"].size
     L += ["", "### Brute-force scan vs optimiser", "",
           f"Scan: {len(sc['lz'])} heights × {R} independently poured beds × "
           f"{s['scan_duration']} s "
@@ -612,47 +564,24 @@ def _summary(out, s, s3, dem, wall, t_s3, command, quick):
          "steady state detected (Z)", "max balance error"],
         [[lz, scaffold.pm(sc["dissipation"][i], sc["dissipation_se"][i], 4, 2),
           scaffold.pm(sc["amplitude"][i], sc["amplitude_se"][i], 3, 2, scale=1e3),
-          ", ".join(f"{z * 1e3:.3g}" for z in sc["amplitude_beds"][i]),
+          _list(sc["amplitude_beds"][i] * 1e3, ".3g"),
           f"{int(sc['stationary_amplitude'][i].sum())}/{R}", f"{np.max(sc['balance'][i]):.1e}"]
          for i, lz in enumerate(sc["lz"])])
 
-    def opt_text(o, what):
-        q = o["surface"]
-        if o["at_edge"]:
-            inside = "not testable: the optimum is not bracketed by the scan"
-        elif o["contains_thesis"] is None:
-            inside = "not testable (one bed)"
-        else:
-            inside = "inside" if o["contains_thesis"] else "outside"
-        return (f"{what}: per bed (parabola through the bed's best height and its two "
-                f"neighbours) " + ", ".join(f"{x:.4g}" for x in o["vertices"])
-                + f" m → **Lz = {scaffold.pm(o['mean'], o['se'], 4, 2)} m** (mean ± SE over "
-                f"{R} beds; 95 % t-interval [{o['mean'] - o['ci95']:.4g}, "
-                f"{o['mean'] + o['ci95']:.4g}] m, thesis 0.1225 m {inside}); {o['at_edge']} of "
-                f"{R} beds' best sample at an end of the range. Cross-checks: the parabola "
-                f"through the beds' mean curve {o['mean_curve']:.4g} m; the same per-bed "
-                "parabolas in log Lz (the interpolation model, not in the beds' interval) "
-                f"{o['log_model']:.4g} m; the package's jackknife response surface "
-                f"(`quadratic_optimum` on Lz = " + ", ".join(f"{x:g}" for x in q["lz"])
-                + f") {q['x']:.4g} m, 95 % [{q['lo']:.4g}, {q['hi']:.4g}] m"
-                + ("" if q["interior"] else " (not interior: no optimum inside these heights)")
-                + ".")
-
     def opt_rows(runs, ref, ratio):  # optimiser runs against the scan optimum ``ref``
-        return [[lz0, f"{o.lz:.4g}", f"{(o.lz - ref) / ref * 100:+.1f} %",
-                 f"{(o.lz - THESIS_LZ) / THESIS_LZ * 100:+.1f} %", len(o.history["x"]),
-                 o.reason, f"{o.sim_seconds:.3g}"]
+        return [[lz0, f"{o.lz:.4g}", _rel(o.lz, ref, 1), _rel(o.lz, THESIS_LZ, 1),
+                 len(o.history["x"]), o.reason, f"{o.sim_seconds:.3g}"]
                 + ([f"{o.sim_seconds / sc['sim_seconds']:.2f}"] if ratio else [])
                 for lz0, o in runs.items()]
 
     head = ["start Lz0", "final Lz", "vs scan optimum", "vs 0.1225", "iterates", "stop",
             "simulated s"]
-    L += ["", opt_text(sc["opt_dissipation"], "Scan optimum of the dissipation (maximum)"), "",
-          "The optimiser runs below are **single runs** (one optimiser trajectory per start, no "
-          "error bar); their distance to the scan optimum is to its mean over beds.", ""]
+    L += ["", _opt_text(sc["opt_dissipation"], "Scan optimum of the dissipation (maximum)", R),
+          "", "The optimiser runs below are **single runs** (one optimiser trajectory per start, "
+          "no error bar); their distance to the scan optimum is to its mean over beds.", ""]
     L += scaffold.table(head + ["ratio to scan"], opt_rows(dem["opt"], sc["optimum"], True))
     L += ["", "Amplitude objective (Z at f0, surrogate sqrt(2 <(z - z_s)²>) over the windows). "
-          + opt_text(sc["opt_amplitude"], "Scan optimum of Z (minimum)"),
+          + _opt_text(sc["opt_amplitude"], "Scan optimum of Z (minimum)", R),
           "", "Optimiser: single runs, no error bar.", ""]
     L += scaffold.table(head, opt_rows(dem["opt_amp"], sc["optimum_amplitude"], False))
     L += _findings(s, s3, dem, quick)

@@ -90,3 +90,23 @@ def quadratic_optimum(x, J, maximise: bool) -> Optimum:
     s = float(np.sqrt((R - 1) / R * np.sum((xj - xj.mean()) ** 2)))
     half = t_quantile(0.975, R - 1) * s
     return Optimum(x0, s, x0 - half, x0 + half, v0, interior, R)
+
+
+def local_quadratic_optimum(x, J, maximise: bool) -> tuple[Optimum, np.ndarray]:
+    """:func:`quadratic_optimum` of ``J`` ``(L, R)`` (or ``(L,)``) on the three points around
+    the best sample of the replicates' mean curve ``J̄_l``: ``k = argmax J̄`` (``argmin`` to
+    minimise) clamped to ``1 ≤ k ≤ L − 2``, the points ``x[k−1], x[k], x[k+1]`` (the three at
+    an end where the best sample is there; the fit's ``interior`` then says whether an optimum
+    lies inside them). Returns the optimum and the three points.
+
+    Example::
+
+        x = np.array([0.06, 0.08, 0.10, 0.12, 0.14])
+        J = 1 - 100 * (x[:, None] - 0.1) ** 2 + np.array([[0.0, 0.01]])  # two replicates
+        opt, pts = local_quadratic_optimum(x, J, maximise=True)
+        opt.x, pts  # ≈ 0.1, [0.08, 0.1, 0.12]
+    """
+    x, J = np.asarray(x, float), np.asarray(J, float)
+    mean = J.mean(axis=1) if J.ndim == 2 else J
+    k = min(max(int(np.argmax(mean) if maximise else np.argmin(mean)), 1), len(x) - 2)
+    return quadratic_optimum(x[k - 1:k + 2], J[k - 1:k + 2], maximise), x[k - 1:k + 2]

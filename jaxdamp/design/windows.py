@@ -283,6 +283,47 @@ class DEMProblem:
             raise FloatingPointError("window objective or derivative is non-finite")
         return v, d
 
+    def central_difference(self, ens: Ensemble, h: float, lz: float | None = None,
+                           engine: str = "auto") -> np.ndarray:
+        """Per-window central difference of the window values w.r.t. ``Lz`` at ``lz`` (default
+        ``ens.lz``) from the ensemble's start states,
+        ``(v(Lz + h) − v(Lz − h)) / 2h`` (truncation error ``O(h²)``, round-off
+        ``~ ε |v| / h``): the check of :meth:`window_derivatives`, which differentiates the same
+        truncated objective (start states held fixed). ``engine="auto"``: native forward runs.
+
+        Example::
+
+            ens = prob.start_states(0.12)
+            v, d = prob.window_derivatives(ens)
+            prob.central_difference(ens, 1e-8)  # ≈ d in short windows
+        """
+        lz = ens.lz if lz is None else lz
+        return (self.window_values(ens, lz + h, engine=engine)
+                - self.window_values(ens, lz - h, engine=engine)) / (2 * h)
+
+    def derivative_cost(self, ens: Ensemble, mode: str | None = None) -> dict:
+        """The cost of one call of the window derivatives in ``mode`` (default ``self.mode``):
+        ``wall`` [s] of a compiled call (the second; the first compiles) and ``temp_bytes``,
+        the compiled program's temporary memory (XLA's ``memory_analysis``; NaN where the
+        backend reports none). Forward mode's memory does not grow with the window, reverse
+        mode's does (a checkpoint every ``record_every`` steps). The neighbour lists as first
+        allocated (no retry on overflow: a measurement, not a value).
+
+        Example::
+
+            ens = prob.start_states(0.12)
+            prob.derivative_cost(ens, "forward")  # {'wall': 0.6, 'temp_bytes': 8e5}
+        """
+        fn = self._derivative_fn(mode or self.mode)
+        B = ens.states.t.shape[0]
+        args = (jnp.full((B,), ens.lz), ens.states, self._windows(ens).nbrs, ens.params)
+        mem = fn.lower(*args).compile().memory_analysis()
+        jax.block_until_ready(fn(*args))
+        t0 = time.perf_counter()
+        jax.block_until_ready(fn(*args))
+        return dict(wall=time.perf_counter() - t0,
+                    temp_bytes=float(getattr(mem, "temp_size_in_bytes", np.nan)))
+
     def _windows(self, ens: Ensemble):
         """The ensemble's start states as a driver batch (neighbour lists for the windows)."""
         from jaxdamp.engine import driver
