@@ -1,4 +1,5 @@
-"""Design optimisation that beats the scan: DEM derivatives with error bars, searches with intervals.
+"""Design optimisation that beats the scan: DEM derivatives with error bars, searches with
+intervals.
 
     python experiments/design_optimisation.py            # full mode (cost in summary.md)
     python experiments/design_optimisation.py --quick    # minutes: tiny settings, every part
@@ -45,6 +46,7 @@ except ImportError:  # run as a file: python experiments/<name>.py
     import scaffold
 
 THESIS_LZ = 0.1225
+OBJECTIVE = "C_eq = E/(pi Omega Z^2) at f0 [N s/m], maximised"
 #: quick mode's damper: 24 grains in a 2 cm box on a light primary (design_starts_and_variables)
 QUICK = {"grains.0.count": 24, "box.Lx": 0.02, "box.Ly": 0.02, "primary.M": 0.3,
          "primary.K": 2720.0, "primary.C": 1.0, "numerics.settle_time": 0.15}
@@ -65,6 +67,11 @@ def settings(quick: bool) -> dict:
                 s3_gaps=41, s3_duration=3.0)
 
 
+def damper(s):
+    """``sanchez2012-optimal`` with the settings' overrides."""
+    return apply_overrides(presets.get("sanchez2012-optimal"), s["overrides"])
+
+
 def problem(base, s, seed, R=None, duration=None):
     """The steady C_eq problem from seed ``seed`` with ``R`` replicates of ``duration`` [s]
     (default ``s["R"]``, ``s["duration"]``)."""
@@ -73,117 +80,10 @@ def problem(base, s, seed, R=None, duration=None):
                          duration=duration or s["duration"])
 
 
-def run(s: dict, log) -> dict:
-    base = apply_overrides(presets.get("sanchez2012-optimal"), s["overrides"])
-    out = {"settings": s}
-
-    # 1. the reference derivative (seeds 0 .. R_ref-1)
-    ref = problem(base, s, 0, s["R_ref"], s["ref_duration"])
-    rows = []
-    for lz in s["ref_lz"]:
-        e, _ = ref.evaluate(lz)
-        g = (e.extra["plus"] - e.extra["minus"]) / (2 * ref.h)
-        half = t_quantile(0.975, len(g) - 1) * e.grad_se
-        rows.append(dict(lz=lz, grad=e.grad, se=e.grad_se, half=half, pairs=g, value=e.value,
-                         value_se=e.value_se, not_stationary=e.extra["not_stationary"]))
-        log(f"reference at Lz = {lz}: dC_eq/dLz = {scaffold.pm(e.grad, half, 4, 3)} (95 %), "
-            f"C_eq = {scaffold.pm(e.value, e.value_se, 4)}; {e.extra['not_stationary']} runs not "
-            "stationary")
-    out["reference"] = rows
-    out["reference_sim"] = ref.sim_seconds
-
-    # 2. the estimator with R replicates: at every point (seed set 1), and repetitions at the
-    #    middle point with disjoint seed sets
-    est_rows = []
-    for k in range(s["reps"]):
-        prob = problem(base, s, s["seed_stride"] * (k + 1))
-        points = s["ref_lz"] if k == 0 else (s["ref_lz"][len(s["ref_lz"]) // 2],)
-        for lz in points:
-            e, _ = prob.evaluate(lz)
-            est_rows.append(dict(rep=k, lz=lz, grad=e.grad, se=e.grad_se, value=e.value,
-                                 sim=e.sim_seconds))
-            log(f"estimator (R = {s['R']}, rep {k}) at {lz}: "
-                f"{scaffold.pm(e.grad, e.grad_se, 4, 3)}")
-    out["estimator"] = est_rows
-
-    # 3. the baseline scan (seed set 50)
-    scan_prob = problem(base, s, 50 * s["seed_stride"])
-    lo = scan_prob.bounds()[0] if s["lo"] is None else s["lo"]
-    hi = s["hi"]
-    t0 = time.perf_counter()
-    scan = adaptive_scan(scan_prob, lo, hi, n_coarse=s["coarse"], n_fine=s["fine"], echo=log)
-    out["scan"] = scan
-    out["scan_wall"] = time.perf_counter() - t0
-    o = scan.optimum
-    log(f"scan: optimum {o.x:.5g} m [{o.lo:.5g}, {o.hi:.5g}], {scan.sim_seconds:.4g} sim s")
-
-    # 4. multi-fidelity trust region from the S3 proposal
-    trust = []
-    for seed in s["trust_seeds"]:
-        prob = problem(base, s, seed * s["seed_stride"])
-        p = propose(prob.config, prob.objective, prob.bed_height, lo, hi, n=s["s3_gaps"],
-                    duration=s["s3_duration"])
-        r = trust_region(prob, p["lz"], lo, hi, radius=s["radius"], min_radius=s["min_radius"],
-                         tol=s["tol"], max_rounds=s["max_rounds"], echo=log)
-        trust.append(dict(seed=seed, proposal=p["lz"], s3_sim=p["sim_seconds"], result=r))
-        log(f"trust region (seed set {seed}): S3 proposes {p['lz']:.5g} m; optimum "
-            f"{r.optimum.x:.5g} m [{r.optimum.lo:.5g}, {r.optimum.hi:.5g}], "
-            f"{r.sim_seconds:.4g} DEM sim s")
-    out["trust"] = trust
-
-    # 5. the pure finite-difference optimiser
-    fd = []
-    for lz0 in s["fd_starts"]:
-        prob = problem(base, s, 77 * s["seed_stride"])
-        r = optimize(prob, lz0, lr=0.01, decay=0.85, max_iter=20, xtol=5e-4, lo=lo, hi=hi,
-                     progress=False, budget=s["fd_budget"])
-        fd.append(dict(lz0=lz0, result=r))
-        opt = r.optimum
-        log(f"FD optimiser from {lz0}: {len(r.history['x'])} iterates ({r.reason}); average "
-            f"{r.x_average:.5g} m" + (f", surface optimum {opt.x:.5g} [{opt.lo:.5g}, {opt.hi:.5g}]"
-                                      if opt is not None else "") + f"; {r.sim_seconds:.4g} sim s")
-    out["fd"] = fd
-    return out
-
-
-def verdicts(out: dict) -> dict:
-    """The claims, from intervals."""
-    v = {}
-    ref = {r["lz"]: r for r in out["reference"]}
-    agree = []
-    for e in out["estimator"]:
-        if e["rep"] == 0:
-            r = ref[e["lz"]]
-            comb = np.hypot(e["se"], r["se"])
-            agree.append(dict(lz=e["lz"], z=(e["grad"] - r["grad"]) / comb,
-                              inside=abs(e["grad"] - r["grad"]) <= 1.96 * comb))
-    v["estimator_agrees"] = agree
-    mid = out["reference"][len(out["reference"]) // 2]
-    reps = [e for e in out["estimator"] if e["lz"] == mid["lz"]]
-    z = np.array([(e["grad"] - mid["grad"]) / np.hypot(e["se"], mid["se"]) for e in reps])
-    v["calibration_z"] = z
-    v["calibration_spread"] = float(z.std(ddof=1)) if len(z) > 1 else float("nan")
-    scan = out["scan"].optimum
-    v["scan"] = dict(x=scan.x, lo=scan.lo, hi=scan.hi, sim=out["scan"].sim_seconds)
-    tr = []
-    for t in out["trust"]:
-        o = t["result"].optimum
-        tr.append(dict(seed=t["seed"], x=o.x, lo=o.lo, hi=o.hi,
-                       inside_scan_ci=scan.lo <= o.x <= scan.hi,
-                       overlaps=not (o.hi < scan.lo or o.lo > scan.hi),
-                       dem_sim=t["result"].sim_seconds, s3_sim=t["s3_sim"],
-                       ratio=t["result"].sim_seconds / out["scan"].sim_seconds))
-    v["trust"] = tr
-    if tr:
-        xs = np.array([t["x"] for t in tr])
-        v["trust_mean"] = float(xs.mean())
-        v["trust_mean_inside"] = bool(scan.lo <= xs.mean() <= scan.hi)
-        v["trust_sim_mean"] = float(np.mean([t["dem_sim"] for t in tr]))
-    v["fd"] = [dict(lz0=f["lz0"], x=f["result"].x_average, sim=f["result"].sim_seconds,
-                    reason=f["result"].reason,
-                    inside_scan_ci=scan.lo <= f["result"].x_average <= scan.hi)
-               for f in out["fd"]]
-    return v
+def trust(prob, x0, lo, hi, s, echo=None):
+    """The DEM trust region from ``x0`` with the settings' radii, tolerance and rounds."""
+    return trust_region(prob, x0, lo, hi, radius=s["radius"], min_radius=s["min_radius"],
+                        tol=s["tol"], max_rounds=s["max_rounds"], echo=echo)
 
 
 def encode(x) -> str:
@@ -192,9 +92,107 @@ def encode(x) -> str:
                       else bool(y) if isinstance(y, np.bool_) else str(y))
 
 
+def run(s: dict, log) -> dict:
+    base = damper(s)
+    out = {"settings": s, "reference": [], "estimator": [], "trust": [], "fd": []}
+
+    # 1. the reference derivative (seeds 0 .. R_ref-1)
+    ref = problem(base, s, 0, s["R_ref"], s["ref_duration"])
+    for lz in s["ref_lz"]:
+        e, _ = ref.evaluate(lz)
+        g = (e.extra["plus"] - e.extra["minus"]) / (2 * ref.h)
+        half = t_quantile(0.975, len(g) - 1) * e.grad_se
+        out["reference"].append(dict(lz=lz, grad=e.grad, se=e.grad_se, half=half, pairs=g,
+                                     value=e.value, value_se=e.value_se,
+                                     not_stationary=e.extra["not_stationary"]))
+        log(f"reference at Lz = {lz}: dC_eq/dLz = {scaffold.pm(e.grad, half, 4, 3)} (95 %), "
+            f"C_eq = {scaffold.pm(e.value, e.value_se, 4)}; {e.extra['not_stationary']} runs not "
+            "stationary")
+    out["reference_sim"] = ref.sim_seconds
+
+    # 2. the estimator with R replicates: at every point (seed set 1), and repetitions at the
+    #    middle point with disjoint seed sets
+    for k in range(s["reps"]):
+        prob = problem(base, s, s["seed_stride"] * (k + 1))
+        for lz in s["ref_lz"] if k == 0 else (s["ref_lz"][len(s["ref_lz"]) // 2],):
+            e, _ = prob.evaluate(lz)
+            out["estimator"].append(dict(rep=k, lz=lz, grad=e.grad, se=e.grad_se, value=e.value,
+                                         sim=e.sim_seconds))
+            log(f"estimator (R = {s['R']}, rep {k}) at {lz}: "
+                f"{scaffold.pm(e.grad, e.grad_se, 4, 3)}")
+
+    # 3. the baseline scan (seed set 50)
+    scan_prob = problem(base, s, 50 * s["seed_stride"])
+    lo, hi = scan_prob.bounds()[0] if s["lo"] is None else s["lo"], s["hi"]
+    t0 = time.perf_counter()
+    out["scan"] = sc = adaptive_scan(scan_prob, lo, hi, n_coarse=s["coarse"], n_fine=s["fine"],
+                                     echo=log)
+    out["scan_wall"] = time.perf_counter() - t0
+    o = sc.optimum
+    log(f"scan: optimum {o.x:.5g} m [{o.lo:.5g}, {o.hi:.5g}], {sc.sim_seconds:.4g} sim s")
+
+    # 4. multi-fidelity trust region from the S3 proposal
+    for seed in s["trust_seeds"]:
+        prob = problem(base, s, seed * s["seed_stride"])
+        p = propose(prob.config, prob.objective, prob.bed_height, lo, hi, n=s["s3_gaps"],
+                    duration=s["s3_duration"])
+        r = trust(prob, p["lz"], lo, hi, s, echo=log)
+        out["trust"].append(dict(seed=seed, proposal=p["lz"], s3_sim=p["sim_seconds"], result=r))
+        log(f"trust region (seed set {seed}): S3 proposes {p['lz']:.5g} m; optimum "
+            f"{r.optimum.x:.5g} m [{r.optimum.lo:.5g}, {r.optimum.hi:.5g}], "
+            f"{r.sim_seconds:.4g} DEM sim s")
+
+    # 5. the pure finite-difference optimiser
+    for lz0 in s["fd_starts"]:
+        r = optimize(problem(base, s, 77 * s["seed_stride"]), lz0, lr=0.01, decay=0.85,
+                     max_iter=20, xtol=5e-4, lo=lo, hi=hi, progress=False, budget=s["fd_budget"])
+        out["fd"].append(dict(lz0=lz0, result=r))
+        opt = r.optimum
+        log(f"FD optimiser from {lz0}: {len(r.history['x'])} iterates ({r.reason}); average "
+            f"{r.x_average:.5g} m" + (f", surface optimum {opt.x:.5g} [{opt.lo:.5g}, {opt.hi:.5g}]"
+                                      if opt is not None else "") + f"; {r.sim_seconds:.4g} sim s")
+    return out
+
+
+def verdicts(out: dict) -> dict:
+    """The claims, from intervals."""
+    ref = {r["lz"]: r for r in out["reference"]}
+    v = {"estimator_agrees": []}
+    for e in out["estimator"]:
+        if e["rep"] == 0:
+            r = ref[e["lz"]]
+            comb = np.hypot(e["se"], r["se"])
+            v["estimator_agrees"].append(dict(lz=e["lz"], z=(e["grad"] - r["grad"]) / comb,
+                                              inside=abs(e["grad"] - r["grad"]) <= 1.96 * comb))
+    mid = out["reference"][len(out["reference"]) // 2]
+    reps = [e for e in out["estimator"] if e["lz"] == mid["lz"]]
+    v["calibration_z"] = z = np.array([(e["grad"] - mid["grad"]) / np.hypot(e["se"], mid["se"])
+                                       for e in reps])
+    v["calibration_spread"] = float(z.std(ddof=1)) if len(z) > 1 else float("nan")
+    scan, sim = out["scan"].optimum, out["scan"].sim_seconds
+    inside = lambda x: scan.lo <= x <= scan.hi  # noqa: E731 - inside the scan's interval
+    v["scan"] = dict(x=scan.x, lo=scan.lo, hi=scan.hi, sim=sim)
+    v["trust"] = []
+    for t in out["trust"]:
+        o = t["result"].optimum
+        v["trust"].append(dict(seed=t["seed"], x=o.x, lo=o.lo, hi=o.hi, inside_scan_ci=inside(o.x),
+                               overlaps=not (o.hi < scan.lo or o.lo > scan.hi),
+                               dem_sim=t["result"].sim_seconds, s3_sim=t["s3_sim"],
+                               ratio=t["result"].sim_seconds / sim))
+    if v["trust"]:
+        xs = np.array([t["x"] for t in v["trust"]])
+        v["trust_mean"] = float(xs.mean())
+        v["trust_mean_inside"] = bool(inside(xs.mean()))
+        v["trust_sim_mean"] = float(np.mean([t["dem_sim"] for t in v["trust"]]))
+    v["fd"] = [dict(lz0=f["lz0"], x=f["result"].x_average, sim=f["result"].sim_seconds,
+                    reason=f["result"].reason, inside_scan_ci=inside(f["result"].x_average))
+               for f in out["fd"]]
+    return v
+
+
 def write(out: dict, v: dict, path: str, prov: dict) -> None:
     with scaffold.data_file(path, prov, settings=out["settings"], verdicts=encode(v),
-                            objective="C_eq = E/(pi Omega Z^2) at f0 [N s/m], maximised") as h:
+                            objective=OBJECTIVE) as h:
         for k in ("lz", "grad", "se", "half", "value", "value_se"):
             d = h.create_dataset(f"reference/{k}", data=np.array([r[k] for r in out["reference"]]))
             if k in ("lz", "grad", "se", "half"):
@@ -314,14 +312,15 @@ def _summary(out, v, path, prov):
     scaffold.write_summary(path, L)
 
 
-def main(argv=None):
-    def compute(quick, log, _ctx):
-        s = settings(quick)
-        out = run(s, log)
-        v = verdicts(out)
-        return {"out": out, "verdicts": v}, lambda path, prov: write(out, v, path, prov)
+def compute(quick, log, _ctx):
+    out = run(settings(quick), log)
+    v = verdicts(out)
+    return {"out": out, "verdicts": v}, lambda path, prov: write(out, v, path, prov)
 
+
+def main(argv=None):
     return scaffold.main(__doc__, "design_optimisation", argv, compute)
+
 
 if __name__ == "__main__":
     sys.exit(0 if main() else 1)

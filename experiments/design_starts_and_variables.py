@@ -31,46 +31,39 @@ import h5py
 import numpy as np
 
 from jaxdamp.analysis.stats import welch
-from jaxdamp.cases import presets
-from jaxdamp.config import apply_overrides
-from jaxdamp.design import Objective, adaptive_scan, trust_region
+from jaxdamp.design import Objective, adaptive_scan
 from jaxdamp.design.space import DesignProblem
 from jaxdamp.design.spsa import random_search, spsa
 from jaxdamp.design.surrogate import descend
 
 try:
+    from . import design_optimisation as do
     from . import scaffold
-    from .design_optimisation import QUICK, encode, problem
 except ImportError:  # run as a file: python experiments/<name>.py
+    import design_optimisation as do
     import scaffold
-    from design_optimisation import QUICK, encode, problem
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-SCAN_FILE = os.path.join(HERE, "design_optimisation", "data.h5")
+SCAN_FILE = os.path.join(scaffold.HERE, "design_optimisation", "data.h5")
 VARS = ("Lz", "base", "friction")
 
 
 def settings(quick: bool) -> dict:
+    """design_optimisation's damper, DEM problem, trust region and scan, and this study's."""
+    s = do.settings(quick)
     if quick:
-        return dict(overrides=QUICK, starts=(0.03, 0.12), seeds=(1,), R=2, duration=0.3,
-                    h=0.003, lo=0.025, hi=0.15, radius=0.005, min_radius=0.002, tol=0.004,
-                    max_rounds=2, own_scan=True, coarse=3, fine=1,
+        return dict(s, starts=(0.03, 0.12), seeds=(1,), lo=0.025, own_scan=True,
                     s3=dict(max_iter=6, duration=1.5), bounds={"Lz": (0.03, 0.1)},
                     spsa=dict(pairs=2, replicates=2, max_iter=2, duration=0.3), confirm=2)
-    return dict(overrides={"numerics.settle_time": 0.3},
-                starts=(0.07, 0.25), seeds=(400, 500, 600, 700, 800), R=4, duration=3.0,
-                h=0.005, lo=None, hi=0.30, radius=0.01, min_radius=0.0025, tol=0.003,
-                max_rounds=6, own_scan=False, coarse=11, fine=4, s3={},
+    return dict(s, starts=(0.07, 0.25), seeds=(400, 500, 600, 700, 800), own_scan=False, s3={},
                 bounds=None, spsa=dict(pairs=4, replicates=2, max_iter=10, duration=3.0),
                 confirm=8)
 
 
 def part_a(base, s, log) -> dict:
-    first = problem(base, s, s["seeds"][0] * 1000)
-    lo = first.bounds()[0] if s["lo"] is None else s["lo"]
-    hi = s["hi"]
+    first = do.problem(base, s, s["seeds"][0] * 1000)
+    lo, hi = first.bounds()[0] if s["lo"] is None else s["lo"], s["hi"]
     if s["own_scan"] or not os.path.exists(SCAN_FILE):
-        sc = adaptive_scan(problem(base, s, 50_000), lo, hi, n_coarse=s["coarse"],
+        sc = adaptive_scan(do.problem(base, s, 50_000), lo, hi, n_coarse=s["coarse"],
                            n_fine=s["fine"], echo=log)
         scan = dict(x=sc.optimum.x, lo=sc.optimum.lo, hi=sc.optimum.hi,
                     sim_seconds=sc.sim_seconds, source="run here")
@@ -89,10 +82,9 @@ def part_a(base, s, log) -> dict:
         log(f"S3 from {lz0}: {d['lz']:.5g} m, {d['iterates']} iterates ({d['fallbacks']} "
             f"fallbacks; {d['reason']}), {time.perf_counter() - t0:.1f} s wall")
         for seed in s["seeds"]:
-            prob = first if seed == s["seeds"][0] and not runs else problem(base, s, seed * 1000)
-            r = trust_region(prob, d["lz"], lo, hi, radius=s["radius"],
-                             min_radius=s["min_radius"], tol=s["tol"],
-                             max_rounds=s["max_rounds"])
+            prob = (first if seed == s["seeds"][0] and not runs
+                    else do.problem(base, s, seed * 1000))
+            r = do.trust(prob, d["lz"], lo, hi, s)
             o = r.optimum
             runs.append(dict(lz0=lz0, seed=seed, s3_lz=d["lz"], s3_sim=d["sim_seconds"],
                              s3_iterates=d["iterates"], s3_fallbacks=d["fallbacks"],
@@ -152,21 +144,20 @@ def verdicts(a: dict, b: dict) -> dict:
 
 
 def write(a, b, v, path, prov):
-    with scaffold.data_file(path, prov, objective="C_eq = E/(pi Omega Z^2) at f0 [N s/m], "
-                            "maximised", verdicts=encode(v)) as h:
+    with scaffold.data_file(path, prov, objective=do.OBJECTIVE, verdicts=do.encode(v)) as h:
         g = h.create_group("starts")
-        g.attrs["scan"] = encode(a["scan"])
+        g.attrs["scan"] = do.encode(a["scan"])
         for k in ("lz0", "seed", "s3_lz", "s3_sim", "x", "lo", "hi", "sim", "rounds"):
             d = g.create_dataset(k, data=np.array([r[k] for r in a["runs"]], float))
             if k in ("lz0", "s3_lz", "x", "lo", "hi", "sim"):
                 d.attrs["units"] = "m" if k != "sim" else "s (simulated DEM system-seconds)"
         g = h.create_group("three_variables")
-        g.attrs.update(space=encode(b["space"]), labels=encode(b["labels"]),
-                       units=encode(b["space"]["units"]))
+        g.attrs.update(space=do.encode(b["space"]), labels=do.encode(b["labels"]),
+                       units=do.encode(b["space"]["units"]))
         it = g.create_group("spsa")
         for k, val in b["spsa"].history.items():
             it.create_dataset(k, data=val)
-        it.attrs.update(settings=encode(b["spsa"].settings), reason=b["spsa"].reason,
+        it.attrs.update(settings=do.encode(b["spsa"].settings), reason=b["spsa"].reason,
                         sim_seconds=b["spsa_cost"])
         for k in ("X", "mean", "se", "J"):
             g.create_dataset(f"random/{k}", data=getattr(b["random"], k))
@@ -271,16 +262,17 @@ def _summary(a, b, v, path, prov):
     scaffold.write_summary(path, L)
 
 
-def main(argv=None):
-    def compute(quick, log, _ctx):
-        s = settings(quick)
-        base = apply_overrides(presets.get("sanchez2012-optimal"), s["overrides"])
-        a = part_a(base, s, log)
-        b = part_b(base, s, log)
-        v = verdicts(a, b)
-        return {"a": a, "b": b, "verdicts": v}, lambda path, prov: write(a, b, v, path, prov)
+def compute(quick, log, _ctx):
+    s = settings(quick)
+    base = do.damper(s)
+    a, b = part_a(base, s, log), part_b(base, s, log)
+    v = verdicts(a, b)
+    return {"a": a, "b": b, "verdicts": v}, lambda path, prov: write(a, b, v, path, prov)
 
+
+def main(argv=None):
     return scaffold.main(__doc__, "design_starts_and_variables", argv, compute)
+
 
 if __name__ == "__main__":
     sys.exit(0 if main() else 1)

@@ -37,8 +37,7 @@ try:
 except ImportError:  # run as a file: python experiments/<name>.py
     import scaffold
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-DATA = os.path.join(HERE, "gap_scan", "data.h5")
+DATA = os.path.join(scaffold.HERE, "gap_scan", "data.h5")
 EXTREMES = (0.042, 0.372)
 INTERMEDIATE = (0.117, 0.162)
 
@@ -64,12 +63,10 @@ def compute(quick: bool, log, ctx):
     R = Z.shape[2]
     mis = {w: np.array([[misfit(f, Z[:, j, r], U, K, fits[w][0][j, r], fits[w][1][j, r], w)
                          for r in range(R)] for j in range(len(lz))]) for w in RESIDUALS}
-    comp = {}
-    for w in RESIDUALS:
-        ext = [j for j, L in enumerate(lz) if any(abs(L - e) < 1e-9 for e in EXTREMES)]
-        mid = [j for j, L in enumerate(lz) if any(abs(L - e) < 1e-9 for e in INTERMEDIATE)]
-        comp[w] = [dict(mid=float(lz[a]), ext=float(lz[b]), **dict(zip(("diff", "ci95"),
-                   welch(mis[w][a], mis[w][b])))) for a in mid for b in ext]
+    ext, mid = ([j for j, L in enumerate(lz) if any(abs(L - e) < 1e-9 for e in heights)]
+                for heights in (EXTREMES, INTERMEDIATE))
+    comp = {w: [dict(mid=float(lz[a]), ext=float(lz[b]), **dict(zip(("diff", "ci95"),
+                welch(mis[w][a], mis[w][b])))) for a in mid for b in ext] for w in RESIDUALS}
     result = dict(lz=lz, f=f, Z=Z, mis=mis, comp=comp, U=U, K=K, R=R, source=source, fits=fits)
     for w in RESIDUALS:
         log(f"{w}: misfit by height " + ", ".join(f"{L:g}: {m:.3g}" for L, m in

@@ -50,12 +50,14 @@ def _config(material, radius, n, stiffness_scale=1.0):
 
 
 def measure(cfg: Config, speeds: np.ndarray, wall: bool):
-    """Batched head-on collisions; returns (ε, contact time [s], dt [s]) per speed."""
+    """Batched head-on collisions: ε, contact time [s] and dt [s] per speed, the contact's
+    ``(m_eff, R_eff, E_eff)`` and its (mixed) constants ``A`` and ``γ_n``."""
     model, params = build(cfg)
     R = float(params.radius[0])
     m = float(params.mass[0])
     row = np.asarray(params.wall_table[0] if wall else params.pair_table[0, 0])  # mixed constants
-    E_eff = float(row[contact_law(cfg).column("E_star")])
+    col = contact_law(cfg).column
+    E_eff = float(row[col("E_star")])
     m_eff, R_eff = (m, R) if wall else (m / 2, R / 2)
     dts = np.array([rst.collision_time(m_eff, R_eff, E_eff, v) / STEPS_PER_COLLISION
                     for v in speeds])
@@ -80,7 +82,8 @@ def measure(cfg: Config, speeds: np.ndarray, wall: bool):
     vout = np.asarray(batch.states.v)
     eps = vout[:, 0, 2] / speeds if wall else (vout[:, 1, 0] - vout[:, 0, 0]) / speeds
     contact = (np.asarray(rec["e_elastic"]) > 0).sum(axis=1) * dts
-    return eps, contact, dts, (m_eff, R_eff, E_eff), params
+    return eps, contact, dts, (m_eff, R_eff, E_eff), (float(row[col("A")]),
+                                                       float(row[col("gamma_n")]))
 
 
 def reference(consts, speeds, A=None, gamma_n=None):
@@ -106,14 +109,9 @@ def compute(quick: bool, log, ctx):
     cases = {}
     for name, mat, radius, lam, wall, _ in CASES:
         cfg = _config(mat, radius, 1 if wall else 2, lam)
-        eps, contact, dts, consts, params = measure(cfg, speeds, wall)
-        law = contact_law(cfg)
-        row = np.asarray(params.wall_table[0] if wall else params.pair_table[0, 0])
-        mix_A, g = float(row[law.column("A")]), float(row[law.column("gamma_n")])
-        if mix_A > 0:
-            ref, dur, pade = reference(consts, speeds, A=mix_A)
-        else:
-            ref, dur, pade = reference(consts, speeds, gamma_n=g)
+        eps, contact, dts, consts, (mix_A, g) = measure(cfg, speeds, wall)
+        ref, dur, pade = (reference(consts, speeds, A=mix_A) if mix_A > 0
+                          else reference(consts, speeds, gamma_n=g))
         cases[name] = dict(eps=eps, contact=contact, dt=dts, eps_ref=ref, duration_ref=dur,
                            eps_pade=pade, config=cfg.to_json())
     return cases, lambda out, prov: write(cases, speeds, out, prov, log)

@@ -55,11 +55,16 @@ def settings(quick: bool) -> dict:
     return dict(freqs=F_FULL, duration=1.5, settle=0.3, cases=CASES, R=3, s3_duration=10.0)
 
 
+def optimal(s: dict, **over):
+    """``sanchez2012-optimal`` as run here and in universality_limits, with ``over``."""
+    return apply_overrides(presets.get("sanchez2012-optimal"), {
+        "numerics.duration": s["duration"], "numerics.settle_time": s["settle"],
+        "numerics.record_dt": 1e-3, "numerics.chunk": 0.1, **over})
+
+
 def run_dem(s: dict, out: str, progress: bool):
     """Every (case, frequency) point × R beds in one batch; returns the sweep and its config."""
-    cfg = apply_overrides(presets.get("sanchez2012-optimal"), {
-        "numerics.duration": s["duration"], "numerics.settle_time": s["settle"],
-        "numerics.record_dt": 1e-3, "numerics.chunk": 0.1})
+    cfg = optimal(s)
     pts = [(gn, gs, f) for gn, gs in s["cases"] for f in s["freqs"]]
     axes = Points({"grains.0.material.gamma_n": [p[0] for p in pts],
                    "grains.0.material.gamma_s": [p[1] for p in pts],
@@ -67,10 +72,13 @@ def run_dem(s: dict, out: str, progress: bool):
     return reuse_or_run(cfg, axes, out, progress=progress, replicates=s["R"]), cfg
 
 
-def run_s3(method, s):
+def run_s3(method, s) -> dict:
+    """S3 (``sanchez2012-impact``) by ``method``: config, amplitude, loss, wall time."""
     cfg = apply_overrides(presets.get("sanchez2012-impact"), {
         "impactor.method": method, "numerics.duration": s["s3_duration"]})
-    return sweep(cfg, {"frequency": list(s["freqs"])}, progress=False), cfg
+    r = sweep(cfg, {"frequency": list(s["freqs"])}, progress=False).summary
+    return dict(cfg=cfg, Z=np.asarray(r["amplitude"]),
+                total=np.asarray(r["granular_loss_per_cycle"]), wall=float(r["wall_time"]))
 
 
 def analyse(res, s) -> dict:
@@ -120,12 +128,7 @@ def compute(quick: bool, log, ctx):
     res, cfg = run_dem(s, ctx.raw(f"sweep_cases_R{s['R']}.h5"), ctx.progress)
     a = analyse(res, s)
     a["U"] = cfg.primary.U
-    s3 = {}
-    for method in ("event", "smooth"):
-        r3, c3 = run_s3(method, s)
-        s3[method] = dict(cfg=c3, Z=np.asarray(r3.summary["amplitude"]),
-                          total=np.asarray(r3.summary["granular_loss_per_cycle"]),
-                          wall=float(r3.summary["wall_time"]))
+    s3 = {method: run_s3(method, s) for method in ("event", "smooth")}
     v = verdicts(a, s3, s)
     for row in v["cases"][1:]:
         log(f"(γn, γs) = ({row['gamma_n']:g}, {row['gamma_s']:g}): peak change "
@@ -188,12 +191,11 @@ def _figure(out, r, s):
             continue
         coll = (a["split"]["pp_normal"][c] + a["split"]["pw_normal"][c]).mean(-1)
         fric = (a["split"]["pp_friction"][c] + a["split"]["pw_friction"][c]).mean(-1)
-        E = a["E"][c]
         a2.plot(f, coll, "^-", color=col, ms=4, lw=0.8, label=f"collision, ({gn:g}, {gs:g})")
         a2.plot(f, fric, "s--", color=col, ms=4, lw=0.8, label=f"friction, ({gn:g}, {gs:g})")
-        a2.errorbar(f, E.mean(-1), yerr=2 * scaffold.standard_error(E), fmt="o-",
-                    color=col, ms=5, mfc="none", lw=1.2, capsize=2,
-                    label=f"total, ({gn:g}, {gs:g})")
+        E = a["E"][c]
+        a2.errorbar(f, E.mean(-1), yerr=2 * scaffold.standard_error(E), fmt="o-", color=col,
+                    ms=5, mfc="none", lw=1.2, capsize=2, label=f"total, ({gn:g}, {gs:g})")
     a2.plot(f, r["s3"]["event"]["total"], "k-", lw=1.2, label="S3, e = 0")
     a2.set(xlabel="excitation frequency f [Hz]", ylabel="granular loss per cycle [J]")
     a2.set_title("(b) dissipation per cycle, collisional vs frictional (thesis fig. 5.2b)",

@@ -35,14 +35,17 @@ import numpy as np
 from jaxdamp.analysis.response import resonance
 from jaxdamp.analysis.stats import welch
 from jaxdamp.cases import presets
-from jaxdamp.config import apply_overrides
 from jaxdamp.studies.grid import Points, steady_or_window
 from jaxdamp.studies.sweep import reuse_or_run
 
 try:
     from . import scaffold
+    from .universal_response import SPLIT
+    from .universal_response import optimal as base
 except ImportError:  # run as a file: python experiments/<name>.py
     import scaffold
+    from universal_response import SPLIT
+    from universal_response import optimal as base
 
 GN, GS = 3660.0, 10980.0  # thesis values
 GAMMAS = (0.0, 2500.0, 5000.0, 10000.0)
@@ -52,7 +55,6 @@ MATERIALS = (("steel", 8030.0, 2.03e11, 0.28), ("lead", 11340.0, 1.6e10, 0.44),
 NS = (25, 50, 100, 250)
 #: (part, runs detected stationary, runs), filled by the parts as they read their sweeps
 STATIONARITY: list = []
-SPLIT = ("pp_normal", "pw_normal", "pp_friction", "pw_friction")
 
 
 def settings(quick: bool) -> dict:
@@ -65,10 +67,14 @@ def settings(quick: bool) -> dict:
                 settle=0.3, R=3)
 
 
-def base(s, **over):
-    return apply_overrides(presets.get("sanchez2012-optimal"), {
-        "numerics.duration": s["duration"], "numerics.settle_time": s["settle"],
-        "numerics.record_dt": 1e-3, "numerics.chunk": 0.1, **over})
+def batch(s, ctx, cfg, axes, raw: str, part: str):
+    """``axes`` × R beds of ``cfg`` (raw file ``<raw>_R<R>.h5``): the sweep and each run's
+    amplitude (steady, else its final 10 %); ``part``'s stationary runs noted in STATIONARITY."""
+    res = reuse_or_run(cfg, axes, ctx.raw(f"{raw}_R{s['R']}.h5"), progress=ctx.progress,
+                       replicates=s["R"])
+    Z, fb = steady_or_window(res, "amplitude")
+    STATIONARITY.append((part, Z.size - fb, Z.size))
+    return res, Z
 
 
 def gamma_scan(s, ctx) -> list:
@@ -82,12 +88,9 @@ def gamma_scan(s, ctx) -> list:
                        "grains.0.material.gamma_s": [g if sc == "gamma_s" else GS
                                                      for sc, g, _ in pts],
                        "frequency": [f for *_, f in pts]})
-        res = reuse_or_run(base(s, **{"box.Lz": Lz}), axes,
-                           ctx.raw(f"gammas_Lz{Lz:g}_R{s['R']}.h5"), progress=ctx.progress,
-                           replicates=s["R"])
+        res, Z = batch(s, ctx, base(s, **{"box.Lz": Lz}), axes, f"gammas_Lz{Lz:g}",
+                       f"γ scans at Lz = {Lz} m")
         E, _ = steady_or_window(res, "granular_loss_per_cycle")  # (P, R)
-        Z, fb = steady_or_window(res, "amplitude")
-        STATIONARITY.append((f"γ scans at Lz = {Lz} m", Z.size - fb, Z.size))
         split = {k: np.asarray(res.replicate_summary[f"{k}_per_cycle"]) for k in SPLIT}
         nf = len(s["res_freqs"])
         for scan in ("gamma_n", "gamma_s"):
@@ -112,11 +115,8 @@ def material_scan(s, ctx) -> list:
         cfg = base(s, **{"grains.0.material.density": rho, "grains.0.material.E": E,
                          "grains.0.material.nu": nu,  # walls: the grains' material (preset)
                          "primary.M": p.M * k, "primary.K": p.K * k, "primary.C": p.C * k})
-        res = reuse_or_run(cfg, {"frequency": list(s["frf_freqs"])},
-                           ctx.raw(f"material_{name}_R{s['R']}.h5"), progress=ctx.progress,
-                           replicates=s["R"])
-        Z, fb = steady_or_window(res, "amplitude")  # (F, R)
-        STATIONARITY.append((f"material {name}", Z.size - fb, Z.size))
+        res, Z = batch(s, ctx, cfg, {"frequency": list(s["frf_freqs"])}, f"material_{name}",
+                       f"material {name}")  # Z: (F, R)
         peaks = np.array([resonance(s["frf_freqs"], Z[:, r]) for r in range(s["R"])])
         out.append(dict(material=name, density=rho, E=E, nu=nu, scale=k, ZU=Z / p.U,
                         peak=peaks[:, 1] / p.U, f_peak=peaks[:, 0],
@@ -134,10 +134,7 @@ def few_grains(s, ctx) -> list:
         axes = Points({"grains.0.material.gamma_n": [g for g in (GN, 0.0)
                                                      for _ in s["res_freqs"]],
                        "frequency": [f for _ in (GN, 0.0) for f in s["res_freqs"]]})
-        res = reuse_or_run(cfg, axes, ctx.raw(f"few_N{n}_R{s['R']}.h5"), progress=ctx.progress,
-                           replicates=s["R"])
-        Z, fb = steady_or_window(res, "amplitude")
-        STATIONARITY.append((f"N = {n}", Z.size - fb, Z.size))
+        res, Z = batch(s, ctx, cfg, axes, f"few_N{n}", f"N = {n}")
         nf = len(s["res_freqs"])
         U = cfg.primary.U
         peak = {g: Z[i * nf:(i + 1) * nf].max(axis=0) / U for i, g in enumerate((GN, 0.0))}
