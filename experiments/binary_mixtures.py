@@ -43,7 +43,6 @@ import time
 
 import numpy as np
 
-from jaxdamp.analysis import stats
 from jaxdamp.cases import presets
 from jaxdamp.figures import save, snapshot_grid_figure
 from jaxdamp.physics.model import grain_radii, grain_species
@@ -60,6 +59,8 @@ CLASS_NAMES = {"a": "class a (equal mass)", "b": "class b (equal number)",
 A_PAPER = 0.028
 #: The paper's claim for each class at σ = 0.5 against the reference above A_opt.
 EXPECT = {"a": "above", "b": "above", "c": "below"}
+#: The snapshots' quarter periods (the paper shows min (I, III) and max (II) speed).
+CAPTIONS = {0: "(I/III) top, v = 0", 1: "(II) fastest, moving down", 2: "(III/I) bottom, v = 0"}
 
 
 def settings(args):
@@ -72,8 +73,10 @@ def settings(args):
                 low_amps=[0.02, 0.03, 0.04], replicates=args.replicates)
 
 
-def run_family(name, sigma, amps, ctx, periods, transient, replicates, settle=None):
-    """One family's amplitude sweep with ``replicates`` beds per amplitude (resumable file)."""
+def run_family(name, sigma, protocol, ctx, replicates):
+    """One family's amplitude sweep with ``replicates`` beds per amplitude (resumable file);
+    ``protocol``: ``(amplitudes, periods, transient, settle time or None)``."""
+    amps, periods, transient, settle = protocol
     cfg = presets.family(name, sigma)
     if settle is not None:  # quick mode: the transient period erases the start anyway
         cfg = cfg.replace(numerics=dataclasses.replace(cfg.numerics, settle_time=settle))
@@ -96,23 +99,16 @@ def plot_label(run):
                                       if run["periods"] != 50 else "")
 
 
-def peak(amps, y):
-    """Amplitude of the largest value, refined by a parabola through it and its neighbours."""
-    k = int(np.argmax(y))
-    if 0 < k < len(y) - 1:
-        a, b, c = y[k - 1], y[k], y[k + 1]
-        den = a - 2 * b + c
-        h = amps[1] - amps[0]
-        if den < 0:
-            return float(amps[k] + 0.5 * h * (a - c) / den), float(b)
-    return float(amps[k]), float(y[k])
-
-
 def at3(r):
     return int(np.argmin(np.abs(r.amplitudes - 0.03)))
 
 
-# ------------------------------------------------------------------------------------------
+def quarters(r):
+    """The quarter period (0: the box at its top) of each of the snapshots' times."""
+    f = r.config.frequency
+    return [int(round((t * f % 1.0) * 4)) % 4 for t in r.snapshots["t"]]
+
+
 # per-replicate quantities: arrays (P, R), NaN where a replicate is not stationary
 
 
@@ -121,26 +117,19 @@ def per_mass(run):
     return run["result"].steady["E_d_per_mass"]["values"]
 
 
-def e_d(run):
-    """⟨E_d⟩ [1] of every replicate from its detected steady state, ``(P, R)``."""
-    return run["result"].steady["E_d"]["values"]
-
-
-def energy(run):
-    """Energy dissipated per period [J] (E_pp + E_pw over the analysed periods), ``(P, R)``."""
-    rs = run["result"].replicate_summary
-    return np.asarray(rs["E_pp"]) + np.asarray(rs["E_pw"])
+#: A class's dissipation three ways, ``(P, R)``: the paper's ⟨E_d⟩/m, ⟨E_d⟩ [1] (per unit
+#: mass: E_max ∝ m) from each replicate's steady state, and the energy dissipated per period
+#: [J] (E_pp + E_pw over the analysed periods).
+NORMALISATIONS = {
+    "⟨E_d⟩/m": per_mass, "⟨E_d⟩": lambda run: run["result"].steady["E_d"]["values"],
+    "energy per period": lambda run: (np.asarray(run["result"].replicate_summary["E_pp"])
+                                      + np.asarray(run["result"].replicate_summary["E_pw"]))}
 
 
 def a_opt(run):
-    """Each replicate's A_opt [m] (parabola through the top three of its ⟨E_d⟩/m), ``(R,)``;
+    """Each replicate's A_opt [m] (:func:`ef.optimal_amplitudes` of its ⟨E_d⟩/m), ``(R,)``;
     NaN where a replicate is not stationary at some amplitude or the family has < 3 amplitudes."""
-    y = per_mass(run)
-    amps = run["result"].amplitudes
-    if len(amps) < 3:
-        return np.full(y.shape[1], np.nan)
-    return np.array([peak(amps, y[:, r])[0] if np.all(np.isfinite(y[:, r])) else np.nan
-                     for r in range(y.shape[1])])
+    return ef.optimal_amplitudes(run["result"].amplitudes, per_mass(run))
 
 
 def fmt(values, digits=3):
@@ -151,22 +140,9 @@ def fmt(values, digits=3):
     return scaffold.pm(e.mean, e.se, digits) + ("" if np.isfinite(e.se) else f" (n = {e.n})")
 
 
-def compare(x, y):
-    """Ratio of means x̄/ȳ with its delta-method SE, and the Welch 95 % interval of x̄ − ȳ as
-    ``(ratio, ratio_se, diff, half, verdict)``: ``verdict`` "above", "below" or "not
-    significant" (the interval includes 0) or "undetermined" (fewer than 2 beds on a side)."""
-    ex, ey = scaffold.across(x), scaffold.across(y)
-    ratio = ex.mean / ey.mean
-    rse = abs(ratio) * np.hypot(ex.se / ex.mean, ey.se / ey.mean)
-    d, h = stats.welch(x, y)
-    if not np.isfinite(h):
-        verdict = "undetermined"
-    else:
-        verdict = "above" if d - h > 0 else "below" if d + h < 0 else "not significant"
-    return ratio, rse, d, h, verdict
-
-
-# ------------------------------------------------------------------------------------------
+def per_species(r, x):
+    """``x`` ``(R, S)`` per species, mean ± SE across beds, as text."""
+    return ", ".join(f"{sp.name} {fmt(c)}" for sp, c in zip(r.config.grains, x.T))
 
 
 def options(ap):
@@ -194,17 +170,12 @@ def _at_least_one(text):
 def compute(quick, log, ctx):
     args = ctx.args
     s = settings(args)
-    settle = 0.02 if quick else None
-    R = s["replicates"]
-    runs = [run_family("varela2023-reference", None, s["amps"], ctx, s["periods"],
-                       s["transient"], R, settle=settle)]
-    for klass in args.classes:
-        for sigma in s["sigmas"]:
-            runs.append(run_family(f"varela2023-{klass}", sigma, s["amps"], ctx, s["periods"],
-                                   s["transient"], R, settle=settle))
-        for sigma in s["low_sigmas"]:
-            runs.append(run_family(f"varela2023-{klass}", sigma, s["low_amps"], ctx,
-                                   s["low_periods"], s["low_transient"], R))
+    full = (s["amps"], s["periods"], s["transient"], 0.02 if quick else None)
+    low = (s["low_amps"], s["low_periods"], s["low_transient"], None)
+    plan = [("reference", None, full)] + [
+        (k, sigma, p) for k in args.classes
+        for sigma, p in [(x, full) for x in s["sigmas"]] + [(x, low) for x in s["low_sigmas"]]]
+    runs = [run_family(f"varela2023-{k}", sigma, p, ctx, s["replicates"]) for k, sigma, p in plan]
     drift = [] if quick else balance_drift(ctx.progress)
 
     def write(out, prov):
@@ -225,13 +196,10 @@ def write_data(out, prov, runs):
     with scaffold.data_file(out, prov, E_max="4 m A_d^2 omega^2") as h:
         for run in runs:
             r = run["result"]
-            sub = f"/sigma_{run['sigma']:g}" if run["sigma"] else ""
-            g = h.create_group(f"{run['name']}{sub}")
-            g.attrs["config"] = r.config.to_json()
-            g.attrs["periods"] = run["periods"]
-            g.attrs["transient_periods"] = run["transient"]
-            g.attrs["replicates"] = r.replicates
-            g.attrs["wall_time"] = r.wall_time
+            g = h.create_group(run["name"] + (f"/sigma_{run['sigma']:g}" if run["sigma"] else ""))
+            g.attrs.update(config=r.config.to_json(), periods=run["periods"],
+                           transient_periods=run["transient"], replicates=r.replicates,
+                           wall_time=r.wall_time)
             g.create_dataset("amplitude", data=r.amplitudes).attrs["units"] = "m"
             g.create_dataset("A_opt", data=a_opt(run)).attrs["units"] = "m"
             for part, units in (("summary", ef.SUMMARY_UNITS),
@@ -253,15 +221,18 @@ def _family_runs(runs, klass):
     return [r for r in runs if r["klass"] == klass]
 
 
-def _class_panels(classes, title, xlabel, ylabel, draw):
-    """One panel per class: ``draw(ax, klass)``, then the panel's title, labels and legend."""
-    fig, axes = scaffold.subplots(1, len(classes), figsize=(5 * len(classes), 4.2),
-                                  squeeze=False)
-    for ax, klass in zip(axes[0], classes):
-        draw(ax, klass)
-        ax.set_title(f"{CLASS_NAMES[klass]}{title}", fontsize=9)
-        ax.set(xlabel=xlabel, ylabel=ylabel)
-        ax.legend(fontsize=7)
+def _class_panels(classes, rows, title, width=5, height=4.2):
+    """One column per class, one row per ``(xlabel, ylabel, draw)`` of ``rows``:
+    ``draw(ax, klass)``, then the panel's labels and legend; the top panel's title the class
+    and ``title``."""
+    n = max(len(classes), 1)
+    fig, axes = scaffold.subplots(len(rows), n, figsize=(width * n, height), squeeze=False)
+    for j, klass in enumerate(classes):
+        for ax, (xlabel, ylabel, draw) in zip(axes[:, j], rows):
+            draw(ax, klass)
+            ax.set(xlabel=xlabel, ylabel=ylabel)
+            ax.legend(fontsize=7)
+        axes[0, j].set_title(f"{CLASS_NAMES[klass]}{title}", fontsize=9)
     return fig
 
 
@@ -286,50 +257,39 @@ def figures(out, runs, classes):
             ax.fill_between(t, m - se, m + se, color=line.get_color(), alpha=0.25, lw=0)
         ax.axhline(0.0, color="0.5", lw=0.8)
 
-    scaffold.save_figure(_class_panels(
-        classes, "", "drive amplitude A_d [cm] (dotted: the paper's A_opt)",
-        "⟨E_d⟩ / m [1/kg] (mean, 95 % interval across beds)", efficiency), out, "efficiency.png")
-    scaffold.save_figure(_class_panels(
-        classes, ", A_d = 3 cm", "drive period (transient first)",
-        "segregation index S [1] (mean ± SE)", segregation), out, "segregation.png")
+    def phase_curve(key):  # contacts or force vs phase at 3 cm, replicate means
+        def draw(ax, klass):
+            for run in [ref] + _family_runs(runs, klass):
+                r, k = run["result"], at3(run["result"])
+                ax.plot(r.phase["phase"][k], r.phase[key][k], "k-" if run is ref else "-",
+                        lw=1, label=plot_label(run))
+        return draw
 
-    # contacts and force vs phase at A_d = 3 cm (figs. 4, 5, 7, 10, 11), replicate means
-    fig, axes = scaffold.subplots(2, len(classes), figsize=(5 * len(classes), 7), squeeze=False)
-    for j, klass in enumerate(classes):
-        for run in [ref] + _family_runs(runs, klass):
-            r = run["result"]
-            k = at3(r)
-            ph = r.phase
-            style = "k-" if run is ref else "-"
-            axes[0, j].plot(ph["phase"][k], ph["contacts"][k], style, lw=1, label=plot_label(run))
-            axes[1, j].plot(ph["phase"][k], ph["force_floor_lid"][k], style, lw=1,
-                            label=plot_label(run))
-        axes[0, j].set_title(f"{CLASS_NAMES[klass]}, A_d = 3 cm (mean over beds)", fontsize=9)
-        axes[0, j].set_ylabel("grains touching floor or lid [1]")
-        axes[1, j].set_ylabel("vertical force on floor + lid [N]")
-        for i in range(2):
-            axes[i, j].set_xlabel("phase t/T [1] (box at its top at 0)")
-            axes[i, j].legend(fontsize=7)
-    scaffold.save_figure(fig, out, "contacts_force.png")
-
-    # phase plots at σ = 0.5 (figs. 8, 12)
-    pc = [k for k in "bc" if k in classes]
-    fig, axes = scaffold.subplots(1, max(len(pc), 1), figsize=(6 * max(len(pc), 1), 4.5),
-                                  squeeze=False)
-    for ax, klass in zip(axes[0], pc):
+    def phase_plot(ax, klass):  # centre of mass v_z(z) per species at σ = 0.5
         for run in [ref] + [r for r in _family_runs(runs, klass) if r["sigma"] == 0.5]:
-            r = run["result"]
-            k = at3(r)
+            r, k = run["result"], at3(run["result"])
             zc, vc = r.phase["z_cm_species"][k], r.phase["vz_cm_species"][k]
+            close = lambda a: np.append(a, a[:1])  # noqa: E731
             for sp, spec in enumerate(r.config.grains):
-                close = lambda a: np.append(a, a[:1])  # noqa: E731
                 ax.plot(close(zc[:, sp]) * 100, close(vc[:, sp]),
                         "k-" if run is ref else ("-" if sp == 0 else "--"), lw=1.2,
                         label=f"{plot_label(run)}: {spec.name}")
-        ax.set_title(f"{CLASS_NAMES[klass]}: centre of mass, A_d = 3 cm", fontsize=9)
-        ax.set(xlabel="z [cm] (lab frame)", ylabel="v_z [m/s]")
-        ax.legend(fontsize=7)
-    scaffold.save_figure(fig, out, "phase_plots.png")
+
+    x_phase = "phase t/T [1] (box at its top at 0)"
+    scaffold.save_figure(_class_panels(classes, [(
+        "drive amplitude A_d [cm] (dotted: the paper's A_opt)",
+        "⟨E_d⟩ / m [1/kg] (mean, 95 % interval across beds)", efficiency)], ""),
+        out, "efficiency.png")
+    scaffold.save_figure(_class_panels(classes, [(
+        "drive period (transient first)", "segregation index S [1] (mean ± SE)", segregation)],
+        ", A_d = 3 cm"), out, "segregation.png")
+    scaffold.save_figure(_class_panels(classes, [  # figs. 4, 5, 7, 10, 11
+        (x_phase, "grains touching floor or lid [1]", phase_curve("contacts")),
+        (x_phase, "vertical force on floor + lid [N]", phase_curve("force_floor_lid"))],
+        ", A_d = 3 cm (mean over beds)", height=7), out, "contacts_force.png")
+    scaffold.save_figure(_class_panels(  # figs. 8, 12
+        [k for k in "bc" if k in classes], [("z [cm] (lab frame)", "v_z [m/s]", phase_plot)],
+        ": centre of mass, A_d = 3 cm", width=6, height=4.5), out, "phase_plots.png")
 
     # snapshots (fig. 3): reference and class a at the smallest σ run, first bed
     rows = []
@@ -338,15 +298,10 @@ def figures(out, runs, classes):
         r = run["result"]
         row = at3(r) * r.replicates  # replicates are the fastest axis of the snapshots
         f = r.config.frequency
-        frames = []
-        for j, t in enumerate(r.snapshots["t"]):
-            q = int(round((t * f % 1.0) * 4)) % 4
-            if q == 3:
-                continue  # the paper shows min (I, III) and max (II) speed: top, fastest, bottom
-            cap = {0: "(I/III) top, v = 0", 1: "(II) fastest, moving down",
-                   2: "(III/I) bottom, v = 0"}[q]
-            frames.append((f"t/T = {t * f:.2f}: {cap}", r.snapshots["r"][row, j],
-                           r.snapshots["z_box"][row, j]))
+        frames = [(f"t/T = {t * f:.2f}: {CAPTIONS[q]}", r.snapshots["r"][row, j],
+                   r.snapshots["z_box"][row, j])  # top, fastest, bottom
+                  for j, (t, q) in enumerate(zip(r.snapshots["t"], quarters(r)))
+                  if q in CAPTIONS]
         rows.append((f"{'reference' if run is ref else 'class a, ' + plot_label(run)}, A_d = 3 cm",
                      frames, grain_radii(r.config), grain_species(r.config), r.config))
     save(snapshot_grid_figure(rows, "driven box at 70 Hz"), os.path.join(out, "snapshots.png"))
@@ -370,18 +325,15 @@ def balance_drift(progress, amplitude=0.03, periods=5, transient=2, replicates=3
         t0 = time.perf_counter()
         res = sweep(cfg, {"drive.amplitude": [amplitude]}, progress=progress, echo=None,
                     replicates=replicates)
-        spp = 100
-        i0, i1 = transient * spp - 1, (transient + periods) * spp - 1
+        i0, i1 = transient * 100 - 1, (transient + periods) * 100 - 1  # 100 samples per period
         drift, e_d = [], []
         for r in range(replicates):
             rec = {k: v[res.point(0, r)] for k, v in res.records.items()}
             a = ef.analyse(res.configs[0], rec, periods)
-            resid = rec["balance_residual"]
             diss = float((a["per_period"]["E_pp"] + a["per_period"]["E_pw"])[transient:].sum())
-            drift.append(float(resid[i1] - resid[i0]) / diss)
+            drift.append(float(rec["balance_residual"][i1] - rec["balance_residual"][i0]) / diss)
             e_d.append(a["summary"]["E_d_mean"])
-        rows.append(dict(dt_per_collision=n,
-                         drift=np.asarray(drift), E_d=np.asarray(e_d),
+        rows.append(dict(dt_per_collision=n, drift=np.asarray(drift), E_d=np.asarray(e_d),
                          wall=time.perf_counter() - t0))
     return rows
 
@@ -410,10 +362,9 @@ def write_summary(out, prov, s, runs, drift=()):
       "standard error across beds (s/√n); a difference is 'above'/'below' when its Welch 95 % "
       "interval excludes 0, otherwise 'not significant'. The paper's error bars are the spread "
       "over periods of one run; ours are not.\n")
-    n_stat = {fam_label(r): (int(np.sum(r["result"].steady["E_d"]["stationary"])),
-                             r["result"].steady["E_d"]["stationary"].size) for r in runs}
+    n_stat = {fam_label(r): r["result"].steady["E_d"]["stationary"] for r in runs}
     P("Stationary beds (detected / run, over all amplitudes): "
-      + "; ".join(f"{k} {a}/{b}" for k, (a, b) in n_stat.items()) + ".\n")
+      + "; ".join(f"{k} {int(np.sum(st))}/{st.size}" for k, st in n_stat.items()) + ".\n")
     P("## ⟨E_d⟩/m [1/kg] per family (mean ± SE across beds)\n")
     rows = []
     for run in runs:
@@ -430,62 +381,52 @@ def write_summary(out, prov, s, runs, drift=()):
     lines += scaffold.table(["family", "N", "m [kg]", "dt [s]", "periods"]
                             + [f"{a * 100:g} cm" for a in amps]
                             + ["A_opt [cm]", "sweep wall [s]"], rows)
-    low = [run for run in runs if run["periods"] != s["periods"]]
 
     def projected(run):  # minutes for the full protocol at this run's cost per period
         r = run["result"]
         return (r.wall_time * 9 / len(r.amplitudes) * (s["transient"] + s["periods"])
                 / (run["transient"] + run["periods"]) / 60)
 
+    low = [run for run in runs if run["periods"] != s["periods"]]
     if low:
-        P("")
-        P("Small size ratios ran a shorter protocol ("
+        P("\nSmall size ratios ran a shorter protocol ("
           + "; ".join(f"{fam_label(run)}: {len(run['result'].amplitudes)} amplitudes × "
                       f"{run['transient']} + {run['periods']} periods × {R} beds in "
                       f"{run['result'].wall_time:.0f} s, the full protocol (9 amplitudes × "
                       f"{s['transient']} + {s['periods']} periods × {R} beds) projected at "
                       f"{projected(run):.0f} min"
                       for run in low) + ").")
-    P("")
     worst = max(float(np.max(run["result"].replicate_summary["balance_error"])) for run in runs)
-    P("Energy balance (max |residual| / max input work over the run), worst over all points and "
-      f"beds: {worst:.2e}.\n")
+    P("\nEnergy balance (max |residual| / max input work over the run), worst over all points "
+      f"and beds: {worst:.2e}.\n")
     if drift:
-        _, _, dd, hd, vd = compare(drift[0]["E_d"], drift[1]["E_d"])
+        c = ef.compare_beds(drift[0]["E_d"], drift[1]["E_d"])
         P(f"Energy-balance drift vs time step (reference, A_d = 3 cm, 2 + 5 periods, "
           f"{len(drift[0]['drift'])} beds per time step, mean ± SE across beds; residual gained "
           "over the analysed periods / energy dissipated in them): "
           + "; ".join(f"dt = t_c/{d['dt_per_collision']}: {fmt(d['drift'])} (⟨E_d⟩ "
                       f"{fmt(d['E_d'], 4)}, {d['wall']:.0f} s wall)" for d in drift)
-          + f". ⟨E_d⟩ at t_c/50 minus t_c/100: {scaffold.pm(dd, hd, '+.4f', '.4f')} "
-          f"(Welch 95 %: {vd}).\n")
+          + f". ⟨E_d⟩ at t_c/50 minus t_c/100: {scaffold.pm(c.diff, c.half, '+.4f', '.4f')} "
+          f"(Welch 95 %: {c.verdict}).\n")
     P("## The paper's claims\n")
-    for line in claims(runs, s):
-        P(f"- {line}")
-    P("")
-    P("## At A_d = 3 cm: wall contacts, wall force, centre-of-mass speed, segregation\n")
+    lines += [f"- {line}" for line in claims(runs)]
+    P("\n## At A_d = 3 cm: wall contacts, wall force, centre-of-mass speed, segregation\n")
     P("Every column: mean ± SE across beds. Mean contacts and S over the analysed periods; "
       "peak contacts, peak abs(F_z) and the largest centre-of-mass speed from each bed's own "
       "phase curve (averaged over its analysed periods).\n")
     rows = []
     for run in runs:
-        r = run["result"]
-        k = at3(r)
-        rs = r.replicate_summary
-        b = bed_phase(run, k)
-        seg = segregation_at3(run)
-        per_species = lambda x: ", ".join(  # noqa: E731
-            f"{spec.name} {fmt(c)}" for spec, c in zip(r.config.grains, x.T))
+        r, k = run["result"], at3(run["result"])
+        rs, b, seg = r.replicate_summary, bed_phase(run, k), segregation_at3(run)
         rows.append([fam_label(run), fmt(per_mass(run)[k]), fmt(rs["wall_fraction"][k]),
-                     fmt(rs["contacts_mean"][k]), per_species(b["contacts_species"]),
-                     fmt(b["contacts_peak"]), fmt(b["force_peak"], 4), per_species(b["vz_max"]),
-                     seg["S"], seg["trend"]])
+                     fmt(rs["contacts_mean"][k]), per_species(r, b["contacts_species"]),
+                     fmt(b["contacts_peak"]), fmt(b["force_peak"], 4),
+                     per_species(r, b["vz_max"]), seg["S"], seg["trend"]])
     lines += scaffold.table(["family", "⟨E_d⟩/m", "E_pw/(E_pp+E_pw)", "mean contacts",
                              "contacts per species", "peak contacts", "peak abs(F_z) [N]",
                              "max abs(v_z) COM per species [m/s]", "S", "S trend [1/period]"],
                             rows)
-    P("")
-    P("S trend: each bed's least-squares slope of S over its analysed periods, mean ± SE "
+    P("\nS trend: each bed's least-squares slope of S over its analysed periods, mean ± SE "
       "across beds; a slope whose interval includes 0 means S is steady (the bed is not still "
       "segregating or mixing).\n")
     P("Figures: `efficiency.png` (figs. 2, 6, 9), `segregation.png` (S per period), "
@@ -514,8 +455,7 @@ def bed_phase(run, k):
 def segregation_at3(run):
     """S at 3 cm over each bed's analysed periods, and its trend per period, as text."""
     r = run["result"]
-    seg = np.asarray(r.replicate_per_period["segregation"][at3(r)])  # (R, n)
-    win = seg[:, -run["periods"]:]
+    win = np.asarray(r.replicate_per_period["segregation"][at3(r)])[:, -run["periods"]:]
     if not np.isfinite(win).all():
         return {"S": "–", "trend": "–", "values": None}
     x = np.arange(win.shape[1])
@@ -524,98 +464,77 @@ def segregation_at3(run):
             "slopes": np.asarray(slopes)}
 
 
-def claims(runs, s):
+def claims(runs):
     """One line per claim of SPEC §5 with the numbers and the interval that decide it."""
-    out = []
     ref = runs[0]
     amps = ref["result"].amplitudes
-    full = [r for r in runs if len(r["result"].amplitudes) == len(amps)]
+    full = [r for r in runs if len(r["result"].amplitudes) == len(amps)]  # ref first
     # A_opt ≈ 2.8 cm for every σ
-    rows, inside = [], 0
-    for run in full:
-        e = scaffold.across(a_opt(run))
-        if not np.isfinite(e.mean):
-            continue
-        inside += np.isfinite(e.ci95) and abs(e.mean - A_PAPER) <= e.ci95
-        rows.append(f"{fam_label(run)} {scaffold.pm(e.mean, e.se, '.3f', '.3f', scale=100)}")
-    out.append("**A_opt ≈ 2.8 cm for every σ** (each bed's largest ⟨E_d⟩/m, parabola through "
-               "its top three amplitudes; mean ± SE across beds, cm): " + "; ".join(rows)
-               + f". The paper's 2.8 cm lies inside the 95 % interval for {inside} of "
-               f"{len(rows)} families. Depends on E_max ∝ A_d² (our reading of the paper).")
+    est = [(run, e) for run in full for e in [scaffold.across(a_opt(run))] if np.isfinite(e.mean)]
+    inside = sum(bool(np.isfinite(e.ci95) and abs(e.mean - A_PAPER) <= e.ci95) for _, e in est)
+    out = ["**A_opt ≈ 2.8 cm for every σ** (each bed's largest ⟨E_d⟩/m, parabola through "
+           "its top three amplitudes; mean ± SE across beds, cm): "
+           + "; ".join(f"{fam_label(run)} {scaffold.pm(e.mean, e.se, '.3f', '.3f', scale=100)}"
+                       for run, e in est)
+           + f". The paper's 2.8 cm lies inside the 95 % interval for {inside} of "
+           f"{len(est)} families. Depends on E_max ∝ A_d² (our reading of the paper)."]
     # class vs reference above A_opt, at every σ; the three normalisations
-    above = amps > A_PAPER + 1e-9
-    for run in runs[1:]:
-        if len(run["result"].amplitudes) != len(amps):
-            continue
-        klass = run["klass"]
-        parts = {}
-        for name, fn in (("⟨E_d⟩/m", per_mass), ("⟨E_d⟩", e_d), ("energy per period", energy)):
-            res = [compare(fn(run)[i], fn(ref)[i]) for i in np.flatnonzero(above)]
-            parts[name] = res
-        ratios = parts["⟨E_d⟩/m"]
-        verdicts = [c[4] for c in ratios]
-        n_exp = sum(v == EXPECT[klass] for v in verdicts)
+    above = np.flatnonzero(amps > A_PAPER + 1e-9)
+    for run in full[1:]:
+        klass, want = run["klass"], EXPECT[run["klass"]]
+        parts = {name: [ef.compare_beds(fn(run)[i], fn(ref)[i]) for i in above]
+                 for name, fn in NORMALISATIONS.items()}
+        verdicts = [c.verdict for c in parts["⟨E_d⟩/m"]]
         head = (f"**class {klass} (σ = {run['sigma']:g}) vs the reference for A_d > 2.8 cm** "
-                f"(paper, at σ = 0.5: {EXPECT[klass]}) — in the paper's ⟨E_d⟩/m: "
-                f"{n_exp} of {len(verdicts)} amplitudes {EXPECT[klass]} (Welch 95 %), the rest "
-                + (", ".join(sorted({v for v in verdicts if v != EXPECT[klass]})) or "none")
-                + "; ratio to the reference ")
-        head += ", ".join(scaffold.pm(c[0], c[1], ".3f", ".3f") for c in ratios)
-        head += f" at {', '.join(f'{a * 100:g}' for a in amps[above])} cm."
+                f"(paper, at σ = 0.5: {want}) — in the paper's ⟨E_d⟩/m: "
+                f"{verdicts.count(want)} of {len(verdicts)} amplitudes {want} (Welch 95 %), the "
+                "rest " + (", ".join(sorted({v for v in verdicts if v != want})) or "none")
+                + "; ratio to the reference "
+                + ", ".join(scaffold.pm(c.ratio, c.ratio_se, ".3f", ".3f")
+                            for c in parts["⟨E_d⟩/m"])
+                + f" at {', '.join(f'{a * 100:g}' for a in amps[above])} cm.")
         mass_ratio = run["result"].summary["mass"][0] / ref["result"].summary["mass"][0]
-        plain = []
-        for name in ("⟨E_d⟩", "energy per period"):
-            cs = parts[name]
-            vs = [c[4] for c in cs]
-            plain.append(f"{name} ratio {min(c[0] for c in cs):.3f}–{max(c[0] for c in cs):.3f} "
-                         f"({sum(v == 'above' for v in vs)} above, "
-                         f"{sum(v == 'below' for v in vs)} below, "
-                         f"{sum(v == 'not significant' for v in vs)} not significant)")
+        plain = [f"{name} ratio {min(c.ratio for c in cs):.3f}–{max(c.ratio for c in cs):.3f} ("
+                 + ", ".join(f"{[c.verdict for c in cs].count(v)} {v}"
+                             for v in ("above", "below", "not significant")) + ")"
+                 for name, cs in parts.items() if name != "⟨E_d⟩/m"]
         out.append(head + f" Mass ratio {mass_ratio:.4f}. Per unit mass (⟨E_d⟩; E_max ∝ m "
                    f"already): {plain[0]}. Per damper (J dissipated per period): {plain[1]}.")
-    out += diagnostics(runs)
-    return out
+    return out + diagnostics(runs)
 
 
 def diagnostics(runs):
     """The paper's explanations at A_d = 3 cm (figs. 4, 5, 7, 8, 10–12), segregation and fig. 3."""
-    out = []
     ref = runs[0]
     rr = ref["result"]
-    kr = at3(rr)
-    c_ref = rr.replicate_summary["contacts_mean"][kr]
-    b_ref = bed_phase(ref, kr)
-    v_ref = b_ref["vz_max"][:, 0]
+    c_ref = rr.replicate_summary["contacts_mean"][at3(rr)]
+    b_ref = bed_phase(ref, at3(rr))
 
     def versus(x, y, unit, digits=4):
-        ratio, rse, d, h, verdict = compare(x, y)
+        c = ef.compare_beds(x, y)
         return (f"{fmt(x, digits)} vs {fmt(y, digits)} {unit} (difference "
-                f"{scaffold.pm(d, h, '+.4g')}, "
-                f"Welch 95 %: {verdict})")
+                f"{scaffold.pm(c.diff, c.half, '+.4g')}, Welch 95 %: {c.verdict})")
 
+    out = []
     for run in runs[1:]:  # every class and σ (the paper shows σ = 0.5)
-        r = run["result"]
-        k = at3(r)
-        klass = run["klass"]
+        r, k, klass = run["result"], at3(run["result"]), run["klass"]
         c = r.replicate_summary["contacts_mean"][k]
-        ratio, rse, d, h, verdict = compare(c, c_ref)
-        want = {"a": "above", "b": "below", "c": "below"}[klass]
-        text = (f"**class {klass} (σ = {run['sigma']:g}) at 3 cm, wall contacts**: {fmt(c)} "
-                f"grains on floor "
-                f"or lid on average vs {fmt(c_ref)} for the reference (difference "
-                f"{scaffold.pm(d, h, '+.2f', '.2f')}, Welch 95 %: {verdict}; paper: "
-                f"{'more' if want == 'above' else 'fewer'}; "
-                f"{'as the paper' if verdict == want else 'not as the paper'})")
+        cmp = ef.compare_beds(c, c_ref)
+        want = "above" if klass == "a" else "below"
         b = bed_phase(run, k)
-        text += ("; per species " + ", ".join(f"{sp.name} {fmt(x)}" for sp, x
-                                              in zip(r.config.grains, b["contacts_species"].T)))
+        text = (f"**class {klass} (σ = {run['sigma']:g}) at 3 cm, wall contacts**: {fmt(c)} "
+                f"grains on floor or lid on average vs {fmt(c_ref)} for the reference (difference "
+                f"{scaffold.pm(cmp.diff, cmp.half, '+.2f', '.2f')}, Welch 95 %: {cmp.verdict}; "
+                f"paper: {'more' if want == 'above' else 'fewer'}; "
+                f"{'as the paper' if cmp.verdict == want else 'not as the paper'}); per species "
+                + per_species(r, b["contacts_species"]))
         if klass in "ac":
             text += ("; **wall force** (each bed's phase curve) peak "
                      + versus(b["force_peak"], b_ref["force_peak"], "N")
                      + ", period mean " + versus(b["force_mean"], b_ref["force_mean"], "N")
                      + f" (paper: {'larger' if klass == 'a' else 'smaller'})")
         if klass in "bc":
-            vs = "; ".join(f"{sp.name} " + versus(v, v_ref, "m/s", 3)
+            vs = "; ".join(f"{sp.name} " + versus(v, b_ref["vz_max"][:, 0], "m/s", 3)
                            for sp, v in zip(r.config.grains, b["vz_max"].T))
             want_v = ("both species faster than the reference" if klass == "b"
                       else "large grains like the reference, small grains faster")
@@ -638,32 +557,31 @@ def diagnostics(runs):
                    "across beds; 95 % interval against 0): " + "; ".join(seg_rows) + ". In a "
                    "well-mixed bed of unequal radii S is not exactly 0 (small centres reach "
                    "R_large − R_small closer to the floor), so a small |S| is not segregation.")
-    # fig. 3: spread in the snapshots (last period of every bed)
+
     def spreads(run):
         """Per snapshot (phase): the quarter ``q``, and per bed the spread (std) of all grain
         heights and the mean heights of the two species above the floor ``(R,)`` [cm]."""
         r = run["result"]
         sp = grain_species(r.config)
+        rows = at3(r) * r.replicates + np.arange(r.replicates)
         out = []
-        for j, t in enumerate(r.snapshots["t"]):
-            rows = at3(r) * r.replicates + np.arange(r.replicates)
+        for j, q in enumerate(quarters(r)):
             z = (r.snapshots["r"][rows, j, :, 2] - r.snapshots["z_box"][rows, j][:, None]) * 100
-            q = int(round((t * r.config.frequency % 1.0) * 4)) % 4
             out.append((q, z.std(axis=1), z[:, sp == 0].mean(axis=1),
                         z[:, sp == 1].mean(axis=1) if (sp == 1).any() else None))
         return out
 
+    # fig. 3: spread in the snapshots (last period of every bed)
     if rr.snapshots is not None:
         ref_sp = spreads(ref)
         for run in runs:
-            r = run["result"]
-            if run["sigma"] is None or r.snapshots is None or run["klass"] != "a":
+            if run["sigma"] is None or run["result"].snapshots is None or run["klass"] != "a":
                 continue
             rows = []
             for (q, std, hl, hs), (_, std_ref, _, _) in zip(spreads(run), ref_sp):
-                _, _, d, h, verdict = compare(std, std_ref)
                 rows.append(f"{q / 4:.2f}T: {fmt(hl)} / {fmt(hs)} cm, spread {fmt(std)} cm vs "
-                            f"reference {fmt(std_ref)} cm ({verdict}, Welch 95 %)")
+                            f"reference {fmt(std_ref)} cm ({ef.compare_beds(std, std_ref).verdict}"
+                            ", Welch 95 %)")
             out.append(f"fig. 3, class a σ = {run['sigma']:g} at 3 cm, snapshots of the last "
                        "period of every bed (phase: mean height of large / small grains above "
                        "the floor, spread (std) of all heights, mean ± SE across beds): "

@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from jaxdamp.analysis.decay import on_amplitudes
+from jaxdamp.analysis.decay import at_starting_peak, on_amplitudes, on_common_range
 from jaxdamp.analysis.stats import welch
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
@@ -45,6 +45,8 @@ try:
     from . import scaffold
 except ImportError:  # run as a file: python experiments/<name>.py
     import scaffold
+
+OUTSIDE = "outside the decay's range"
 
 
 def settings(quick: bool) -> dict:
@@ -67,85 +69,49 @@ def compute(quick: bool, log, ctx):
     dec = decay.measure(cfg, [s["z0"]], duration=s["decay_s"], replicates=s["R"], reuse=True,
                         out=ctx.raw(f"decay_z{s['z0']:g}_{s['decay_s']:g}s_R{s['R']}.h5"),
                         progress=ctx.progress, echo=None)
-    per_bed = dec.cycles[0]
     log(f"stepped sine: U = {s['U']} m × f = {s['f']} Hz, {s['sine_s']} s, R = {s['R']}")
-    sine_cfg = apply_overrides(cfg, {"numerics.duration": s["sine_s"]})
-    axes = {"primary.U": s["U"], "frequency": s["f"]}
-    res = reuse_or_run(sine_cfg, axes, ctx.raw(f"sine_R{s['R']}.h5"), progress=ctx.progress,
-                       echo=None, replicates=s["R"])
+    res = reuse_or_run(apply_overrides(cfg, {"numerics.duration": s["sine_s"]}),
+                       {"primary.U": s["U"], "frequency": s["f"]}, ctx.raw(f"sine_R{s['R']}.h5"),
+                       progress=ctx.progress, echo=None, replicates=s["R"])
     Z, fb_z = steady_or_window(res, "amplitude")  # (U, F, R)
     W, fb_w = steady_or_window(res, "granular_loss_per_cycle")
     zeta_sine = W / (2 * np.pi * K * Z ** 2)
-    stationary = int(np.asarray(res.steady["amplitude"]["stationary"], bool).sum())
     # the decay curve at every sine point's mean amplitude, per decay bed, in both cycle
     # amplitude conventions
-    Zm = Z.mean(axis=-1)
-    cmp = {name: compare(curves, Zm, zeta_sine)
-           for name, curves in (("mean", per_bed), ("start", [at_start(c) for c in per_bed]))}
+    per_bed = {"mean": dec.cycles[0], "start": [at_starting_peak(c) for c in dec.cycles[0]]}
     result = dict(settings=s, K=K, f=np.asarray(s["f"]), U=np.asarray(s["U"]), Z=Z, W=W,
-                  zeta_sine=zeta_sine, cmp=cmp, stationary=stationary, runs=int(Z.size),
-                  fallback=max(fb_z, fb_w), decay=dec, curve=dec.curves[0],
-                  curve_start=start_curve(per_bed),
+                  zeta_sine=zeta_sine, runs=int(Z.size), fallback=max(fb_z, fb_w), decay=dec,
+                  cmp={k: compare(c, Z.mean(axis=-1), zeta_sine) for k, c in per_bed.items()},
+                  stationary=int(np.asarray(res.steady["amplitude"]["stationary"], bool).sum()),
+                  curve=dec.curves[0], curve_start=on_common_range(per_bed["start"]),
                   zeta_struct=dec.zeta_struct,
                   wall=dict(decay=float(dec.sweep.summary["wall_time"]),
                             sine=float(res.summary["wall_time"])))
     return result, lambda out, prov: write(result, out, prov)
 
 
-def at_start(c: dict) -> dict:
-    """A decay bed's cycles (``Z = √(X_k X_k+1)``) re-expressed at each cycle's starting peak
-    ``X_k = Z e^{δ/2}`` (``δ`` the cycle's log decrement, from ``zeta``), with
-    ``ζ_g = ΔW/(2πK X_k²) = ζ_g(Z) e^{-δ}``: the other end of the amplitude a cycle can be
-    said to have. Where ζ_g(Z) is steep and a cycle loses much of its amplitude, the two
-    conventions place the same loss at visibly different amplitudes."""
-    zeta = np.asarray(c["zeta"])
-    delta = 2 * np.pi * zeta / np.sqrt(1 - zeta ** 2)
-    out = dict(c)
-    out["Z"] = np.asarray(c["Z"]) * np.exp(delta / 2)
-    out["zeta_g"] = np.asarray(c["zeta_g"]) * np.exp(-delta)
-    return out
-
-
-def start_curve(per_bed, n: int = 40) -> dict:
-    """The beds' curves in the starting-peak convention (:func:`at_start`) on a common grid."""
-    beds = [at_start(c) for c in per_bed if len(c["Z"]) >= 2]
-    lo = max(np.min(c["Z"]) for c in beds)
-    hi = min(np.max(c["Z"]) for c in beds)
-    return on_amplitudes(beds, np.geomspace(lo, hi, n))
-
-
 def compare(curves, Zm, zeta_sine) -> dict:
     """Per sine point (mean amplitude ``Zm`` (U, F)): the decay beds' ζ_g at that amplitude
-    (U, F, R_d), the Welch difference sine − decay and its 95 % half-width, and whether at
-    least two decay beds cover the amplitude."""
+    (U, F, R_d), the Welch difference sine − decay and its 95 % half-width, whether at least
+    two decay beds cover the amplitude, and the verdict."""
     at = on_amplitudes(curves, Zm.ravel())
     zeta_decay = at["values"]["zeta_g"].T.reshape(Zm.shape + (len(curves),))
-    diff = np.full(Zm.shape, np.nan)
-    half = np.full(Zm.shape, np.nan)
-    for idx in np.ndindex(Zm.shape):
-        diff[idx], half[idx] = welch(zeta_sine[idx], zeta_decay[idx])
-    return dict(zeta_decay=zeta_decay, diff=diff, half=half,
-                covered=np.isfinite(zeta_decay).sum(axis=-1) >= 2)
-
-
-def sine_range(r) -> str:
-    """The sine's ζ_g at each base amplitude's resonant point, as text."""
-    parts = []
-    for i in range(len(r["U"])):
-        j = int(np.argmax(r["Z"][i].mean(axis=-1)))
-        parts.append(f"{100 * r['zeta_sine'][i, j].mean():.2f} % at "
-                     f"{1e3 * r['Z'][i, j].mean():.1f} mm")
-    return ", ".join(parts)
+    covered = np.isfinite(zeta_decay).sum(axis=-1) >= 2
+    dh = np.array([welch(zeta_sine[i], zeta_decay[i]) for i in np.ndindex(Zm.shape)])
+    diff, half = dh[:, 0].reshape(Zm.shape), dh[:, 1].reshape(Zm.shape)
+    return dict(zeta_decay=zeta_decay, diff=diff, half=half, covered=covered,
+                verdict=np.array([verdict(diff[i], half[i], covered[i])
+                                  for i in np.ndindex(Zm.shape)]).reshape(Zm.shape))
 
 
 def verdict(d, h, covered) -> str:
     if not covered or not np.isfinite(h):
-        return "outside the decay's range"
+        return OUTSIDE
     return "agree" if abs(d) <= h else ("sine above" if d > 0 else "sine below")
 
 
 def write(r, out, prov):
-    s = r["settings"]
+    s, c, cs = r["settings"], r["curve"], r["curve_start"]
     with scaffold.data_file(out, prov, convention="zeta_g = dW / (2 pi K Z^2), dW granular "
                             "loss per cycle", cycle_amplitude="mean: Z = sqrt(X_k X_k+1) (main); "
                             "start: Z = X_k, the cycle's starting peak (sensitivity)") as h:
@@ -154,27 +120,22 @@ def write(r, out, prov):
         for name, cm in r["cmp"].items():
             for k in ("zeta_decay", "diff", "half"):
                 h.create_dataset(f"sine/{name}/{k}", data=cm[k]).attrs["units"] = "1"
-        c = r["curve"]
         for k in ("Z", "zeta", "zeta_se", "zeta_g", "zeta_g_se", "f", "f_se", "n"):
             h.create_dataset(f"decay/{k}", data=c[k]).attrs["units"] = (
                 "m" if k == "Z" else "Hz" if k.startswith("f") else "1")
     fig, ax = scaffold.subplots(figsize=(7.5, 4.5))
-    Zc = np.asarray(c["Z"]) * 1e3
+    Zc, ok = np.asarray(c["Z"]) * 1e3, np.isfinite(c["zeta_g_se"])
     ax.plot(Zc, 100 * c["zeta_g"], "k-", lw=1.2,
             label=f"free decay, cycle at Z = √(X_k X_k+1) (mean of {s['R']} beds)")
-    ok = np.isfinite(c["zeta_g_se"])
     ax.fill_between(Zc[ok], 100 * (c["zeta_g"] - 2 * c["zeta_g_se"])[ok],
                     100 * (c["zeta_g"] + 2 * c["zeta_g_se"])[ok], color="k", alpha=0.2, lw=0)
-    cs = r["curve_start"]
     ax.plot(1e3 * np.asarray(cs["Z"]), 100 * cs["zeta_g"], "k--", lw=1,
             label="free decay, each cycle at its starting peak X_k (sensitivity)")
     for i, U in enumerate(r["U"]):
-        zm = r["Z"][i].mean(axis=-1) * 1e3
-        ym = 100 * r["zeta_sine"][i].mean(axis=-1)
-        ye = 200 * scaffold.standard_error(r["zeta_sine"][i])
-        ax.errorbar(zm, ym, yerr=ye, fmt="o", ms=4, capsize=2,
-                    label=f"stepped sine, U = {U * 1e3:g} mm "
-                          f"({', '.join(f'{x:g}' for x in r['f'])} Hz)")
+        ax.errorbar(r["Z"][i].mean(axis=-1) * 1e3, 100 * r["zeta_sine"][i].mean(axis=-1),
+                    yerr=200 * scaffold.standard_error(r["zeta_sine"][i]), fmt="o", ms=4,
+                    capsize=2, label=f"stepped sine, U = {U * 1e3:g} mm "
+                                     f"({', '.join(f'{x:g}' for x in r['f'])} Hz)")
     ax.set(xscale="log", xlabel="amplitude of the primary Z [mm]",
            ylabel="grains' damping ratio ζ_g = ΔW/(2πKZ²) [%]")
     ax.set_title("thesis damper: free decay vs stepped sine (± 2 SE over beds)", fontsize=9)
@@ -204,43 +165,41 @@ def write(r, out, prov):
          "## At each base amplitude's resonant point (largest Z over its frequencies)", "",
          "Two decay columns: each cycle at Z = √(X_k X_k+1) (the main convention) and at its "
          "starting peak X_k (sensitivity).", ""]
-    rows, agree, total = [], 0, 0
-    for i, U in enumerate(r["U"]):
-        Zm = r["Z"][i].mean(axis=-1)
-        j = int(np.argmax(Zm))
+    resonant = [(i, int(np.argmax(r["Z"][i].mean(axis=-1)))) for i in range(len(r["U"]))]
+    rows = []
+    for i, j in resonant:
         zs = r["zeta_sine"][i, j]
-        cells = []
-        for name in ("mean", "start"):
-            cm = r["cmp"][name]
+        row = [f"{r['U'][i] * 1e3:g}", f"{r['f'][j]:g}",
+               scaffold.pm(r["Z"][i, j].mean(), scaffold.standard_error(r["Z"][i, j]), ".2f",
+                           scale=1e3), scaffold.pm(*scaffold.mean_se(zs), ".3f", scale=100)]
+        for cm in (r["cmp"]["mean"], r["cmp"]["start"]):
             zd = cm["zeta_decay"][i, j]
-            v = verdict(cm["diff"][i, j], cm["half"][i, j], cm["covered"][i, j])
-            if name == "mean":
-                total += v != "outside the decay's range"
-                agree += v == "agree"
-            dec_txt = diff_txt = "–"
-            if np.isfinite(zd).sum() >= 2:
-                dec_txt = scaffold.pm(*scaffold.mean_se(zd[np.isfinite(zd)]), ".3f", scale=100)
-                diff_txt = scaffold.pm(cm["diff"][i, j], cm["half"][i, j], "+.3f", scale=100)
-            cells += [dec_txt, diff_txt, v]
-        z_amp = scaffold.pm(Zm[j], scaffold.standard_error(r["Z"][i, j]), ".2f", scale=1e3)
-        rows.append([f"{U * 1e3:g}", f"{r['f'][j]:g}", z_amp,
-                     scaffold.pm(*scaffold.mean_se(zs), ".3f", scale=100)] + cells)
+            enough = np.isfinite(zd).sum() >= 2
+            row += [scaffold.pm(*scaffold.mean_se(zd[np.isfinite(zd)]), ".3f", scale=100)
+                    if enough else "–",
+                    scaffold.pm(cm["diff"][i, j], cm["half"][i, j], "+.3f", scale=100)
+                    if enough else "–", cm["verdict"][i, j]]
+        rows.append(row)
     L += scaffold.table(["U [mm]", "f [Hz]", "Z [mm]", "ζ_g sine [%]",
                          "ζ_g decay at Z, √(X_k X_k+1) [%]", "difference [%]", "verdict",
                          "ζ_g decay at Z, X_k [%]", "difference [%]", "verdict"], rows)
+    at_res = [r["cmp"]["mean"]["verdict"][i, j] for i, j in resonant]
     counts = {}
     for name, cm in r["cmp"].items():
-        every = [verdict(cm["diff"][k], cm["half"][k], cm["covered"][k])
-                 for k in np.ndindex(cm["diff"].shape)]
-        inside = [v for v in every if v != "outside the decay's range"]
+        every = list(cm["verdict"].ravel())
+        inside = [v for v in every if v != OUTSIDE]
         counts[name] = (f"{inside.count('agree')} of {len(inside)} agree, "
                         f"{inside.count('sine above')} above, {inside.count('sine below')} "
                         f"below ({len(every) - len(inside)} outside the decay's range)")
-    L += ["", f"Resonant points (cycle at √(X_k X_k+1)): {agree} of {total} agree within the "
+    L += ["", f"Resonant points (cycle at √(X_k X_k+1)): {at_res.count('agree')} of "
+          f"{len(at_res) - at_res.count(OUTSIDE)} agree within the "
           f"95 % interval. Every sine point inside the decay's amplitude range: cycle at "
           f"√(X_k X_k+1): {counts['mean']}; cycle at X_k: {counts['start']}.", "",
           "Why the convention can matter: at the large amplitudes the sine's ζ_g changes "
-          f"steeply with Z ({sine_range(r)}), while a decay cycle there loses a large part of "
+          "steeply with Z ("
+          + ", ".join(f"{100 * r['zeta_sine'][i, j].mean():.2f} % at "
+                      f"{1e3 * r['Z'][i, j].mean():.1f} mm" for i, j in resonant)
+          + "), while a decay cycle there loses a large part of "
           f"its amplitude (total ζ up to {100 * np.nanmax(c['zeta']):.1f} %, X_k+1/X_k down to "
           f"{np.exp(-2 * np.pi * np.nanmax(c['zeta'])):.2f}), so the amplitude a cycle is "
           "assigned to moves the decay curve along Z by up to that ratio. A verdict that is "

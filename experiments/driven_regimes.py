@@ -37,6 +37,7 @@ from jaxdamp.analysis.response import first_harmonic
 from jaxdamp.analysis.stats import t_quantile, welch
 from jaxdamp.cases import presets
 from jaxdamp.studies import efficiency as ef
+from jaxdamp.studies.sweep import reuse_or_run
 
 try:
     from . import scaffold
@@ -45,6 +46,13 @@ except ImportError:  # run as a file: python experiments/<name>.py
 
 A_OPT_OURS = 0.02567  # [m], reference system, binary_mixtures (3 beds)
 A_OPT_PAPER = 0.028
+#: Each bed's measures: name → (units, table column, figure axis or None: not drawn).
+MEASURES = {
+    "contact": ("1", "grains touching floor or lid", "grains touching floor or lid [fraction]"),
+    "excursion": ("1", "relative excursion", "relative excursion of the bed [-]"),
+    "com_amp": ("1", "c.o.m. harmonic / A_d", "c.o.m. first harmonic / A_d [-]"),
+    "com_phase": ("deg", "c.o.m. phase vs box [deg]", None),
+    "E_d": ("1", "⟨E_d⟩", "efficiency ⟨E_d⟩ [-]")}
 
 
 def settings(quick: bool) -> dict:
@@ -54,46 +62,39 @@ def settings(quick: bool) -> dict:
                 R=3)
 
 
-def compute(quick: bool, log, ctx):
-    from jaxdamp.studies.sweep import reuse_or_run
+def bed(c, rec: dict, periods: int, rest: float) -> dict:
+    """One bed's :data:`MEASURES` from its records (config ``c``, bed height at rest ``rest``)."""
+    a = ef.analyse(c, rec, periods)
+    h_rel = a["phase"]["z_cm_species"][:, 0] - a["phase"]["z_box"]
+    t = np.asarray(rec["t"])
+    keep = t >= t[-1] - periods / c.frequency
+    (amp_c, ph_c), (_, ph_b) = (first_harmonic(t[keep], np.asarray(rec[k])[keep], c.frequency)
+                                for k in ("z_cm", "z_box"))
+    return dict(contact=a["summary"]["contacts_mean"] / c.n_grains,
+                excursion=0.5 * np.ptp(h_rel) / (0.5 * (c.box.Lz - rest)),
+                com_amp=amp_c / c.drive.amplitude,
+                com_phase=math.degrees(math.remainder(ph_c - ph_b, 2 * math.pi)),
+                E_d=a["summary"]["E_d_mean"])
 
+
+def compute(quick: bool, log, ctx):
     s = settings(quick)
-    base = presets.get("varela2023-reference")
-    cfg = ef.protocol(base, s["periods"], s["transient"], 100, s["amps"])
-    axes = {"drive.amplitude": list(s["amps"])}
-    res = reuse_or_run(cfg, axes, ctx.raw(f"reference_R{s['R']}.h5"), progress=ctx.progress,
+    cfg = ef.protocol(presets.get("varela2023-reference"), s["periods"], s["transient"], 100,
+                      s["amps"])
+    res = reuse_or_run(cfg, {"drive.amplitude": list(s["amps"])},
+                       ctx.raw(f"reference_R{s['R']}.h5"), progress=ctx.progress,
                        replicates=s["R"], snapshots=0)
-    P, R = len(s["amps"]), s["R"]
-    n = sum(sp.count for sp in cfg.grains)
-    f = cfg.frequency
     with h5py.File(res.path, "r") as h:
-        rest = np.asarray(h["settle/bed_height"]).reshape(P, R)
-    keys = ("contact", "excursion", "com_amp", "com_phase", "E_d")
-    m = {k: np.full((P, R), np.nan) for k in keys}
-    for i, c in enumerate(res.configs):
-        A = c.drive.amplitude
-        for r in range(R):
-            row = res.point(i, r)
-            rec = {k: v[row] for k, v in res.records.items()}
-            a = ef.analyse(c, rec, s["periods"])
-            m["contact"][i, r] = a["summary"]["contacts_mean"] / n
-            m["E_d"][i, r] = a["summary"]["E_d_mean"]
-            h_rel = a["phase"]["z_cm_species"][:, 0] - a["phase"]["z_box"]
-            m["excursion"][i, r] = 0.5 * np.ptp(h_rel) / (0.5 * (c.box.Lz - rest[i, r]))
-            t = np.asarray(rec["t"])
-            keep = t >= t[-1] - s["periods"] / f
-            amp_c, ph_c = first_harmonic(t[keep], np.asarray(rec["z_cm"])[keep], f)
-            amp_b, ph_b = first_harmonic(t[keep], np.asarray(rec["z_box"])[keep], f)
-            m["com_amp"][i, r] = amp_c / A
-            m["com_phase"][i, r] = math.degrees(math.remainder(ph_c - ph_b, 2 * math.pi))
-    comp = {}
-    for k in keys:
-        d, h = welch(m[k][-1], m[k][0])
-        comp[k] = dict(diff=d, ci95=h)
-    stationary = int(np.sum(res.steady["amplitude"]["stationary"])) if res.steady else 0
-    result = dict(s=s, m=m, comp=comp, rest=rest, cfg=cfg, res=res, n=n,
+        rest = np.asarray(h["settle/bed_height"]).reshape(len(s["amps"]), s["R"])
+    beds = [[bed(c, {k: v[res.point(i, r)] for k, v in res.records.items()}, s["periods"],
+                 rest[i, r]) for r in range(s["R"])] for i, c in enumerate(res.configs)]
+    m = {k: np.array([[b[k] for b in row] for row in beds], float) for k in MEASURES}
+    comp = {k: dict(zip(("diff", "ci95"), welch(m[k][-1], m[k][0]))) for k in MEASURES}
+    result = dict(s=s, m=m, comp=comp, rest=rest, cfg=cfg, res=res, n=cfg.n_grains,
                   balance=float(np.nanmax(np.abs(res.summary["balance_error"]))),
-                  wall=float(res.summary["wall_time"]), stationary=stationary)
+                  wall=float(res.summary["wall_time"]),
+                  stationary=int(np.sum(res.steady["amplitude"]["stationary"]))
+                  if res.steady else 0)
     for i, A in enumerate(s["amps"]):
         log(f"A_d = {A * 100:g} cm: contact {m['contact'][i].mean():.3f}, excursion "
             f"{m['excursion'][i].mean():.2f}, c.o.m. {m['com_amp'][i].mean():.2f} A_d")
@@ -105,31 +106,27 @@ def main(argv=None):
 
 
 def write(r, out, prov):
-    s, m = r["s"], r["m"]
+    s, m, R = r["s"], r["m"], r["s"]["R"]
     prov = dict(prov, sweep_wall_s=r["wall"])
     with scaffold.data_file(out, prov, settings=s, base_config=r["cfg"].to_json()) as h:
         h.create_dataset("amplitude", data=np.asarray(s["amps"])).attrs["units"] = "m"
-        for k, u in (("contact", "1"), ("excursion", "1"), ("com_amp", "1"),
-                     ("com_phase", "deg"), ("E_d", "1")):
+        for k, (u, _, _) in MEASURES.items():
             h.create_dataset(k, data=m[k]).attrs.update(units=u, dims="amplitude, replicate")
         h.create_dataset("bed_height_rest", data=r["rest"]).attrs["units"] = "m"
 
-    A = np.asarray(s["amps"]) * 100
-    fig, axs = scaffold.subplots(1, 4, figsize=(16, 3.8))
-    for ax, (k, lab) in zip(axs, (("contact", "grains touching floor or lid [fraction]"),
-                                   ("excursion", "relative excursion of the bed [-]"),
-                                   ("com_amp", "c.o.m. first harmonic / A_d [-]"),
-                                   ("E_d", "efficiency ⟨E_d⟩ [-]"))):
-        ax.errorbar(A, m[k].mean(-1), yerr=2 * scaffold.standard_error(m[k]), fmt="o-",
-                    capsize=3)
+    drawn = [(k, axis) for k, (_, _, axis) in MEASURES.items() if axis]
+    fig, axs = scaffold.subplots(1, len(drawn), figsize=(16, 3.8))
+    for ax, (k, axis) in zip(axs, drawn):
+        ax.errorbar(np.asarray(s["amps"]) * 100, m[k].mean(-1),
+                    yerr=2 * scaffold.standard_error(m[k]), fmt="o-", capsize=3)
         ax.axvline(A_OPT_OURS * 100, color="tab:green", ls="--", lw=0.8, label="our A_opt")
         ax.axvline(A_OPT_PAPER * 100, color="tab:red", ls=":", lw=0.8, label="paper's A_opt")
-        ax.set(xlabel="drive amplitude A_d [cm]", ylabel=lab)
+        ax.set(xlabel="drive amplitude A_d [cm]", ylabel=axis)
     axs[0].legend(fontsize=7)
-    fig.suptitle(f"varela2023-reference, mean of R = {s['R']} beds ± 2 SE", fontsize=9)
+    fig.suptitle(f"varela2023-reference, mean of R = {R} beds ± 2 SE", fontsize=9)
     scaffold.save_figure(fig, out)
 
-    R = s["R"]
+    c = r["comp"]
     L = ["# The two regimes of the driven box (2023 paper §4, §5.2)", "",
          scaffold.provenance_line(prov, prov["sweep_wall_s"]) + " Native engine.", "",
          f"`varela2023-reference`, {len(s['amps'])} amplitudes × **R = {R} independently "
@@ -139,13 +136,9 @@ def write(r, out, prov):
          f"{r['stationary']} of {len(s['amps']) * R} runs detected stationary by MSER on the "
          f"per-period amplitude and dissipation (the measures below use the analysed periods "
          f"of every run). Energy balance error ≤ {r['balance']:.1e}.", ""]
-    L += scaffold.table(
-        ["A_d [cm]", "grains touching floor or lid", "relative excursion",
-         "c.o.m. harmonic / A_d", "c.o.m. phase vs box [deg]", "⟨E_d⟩"],
-        [[f"{a * 100:g}"] + [scaffold.pm(*scaffold.mean_se(m[k][i]), 3) for k in
-                             ("contact", "excursion", "com_amp", "com_phase", "E_d")]
-         for i, a in enumerate(s["amps"])])
-    c = r["comp"]
+    L += scaffold.table(["A_d [cm]"] + [col for _, col, _ in MEASURES.values()],
+                        [[f"{a * 100:g}"] + [scaffold.pm(*scaffold.mean_se(m[k][i]), 3)
+                                             for k in MEASURES] for i, a in enumerate(s["amps"])])
     L += ["", f"Highest minus lowest amplitude ({s['amps'][-1] * 100:g} − {s['amps'][0] * 100:g} "
           "cm), Welch 95 %: " + "; ".join(f"{k} {scaffold.pm(c[k]['diff'], c[k]['ci95'], '+.3g')}"
                                           for k in ("contact", "excursion", "com_amp")) + ".",

@@ -9,7 +9,7 @@ import h5py
 import numpy as np
 import pytest
 
-from jaxdamp.analysis.decay import decay_curve, on_amplitudes
+from jaxdamp.analysis.decay import at_starting_peak, decay_curve, on_amplitudes, on_common_range
 from jaxdamp.cases import presets
 from jaxdamp.config import ConfigError, apply_overrides
 from jaxdamp.studies import decay
@@ -107,3 +107,27 @@ def test_decay_cli_quick_writes_curves_and_figure(tmp_path):
         p = subprocess.run([sys.executable, "-m", "jaxdamp", "decay", *args],
                            capture_output=True, text=True, timeout=120)
         assert p.returncode == 2 and match in p.stderr and "Traceback" not in p.stderr, p.stderr
+
+
+def test_at_starting_peak_moves_each_cycle_to_its_first_peak():
+    """For peaks X0 = 1, X1 = e^{−δ}: Z = √(X0 X1) → X0, ζ_g(Z) → ζ_g(Z) Z²/X0²."""
+    delta = 0.5
+    zeta = delta / math.sqrt(4 * math.pi ** 2 + delta ** 2)
+    Z = math.exp(-delta / 2)
+    c = at_starting_peak({"Z": np.array([Z]), "zeta": np.array([zeta]),
+                          "zeta_g": np.array([0.03]), "f": np.array([15.0])})
+    assert c["Z"][0] == pytest.approx(1.0, rel=1e-12)
+    assert c["zeta_g"][0] == pytest.approx(0.03 * Z ** 2, rel=1e-12)
+    assert c["f"][0] == 15.0 and c["zeta"][0] == zeta
+
+
+def test_on_common_range_is_the_overlap_of_the_replicates():
+    """Log-spaced grid from the largest smallest Z to the smallest largest Z; a curve with
+    fewer than two cycles is left out; the mean across replicates on the grid."""
+    curve = lambda Z, z: {"Z": np.array(Z), "zeta": np.full(len(Z), z),  # noqa: E731
+                          "f": np.ones(len(Z))}
+    r = on_common_range([curve([1.0, 4.0], 0.1), curve([2.0, 8.0], 0.3), curve([3.0], 9.0)],
+                        3)
+    np.testing.assert_allclose(r["Z"], [2.0, 2 * math.sqrt(2), 4.0], rtol=1e-12)
+    np.testing.assert_allclose(r["zeta"], 0.2, rtol=1e-12)
+    assert r["n"].tolist() == [2, 2, 2]

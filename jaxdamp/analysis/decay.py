@@ -129,3 +129,44 @@ def on_amplitudes(curves: list[dict], Z_grid) -> dict:
             sd = np.sqrt(np.nansum((v - m) ** 2, axis=0) / np.maximum(n - 1, 1))
         out[k], out[f"{k}_se"] = m, np.where(n > 1, sd / np.sqrt(np.maximum(n, 1)), np.nan)
     return out
+
+
+def at_starting_peak(curve: dict) -> dict:
+    """A decay curve (:func:`decay_curve`, cycles at ``Z = √(X_k X_{k+1})``) re-expressed
+    at each cycle's starting peak: with the cycle's decrement ``δ = 2πζ/√(1 − ζ²)``,
+
+    .. math:: X_k = Z\\, e^{δ/2}, \\qquad ζ_g(X_k) = ΔW/(2π K X_k^2) = ζ_g(Z)\\, e^{-δ},
+
+    the other end of the amplitude a cycle can be said to have (the other arrays kept). Where
+    ``ζ_g`` depends steeply on the amplitude and a cycle loses much of it, the two conventions
+    place the same loss at visibly different amplitudes.
+
+    >>> c = at_starting_peak({"Z": np.array([0.01]), "zeta": np.array([0.0]),
+    ...                       "zeta_g": np.array([0.02])})
+    >>> float(c["Z"][0]), float(c["zeta_g"][0])
+    (0.01, 0.02)
+    """
+    zeta = np.asarray(curve["zeta"])
+    delta = 2 * np.pi * zeta / np.sqrt(1 - zeta ** 2)
+    out = dict(curve)
+    out["Z"] = np.asarray(curve["Z"]) * np.exp(delta / 2)
+    out["zeta_g"] = np.asarray(curve["zeta_g"]) * np.exp(-delta)
+    return out
+
+
+def on_common_range(curves: list[dict], n: int = 40) -> dict:
+    """Replicates' curves (those with at least two cycles) by :func:`on_amplitudes` on ``n``
+    amplitudes spaced evenly in ``log Z`` over the range every one of them covers, from the
+    largest of their smallest ``Z`` to the smallest of their largest.
+
+    >>> c = [{"Z": np.array([1.0, 4.0]), "zeta": np.array([0.1, 0.1]),
+    ...       "f": np.array([1.0, 1.0])}, {"Z": np.array([2.0, 8.0]),
+    ...       "zeta": np.array([0.3, 0.3]), "f": np.array([1.0, 1.0])}]
+    >>> r = on_common_range(c, 3)
+    >>> np.round(r["Z"], 4).tolist(), np.round(r["zeta"], 6).tolist()
+    ([2.0, 2.8284, 4.0], [0.2, 0.2, 0.2])
+    """
+    beds = [c for c in curves if len(c["Z"]) >= 2]
+    lo = max(np.min(c["Z"]) for c in beds)
+    hi = min(np.max(c["Z"]) for c in beds)
+    return on_amplitudes(beds, np.geomspace(lo, hi, n))

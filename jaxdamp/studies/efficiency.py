@@ -1,4 +1,5 @@
-"""Dissipation efficiency of a driven box (S2; docs/physics.md §4; Varela-Rosales et al. 2023, eqs. 3–5).
+"""Dissipation efficiency of a driven box (S2; docs/physics.md §4; Varela-Rosales et al. 2023,
+eqs. 3–5).
 
 Per drive period ``T = 1/f`` (energies in J per period, not the paper's ``1/T`` powers):
 
@@ -17,7 +18,8 @@ The average ``⟨E_d⟩`` over the analysed periods (after a transient) is given
 paper's "linear fit to E_d(t)" (``E_d(t)`` with the one-period integrals starting at every
 sample ``t`` whose period lies in the window, a least-squares line through them read at the
 window's middle; its slope is reported as the trend per period) and the plain mean of the
-per-period values, with their standard deviation and the standard error of the mean. Phase-resolved diagnostics average over the analysed periods in
+per-period values, with their standard deviation and the standard error of the mean.
+Phase-resolved diagnostics average over the analysed periods in
 ``samples_per_period`` phase bins: grains touching floor or lid (per species), the vertical
 force of the grains on floor + lid, and the centre of mass ``z``, ``v_z`` per species.
 
@@ -30,6 +32,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -78,6 +81,74 @@ def segregation_index(h_cm_species) -> np.ndarray:
     if h.shape[-1] != 2:
         return np.full(h.shape[:-1], np.nan)
     return 2.0 * (h[..., 0] - h[..., 1]) / (h[..., 0] + h[..., 1])
+
+
+class Comparison(NamedTuple):
+    """One quantity of two groups of beds compared (:func:`compare_beds`)."""
+
+    ratio: float
+    ratio_se: float
+    diff: float
+    half: float
+    verdict: str
+
+
+def compare_beds(x, y) -> Comparison:
+    """A quantity of two families compared across their independent beds ``x`` and ``y``
+    (NaN: a bed left out, e.g. not stationary; e.g. a mixture's ⟨E_d⟩/m against the
+    reference's at one amplitude): the ratio of the means with its delta-method SE,
+
+    .. math:: r = \\bar x / \\bar y, \\qquad
+              \\mathrm{SE}_r = |r| \\sqrt{(\\mathrm{SE}_x/\\bar x)^2 + (\\mathrm{SE}_y/\\bar y)^2}
+
+    (means and SEs across beds, :func:`jaxdamp.analysis.stats.across`), the difference
+    ``x̄ − ȳ`` with the half-width of its Welch 95 % interval
+    (:func:`jaxdamp.analysis.stats.welch`), and the ``verdict``: ``"above"``/``"below"``
+    when that interval excludes 0, ``"not significant"`` when it includes it,
+    ``"undetermined"`` with fewer than two beds on a side.
+
+    >>> c = compare_beds([2.0, 2.2, 2.1], [1.0, 1.1, 1.2])
+    >>> round(c.ratio, 6), round(c.diff, 6), c.verdict
+    (1.909091, 1.0, 'above')
+    """
+    from jaxdamp.analysis import stats
+
+    ex, ey = stats.across(x), stats.across(y)
+    ratio = ex.mean / ey.mean
+    rse = abs(ratio) * np.hypot(ex.se / ex.mean, ey.se / ey.mean)
+    d, h = stats.welch(x, y)
+    if not np.isfinite(h):
+        verdict = "undetermined"
+    else:
+        verdict = "above" if d - h > 0 else "below" if d + h < 0 else "not significant"
+    return Comparison(ratio, rse, d, h, verdict)
+
+
+def optimal_amplitudes(amplitudes, values) -> np.ndarray:
+    """Each bed's optimal drive amplitude ``A_opt`` [m], the amplitude of its largest
+    efficiency: ``values`` ``(P, R)`` (e.g. :attr:`EfficiencyResult.steady`
+    ``["E_d_per_mass"]["values"]``) at ``amplitudes`` ``(P,)``, per bed the vertex of the
+    parabola through its largest value and the two neighbours,
+
+    .. math:: A_\\text{opt} = A_k + \\frac{h}{2}\\,\\frac{y_{k-1} - y_{k+1}}
+              {y_{k-1} - 2 y_k + y_{k+1}}
+
+    (``h`` the spacing; :func:`jaxdamp.analysis.stats.replicate_extrema`; the sample itself
+    when it lies at either end of the range). NaN for a bed with a NaN at any amplitude (not
+    stationary there) and for every bed when there are fewer than 3 amplitudes.
+
+    >>> A = np.array([0.02, 0.025, 0.03, 0.035])
+    >>> np.round(optimal_amplitudes(A, -(A[:, None] - [0.026, 0.028]) ** 2), 6).tolist()
+    [0.026, 0.028]
+    """
+    from jaxdamp.analysis.stats import replicate_extrema
+
+    y = np.asarray(values, float)
+    out = np.full(y.shape[1], np.nan)
+    ok = np.isfinite(y).all(axis=0)
+    if len(amplitudes) >= 3 and ok.any():
+        out[ok] = replicate_extrema(amplitudes, y[:, ok]).x
+    return out
 
 
 def protocol(config: Config, periods: int = 50, transient: int = 10,
@@ -129,7 +200,8 @@ def analyse(config: Config, records: dict, periods: int, samples_per_period: int
     :data:`jaxdamp.physics.energy.RECORD_UNITS`); the last ``periods`` whole periods are analysed.
 
     Returns ``{"summary": {name: float}, "per_period": {name: (n,[S])},
-    "phase": {name: (spp,[S])}}`` where ``per_period`` covers every simulated period (:data:`PER_PERIOD_UNITS`: ``E_pp``,
+    "phase": {name: (spp,[S])}}`` where ``per_period`` covers every simulated period
+    (:data:`PER_PERIOD_UNITS`: ``E_pp``,
     ``E_pw``, ``E_input``, ``E_d``, ``t_end``, the species' mean heights above the floor
     ``h_cm_species`` ``(n, S)`` and the ``segregation`` index) and ``phase`` the analysed ones
     (``phase`` bin starts in units of ``T``); ``summary["segregation"]`` is the index's mean over
