@@ -286,6 +286,41 @@ def resonance(f, Z):
     return fp, float(np.exp(logz))
 
 
+def resonances(f, Z):
+    """:func:`resonance` of every sampled FRF in ``Z`` ``(F, ...)`` (frequency first; heights,
+    replicates, … after it): the resonance frequencies [Hz] and the peak amplitudes, each an
+    array of shape ``Z.shape[1:]`` — per column, the vertex of the parabola in ``log Z``
+    through the largest sample and its two neighbours.
+
+    >>> f = np.array([10.0, 12.0, 14.0, 16.0])
+    >>> fp, Zp = resonances(f, np.exp(-(f[:, None] - [12.5, 13.0]) ** 2))  # log Z: parabolas
+    >>> np.round(fp, 6).tolist(), np.round(Zp, 6).tolist()
+    ([12.5, 13.0], [1.0, 1.0])
+    """
+    Z = np.asarray(Z, float)
+    cols = Z.reshape(len(Z), -1)
+    peaks = np.array([resonance(f, cols[:, k]) for k in range(cols.shape[1])], float)
+    return peaks[:, 0].reshape(Z.shape[1:]), peaks[:, 1].reshape(Z.shape[1:])
+
+
+def fit_frf_scan(f, Z, primary, residuals: str = "relative") -> list[dict]:
+    """:func:`fit_frf_replicates` of every column of a scan's amplitudes ``Z`` ``(F, L, R)``
+    (frequency × a scanned parameter such as the box height × replicate): per ``j`` the
+    replicates' FRFs ``Z[:, j]`` fitted with the ``primary``'s ``U`` and ``K`` fixed, started
+    at ``M0 = M`` and ``C0 = max(C, 1)`` N s/m (off the bound 0 for an undamped primary).
+    Returns the ``L`` fits.
+
+    Example: amplitudes of the model itself fit back to its parameters::
+
+        Z = frf_amplitude(f, 2.6, p.K, 12.0, p.U)[:, None, None] * np.ones((1, 1, 2))
+        fit_frf_scan(f, Z, p)[0]["M_ef"]  # 2.6
+    """
+    Z = np.asarray(Z, float)
+    return [fit_frf_replicates(f, Z[:, j], primary.U, primary.K, M0=primary.M,
+                               C0=max(primary.C, 1.0), residuals=residuals)
+            for j in range(Z.shape[1])]
+
+
 def secondary_maxima(Z, se, k: float = 2.0) -> dict:
     """Local maxima of a sampled curve ``Z`` ``(F,)`` that stand out of its uncertainty.
 

@@ -168,6 +168,49 @@ def draw_band(ax, t, z_box, z_lowest, z_highest, z_cm, Lz, *, fontsize=None):
     ax.grid(alpha=0.3)
 
 
+def draw_run_band(ax, run: dict, Lz, frequency, periods=3, *, centre=True, fontsize=None):
+    """:func:`draw_band` of the last ``periods`` drive periods of ``frequency`` [Hz] of one
+    recorded run: ``run`` holds its samples ``t``, ``z_box``, ``z_lowest``, ``z_highest`` and,
+    with ``centre``, ``z_cm`` (a row of a sweep's records, say). Returns the boolean mask of
+    the samples drawn, ``t ≥ t_end − periods/frequency``, for more curves on the same window.
+
+    Example: ``m = draw_run_band(ax, {k: v[row] for k, v in res.records.items()}, 0.11, 15.5)``
+    draws the band of the run's last 3 periods (0.194 s).
+    """
+    m = time_window(run["t"], None, None, frequency, periods, "band")
+    z = [np.asarray(run[k])[m] for k in ("z_box", "z_lowest", "z_highest")]
+    draw_band(ax, np.asarray(run["t"])[m], *z, np.asarray(run["z_cm"])[m] if centre else None,
+              Lz, fontsize=fontsize)
+    return m
+
+
+def draw_replicates(ax, x, Y, **kwargs):
+    """The mean over the last axis (the replicates) of ``Y`` ``(L, R)`` against ``x`` ``(L,)``
+    with error bars of ± 2 standard errors across the replicates, ``2 s/√R``
+    (:func:`jaxdamp.analysis.uncertainty.standard_error`; no bar where ``R = 1``), by
+    ``Axes.errorbar`` (``kwargs``; defaults ``fmt="o-"``, ``capsize=3``). Returns its container.
+
+    Example: ``draw_replicates(ax, [1, 2], [[1.0, 3.0], [2.0, 2.0]])`` draws 2 ± 2 and 2 ± 0.
+    """
+    from jaxdamp.analysis.uncertainty import standard_error
+
+    Y = np.asarray(Y, float)
+    return ax.errorbar(x, Y.mean(axis=-1), yerr=2 * standard_error(Y),
+                       **{"fmt": "o-", "capsize": 3, **kwargs})
+
+
+def draw_interval(ax, mean, half_width, **kwargs):
+    """Shade ``mean ± half_width`` along the x axis (an optimum's 95 % interval, say), with
+    ``kwargs`` to ``Axes.axvspan``; nothing where the half-width is not finite (one replicate).
+    Returns the patch, or ``None``.
+
+    Example: ``draw_interval(ax, 0.12, 0.01, alpha=0.15)`` shades 0.11 … 0.13.
+    """
+    if not np.isfinite(half_width):
+        return None
+    return ax.axvspan(mean - half_width, mean + half_width, **kwargs)
+
+
 def band_figure(t, z_box, Lz, z_lowest, z_highest, z_cm, force_box, *, weight=None,
                 frequency=None, t0=None, t1=None, periods=BAND_PERIODS, title="", path=""):
     """The bed-band plot of the thesis versus time ``t`` [s].
