@@ -28,12 +28,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from jaxdamp.analysis.response import parabolic_extremum
-from jaxdamp.analysis.stats import across, welch
+from jaxdamp.analysis.stats import across, replicate_extrema, welch
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.physics.model import primary_frequency
-from jaxdamp.studies.grid import steady_or_window
+from jaxdamp.studies.grid import steady_replicates
 from jaxdamp.studies.sweep import reuse_or_run
 
 try:
@@ -79,24 +78,19 @@ def compute(quick: bool, log, ctx):
     res = reuse_or_run(cfg, {"box.Lz": list(s["lz"])},
                        ctx.raw(f"scan_{s['duration']:g}s_R{s['R']}.h5"), progress=ctx.progress,
                        echo=None, replicates=s["R"])
-    Z, fallback = steady_or_window(res, "amplitude")  # (L, R)
-    Z = np.asarray(Z, float)
-    stationary = np.asarray(res.steady["amplitude"]["stationary"], bool).reshape(Z.shape)
-    R = Z.shape[1]
-    local = [parabolic_extremum(lz, Z[:, r], "min") for r in range(R)]
-    k = int(np.argmin(Z.mean(axis=1)))
+    st = steady_replicates(res, "amplitude")
+    Z = np.asarray(st.values[0], float)  # (L, R)
+    local = replicate_extrema(lz, Z, "min")  # per bed: parabola through the smallest sample
     n = s["fit_points"]
-    lo = min(max(k - n // 2, 0), len(lz) - n)
+    lo = min(max(int(np.argmin(Z.mean(axis=1))) - n // 2, 0), len(lz) - n)
     sel = slice(lo, lo + n)
-    quad = [quadratic_vertex(lz[sel], Z[sel, r]) for r in range(R)]
-    at_edge = int(sum(x[2] in (0, len(lz) - 1) for x in local))
-    local_iv = interval([x[0] for x in local])
-    if at_edge:  # a bed's minimum is not bracketed by the scan: no interval of an optimum
+    local_iv = interval(local.x)
+    if local.at_edge:  # a bed's minimum is not bracketed by the scan: no interval of an optimum
         local_iv["contains_thesis"] = None
-    result = dict(settings=s, f0=f0, lz=lz, Z=Z, stationary=stationary, fallback=fallback,
-                  local=local_iv, local_at_edge=at_edge,
-                  quadratic=interval(quad), fit_lz=lz[sel],
-                  wall=float(res.summary["wall_time"]), config=cfg.to_json())
+    result = dict(settings=s, f0=f0, lz=lz, Z=Z, stationary=st.stationary.reshape(Z.shape),
+                  fallback=st.fallback[0], local=local_iv, local_at_edge=local.at_edge,
+                  quadratic=interval([quadratic_vertex(lz[sel], z) for z in Z[sel].T]),
+                  fit_lz=lz[sel], wall=st.wall, config=cfg.to_json())
     return result, lambda out, prov: write(result, out, prov)
 
 
@@ -111,19 +105,16 @@ def write(r, out, prov):
     R = Z.shape[1]
     with scaffold.data_file(out, prov, config=r["config"]) as h5:
         h5.attrs["f0"] = r["f0"]
-        h5.create_dataset("Lz", data=lz).attrs["units"] = "m"
-        h5.create_dataset("Z", data=Z).attrs["units"] = "m"
-        h5.create_dataset("stationary", data=r["stationary"]).attrs["units"] = "1"
+        for k, x, unit in (("Lz", lz, "m"), ("Z", Z, "m"), ("stationary", r["stationary"], "1")):
+            h5.create_dataset(k, data=x).attrs["units"] = unit
         for name in ("local", "quadratic"):
             d = h5.create_dataset(f"minimum_{name}", data=r[name]["values"])
-            d.attrs["units"] = "m"
-            d.attrs.update({k: r[name][k] for k in ("mean", "se", "lo", "hi")})
+            d.attrs.update(units="m", **{k: r[name][k] for k in ("mean", "se", "lo", "hi")})
 
     fig, ax = scaffold.subplots()
     for b in range(R):
         ax.plot(1e3 * lz, 1e3 * Z[:, b], "o-", ms=3, lw=0.8, alpha=0.6, label=f"bed {b}")
-    m = Z.mean(axis=1)
-    e = np.nan_to_num(scaffold.standard_error(Z, axis=1))
+    m, e = Z.mean(axis=1), np.nan_to_num(scaffold.standard_error(Z, axis=1))
     ax.errorbar(1e3 * lz, 1e3 * m, yerr=2e3 * e, fmt="ks-", ms=4, capsize=2,
                 label=f"mean of {R} beds ± 2 SE")
     for name, style in (("local", "C3"), ("quadratic", "C2")):

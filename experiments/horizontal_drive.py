@@ -22,12 +22,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from jaxdamp.analysis.response import fit_frf_replicates, frf_amplitude, parabolic_extremum
-from jaxdamp.analysis.stats import welch
+from jaxdamp.analysis.response import fit_frf_replicates, frf_amplitude
+from jaxdamp.analysis.stats import replicate_extrema, welch
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.physics.model import grain_mass
-from jaxdamp.studies.grid import steady_or_window
+from jaxdamp.studies.grid import steady_replicates
 from jaxdamp.studies.sweep import reuse_or_run
 
 try:
@@ -36,6 +36,9 @@ except ImportError:  # run as a file: python experiments/<name>.py
     import scaffold
 
 DIRECTIONS = {"vertical": (0.0, 0.0, 1.0), "horizontal": (1.0, 0.0, 0.0)}
+#: per-bed quantities compared between the directions: label, key, unit, scale in the summary
+QUANTITIES = (("M_ef [kg]", "M_ef", "kg", 1.0), ("C_ef [N s/m]", "C_ef", "N s/m", 1.0),
+              ("peak Z [mm]", "Z_peak", "m", 1e3), ("peak frequency [Hz]", "f_peak", "Hz", 1.0))
 
 
 def settings(quick: bool) -> dict:
@@ -49,58 +52,55 @@ def settings(quick: bool) -> dict:
                 duration={"vertical": 2.5, "horizontal": 6.0}, R=3, settle=None)
 
 
+def verdict(d, h, same="same", above="higher", below="lower") -> str:
+    """The verdict on a difference ``d`` and the half-width ``h`` of its 95 % interval
+    (:func:`~jaxdamp.analysis.stats.welch`): ``same`` where the interval holds 0, else
+    ``above``/``below`` by the sign; "no interval" where ``h`` is not finite. The studies that
+    compare two groups of beds share it (``random_vs_sine``, ``two_mode_structure``)."""
+    if not np.isfinite(h):
+        return "no interval"
+    return same if abs(d) <= h else above if d > 0 else below
+
+
 def compute(quick: bool, log, ctx):
     s = settings(quick)
     cfg = presets.get("sanchez2012-optimal")
     if s["settle"] is not None:
         cfg = apply_overrides(cfg, {"numerics.settle_time": s["settle"]})
-    p = cfg.primary
-    m_p = grain_mass(cfg)
-    f = np.asarray(s["f"])
-    out = {}
+    p, m_p, f = cfg.primary, grain_mass(cfg), np.asarray(s["f"])
+    runs = {}
     for name, d in DIRECTIONS.items():
         T = s["duration"][name]
         log(f"{name}: f = {s['f']} Hz, {T} s, R = {s['R']}")
         c = apply_overrides(cfg, {"direction": list(d), "numerics.duration": T})
         res = reuse_or_run(c, {"frequency": s["f"]}, ctx.raw(f"{name}_{T:g}s_R{s['R']}.h5"),
                            progress=ctx.progress, echo=None, replicates=s["R"])
-        Z, fallback = steady_or_window(res, "amplitude")  # (F, R)
-        W, _ = steady_or_window(res, "granular_loss_per_cycle")
+        st = steady_replicates(res, "amplitude", "granular_loss_per_cycle")
+        Z, W = st.values  # (F, R)
         fit = fit_frf_replicates(f, Z, p.U, p.K, p.M + m_p, p.C, residuals="relative")
-        peaks = [parabolic_extremum(f, Z[:, r], kind="max")[:2] for r in range(Z.shape[1])]
-        out[name] = dict(Z=Z, W=W, fit=fit, fallback=fallback,
-                         stationary=int(np.asarray(res.steady["amplitude"]["stationary"],
-                                                   bool).sum()),
-                         f_peak=np.array([x[0] for x in peaks]),
-                         Z_peak=np.array([x[1] for x in peaks]),
-                         wall=float(res.summary["wall_time"]))
-    cmp = {}
-    v, h = out["vertical"], out["horizontal"]
-    for key, a, b in (("M_ef", v["fit"]["M_reps"], h["fit"]["M_reps"]),
-                      ("C_ef", v["fit"]["C_reps"], h["fit"]["C_reps"]),
-                      ("Z_peak", v["Z_peak"], h["Z_peak"]),
-                      ("f_peak", v["f_peak"], h["f_peak"])):
-        cmp[key] = welch(b, a)  # horizontal − vertical
-    result = dict(settings=s, f=f, M=p.M, C=p.C, K=p.K, U=p.U, m_p=m_p, runs=out, cmp=cmp)
+        peak = replicate_extrema(f, Z, "max")
+        runs[name] = dict(Z=Z, W=W, fit=fit, M_ef=fit["M_reps"], C_ef=fit["C_reps"],
+                          fallback=st.fallback[0], stationary=int(st.stationary.sum()),
+                          f_peak=peak.x, Z_peak=peak.y, wall=st.wall)
+    cmp = {key: welch(runs["horizontal"][key], runs["vertical"][key])  # horizontal − vertical
+           for _, key, _, _ in QUANTITIES}
+    result = dict(settings=s, f=f, M=p.M, C=p.C, K=p.K, U=p.U, m_p=m_p, runs=runs, cmp=cmp)
     return result, lambda o, prov: write(result, o, prov)
 
 
 def write(r, out, prov):
-    s = r["settings"]
-    f = r["f"]
+    s, f, runs = r["settings"], r["f"], r["runs"]
     with scaffold.data_file(out, prov, fit="relative residuals (fit_frf_replicates), one fit "
                             "per bed") as h5:
         h5.create_dataset("f", data=f).attrs["units"] = "Hz"
-        for name, d in r["runs"].items():
+        for name, d in runs.items():
             g = h5.create_group(name)
             g.attrs["direction"] = list(DIRECTIONS[name])
-            for k, unit in (("Z", "m"), ("W", "J"), ("f_peak", "Hz"), ("Z_peak", "m")):
+            for k, unit in [("Z", "m"), ("W", "J")] + [(k, u) for _, k, u, _ in QUANTITIES]:
                 g.create_dataset(k, data=d[k]).attrs["units"] = unit
-            g.create_dataset("M_ef", data=d["fit"]["M_reps"]).attrs["units"] = "kg"
-            g.create_dataset("C_ef", data=d["fit"]["C_reps"]).attrs["units"] = "N s/m"
     fig, ax = scaffold.subplots()
     fine = np.linspace(f.min(), f.max(), 300)
-    for name, d in r["runs"].items():
+    for name, d in runs.items():
         m, e = scaffold.mean_se(d["Z"], axis=1)
         bar = ax.errorbar(f, 1e3 * m, yerr=2e3 * np.nan_to_num(e), fmt="o", ms=4, capsize=2,
                           label=f"{name} drive (mean of {d['Z'].shape[1]} beds ± 2 SE)")
@@ -116,7 +116,6 @@ def write(r, out, prov):
     ax.legend(fontsize=7)
     scaffold.save_figure(fig, out)
 
-    runs = r["runs"]
     n_runs = sum(d["Z"].size for d in runs.values())
     n_stat = sum(d["stationary"] for d in runs.values())
     L = ["# Horizontal against vertical base motion (issue 16)", "",
@@ -139,25 +138,17 @@ def write(r, out, prov):
          "(each frequency weighted equally in log amplitude); the peak by a parabola through "
          "each bed's three largest points. Verdict: Welch 95 % interval of horizontal − "
          "vertical across beds.", ""]
-    quantities = (("M_ef [kg]", "M_ef", lambda d: d["fit"]["M_reps"], 1.0),
-            ("C_ef [N s/m]", "C_ef", lambda d: d["fit"]["C_reps"], 1.0),
-            ("peak Z [mm]", "Z_peak", lambda d: d["Z_peak"], 1e3),
-            ("peak frequency [Hz]", "f_peak", lambda d: d["f_peak"], 1.0))
-    rows = []
-    for label, key, get, k in quantities:
-        d, hw = r["cmp"][key]
-        verdict = ("no interval" if not np.isfinite(hw) else "same" if abs(d) <= hw
-                   else "horizontal higher" if d > 0 else "horizontal lower")
-        rows.append([label] + [scaffold.pm(*scaffold.mean_se(get(runs[name])), 4, scale=k)
-                               for name in ("vertical", "horizontal")]
-                    + [scaffold.pm(d, hw, "+.3g", scale=k), verdict])
     L += scaffold.table(["quantity", "vertical", "horizontal", "horizontal − vertical",
-                         "verdict"], rows)
+                         "verdict"], [
+        [label] + [scaffold.pm(*scaffold.mean_se(d[key]), 4, scale=k) for d in runs.values()]
+        + [scaffold.pm(*r["cmp"][key], "+.3g", scale=k),
+           verdict(*r["cmp"][key], "same", "horizontal higher", "horizontal lower")]
+        for label, key, _, k in QUANTITIES])
     L += ["", f"Grains as dead mass: M + m_p = {r['M'] + r['m_p']:.4g} kg, C = {r['C']} N s/m.",
           "", "## Amplitude per frequency (mean ± SE over beds) [mm]", ""]
     L += scaffold.table(["f [Hz]", "vertical", "horizontal"], [
-        [f"{x:g}"] + [scaffold.pm(*scaffold.mean_se(runs[name]["Z"][j]), 4, scale=1e3)
-                      for name in ("vertical", "horizontal")] for j, x in enumerate(f)])
+        [f"{x:g}"] + [scaffold.pm(*scaffold.mean_se(d["Z"][j]), 4, scale=1e3)
+                      for d in runs.values()] for j, x in enumerate(f)])
     L += ["", "Figure: `figure.png`. Data: `data.h5`."]
     scaffold.write_summary(out, L)
 

@@ -35,13 +35,15 @@ from jaxdamp.analysis.stats import welch
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.studies import random as rnd
-from jaxdamp.studies.grid import steady_or_window
+from jaxdamp.studies.grid import steady_replicates
 from jaxdamp.studies.sweep import reuse_or_run
 
 try:
     from . import scaffold
+    from .horizontal_drive import verdict
 except ImportError:  # run as a file: python experiments/<name>.py
     import scaffold
+    from horizontal_drive import verdict
 
 #: amplitudes may differ by this fraction for a random level and a sine amplitude to be compared
 MATCH = 0.25
@@ -70,58 +72,44 @@ def compute(quick: bool, log, ctx):
                       out=ctx.raw(f"random_R{s['R']}.h5"), reuse=True, progress=ctx.progress,
                       echo=None)
     log(f"stepped sine: U = {s['U']} m × f = {s['f']} Hz, {s['sine_s']} s, R = {s['R']}")
-    sine_cfg = apply_overrides(cfg, {"numerics.duration": s["sine_s"]})
-    res = reuse_or_run(sine_cfg, {"primary.U": s["U"], "frequency": s["f"]},
+    res = reuse_or_run(apply_overrides(cfg, {"numerics.duration": s["sine_s"]}),
+                       {"primary.U": s["U"], "frequency": s["f"]},
                        ctx.raw(f"sine_R{s['R']}.h5"), progress=ctx.progress, echo=None,
                        replicates=s["R"])
-    Z, fallback = steady_or_window(res, "amplitude")  # (U, F, R)
+    st = steady_replicates(res, "amplitude")
+    Z = st.values[0]  # (U, F, R)
     ratio = Z / np.asarray(s["U"])[:, None, None]
-    stationary = int(np.asarray(res.steady["amplitude"]["stationary"], bool).sum())
     f = np.asarray(s["f"])
     # random: |H1| per realisation at the sine's frequencies (lines of the multisine)
-    P, R = len(s["scales"]), s["R"]
-    mag = np.full((P, len(f), R), np.nan)
-    mag_pooled = np.full((P, len(f)), np.nan)
-    coh = np.full((P, len(f)), np.nan)
-    for i, lev in enumerate(ran.levels):
-        k = [int(np.argmin(np.abs(lev["f"] - x))) for x in f]
+    lines = [[int(np.argmin(np.abs(lev["f"] - x))) for x in f] for lev in ran.levels]
+    for lev, k in zip(ran.levels, lines):
         assert np.allclose(lev["f"][k], f), "the sine frequencies must be lines of the multisine"
-        mag[i] = np.abs(lev["H_each"][:, k]).T
-        mag_pooled[i] = np.abs(lev["H"][k])
-        coh[i] = lev["coherence"][k]
+    mag = np.array([np.abs(lev["H_each"][:, k]).T for lev, k in zip(ran.levels, lines)])
+    mag_pooled = np.array([np.abs(lev["H"][k]) for lev, k in zip(ran.levels, lines)])
+    coh = np.array([lev["coherence"][k] for lev, k in zip(ran.levels, lines)])
     z_rms = np.array([lev["z_rms"] for lev in ran.levels])  # (P, R)
     Z_res = Z.mean(axis=-1).max(axis=1)  # each U's resonant amplitude
-    j_res = Z.mean(axis=-1).argmax(axis=1)
     pairs = []
-    for i in range(P):
-        amp = np.sqrt(2.0) * z_rms[i].mean()
-        for u in range(len(s["U"])):
-            if abs(amp / Z_res[u] - 1.0) <= MATCH:
-                rows = []
-                for j in range(len(f)):
-                    d, h = welch(mag[i, j], ratio[u, j])
-                    rows.append((d, h))
-                pairs.append(dict(level=i, U=u, amp=amp, rows=rows))
+    for i, z in enumerate(z_rms):
+        amp = np.sqrt(2.0) * z.mean()
+        pairs += [dict(level=i, U=u, amp=amp, rows=[welch(mag[i, j], ratio[u, j])
+                                                     for j in range(len(f))])
+                  for u in range(len(s["U"])) if abs(amp / Z_res[u] - 1.0) <= MATCH]
     result = dict(settings=s, f=f, U=np.asarray(s["U"]), Z=Z, ratio=ratio, mag=mag,
                   mag_pooled=mag_pooled, coh=coh, z_rms=z_rms, a_rms=np.array(
-                      [lev["a_rms"] for lev in ran.levels]), Z_res=Z_res, j_res=j_res,
-                  pairs=pairs, stationary=stationary, runs=int(Z.size), fallback=fallback,
+                      [lev["a_rms"] for lev in ran.levels]), Z_res=Z_res,
+                  j_res=Z.mean(axis=-1).argmax(axis=1), pairs=pairs,
+                  stationary=int(st.stationary.sum()), runs=int(Z.size),
+                  fallback=st.fallback[0],
                   random_stationary=int(sum(lev["stationary"].sum() for lev in ran.levels)),
                   segments=[lev["segments"] for lev in ran.levels], levels=ran.levels,
                   period=ran.period,
-                  wall=dict(random=float(ran.sweep.summary["wall_time"]),
-                            sine=float(res.summary["wall_time"])))
+                  wall=dict(random=float(ran.sweep.summary["wall_time"]), sine=st.wall))
     return result, lambda out, prov: write(result, out, prov)
 
 
-def verdict(d, h) -> str:
-    if not np.isfinite(h):
-        return "no interval"
-    return "agree" if abs(d) <= h else ("random above" if d > 0 else "random below")
-
-
 def write(r, out, prov):
-    s = r["settings"]
+    s, f = r["settings"], r["f"]
     with scaffold.data_file(out, prov, convention="amplitudes matched by the RMS of z: sqrt(2) "
                             "z_rms(random) vs the sine's resonant Z, within 25 %") as h:
         for k, unit in (("f", "Hz"), ("U", "m"), ("Z", "m"), ("ratio", "1"), ("mag", "1"),
@@ -143,7 +131,6 @@ def write(r, out, prov):
     ax.legend(fontsize=6.5)
     fig.savefig(os.path.join(out, "figure.png"), dpi=120)
 
-    f = r["f"]
     L = ["# Random excitation against stepped sine (issue 16)", "",
          scaffold.provenance_line(prov), "",
          f"Damper: `sanchez2012-optimal` (250 grains, Lz = 0.1225 m). Random base motion: flat "
@@ -166,41 +153,33 @@ def write(r, out, prov):
          "Verdict: Welch 95 % interval of |H1| − Z/U across realisations (|H1| of each "
          "realisation from its own periods).", "",
          "## Random levels", ""]
-    rows = []
-    for i, sc in enumerate(s["scales"]):
-        m, e = scaffold.mean_se(r["mag"][i])
-        rows.append([f"{sc:g}", f"{r['a_rms'][i]:.3g}",
-                     scaffold.pm(*scaffold.mean_se(np.sqrt(2) * r["z_rms"][i]), 3, scale=1e3)]
-                    + [f"{scaffold.pm(m[j], e[j], 3)} ({r['coh'][i, j]:.3f})"
-                       for j in range(len(f))])
     L += scaffold.table(["scale", "a_rms [m/s²]", "√2 z_rms [mm]"]
-                        + [f"\\|H1\\| {x:g} Hz (γ²)" for x in f], rows)
+                        + [f"\\|H1\\| {x:g} Hz (γ²)" for x in f], [
+        [f"{sc:g}", f"{r['a_rms'][i]:.3g}",
+         scaffold.pm(*scaffold.mean_se(np.sqrt(2) * r["z_rms"][i]), 3, scale=1e3)]
+        + [f"{scaffold.pm(m, e, 3)} ({c:.3f})"
+           for m, e, c in zip(*scaffold.mean_se(r["mag"][i]), r["coh"][i])]
+        for i, sc in enumerate(s["scales"])])
     L += ["", "## Stepped sine", ""]
-    rows = []
-    for u, U in enumerate(s["U"]):
-        m, e = scaffold.mean_se(r["ratio"][u])
-        rows.append([f"{1e3 * U:g}", f"{1e3 * r['Z_res'][u]:.3g}"]
-                    + [scaffold.pm(m[j], e[j], 3) for j in range(len(f))])
-    L += scaffold.table(["U [mm]", "resonant Z [mm]"] + [f"Z/U {x:g} Hz" for x in f], rows)
+    L += scaffold.table(["U [mm]", "resonant Z [mm]"] + [f"Z/U {x:g} Hz" for x in f], [
+        [f"{1e3 * U:g}", f"{1e3 * r['Z_res'][u]:.3g}"]
+        + [scaffold.pm(m, e, 3) for m, e in zip(*scaffold.mean_se(r["ratio"][u]))]
+        for u, U in enumerate(s["U"])])
     L += ["", "## Matched pairs", ""]
-    n_agree = n_all = 0
     if not r["pairs"]:
         L.append(f"No random level's √2 z_rms lies within {100 * MATCH:g} % of a sine's "
                  "resonant Z: no matched pair (see the tables).")
     else:
-        rows = []
-        for p in r["pairs"]:
-            cells = []
-            for (d, h) in p["rows"]:
-                v = verdict(d, h)
-                n_all += 1
-                n_agree += v == "agree"
-                cells.append(f"{scaffold.pm(d, h, '+.3g')} ({v})")
-            rows.append([f"{s['scales'][p['level']]:g}", f"{1e3 * s['U'][p['U']]:g}",
-                         f"{p['amp'] / r['Z_res'][p['U']]:.2f}"] + cells)
+        said = [[verdict(d, h, "agree", "random above", "random below") for d, h in p["rows"]]
+                for p in r["pairs"]]
         L += scaffold.table(["scale", "U [mm]", "√2 z_rms / Z_res"]
-                            + [f"{x:g} Hz: \\|H1\\| − Z/U" for x in f], rows)
-        L += ["", f"Matched lines that agree within the 95 % interval: {n_agree} of {n_all}."]
+                            + [f"{x:g} Hz: \\|H1\\| − Z/U" for x in f], [
+            [f"{s['scales'][p['level']]:g}", f"{1e3 * s['U'][p['U']]:g}",
+             f"{p['amp'] / r['Z_res'][p['U']]:.2f}"]
+            + [f"{scaffold.pm(d, h, '+.3g')} ({v})" for (d, h), v in zip(p["rows"], said_p)]
+            for p, said_p in zip(r["pairs"], said)])
+        L += ["", "Matched lines that agree within the 95 % interval: "
+              f"{sum(v.count('agree') for v in said)} of {sum(map(len, said))}."]
     L += ["", "Figure: `figure.png` (|H1| ± 2 SE of each random level with its coherence, sine "
           "points ± 2 SE). Data: `data.h5`."]
     scaffold.write_summary(out, L)

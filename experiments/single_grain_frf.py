@@ -38,7 +38,7 @@ from jaxdamp.analysis.response import secondary_maxima
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.s3 import impact
-from jaxdamp.studies.grid import steady_or_window
+from jaxdamp.studies.grid import steady_replicates
 from jaxdamp.studies.sweep import reuse_or_run
 
 try:
@@ -61,19 +61,13 @@ def settings(quick: bool):
 
 def window_halves(res, config):
     """Amplitude [m] of ``z_box`` over each half of every point's analysis window, ``(P, 2)``."""
-    t = res.records["t"]
-    z = res.records["z_box"]
+    t, z = res.records["t"], res.records["z_box"]
     t_end = t[:, -1]
     t0 = t_end * (1.0 - config.numerics.analysis_window)
-    out = []
-    for i in range(len(t)):
-        mid = 0.5 * (t0[i] + t_end[i])
-        amp = []
-        for lo, hi in ((t0[i], mid), (mid, t_end[i])):
-            sel = (t[i] >= lo) & (t[i] <= hi)
-            amp.append(0.5 * (z[i, sel].max() - z[i, sel].min()))
-        out.append(amp)
-    return np.asarray(out)
+    mid = 0.5 * (t0 + t_end)
+    return np.asarray([[0.5 * np.ptp(z[i, (t[i] >= lo) & (t[i] <= hi)])
+                        for lo, hi in ((t0[i], mid[i]), (mid[i], t_end[i]))]
+                       for i in range(len(t))])
 
 
 def run_s3(e, s, ctx):
@@ -85,10 +79,9 @@ def run_s3(e, s, ctx):
         os.remove(path)  # S3 sweeps are cheap and have no resume: recompute
     res = impact.sweep(cfg, {"frequency": list(s["s3_freqs"])}, out=path,
                        progress=ctx.progress, echo=None)
-    U = cfg.primary.U
     halves = window_halves(res, cfg)
-    Z = np.asarray(res.summary["amplitude"]) / U
-    err = 0.5 * np.abs(halves[:, 0] - halves[:, 1]) / U
+    Z = np.asarray(res.summary["amplitude"]) / cfg.primary.U
+    err = 0.5 * np.abs(halves[:, 0] - halves[:, 1]) / cfg.primary.U
     return dict(cfg=cfg, Z=Z, err=err, impacts=np.asarray(res.summary["impacts_per_cycle"]),
                 balance=float(np.max(res.summary["balance_error"])),
                 wall=float(res.summary["wall_time"]), jag=secondary_maxima(Z, err))
@@ -101,12 +94,12 @@ def run_dem(s, ctx):
     res = reuse_or_run(cfg, {"frequency": list(s["dem_freqs"])},
                        ctx.raw(f"dem_{len(s['dem_freqs'])}f_R{s['R']}.h5"),
                        progress=ctx.progress, replicates=s["R"])
-    Z, fallback = steady_or_window(res, "amplitude")  # (F, R)
-    Z = Z / cfg.primary.U
+    st = steady_replicates(res, "amplitude")
+    Z = st.values[0] / cfg.primary.U  # (F, R)
     mean, se = scaffold.mean_se(Z, axis=1)
     se = np.nan_to_num(se)  # one bed: no spread
-    return dict(cfg=cfg, Z=Z, mean=mean, se=se, fallback=fallback, runs=Z.size,
-                wall=float(res.summary["wall_time"]), jag=secondary_maxima(mean, se))
+    return dict(cfg=cfg, Z=Z, mean=mean, se=se, fallback=st.fallback[0], runs=Z.size,
+                wall=st.wall, jag=secondary_maxima(mean, se))
 
 
 def compute(quick, log, ctx):

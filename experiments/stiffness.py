@@ -27,12 +27,11 @@ import math
 import h5py
 import numpy as np
 
-from jaxdamp.analysis.response import resonance
-from jaxdamp.analysis.stats import welch
+from jaxdamp.analysis.stats import replicate_extrema, welch
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.physics.model import collision_time_limit, grain_radii
-from jaxdamp.studies.grid import steady_or_window
+from jaxdamp.studies.grid import steady_replicates
 from jaxdamp.studies.sweep import reuse_or_run
 
 try:
@@ -41,6 +40,7 @@ except ImportError:  # run as a file: python experiments/<name>.py
     import scaffold
 
 SCALES = (1.0, 0.01, 0.001)
+REF = 0.01  # the preset's stiffness_scale: every other modulus is compared with it
 
 
 def settings(quick: bool):
@@ -49,39 +49,32 @@ def settings(quick: bool):
     return dict(freqs=(14.5, 15.0, 15.5), duration=1.8, settle=0.3, scales=SCALES, R=3)
 
 
-def run_one(scale: float, s: dict, out: str, progress: bool):
-    cfg = apply_overrides(presets.get("sanchez2012-optimal"), {
-        "numerics.stiffness_scale": scale, "numerics.duration": s["duration"],
-        "numerics.settle_time": s["settle"], "numerics.record_dt": 1e-3, "numerics.chunk": 0.1})
-    res = reuse_or_run(cfg, {"frequency": list(s["freqs"])}, out, progress=progress,
-                       replicates=s["R"])
-    with h5py.File(out, "r") as h:
-        dt = float(h.attrs["dt"])
-    return res, cfg, dt, float(res.summary["wall_time"])
-
-
-REF = 0.01  # the preset's stiffness_scale: every other modulus is compared with it
-
-
 def compute(quick: bool, log, ctx):
     s = settings(quick)
     rows = {}
     k15 = int(np.argmin(np.abs(np.asarray(s["freqs"]) - 15.0)))  # a common frequency near f0
     for scale in s["scales"]:
-        res, cfg, dt, wall = run_one(scale, s, ctx.raw(f"sweep_scale{scale:g}_R{s['R']}.h5"),
-                                     ctx.progress)
-        Z, fb = steady_or_window(res, "amplitude")  # (F, R)
-        loss, fb2 = steady_or_window(res, "granular_loss_per_cycle")
-        peaks = np.array([resonance(s["freqs"], Z[:, r]) for r in range(s["R"])])
-        stat = np.asarray(res.steady["amplitude"]["stationary"], bool)
-        rows[scale] = dict(config=cfg, Z=Z, f_peak=peaks[:, 0], Z_peak=peaks[:, 1],
+        cfg = apply_overrides(presets.get("sanchez2012-optimal"), {
+            "numerics.stiffness_scale": scale, "numerics.duration": s["duration"],
+            "numerics.settle_time": s["settle"], "numerics.record_dt": 1e-3,
+            "numerics.chunk": 0.1})
+        path = ctx.raw(f"sweep_scale{scale:g}_R{s['R']}.h5")
+        res = reuse_or_run(cfg, {"frequency": list(s["freqs"])}, path, progress=ctx.progress,
+                           replicates=s["R"])
+        with h5py.File(path, "r") as h:
+            dt = float(h.attrs["dt"])
+        st = steady_replicates(res, "amplitude", "granular_loss_per_cycle")
+        Z, loss = st.values  # (F, R)
+        peak = replicate_extrema(s["freqs"], Z, "max", log_y=True)  # per bed, parabola in log Z
+        rows[scale] = dict(config=cfg, Z=Z, f_peak=peak.x, Z_peak=peak.y,
                            Z_max=float(Z.mean(-1).max()), loss=loss, loss15=loss[k15],
                            balance=np.asarray(res.summary["balance_error"]),
                            E=cfg.grains[0].material.E * scale, dt=dt,
-                           t_c=collision_time_limit(cfg, grain_radii(cfg)), wall=wall,
-                           fallback=fb + fb2, stationary=int(stat.sum()), runs=int(stat.size))
+                           t_c=collision_time_limit(cfg, grain_radii(cfg)), wall=st.wall,
+                           fallback=sum(st.fallback), stationary=int(st.stationary.sum()),
+                           runs=int(st.stationary.size))
         log(f"E = {rows[scale]['E']:.3g} Pa: resonant Z/U "
-            f"{peaks[:, 1].mean() / cfg.primary.U:.3f} ({wall:.0f} s)")
+            f"{peak.y.mean() / cfg.primary.U:.3f} ({st.wall:.0f} s)")
     ref = rows.get(REF, rows[s["scales"][-1]])
     for r in rows.values():
         for key, name in (("Z_peak", "peak"), ("loss15", "loss")):
@@ -106,14 +99,12 @@ def write(rows, s, k15, out, prov):
             g.attrs.update({"E": r["E"], "dt": r["dt"], "t_c": r["t_c"], "wall_time": r["wall"],
                             "d_peak": r["d_peak"], "d_peak_ci95": r["d_peak_ci"],
                             "d_loss": r["d_loss"], "d_loss_ci95": r["d_loss_ci"]})
-            for k, u in (("Z", "m"), ("loss", "J")):
-                g.create_dataset("amplitude" if k == "Z" else "granular_loss_per_cycle",
-                                 data=r[k]).attrs.update(units=u, dims="frequency, replicate")
+            for name, k, u in (("amplitude", "Z", "m"), ("granular_loss_per_cycle", "loss", "J")):
+                g.create_dataset(name, data=r[k]).attrs.update(units=u, dims="frequency, replicate")
             g.create_dataset("Z_peak", data=r["Z_peak"]).attrs["units"] = "m"
             g.create_dataset("balance_error", data=r["balance"]).attrs["units"] = "1"
 
-    U = rows[s["scales"][0]]["config"].primary.U
-    R = s["R"]
+    U, R = rows[s["scales"][0]]["config"].primary.U, s["R"]
     fig, (a1, a2) = scaffold.subplots(1, 2, figsize=(10, 4))
     se = lambda x: 2 * scaffold.standard_error(x)  # noqa: E731
     for scale, r in rows.items():

@@ -43,26 +43,23 @@ from jaxdamp.studies import random as rnd
 
 try:
     from . import scaffold
+    from .horizontal_drive import verdict
 except ImportError:  # run as a file: python experiments/<name>.py
     import scaffold
+    from horizontal_drive import verdict
 
 #: the chain and the damper: the preset (one definition)
 PRESET = "sanchez2012-chain"
 
 
-def chain():
-    """``(M, K, C)`` of the preset's chain (:func:`jaxdamp.physics.structure.matrices`)."""
-    M, K, C, _, _ = matrices(presets.get(PRESET))
-    return M, K, C
-
-
 def empty_modes():
     """Natural frequencies [Hz] and damping ratios of the empty chain: ``K φ = ω² M φ`` with
     mass-normalised ``φ``, ``ζ_k = φ_kᵀ C φ_k / (2 ω_k)`` (its damping is stiffness-
-    proportional, so the modes are those of the damped chain)."""
+    proportional, so the modes are those of the damped chain; ``M``, ``K``, ``C`` of the
+    preset's chain: :func:`jaxdamp.physics.structure.matrices`)."""
     from scipy.linalg import eigh
 
-    M, K, C = chain()
+    M, K, C = matrices(presets.get(PRESET))[:3]
     lam, phi = eigh(K, M)
     w = np.sqrt(lam)
     return w / (2 * math.pi), np.einsum("ik,ij,jk->k", phi, C, phi) / (2 * w)
@@ -97,10 +94,9 @@ def fit_modes(f, H, coh, guess):
         d = (two_mode(w, p) - H) * wt
         return np.concatenate([d.real, d.imag])
 
-    sol = least_squares(res, guess, x_scale="jac", max_nfev=4000)
-    p = sol.x
-    modes = sorted([(abs(p[1]), abs(p[2]), p[0]), (abs(p[4]), abs(p[5]), p[3])])
-    (w1, z1, A1), (w2, z2, A2) = modes
+    p = least_squares(res, guess, x_scale="jac", max_nfev=4000).x
+    (w1, z1, A1), (w2, z2, A2) = sorted([(abs(p[1]), abs(p[2]), p[0]),
+                                         (abs(p[4]), abs(p[5]), p[3])])
     return w1 / (2 * math.pi), z1, w2 / (2 * math.pi), z2, A1, A2
 
 
@@ -109,48 +105,45 @@ def compute(quick: bool, log, ctx):
     base = presets.get(PRESET)
     over = {"primary.U": 0.0, "random.psd": [[s["band"][0], s["S"]], [s["band"][1], s["S"]]],
             "random.resolution": s["resolution"]}
-    if s["settle"] is not None:
-        over["numerics.settle_time"] = s["settle"]
-    if s["grains"] is not None:
-        over["grains.0.count"] = s["grains"]
+    over.update({k: v for k, v in (("numerics.settle_time", s["settle"]),
+                                   ("grains.0.count", s["grains"])) if v is not None})
     f_e, z_e = empty_modes()
-    out = {}
+    guess = [1.0, 2 * math.pi * f_e[0], 0.03, 0.3, 2 * math.pi * f_e[1], 0.03]
+    runs = {}
     for dof in (1, 0):
-        cfg = apply_overrides(base, {**over, "structure.attach": dof})
         log(f"damper on DOF {dof}: {s['duration']} s, R = {s['R']}")
-        res = rnd.measure(cfg, [1.0], duration=s["duration"], replicates=s["R"],
+        res = rnd.measure(apply_overrides(base, {**over, "structure.attach": dof}), [1.0],
+                          duration=s["duration"], replicates=s["R"],
                           out=ctx.raw(f"dof{dof}_R{s['R']}.h5"), reuse=True,
                           progress=ctx.progress, echo=None)
         lev = res.levels[0]
-        guess = [1.0, 2 * math.pi * f_e[0], 0.03, 0.3, 2 * math.pi * f_e[1], 0.03]
-        fits = np.array([fit_modes(lev["f"], h, lev["coherence"], guess)
-                         for h in lev["H_each"]])
-        out[dof] = dict(level=lev, fits=fits, wall=float(res.sweep.summary["wall_time"]),
-                        a_rms=lev["a_rms"], y_rms=lev["y_rms"],
-                        stationary=int(lev["stationary"].sum()))
-    cmp = {}
-    for mode, col in ((1, 1), (2, 3)):
-        cmp[mode] = welch(out[1]["fits"][:, col], out[0]["fits"][:, col])  # DOF 1 − DOF 0
-    result = dict(settings=s, f_empty=f_e, z_empty=z_e, runs=out, cmp=cmp,
+        fits = np.array([fit_modes(lev["f"], h, lev["coherence"], guess) for h in lev["H_each"]])
+        runs[dof] = dict(level=lev, fits=fits, wall=float(res.sweep.summary["wall_time"]),
+                         a_rms=lev["a_rms"], y_rms=lev["y_rms"],
+                         stationary=int(lev["stationary"].sum()))
+    cmp = {mode: welch(runs[1]["fits"][:, col], runs[0]["fits"][:, col])  # DOF 1 − DOF 0
+           for mode, col in ((1, 1), (2, 3))}
+    result = dict(settings=s, f_empty=f_e, z_empty=z_e, runs=runs, cmp=cmp,
                   n_grains=int(apply_overrides(base, over).n_grains))
     return result, lambda o, prov: write(result, o, prov)
 
 
+#: the columns of a realisation's fit (:func:`fit_modes`) and their units
+FIT = (("f1", "Hz"), ("zeta1", "1"), ("f2", "Hz"), ("zeta2", "1"), ("A1", "1"), ("A2", "1"))
+
+
 def write(r, out, prov):
-    s = r["settings"]
-    runs = r["runs"]
+    s, runs = r["settings"], r["runs"]
     with scaffold.data_file(out, prov, fit="H = 1 + sum_k A_k w^2 / (w_k^2 - w^2 + 2i z_k w_k "
                             "w), complex least squares weighted by sqrt(coherence), per "
                             "realisation") as h5:
         h5.create_dataset("f_empty", data=r["f_empty"]).attrs["units"] = "Hz"
         h5.create_dataset("zeta_empty", data=r["z_empty"]).attrs["units"] = "1"
         for dof, d in runs.items():
-            lev, fits = d["level"], d["fits"]
+            lev = d["level"]
             data = {"f": (lev["f"], "Hz"), "H_re": (lev["H"].real, "1"),
                     "H_im": (lev["H"].imag, "1"), "coherence": (lev["coherence"], "1")}
-            for j, (name, unit) in enumerate((("f1", "Hz"), ("zeta1", "1"), ("f2", "Hz"),
-                                              ("zeta2", "1"), ("A1", "1"), ("A2", "1"))):
-                data[name] = (fits[:, j], unit)
+            data.update({name: (d["fits"][:, j], unit) for j, (name, unit) in enumerate(FIT)})
             for name, (x, unit) in data.items():
                 h5.create_dataset(f"dof{dof}/{name}", data=x).attrs["units"] = unit
     from jaxdamp.figures import random_figure
@@ -170,7 +163,7 @@ def write(r, out, prov):
     ax.legend(fontsize=7)
     fig.savefig(os.path.join(out, "figure.png"), dpi=120)
 
-    M, K, C = chain()
+    M, K, C = matrices(presets.get(PRESET))[:3]
     L = ["# The damper on a two-mode structure (issue 16)", "",
          scaffold.provenance_line(prov), "",
          f"Structure: the preset `{PRESET}`, a 2-DOF chain, m = {M[1, 1]:g} kg each, "
@@ -194,20 +187,16 @@ def write(r, out, prov):
     rows = []
     for mode, (cf, cz) in ((1, (0, 1)), (2, (2, 3))):
         fe, ze = r["f_empty"][mode - 1], r["z_empty"][mode - 1]
-        m1, e1 = scaffold.mean_se(runs[1]["fits"][:, cf])
-        m0, e0 = scaffold.mean_se(runs[0]["fits"][:, cf])
+        (m1, e1), (m0, e0) = (scaffold.mean_se(runs[k]["fits"][:, cf]) for k in (1, 0))
         rows.append([f"f_{mode} [Hz]", f"{fe:.3f}", scaffold.pm(m1, e1, ".3f"),
                      scaffold.pm(m0, e0, ".3f"), f"{m1 - m0:+.3f}", "–"])
-        m1, e1 = scaffold.mean_se(runs[1]["fits"][:, cz])
-        m0, e0 = scaffold.mean_se(runs[0]["fits"][:, cz])
+        (m1, e1), (m0, e0) = (scaffold.mean_se(runs[k]["fits"][:, cz]) for k in (1, 0))
         d, h = r["cmp"][mode]
-        verdict = ("no interval" if not np.isfinite(h) else "same" if abs(d) <= h else
-                   "more on DOF 1" if d > 0 else "more on DOF 0")
-        rows.append([f"ζ_{mode} [%]", f"{100 * ze:.3f}", scaffold.pm(m1, e1, ".3f", scale=100),
-                     scaffold.pm(m0, e0, ".3f", scale=100),
-                     scaffold.pm(d, h, "+.3f", scale=100), verdict])
-        rows.append([f"added ζ_{mode} [%]", "–", f"{100 * (m1 - ze):.3f}",
-                     f"{100 * (m0 - ze):.3f}", "–", "–"])
+        rows += [[f"ζ_{mode} [%]", f"{100 * ze:.3f}", scaffold.pm(m1, e1, ".3f", scale=100),
+                  scaffold.pm(m0, e0, ".3f", scale=100), scaffold.pm(d, h, "+.3f", scale=100),
+                  verdict(d, h, "same", "more on DOF 1", "more on DOF 0")],
+                 [f"added ζ_{mode} [%]", "–", f"{100 * (m1 - ze):.3f}", f"{100 * (m0 - ze):.3f}",
+                  "–", "–"]]
     L += scaffold.table(["quantity", "empty", "damper on DOF 1", "damper on DOF 0",
                          "DOF 1 − DOF 0", "verdict"], rows)
     L += ["", "RMS of the box's displacement relative to the base: " + ", ".join(

@@ -24,15 +24,16 @@ class SweepResult:
     """``axes``: ``{key: values}``; ``configs``: one per point (grid order, last axis fastest);
     ``summary``: ``{name: array shaped like the grid}``; ``records``: per-point samples
     (dict of arrays ``(P, T)``); ``path``: the HDF5 file or ``None``; ``snapshots``: with
-    ``sweep(..., snapshots=k)``, ``{"t": (k,), "r": (P, k, N, 3), "v": (P, k, N, 3), "z_box": (P, k)}`` at the
-    ends of the last ``k`` chunks, else ``None``.
+    ``sweep(..., snapshots=k)``, ``{"t": (k,), "r": (P, k, N, 3), "v": (P, k, N, 3),
+    "z_box": (P, k)}`` at the ends of the last ``k`` chunks, else ``None``.
 
     With ``R = replicates`` independent beds per grid point, ``records`` and ``snapshots``
     have ``P = grid points × R`` rows (:meth:`point`), ``summary`` holds the mean over the
     replicates of each fixed-window value, ``replicate_summary`` the values of every replicate
     (grid shape + ``(R,)``), and ``steady`` the steady-state estimates over replicates from
-    the detected steady state (:func:`jaxdamp.analysis.stats.steady`, as :func:`jaxdamp.analysis.stats.to_arrays`:
-    ``{quantity: {"mean", "se", "ci95", "n", "values", "batch_se", "start", "stationary"}}``)."""
+    the detected steady state (:func:`jaxdamp.analysis.stats.steady`, as
+    :func:`jaxdamp.analysis.stats.to_arrays`: ``{quantity: {"mean", "se", "ci95", "n",
+    "values", "batch_se", "start", "stationary"}}``)."""
 
     axes: dict
     configs: list
@@ -137,3 +138,43 @@ def steady_or_window(res: SweepResult, key: str) -> tuple[np.ndarray, int]:
     window = res.replicate_summary[key]
     ok = np.asarray(res.steady[key]["stationary"], bool) & np.isfinite(steady)
     return np.where(ok, steady, window), int((~ok).sum())
+
+
+@dataclass(frozen=True)
+class SteadyReplicates:
+    """A replicated sweep read at its steady state (:func:`steady_replicates`).
+
+    Attributes:
+      values: one array per key, in the order asked, grid shape + ``(R,)``: each replicate's
+        steady mean, or its fixed-window value where it was not detected stationary
+        (:func:`steady_or_window`).
+      fallback: per key, how many replicates fell back to the fixed window.
+      stationary: whether each replicate was detected stationary in the first key, grid
+        shape + ``(R,)`` (bool).
+      wall: the sweep's compute time [s] (``summary["wall_time"]``: settling excluded).
+    """
+
+    values: tuple
+    fallback: tuple
+    stationary: np.ndarray
+    wall: float
+
+
+def steady_replicates(res: SweepResult, *keys: str) -> SteadyReplicates:
+    """The steady reading of a sweep with replicates that a study of it starts from: the
+    per-replicate values of ``keys`` (:func:`steady_or_window`; e.g. ``"amplitude"``,
+    ``"granular_loss_per_cycle"``), how many of each fell back to the fixed window, which
+    replicates the first key found stationary, and the sweep's compute time.
+
+    Example::
+
+        st = steady_replicates(res, "amplitude", "granular_loss_per_cycle")
+        Z, W = st.values  # (F, R) each, for a sweep over frequency
+        f"{st.stationary.sum()} of {st.stationary.size} runs detected stationary"
+    """
+    if not keys:
+        raise ValueError("steady_replicates: name at least one key")
+    read = [steady_or_window(res, k) for k in keys]
+    return SteadyReplicates(tuple(v for v, _ in read), tuple(n for _, n in read),
+                            np.asarray(res.steady[keys[0]]["stationary"], bool),
+                            float(res.summary["wall_time"]))
