@@ -41,12 +41,8 @@ from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.figures.response import draw_band
 from jaxdamp.physics.model import grain_mass
+from jaxdamp.studies import scaffold
 from jaxdamp.studies.sweep import reuse_or_run
-
-try:
-    from . import scaffold
-except ImportError:  # run as a file: python experiments/<name>.py
-    import scaffold
 
 #: Frequencies [Hz] of the full mode: the thesis' regions (periodic < 7.5, transition 7.5–11,
 #: chaos I 11–14, window 14.5–16, chaos II > 16.5) each sampled, with the five detail ones.
@@ -171,8 +167,7 @@ def compute(quick: bool, log, ctx):
     return result, lambda out, prov: write(result, walls, out, prov)
 
 
-def main(argv=None):
-    return scaffold.main(__doc__, "bed_dynamics", argv, compute)
+main = scaffold.entry(__file__, __doc__, compute)
 
 
 def write(r, walls, out, prov):

@@ -44,15 +44,14 @@ import math
 import numpy as np
 
 from jaxdamp.analysis import dynamics as dyn
+from jaxdamp.studies import scaffold
 from jaxdamp.studies.grid import replicate_configs
 from jaxdamp.studies.twin import twin_sweep
 
 try:
     from . import bed_dynamics as bd
-    from . import scaffold
 except ImportError:  # run as a file: python experiments/<name>.py
     import bed_dynamics as bd
-    import scaffold
 F_FULL = (10.0, 10.5, 11.0, 13.0, 14.5, 21.0)
 #: thesis ch. 4 at these frequencies (SPEC §6 / thesis fig. 4.1)
 THESIS = {10.0: "period-2", 10.5: "torus, wrinkling", 11.0: "torus break-up → chaos",
@@ -187,13 +186,13 @@ def _beds(text: str) -> int:
     return n
 
 
-def main(argv=None):
-    def options(ap):
-        ap.add_argument("--beds", type=_beds, default=BEDS, metavar="R",
-                        help=f"independently poured beds per frequency (default {BEDS}; ≥ 2 for "
-                             "standard errors)")
+def options(ap):
+    ap.add_argument("--beds", type=_beds, default=BEDS, metavar="R",
+                    help=f"independently poured beds per frequency (default {BEDS}; ≥ 2 for "
+                         "standard errors)")
 
-    return scaffold.main(__doc__, "bed_dynamics_long", argv, compute, options)
+
+main = scaffold.entry(__file__, __doc__, compute, options)
 
 
 def write(r, s, out, prov):

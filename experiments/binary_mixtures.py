@@ -47,11 +47,7 @@ from jaxdamp.cases import presets
 from jaxdamp.figures import save, snapshot_grid_figure
 from jaxdamp.physics.model import grain_radii, grain_species
 from jaxdamp.studies import efficiency as ef
-
-try:
-    from . import scaffold
-except ImportError:  # run as a file: python experiments/<name>.py
-    import scaffold
+from jaxdamp.studies import scaffold
 
 CLASS_NAMES = {"a": "class a (equal mass)", "b": "class b (equal number)",
                "c": "class c (equal number and mass)"}
@@ -188,8 +184,7 @@ def compute(quick, log, ctx):
     return runs, write
 
 
-def main(argv=None):
-    return scaffold.main(__doc__, "binary_mixtures", argv, compute, options)
+main = scaffold.entry(__file__, __doc__, compute, options)
 
 
 def write_data(out, prov, runs):

@@ -32,11 +32,7 @@ import numpy as np
 from jaxdamp.cases import presets
 from jaxdamp.config import Box, Config, Drive, Numerics, Species
 from jaxdamp.physics.model import CH
-
-try:
-    from . import scaffold
-except ImportError:  # run as a file: python experiments/<name>.py
-    import scaffold
+from jaxdamp.studies import scaffold
 
 V0 = 0.1  # [m/s]
 R = 3e-3  # [m]
@@ -116,8 +112,7 @@ def compute(quick: bool, log, ctx):
     return result, lambda out, prov: write(result, out, prov)
 
 
-def main(argv=None):
-    return scaffold.main(__doc__, "contact_checks", argv, compute)
+main = scaffold.entry(__file__, __doc__, compute)
 
 
 def write(result, out, prov):

@@ -37,14 +37,9 @@ from jaxdamp.analysis.decay import at_starting_peak, on_amplitudes, on_common_ra
 from jaxdamp.analysis.stats import welch
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
-from jaxdamp.studies import decay
+from jaxdamp.studies import decay, scaffold
 from jaxdamp.studies.grid import steady_or_window
 from jaxdamp.studies.sweep import reuse_or_run
-
-try:
-    from . import scaffold
-except ImportError:  # run as a file: python experiments/<name>.py
-    import scaffold
 
 OUTSIDE = "outside the decay's range"
 
@@ -209,8 +204,7 @@ def write(r, out, prov):
     scaffold.write_summary(out, L)
 
 
-def main(argv=None):
-    return scaffold.main(__doc__, "decay_vs_sine", argv, compute)
+main = scaffold.entry(__file__, __doc__, compute)
 
 
 if __name__ == "__main__":

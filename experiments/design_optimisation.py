@@ -39,11 +39,7 @@ from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.design import Objective, SteadyProblem, adaptive_scan, optimize, trust_region
 from jaxdamp.design.surrogate import propose
-
-try:
-    from . import scaffold
-except ImportError:  # run as a file: python experiments/<name>.py
-    import scaffold
+from jaxdamp.studies import scaffold
 
 THESIS_LZ = 0.1225
 OBJECTIVE = "C_eq = E/(pi Omega Z^2) at f0 [N s/m], maximised"
@@ -318,8 +314,7 @@ def compute(quick, log, _ctx):
     return {"out": out, "verdicts": v}, lambda path, prov: write(out, v, path, prov)
 
 
-def main(argv=None):
-    return scaffold.main(__doc__, "design_optimisation", argv, compute)
+main = scaffold.entry(__file__, __doc__, compute)
 
 
 if __name__ == "__main__":

@@ -35,15 +35,15 @@ from jaxdamp.design import Objective, adaptive_scan
 from jaxdamp.design.space import DesignProblem
 from jaxdamp.design.spsa import random_search, spsa
 from jaxdamp.design.surrogate import descend
+from jaxdamp.studies import scaffold
 
 try:
     from . import design_optimisation as do
-    from . import scaffold
 except ImportError:  # run as a file: python experiments/<name>.py
     import design_optimisation as do
-    import scaffold
 
-SCAN_FILE = os.path.join(scaffold.HERE, "design_optimisation", "data.h5")
+HERE = os.path.dirname(os.path.abspath(__file__))
+SCAN_FILE = os.path.join(HERE, "design_optimisation", "data.h5")
 VARS = ("Lz", "base", "friction")
 
 
@@ -270,8 +270,7 @@ def compute(quick, log, _ctx):
     return {"a": a, "b": b, "verdicts": v}, lambda path, prov: write(a, b, v, path, prov)
 
 
-def main(argv=None):
-    return scaffold.main(__doc__, "design_starts_and_variables", argv, compute)
+main = scaffold.entry(__file__, __doc__, compute)
 
 
 if __name__ == "__main__":

@@ -37,12 +37,8 @@ from jaxdamp.analysis.response import first_harmonic
 from jaxdamp.analysis.stats import t_quantile, welch
 from jaxdamp.cases import presets
 from jaxdamp.studies import efficiency as ef
+from jaxdamp.studies import scaffold
 from jaxdamp.studies.sweep import reuse_or_run
-
-try:
-    from . import scaffold
-except ImportError:  # run as a file: python experiments/<name>.py
-    import scaffold
 
 A_OPT_OURS = 0.02567  # [m], reference system, binary_mixtures (3 beds)
 A_OPT_PAPER = 0.028
@@ -101,8 +97,7 @@ def compute(quick: bool, log, ctx):
     return result, lambda out, prov: write(result, out, prov)
 
 
-def main(argv=None):
-    return scaffold.main(__doc__, "driven_regimes", argv, compute)
+main = scaffold.entry(__file__, __doc__, compute)
 
 
 def write(r, out, prov):

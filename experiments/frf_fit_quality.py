@@ -31,13 +31,10 @@ import numpy as np
 from jaxdamp.analysis.response import RESIDUALS, frf_amplitude
 from jaxdamp.analysis.stats import welch
 from jaxdamp.config import from_json
+from jaxdamp.studies import scaffold
 
-try:
-    from . import scaffold
-except ImportError:  # run as a file: python experiments/<name>.py
-    import scaffold
-
-DATA = os.path.join(scaffold.HERE, "gap_scan", "data.h5")
+HERE = os.path.dirname(os.path.abspath(__file__))
+DATA = os.path.join(HERE, "gap_scan", "data.h5")
 EXTREMES = (0.042, 0.372)
 INTERMEDIATE = (0.117, 0.162)
 
@@ -74,8 +71,7 @@ def compute(quick: bool, log, ctx):
     return result, lambda out, prov: write(result, out, prov)
 
 
-def main(argv=None):
-    return scaffold.main(__doc__, "frf_fit_quality", argv, compute)
+main = scaffold.entry(__file__, __doc__, compute)
 
 
 def write(r, out, prov):

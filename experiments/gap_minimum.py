@@ -32,13 +32,9 @@ from jaxdamp.analysis.stats import across, replicate_extrema, welch
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.physics.model import primary_frequency
+from jaxdamp.studies import scaffold
 from jaxdamp.studies.grid import steady_replicates
 from jaxdamp.studies.sweep import reuse_or_run
-
-try:
-    from . import scaffold
-except ImportError:  # run as a file: python experiments/<name>.py
-    import scaffold
 
 THESIS_LZ = 0.1225
 
@@ -177,8 +173,7 @@ def write(r, out, prov):
     scaffold.write_summary(out, L)
 
 
-def main(argv=None):
-    return scaffold.main(__doc__, "gap_minimum", argv, compute)
+main = scaffold.entry(__file__, __doc__, compute)
 
 
 if __name__ == "__main__":

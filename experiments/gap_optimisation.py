@@ -47,13 +47,9 @@ from jaxdamp.design import DEMProblem, Objective, S3Problem, optimize, scan_opti
 from jaxdamp.design.surface import local_quadratic_optimum
 from jaxdamp.figures.response import draw_interval
 from jaxdamp.physics.model import primary_frequency
+from jaxdamp.studies import scaffold
 from jaxdamp.studies.grid import steady_or_window
 from jaxdamp.studies.sweep import sweep
-
-try:
-    from . import scaffold
-except ImportError:  # run as a file: python experiments/<name>.py
-    import scaffold
 
 THESIS_LZ = 0.1225
 #: S3 at f0: the response is periodic (two impacts per period) up to about this gap [m] and
@@ -245,8 +241,7 @@ def compute(quick: bool, log, ctx):
     return result, write
 
 
-def main(argv=None):
-    return scaffold.main(__doc__, "gap_optimisation", argv, compute)
+main = scaffold.entry(__file__, __doc__, compute)
 
 
 def _json(d: dict) -> str:

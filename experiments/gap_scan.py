@@ -47,13 +47,9 @@ from jaxdamp.analysis.stats import replicate_extrema, t_quantile
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.physics.model import grain_mass
+from jaxdamp.studies import scaffold
 from jaxdamp.studies.grid import steady_or_window
 from jaxdamp.studies.sweep import reuse_or_run
-
-try:
-    from . import scaffold
-except ImportError:  # run as a file: python experiments/<name>.py
-    import scaffold
 
 #: Box heights [m] of the thesis' scan (SPEC §5), its 0.117 and 0.282 m included.
 #: (0.072 and 0.222 m, on the earlier single-bed grid, are left out to afford three beds per
@@ -183,8 +179,7 @@ def compute(quick: bool, log, ctx):
     return results, lambda path, prov: write(results, s, path, prov)
 
 
-def main(argv=None):
-    return scaffold.main(__doc__, "gap_scan", argv, compute)
+main = scaffold.entry(__file__, __doc__, compute)
 
 
 def write(results, s, out, prov):

@@ -63,13 +63,9 @@ from jaxdamp.analysis.stats import per_period, replicate_extrema, t_quantile, we
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.physics.model import grain_mass
+from jaxdamp.studies import scaffold
 from jaxdamp.studies.grid import steady_or_window
 from jaxdamp.studies.sweep import reuse_or_run
-
-try:
-    from . import scaffold
-except ImportError:  # run as a file: python experiments/<name>.py
-    import scaffold
 
 NS = (250, 500, 1000)
 #: The thesis' heights [m] (SPEC §5) but 0.15 and 0.33 m, left out to afford three beds per
@@ -251,8 +247,7 @@ def compute(quick: bool, log, ctx):
     return result, lambda path, prov: write(result, path, prov)
 
 
-def main(argv=None):
-    return scaffold.main(__doc__, "grain_number", argv, compute)
+main = scaffold.entry(__file__, __doc__, compute)
 
 
 def write(result, out, prov):

@@ -27,13 +27,9 @@ from jaxdamp.analysis.stats import replicate_extrema, welch
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.physics.model import grain_mass
+from jaxdamp.studies import scaffold
 from jaxdamp.studies.grid import steady_replicates
 from jaxdamp.studies.sweep import reuse_or_run
-
-try:
-    from . import scaffold
-except ImportError:  # run as a file: python experiments/<name>.py
-    import scaffold
 
 DIRECTIONS = {"vertical": (0.0, 0.0, 1.0), "horizontal": (1.0, 0.0, 0.0)}
 #: per-bed quantities compared between the directions: label, key, unit, scale in the summary
@@ -153,8 +149,7 @@ def write(r, out, prov):
     scaffold.write_summary(out, L)
 
 
-def main(argv=None):
-    return scaffold.main(__doc__, "horizontal_drive", argv, compute)
+main = scaffold.entry(__file__, __doc__, compute)
 
 
 if __name__ == "__main__":

@@ -20,11 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from jaxdamp.s3.collapse import E_CRITICAL, collapse_sequence, critical_restitution, cycle_ratio
-
-try:
-    from . import scaffold
-except ImportError:  # run as a file: python experiments/<name>.py
-    import scaffold
+from jaxdamp.studies import scaffold
 
 RESTITUTIONS = (0.01, 0.05, 0.1, 0.15, 0.17, 0.18, 0.3)
 FIGURE_E = 0.1
@@ -49,8 +45,7 @@ def compute(quick: bool, log, _ctx):
     return result, lambda path, prov: write(result, path, prov)
 
 
-def main(argv=None):
-    return scaffold.main(__doc__, "inelastic_collapse", argv, compute)
+main = scaffold.entry(__file__, __doc__, compute)
 
 
 def write(r, out, prov):

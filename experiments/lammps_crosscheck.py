@@ -61,11 +61,7 @@ import numpy as np
 from jaxdamp.analysis.uncertainty import ar1_standard_error, lag1_autocorrelation
 from jaxdamp.io.common import put
 from jaxdamp.peers import lammps
-
-try:
-    from . import scaffold
-except ImportError:  # run as a file: python experiments/lammps_crosscheck.py
-    import scaffold
+from jaxdamp.studies import scaffold
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 PRESET = "varela2023-reference"
@@ -307,8 +303,7 @@ def compute(quick: bool, log, ctx):
     return run, lambda out, prov: write(run, out, prov)
 
 
-def main(argv=None):
-    return scaffold.main(__doc__, "lammps_crosscheck", argv, compute, options=options)
+main = scaffold.entry(__file__, __doc__, compute, options)
 
 
 def within_run(d) -> tuple[float, float, float]:

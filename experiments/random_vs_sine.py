@@ -35,14 +35,13 @@ from jaxdamp.analysis.stats import welch
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.studies import random as rnd
+from jaxdamp.studies import scaffold
 from jaxdamp.studies.grid import steady_replicates
 from jaxdamp.studies.sweep import reuse_or_run
 
 try:
-    from . import scaffold
     from .horizontal_drive import verdict
 except ImportError:  # run as a file: python experiments/<name>.py
-    import scaffold
     from horizontal_drive import verdict
 
 #: amplitudes may differ by this fraction for a random level and a sine amplitude to be compared
@@ -185,8 +184,7 @@ def write(r, out, prov):
     scaffold.write_summary(out, L)
 
 
-def main(argv=None):
-    return scaffold.main(__doc__, "random_vs_sine", argv, compute)
+main = scaffold.entry(__file__, __doc__, compute)
 
 
 if __name__ == "__main__":

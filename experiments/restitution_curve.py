@@ -29,11 +29,7 @@ from jaxdamp.config import Box, Config, Drive, Numerics, Species
 from jaxdamp.engine import driver
 from jaxdamp.physics import restitution as rst
 from jaxdamp.physics.model import build, contact_law
-
-try:
-    from . import scaffold
-except ImportError:  # run as a file: python experiments/<name>.py
-    import scaffold
+from jaxdamp.studies import scaffold
 
 STEPS_BEFORE = 20  # steps of free flight before contact
 STEPS_PER_COLLISION = 50
@@ -117,8 +113,7 @@ def compute(quick: bool, log, ctx):
     return cases, lambda out, prov: write(cases, speeds, out, prov, log)
 
 
-def main(argv=None):
-    return scaffold.main(__doc__, "restitution_curve", argv, compute)
+main = scaffold.entry(__file__, __doc__, compute)
 
 
 def write(cases, speeds, out, prov, log):

@@ -38,13 +38,9 @@ from jaxdamp.analysis.response import secondary_maxima
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.s3 import impact
+from jaxdamp.studies import scaffold
 from jaxdamp.studies.grid import steady_replicates
 from jaxdamp.studies.sweep import reuse_or_run
-
-try:
-    from . import scaffold
-except ImportError:  # run as a file: python experiments/<name>.py
-    import scaffold
 
 LZ = 0.11
 H_BED = 0.039  # the preset's bed height: gap = Lz − h_bed (sanchez2012-impact notes)
@@ -199,8 +195,7 @@ def write(r, out, prov):
     scaffold.write_summary(out, lines)
 
 
-def main(argv=None):
-    return scaffold.main(__doc__, "single_grain_frf", argv, compute)
+main = scaffold.entry(__file__, __doc__, compute)
 
 
 if __name__ == "__main__":

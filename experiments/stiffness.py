@@ -31,13 +31,9 @@ from jaxdamp.analysis.stats import replicate_extrema, welch
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.physics.model import collision_time_limit, grain_radii
+from jaxdamp.studies import scaffold
 from jaxdamp.studies.grid import steady_replicates
 from jaxdamp.studies.sweep import reuse_or_run
-
-try:
-    from . import scaffold
-except ImportError:  # run as a file: python experiments/<name>.py
-    import scaffold
 
 SCALES = (1.0, 0.01, 0.001)
 REF = 0.01  # the preset's stiffness_scale: every other modulus is compared with it
@@ -85,8 +81,7 @@ def compute(quick: bool, log, ctx):
     return rows, lambda path, prov: write(rows, s, k15, path, prov)
 
 
-def main(argv=None):
-    return scaffold.main(__doc__, "stiffness", argv, compute)
+main = scaffold.entry(__file__, __doc__, compute)
 
 
 def write(rows, s, k15, out, prov):

@@ -40,12 +40,11 @@ from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.physics.structure import matrices
 from jaxdamp.studies import random as rnd
+from jaxdamp.studies import scaffold
 
 try:
-    from . import scaffold
     from .horizontal_drive import verdict
 except ImportError:  # run as a file: python experiments/<name>.py
-    import scaffold
     from horizontal_drive import verdict
 
 #: the chain and the damper: the preset (one definition)
@@ -206,8 +205,7 @@ def write(r, out, prov):
     scaffold.write_summary(out, L)
 
 
-def main(argv=None):
-    return scaffold.main(__doc__, "two_mode_structure", argv, compute)
+main = scaffold.entry(__file__, __doc__, compute)
 
 
 if __name__ == "__main__":

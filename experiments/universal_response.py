@@ -35,13 +35,9 @@ from jaxdamp.analysis.stats import welch
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.physics.model import grain_mass
+from jaxdamp.studies import scaffold
 from jaxdamp.studies.grid import Points, steady_or_window
 from jaxdamp.studies.sweep import reuse_or_run, sweep
-
-try:
-    from . import scaffold
-except ImportError:  # run as a file: python experiments/<name>.py
-    import scaffold
 
 CASES = ((3660.0, 10980.0), (0.0, 10980.0), (3660.0, 0.0), (0.0, 0.0))
 F_FULL = (10.0, 12.0, 13.5, 14.5, 15.25, 16.0, 18.5, 23.0)
@@ -139,8 +135,7 @@ def compute(quick: bool, log, ctx):
     return result, lambda path, prov: write(result, s, path, prov)
 
 
-def main(argv=None):
-    return scaffold.main(__doc__, "universal_response", argv, compute)
+main = scaffold.entry(__file__, __doc__, compute)
 
 
 def write(r, s, out, prov):

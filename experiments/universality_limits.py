@@ -35,15 +35,14 @@ import numpy as np
 from jaxdamp.analysis.response import resonance
 from jaxdamp.analysis.stats import welch
 from jaxdamp.cases import presets
+from jaxdamp.studies import scaffold
 from jaxdamp.studies.grid import Points, steady_or_window
 from jaxdamp.studies.sweep import reuse_or_run
 
 try:
-    from . import scaffold
     from .universal_response import SPLIT
     from .universal_response import optimal as base
 except ImportError:  # run as a file: python experiments/<name>.py
-    import scaffold
     from universal_response import SPLIT
     from universal_response import optimal as base
 
@@ -161,8 +160,7 @@ def compute(quick: bool, log, ctx):
     return r, lambda path, prov: write(r, s, path, prov)
 
 
-def main(argv=None):
-    return scaffold.main(__doc__, "universality_limits", argv, compute)
+main = scaffold.entry(__file__, __doc__, compute)
 
 
 def write(r, s, out, prov):

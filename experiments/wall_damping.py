@@ -30,11 +30,7 @@ from jaxdamp.config import apply_overrides
 from jaxdamp.physics import restitution as rst
 from jaxdamp.physics.model import build, contact_law
 from jaxdamp.studies import efficiency as ef
-
-try:
-    from . import scaffold
-except ImportError:  # run as a file: python experiments/<name>.py
-    import scaffold
+from jaxdamp.studies import scaffold
 
 CONVENTIONS = ("mixed", "calibrated")
 
@@ -153,14 +149,14 @@ def write(rows, v, s, path, prov):
     scaffold.write_summary(path, L)
 
 
-def main(argv=None):
-    def compute(quick, log, _ctx):
-        s = settings(quick)
-        rows = run(s, log)
-        v = verdicts(rows, s["amps"])
-        return {"rows": rows, "verdicts": v}, lambda path, prov: write(rows, v, s, path, prov)
+def compute(quick, log, _ctx):
+    s = settings(quick)
+    rows = run(s, log)
+    v = verdicts(rows, s["amps"])
+    return {"rows": rows, "verdicts": v}, lambda path, prov: write(rows, v, s, path, prov)
 
-    return scaffold.main(__doc__, "wall_damping", argv, compute)
+
+main = scaffold.entry(__file__, __doc__, compute)
 
 if __name__ == "__main__":
     sys.exit(0 if main() else 1)

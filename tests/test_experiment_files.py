@@ -8,17 +8,17 @@ import h5py
 import pytest
 
 EXPERIMENTS = pathlib.Path(__file__).parent.parent / "experiments"
-STUDIES = sorted(p.stem for p in EXPERIMENTS.glob("*.py") if p.stem not in ("__init__", "scaffold"))
+STUDIES = sorted(p.stem for p in EXPERIMENTS.glob("*.py") if p.stem != "__init__")
 
 
 @pytest.mark.parametrize("name", STUDIES)
 def test_every_study_is_a_module_on_the_scaffold(name):
     """Importable as ``experiments.<name>`` (no path loading), with ``main(argv)`` through
-    ``scaffold.main``: one command line, provenance, no parser of its own."""
+    :func:`jaxdamp.studies.scaffold.entry`: one command line, provenance, no parser of its own."""
     mod = importlib.import_module(f"experiments.{name}")
     assert callable(mod.main)
     text = (EXPERIMENTS / f"{name}.py").read_text()
-    assert "scaffold.main(" in text and "ArgumentParser(" not in text
+    assert "scaffold.entry(__file__, __doc__, compute" in text and "ArgumentParser(" not in text
 
 
 @pytest.mark.parametrize("path", sorted(EXPERIMENTS.glob("*/data.h5")),

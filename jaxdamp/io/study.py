@@ -5,7 +5,7 @@
 it (:data:`PROVENANCE`: the command, the checkout's revision, the machine, the wall time) and
 the study's own attributes (settings, verdicts: JSON unless a string or a number); below the
 root, each study's groups and datasets, every dataset with a ``units`` attribute. Written by
-:func:`create` (through ``experiments/scaffold.py``); ``jaxdamp info`` describes it
+:func:`create` (through :func:`jaxdamp.studies.scaffold.data_file`); ``jaxdamp info`` describes it
 (:func:`describe_lines`).
 """
 

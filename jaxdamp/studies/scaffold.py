@@ -1,26 +1,31 @@
-"""What the studies share: the command line, provenance, the results file, figures, tables.
+"""What every study script shares: the command line, the provenance, the result file, figures,
+tables and the one estimate and formatter.
 
-A study is a module of the ``experiments`` package, run as ``python experiments/<name>.py
-[--quick] [--out DIR] [--no-progress]`` (or ``python -m experiments.<name>``), that computes,
-judges and writes ``data.h5``, figures and ``summary.md`` into ``DIR`` (default
-``experiments/<name>/``)::
+A study (``experiments/<name>.py``, or a script of yours) computes, judges and writes
+``data.h5`` (:mod:`jaxdamp.io.study`), figures and ``summary.md`` into ``--out`` (default: the
+folder ``<name>/`` beside the script)::
 
-    def main(argv=None):
-        def compute(quick, log, ctx):         # ctx: Context (out folder, progress)
-            result = ...                      # the study's numbers and verdicts
-            return result, lambda path, prov: write(result, path, prov)
-        return scaffold.main(__doc__, "my_experiment", argv, compute)
+    from jaxdamp.studies import scaffold
 
-``write`` uses :func:`data_file` (``data.h5`` with the provenance), :func:`subplots` and
-:func:`save_figure` (the figures' style of :mod:`jaxdamp.figures`), :func:`table` and
-:func:`write_summary`; every "mean ± SE" is :func:`pm` of :func:`mean_se` or of an
-:class:`~jaxdamp.analysis.stats.Estimate` (:func:`across`).
+    def compute(quick, log, ctx):          # ctx: Context (out folder, progress, options)
+        result = ...                       # the study's numbers and verdicts
+        return result, lambda out, prov: write(result, out, prov)
+
+    main = scaffold.entry(__file__, __doc__, compute)
+
+    if __name__ == "__main__":
+        main()
+
+``python <name>.py [--quick] [--out DIR] [--no-progress]``; ``write`` uses :func:`data_file`,
+:func:`subplots` and :func:`save_figure` (the figures' style of :mod:`jaxdamp.figures`),
+:func:`table`, :func:`provenance_line` and :func:`write_summary`; every "mean ± SE" is
+:func:`pm` of :func:`mean_se` or of an :class:`~jaxdamp.analysis.stats.Estimate`
+(:func:`across`).
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import subprocess
@@ -32,41 +37,46 @@ import jaxdamp
 from jaxdamp.analysis.stats import across  # noqa: F401 - the one estimate over replicates
 from jaxdamp.analysis.uncertainty import mean_se, pm, standard_error  # noqa: F401 - the one "±"
 
-HERE = os.path.dirname(os.path.abspath(__file__))
 
-
-def git_revision() -> str:
-    """The checkout's short commit, or ``"unknown"`` outside a git work tree."""
+def _git(folder: str, *args: str) -> str | None:
     try:
-        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
-                              text=True, cwd=HERE, check=True).stdout.strip()
+        return subprocess.run(["git", *args], capture_output=True, text=True, cwd=folder,
+                              check=True).stdout.strip()
     except (OSError, subprocess.CalledProcessError):
-        return "unknown"
+        return None
 
 
-def provenance(name: str, quick: bool, elapsed: float, flags: str = "") -> dict:
-    """``command``, ``jaxdamp_version``, ``git``, ``machine`` and ``elapsed_s`` of a run
-    (``flags``: the study's own options as given, after ``--quick``)."""
-    return {"command": f"python experiments/{name}.py" + (" --quick" if quick else "")
+def git_revision(folder: str) -> str:
+    """The short commit of the checkout holding ``folder``, or ``"unknown"`` outside one."""
+    return _git(folder, "rev-parse", "--short", "HEAD") or "unknown"
+
+
+def script_path(file: str) -> str:
+    """How the study ``file`` is run: its path from the root of its checkout
+    (``experiments/gap_scan.py``), or its file name outside one."""
+    file = os.path.abspath(file)
+    top = _git(os.path.dirname(file), "rev-parse", "--show-toplevel")
+    return os.path.relpath(file, top) if top else os.path.basename(file)
+
+
+def provenance(file: str, quick: bool, elapsed: float, flags: str = "") -> dict:
+    """``command``, ``jaxdamp_version``, ``git``, ``machine`` and ``elapsed_s`` of a run of the
+    study ``file`` (``flags``: the study's own options as given, after ``--quick``)."""
+    return {"command": f"python {script_path(file)}" + (" --quick" if quick else "")
             + (f" {flags}" if flags else ""),
-            "jaxdamp_version": jaxdamp.__version__, "git": git_revision(),
+            "jaxdamp_version": jaxdamp.__version__,
+            "git": git_revision(os.path.dirname(os.path.abspath(file))),
             "machine": f"{platform.machine()}, {os.cpu_count()} cores, Python "
                        f"{platform.python_version()}", "elapsed_s": elapsed}
 
 
-def stamp(h5, prov: dict) -> None:
-    """The provenance as root attributes of an HDF5 file (JSON for non-strings)."""
-    h5.attrs.update({k: json.dumps(x) if not isinstance(x, str) else x for k, x in prov.items()})
-
-
 def data_file(out: str, prov: dict, name: str = "data.h5", **attrs):
-    """``out/name`` opened for writing (an ``h5py.File``, to use in ``with``), its root
-    attributes the provenance and ``attrs`` (JSON for non-strings: settings, verdicts)."""
-    import h5py
+    """``out/name`` opened for writing (an ``h5py.File``, to use in ``with``): a study file
+    (:func:`jaxdamp.io.study.create`) with the provenance and ``attrs`` (settings, verdicts:
+    JSON unless a string or a number)."""
+    from jaxdamp.io.study import create
 
-    h5 = h5py.File(os.path.join(out, name), "w")
-    stamp(h5, dict(prov, **attrs))
-    return h5
+    return create(os.path.join(out, name), prov, **attrs)
 
 
 def subplots(nrows: int = 1, ncols: int = 1, figsize=(7.0, 4.5), **kwargs):
@@ -117,7 +127,7 @@ def provenance_line(prov: dict, sweep_wall: float | None = None) -> str:
 class Context:
     """What ``compute`` may need besides ``quick``: the output folder ``out`` (for raw,
     resumable files under ``out/raw``), whether to show progress bars and ``args``, the
-    parsed command line (a study's own options: ``main(..., options=)``)."""
+    parsed command line (a study's own options: ``entry(..., options=)``)."""
 
     out: str
     progress: bool
@@ -143,15 +153,17 @@ def _study_flags(argv: list[str]) -> str:
     return " ".join(out)
 
 
-def main(doc: str, name: str, argv, compute, options=None):
-    """Parse ``--quick``, ``--out``, ``--no-progress`` and, with ``options(parser)``, the
-    study's own options (in ``ctx.args``); ``compute(quick, log, ctx)`` (``ctx``:
-    :class:`Context`) returns ``(result, writer)``; ``writer(out_dir, provenance)`` writes
-    the files. Returns ``result``."""
+def run(file: str, doc: str, argv, compute, options=None):
+    """Parse ``--quick``, ``--out`` (default: ``<name>/`` beside the study ``file``),
+    ``--no-progress`` and, with ``options(parser)``, the study's own options (in
+    ``ctx.args``); ``compute(quick, log, ctx)`` (``ctx``: :class:`Context`) returns
+    ``(result, writer)``; ``writer(out_dir, provenance)`` writes the files. Returns
+    ``result``."""
+    file = os.path.abspath(file)
     ap = argparse.ArgumentParser(description=doc,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="test-sized settings (minutes)")
-    ap.add_argument("--out", default=os.path.join(HERE, name), help="output folder")
+    ap.add_argument("--out", default=os.path.splitext(file)[0], help="output folder")
     ap.add_argument("--no-progress", action="store_true")
     if options is not None:
         options(ap)
@@ -161,5 +173,11 @@ def main(doc: str, name: str, argv, compute, options=None):
     t0 = time.perf_counter()
     result, writer = compute(args.quick, log, Context(args.out, not args.no_progress, args))
     os.makedirs(args.out, exist_ok=True)
-    writer(args.out, provenance(name, args.quick, time.perf_counter() - t0, _study_flags(argv)))
+    writer(args.out, provenance(file, args.quick, time.perf_counter() - t0, _study_flags(argv)))
     return result
+
+
+def entry(file: str, doc: str, compute, options=None):
+    """The study's ``main(argv=None)`` (:func:`run` of the study ``file`` with its docstring
+    ``doc``): ``main = scaffold.entry(__file__, __doc__, compute)``."""
+    return lambda argv=None: run(file, doc, argv, compute, options)
