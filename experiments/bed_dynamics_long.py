@@ -307,8 +307,8 @@ def _summary(r, s, out, prov):
     R = r["beds"]
     seeds = ", ".join(str(x) for x in r["seeds"])
     ident = max(max(row["identical_before"]) for row in r["rows"].values())
-    L = ["# Bed dynamics: long series, periodicity levels, twin runs (thesis ch. 4)", "",
-         scaffold.provenance_line(prov, r["wall"]), "",
+    L = [*scaffold.head("Bed dynamics: long series, periodicity levels, twin runs "
+                        "(thesis ch. 4)", prov, r["wall"]),
          f"`sanchez2012-optimal`, **{R} independently poured beds** per frequency (seeds "
          f"{seeds}: the package's replicate seeds; `--beds`), one twin pair per bed and "
          f"frequency, {s['duration']:g} s per run (the thesis: ≈ 197 s), analysed after "

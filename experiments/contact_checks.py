@@ -139,8 +139,7 @@ def write(result, out, prov):
     ax.legend(fontsize=8)
     scaffold.save_figure(fig, out)
 
-    L = ["# Single-contact checks: sliding to rolling, mixed A", "",
-         scaffold.provenance_line(prov), "",
+    L = [*scaffold.head("Single-contact checks: sliding to rolling, mixed A", prov),
          "Deterministic computations: one sphere, one contact table — no spread between "
          "realisations, so no replicate interval; the numbers are given to their digits.", "",
          "## Sliding to rolling (SPEC §2)", "",

@@ -138,8 +138,7 @@ def write(r, out, prov):
     ax.legend(fontsize=7)
     scaffold.save_figure(fig, out)
 
-    L = ["# Free decay against stepped sine (issue 16)", "",
-         scaffold.provenance_line(prov), "",
+    L = [*scaffold.head("Free decay against stepped sine (issue 16)", prov),
          f"Damper: `sanchez2012-optimal` (250 grains, Lz = 0.1225 m), K = {r['K']:g} N/m. "
          f"Free decay from z0 = {s['z0']} m, {s['decay_s']} s, base at rest; stepped sine at "
          f"U = {', '.join(f'{u * 1e3:g}' for u in s['U'])} mm × f = "

@@ -252,8 +252,7 @@ def _figure(out, v, path):
 
 def _summary(out, v, path, prov):
     s = out["settings"]
-    L = ["# Design optimisation that beats the scan (issue 12)", "",
-         scaffold.provenance_line(prov), "",
+    L = [*scaffold.head("Design optimisation that beats the scan (issue 12)", prov),
          "Objective: the grains' equivalent viscous damping at f0, C_eq = E/(π Ω Z²) [N s/m], "
          "maximised. Every DEM value is a mean over independent replicates (independently seeded "
          "settled beds) of steady means after each run's MSER-detected start; derivatives are "

@@ -205,8 +205,8 @@ def _figure(a, b, v, path):
 
 def _summary(a, b, v, path, prov):
     sc = a["scan"]
-    L = ["# Design optimisation from two starts, and with three design variables (issue 12)", "",
-         scaffold.provenance_line(prov), "",
+    L = [*scaffold.head("Design optimisation from two starts, and with three design variables "
+                        "(issue 12)", prov),
          "Objective: C_eq = E/(π Ω Z²) at f0 [N s/m], maximised; steady means after the "
          "MSER-detected start; intervals Student-t 95 % across independent beds (optimum "
          "intervals: jackknife-t over replicates of the quadratic response surface, weights "

@@ -127,8 +127,7 @@ def write(r, out, prov):
     scaffold.save_figure(fig, out)
 
     n_stat = int(r["stationary"].sum())
-    L = ["# The gap height of the smallest resonant amplitude, fine scan (F7)", "",
-         scaffold.provenance_line(prov), "",
+    L = [*scaffold.head("The gap height of the smallest resonant amplitude, fine scan (F7)", prov),
          f"Damper: `sanchez2012-optimal` ({s['grains']} grains), driven at f0 = "
          f"{r['f0']:.4g} Hz (sqrt(K/M)/2π, as in `gap_optimisation.py`). Heights "
          f"{', '.join(f'{x:g}' for x in lz)} m, **{R} independently poured beds** per height "

@@ -114,8 +114,7 @@ def write(r, out, prov):
 
     n_runs = sum(d["Z"].size for d in runs.values())
     n_stat = sum(d["stationary"] for d in runs.values())
-    L = ["# Horizontal against vertical base motion (issue 16)", "",
-         scaffold.provenance_line(prov), "",
+    L = [*scaffold.head("Horizontal against vertical base motion (issue 16)", prov),
          f"Damper: `sanchez2012-optimal` (250 grains, m_p = {r['m_p']:.4g} kg, Lz = 0.1225 m, "
          f"M = {r['M']} kg, K = {r['K']:g} N/m, C = {r['C']} N s/m), base amplitude U = "
          f"{1e3 * r['U']:g} mm along z (vertical, the thesis) or along x (horizontal; gravity "

@@ -77,8 +77,7 @@ def write(r, out, prov):
 
 
 def _summary(r, out, prov):
-    L = ["# Inelastic collapse of two particles at a wall (thesis fig. 5.1)", "",
-         scaffold.provenance_line(prov), "",
+    L = [*scaffold.head("Inelastic collapse of two particles at a wall (thesis fig. 5.1)", prov),
          "Event-driven, exact up to round-off, with the S3 collision rule "
          "(`jaxdamp.s3.common.collide`); start as in the thesis: the near particle hits the "
          "wall with V = 1 m/s while the far one, X = 1 m away, approaches with V. "

@@ -130,8 +130,7 @@ def write(r, out, prov):
     ax.legend(fontsize=6.5)
     fig.savefig(os.path.join(out, "figure.png"), dpi=120)
 
-    L = ["# Random excitation against stepped sine (issue 16)", "",
-         scaffold.provenance_line(prov), "",
+    L = [*scaffold.head("Random excitation against stepped sine (issue 16)", prov),
          f"Damper: `sanchez2012-optimal` (250 grains, Lz = 0.1225 m). Random base motion: flat "
          f"acceleration density {s['S']} (m/s²)²/Hz × scale "
          f"{', '.join(f'{x:g}' for x in s['scales'])} "

@@ -163,8 +163,7 @@ def write(r, out, prov):
     fig.savefig(os.path.join(out, "figure.png"), dpi=120)
 
     M, K, C = matrices(presets.get(PRESET))[:3]
-    L = ["# The damper on a two-mode structure (issue 16)", "",
-         scaffold.provenance_line(prov), "",
+    L = [*scaffold.head("The damper on a two-mode structure (issue 16)", prov),
          f"Structure: the preset `{PRESET}`, a 2-DOF chain, m = {M[1, 1]:g} kg each, "
          f"k = {-K[0, 1]:g} N/m, c = {-C[0, 1]:g} N s/m "
          f"(base–lower and lower–upper); empty modes at {r['f_empty'][0]:.3f} and "

@@ -230,8 +230,8 @@ def _summary(r, s, out, prov, wall):
         return (f"{scaffold.pm(x['d_peak'], x['d_peak_ci'], '+.2f', '.2f')} — "
                 + ("**changed**" if x["changed"] else "not significant"))
 
-    L = ["# Limits of the universal response (thesis figs. 5.2c,d, 5.3, 5.4, 5.5)", "",
-         scaffold.provenance_line(prov, wall), "",
+    L = [*scaffold.head("Limits of the universal response (thesis figs. 5.2c,d, 5.3, 5.4, "
+                         "5.5)", prov, wall),
          f"`sanchez2012-optimal`, R = {R} independently poured beds per point, {s['duration']} "
          "s per run; steady means after the MSER-detected start (collisional share: final "
          "10 % of each run); ± = standard error over the beds, comparisons Welch 95 %.", "",

@@ -122,8 +122,8 @@ def write(rows, v, s, path, prov):
         ax.legend(fontsize=7)
     scaffold.save_figure(fig, path)
 
-    L = ["# Grain–wall damping convention: mixed vs calibrated (issue 13, item 5)", "",
-         scaffold.provenance_line(prov), "",
+    L = [*scaffold.head("Grain–wall damping convention: mixed vs calibrated (issue 13, item "
+                         "5)", prov),
          f"Protocol: {s['transient']} transient + {s['periods']} analysed periods at 70 Hz, "
          f"{s['R']} independent beds per point; ⟨E_d⟩ = steady mean of the per-period "
          "dissipation after the MSER-detected start; intervals Student-t 95 % across beds, "

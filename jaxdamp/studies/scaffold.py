@@ -18,7 +18,7 @@ folder ``<name>/`` beside the script)::
 
 ``python <name>.py [--quick] [--out DIR] [--no-progress]``; ``write`` uses :func:`data_file`,
 :func:`subplots` and :func:`save_figure` (the figures' style of :mod:`jaxdamp.figures`),
-:func:`table`, :func:`provenance_line` and :func:`write_summary`; every "mean ± SE" is
+:func:`table`, :func:`head` (title and provenance) and :func:`write_summary`; every "mean ± SE" is
 :func:`pm` of :func:`mean_se` or of an :class:`~jaxdamp.analysis.stats.Estimate`
 (:func:`across`).
 """
@@ -121,6 +121,11 @@ def provenance_line(prov: dict, sweep_wall: float | None = None) -> str:
         line += (f" The sweeps' own compute time: {sweep_wall / 60:.1f} min (kept in the raw "
                  "files across re-runs; settling excluded).")
     return line
+
+
+def head(title: str, prov: dict, sweep_wall: float | None = None) -> list[str]:
+    """The summary's first lines: ``# title`` and the :func:`provenance_line`."""
+    return [f"# {title}", "", provenance_line(prov, sweep_wall), ""]
 
 
 @dataclass(frozen=True)
