@@ -63,7 +63,7 @@ def cmd_frf(args) -> int:
         FIT_RULE,
         RESIDUALS,
         fit_failure,
-        fit_frf_replicates,
+        fit_frf_scan,
         replicate_mean,
     )
     from jaxdamp.figures import frf_figure, save
@@ -95,11 +95,9 @@ def cmd_frf(args) -> int:
         Zr = res.summary["amplitude"].reshape(len(freqs), L, 1)
     Z, Z_se = replicate_mean(Zr)
     order = [args.residuals] + [w for w in RESIDUALS if w != args.residuals]
-    fits, failures, lines, fit_all = [], [], [], {w: [] for w in RESIDUALS}
+    fits, failures, lines = [], [], []
+    fit_all = {w: fit_frf_scan(freqs, Zr, p, w) for w in RESIDUALS}
     for j in range(L):
-        for w in RESIDUALS:
-            fit_all[w].append(fit_frf_replicates(freqs, Zr[:, j], p.U, p.K, M0=p.M,
-                                                 C0=max(p.C, 1.0), residuals=w))
         fr = fit_all[args.residuals][j]
         why = fit_failure(fr)
         fits.append(None if why else (fr["M_ef"], fr["C_ef"]))
