@@ -31,6 +31,7 @@ import numpy as np
 from jaxdamp.analysis.response import RESIDUALS, frf_amplitude
 from jaxdamp.analysis.stats import welch
 from jaxdamp.config import from_json
+from jaxdamp.figures.response import draw_replicates
 from jaxdamp.studies import scaffold
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -83,8 +84,8 @@ def write(r, out, prov):
 
     fig, (a1, a2) = scaffold.subplots(1, 2, figsize=(12, 4.4))
     for w, ls in zip(RESIDUALS, ("-", "--")):
-        a1.errorbar(r["lz"], r["mis"][w].mean(-1), yerr=2 * scaffold.standard_error(r["mis"][w]),
-                    fmt="o", ls=ls, capsize=3, label=f"{w} residuals")
+        draw_replicates(a1, r["lz"], r["mis"][w], fmt="o", ls=ls, capsize=3,
+                        label=f"{w} residuals")
     a1.set(xscale="log", xlabel="box height Lz [m]",
            ylabel="RMS misfit of the 1-DOF FRF [-] (per U, or relative)")
     a1.set_title("misfit of each bed's own fit, mean of 3 beds ± 2 SE", fontsize=9)

@@ -34,6 +34,7 @@ from jaxdamp.analysis.response import frf_amplitude, resonance
 from jaxdamp.analysis.stats import welch
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
+from jaxdamp.figures.response import draw_replicates
 from jaxdamp.physics.model import grain_mass
 from jaxdamp.studies import scaffold
 from jaxdamp.studies.grid import Points, steady_or_window
@@ -173,8 +174,8 @@ def _figure(out, r, s):
             lw=0.9, label="analytic, M + m_p")
     for c, ((gn, gs), mk) in enumerate(zip(s["cases"], "osd^")):
         Z = a["Z"][c] / p.U
-        a1.errorbar(f, Z.mean(-1), yerr=2 * scaffold.standard_error(Z), fmt=mk, ms=6,
-                    mfc="none", capsize=3, label=f"DEM γn = {gn:g}, γs = {gs:g}")
+        draw_replicates(a1, f, Z, fmt=mk, ms=6, mfc="none", capsize=3,
+                        label=f"DEM γn = {gn:g}, γs = {gs:g}")
     a1.plot(f, r["s3"]["event"]["Z"] / p.U, "k-", lw=1.2, label="S3, e = 0 (event-driven)")
     a1.plot(f, r["s3"]["smooth"]["Z"] / p.U, "k:", lw=1.2, label="S3, e = 0 (smooth)")
     a1.set(yscale="log", xlabel="excitation frequency f [Hz]", ylabel="amplitude ratio Z / U  [-]")
@@ -189,8 +190,8 @@ def _figure(out, r, s):
         a2.plot(f, coll, "^-", color=col, ms=4, lw=0.8, label=f"collision, ({gn:g}, {gs:g})")
         a2.plot(f, fric, "s--", color=col, ms=4, lw=0.8, label=f"friction, ({gn:g}, {gs:g})")
         E = a["E"][c]
-        a2.errorbar(f, E.mean(-1), yerr=2 * scaffold.standard_error(E), fmt="o-", color=col,
-                    ms=5, mfc="none", lw=1.2, capsize=2, label=f"total, ({gn:g}, {gs:g})")
+        draw_replicates(a2, f, E, fmt="o-", color=col, ms=5, mfc="none", lw=1.2, capsize=2,
+                        label=f"total, ({gn:g}, {gs:g})")
     a2.plot(f, r["s3"]["event"]["total"], "k-", lw=1.2, label="S3, e = 0")
     a2.set(xlabel="excitation frequency f [Hz]", ylabel="granular loss per cycle [J]")
     a2.set_title("(b) dissipation per cycle, collisional vs frictional (thesis fig. 5.2b)",

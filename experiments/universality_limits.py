@@ -35,6 +35,7 @@ import numpy as np
 from jaxdamp.analysis.response import resonance
 from jaxdamp.analysis.stats import welch
 from jaxdamp.cases import presets
+from jaxdamp.figures.response import draw_replicates
 from jaxdamp.studies import scaffold
 from jaxdamp.studies.grid import Points, steady_or_window
 from jaxdamp.studies.sweep import reuse_or_run
@@ -203,8 +204,7 @@ def _figure(r, s, out):
     axs[0].set_title("figs. 5.2(c,d), 5.5: loss at resonance vs γ", fontsize=9)
     axs[0].legend(fontsize=7)
     for row in r["materials"]:
-        axs[1].errorbar(s["frf_freqs"], row["ZU"].mean(-1),
-                        yerr=[se(z) for z in row["ZU"]], fmt="o-", capsize=3,
+        draw_replicates(axs[1], s["frf_freqs"], row["ZU"], fmt="o-", capsize=3,
                         label=row["material"])
     axs[1].set(xlabel="excitation frequency f [Hz]", ylabel="amplitude ratio Z / U  [-]")
     axs[1].set_title("fig. 5.3: materials at equal M/m_p", fontsize=9)
