@@ -29,7 +29,7 @@ import numpy as np
 
 from jaxdamp.analysis.stats import replicate_extrema, welch
 from jaxdamp.cases import presets
-from jaxdamp.config import apply_overrides
+from jaxdamp.config import apply_overrides, from_dict
 from jaxdamp.physics.model import collision_time_limit, grain_radii
 from jaxdamp.studies import scaffold
 from jaxdamp.studies.grid import steady_replicates
@@ -78,13 +78,10 @@ def compute(quick: bool, log, ctx):
             m = float(np.mean(ref[key]))
             r[f"d_{name}"], r[f"d_{name}_ci"] = d / m, h / m
             r[f"{name}_changed"] = bool(abs(d) > h) if r is not ref else None
-    return rows, lambda path, prov: write(rows, s, k15, path, prov)
+    return rows, lambda path, prov: record(rows, s, path, prov)
 
 
-main = scaffold.entry(__file__, __doc__, compute)
-
-
-def write(rows, s, k15, out, prov):
+def record(rows, s, out, prov):
     wall = sum(r["wall"] for r in rows.values())  # the sweeps' compute time (settling excluded)
     with scaffold.data_file(out, dict(prov, sweep_wall_s=wall), settings=s) as h:
         h.create_dataset("frequency", data=np.asarray(s["freqs"])).attrs["units"] = "Hz"
@@ -93,19 +90,32 @@ def write(rows, s, k15, out, prov):
             g.attrs["config"] = r["config"].to_json()
             g.attrs.update({"E": r["E"], "dt": r["dt"], "t_c": r["t_c"], "wall_time": r["wall"],
                             "d_peak": r["d_peak"], "d_peak_ci95": r["d_peak_ci"],
-                            "d_loss": r["d_loss"], "d_loss_ci95": r["d_loss_ci"]})
+                            "d_loss": r["d_loss"], "d_loss_ci95": r["d_loss_ci"],
+                            "stationary": r["stationary"], "fallback": r["fallback"]})
             for name, k, u in (("amplitude", "Z", "m"), ("granular_loss_per_cycle", "loss", "J")):
                 g.create_dataset(name, data=r[k]).attrs.update(units=u, dims="frequency, replicate")
             g.create_dataset("Z_peak", data=r["Z_peak"]).attrs["units"] = "m"
             g.create_dataset("balance_error", data=r["balance"]).attrs["units"] = "1"
 
-    U, R = rows[s["scales"][0]]["config"].primary.U, s["R"]
+
+def report(data, out):
+    s, prov = data.attrs["settings"], data.attrs
+    freqs, R = s["freqs"], s["R"]
+    k15 = int(np.argmin(np.abs(np.asarray(freqs) - 15.0)))
+    rows = {}
+    for scale in s["scales"]:
+        g = data[f"scale_{scale:g}"]
+        rows[scale] = dict(g.attrs, config=from_dict(g.attrs["config"]), Z=g["amplitude"],
+                           loss=g["granular_loss_per_cycle"], Z_peak=g["Z_peak"],
+                           balance=g["balance_error"], runs=g["amplitude"].size,
+                           ref=scale == (REF if REF in s["scales"] else s["scales"][-1]))
+    U = rows[s["scales"][0]]["config"].primary.U
     fig, (a1, a2) = scaffold.subplots(1, 2, figsize=(10, 4))
     se = lambda x: 2 * scaffold.standard_error(x)  # noqa: E731
-    for scale, r in rows.items():
-        a1.errorbar(s["freqs"], r["Z"].mean(-1) / U, yerr=se(r["Z"]) / U, fmt="o-", capsize=3,
+    for r in rows.values():
+        a1.errorbar(freqs, r["Z"].mean(-1) / U, yerr=se(r["Z"]) / U, fmt="o-", capsize=3,
                     label=f"E = {r['E']:.3g} Pa (dt = {r['dt']:.2g} s)")
-        a2.errorbar(s["freqs"], r["loss"].mean(-1), yerr=se(r["loss"]), fmt="o-", capsize=3,
+        a2.errorbar(freqs, r["loss"].mean(-1), yerr=se(r["loss"]), fmt="o-", capsize=3,
                     label=f"E = {r['E']:.3g} Pa")
     a1.set(xlabel="excitation frequency f [Hz]", ylabel="amplitude ratio Z / U  [-]")
     a2.set(xlabel="excitation frequency f [Hz]", ylabel="granular loss per cycle [J]")
@@ -117,16 +127,17 @@ def write(rows, s, k15, out, prov):
     scaffold.save_figure(fig, out)
 
     def verdict(r, name):
-        if r[f"{name}_changed"] is None:
+        if r["ref"]:
             return "reference"
-        return (scaffold.pm(r[f"d_{name}"], r[f"d_{name}_ci"], "+.1f", ".1f", scale=100,
-                            unit="%") + " — "
-                + ("**changed**" if r[f"{name}_changed"] else "not significant"))
+        d, h = r[f"d_{name}"], r[f"d_{name}_ci95"]
+        return (scaffold.pm(d, h, "+.1f", ".1f", scale=100, unit="%") + " — "
+                + ("**changed**" if abs(d) > h else "not significant"))
 
+    wall = prov["sweep_wall_s"]
     lines = ["# Stiffness sensitivity at the optimal box, with replicates", "",
              scaffold.provenance_line(prov, wall) + " Data `data.h5`, figure `figure.png`.", "",
              f"`sanchez2012-optimal` (Lz = 0.1225 m, C = 7.6 N s/m, N = 250), frequencies "
-             f"{list(s['freqs'])} Hz × **R = {R} independently poured beds** (seeds 0…{R - 1}, "
+             f"{list(freqs)} Hz × **R = {R} independently poured beds** (seeds 0…{R - 1}, "
              f"the same at every modulus), {s['duration']} s per run after settling; amplitude "
              "and loss per cycle are steady means after the MSER-detected start. gamma_n, "
              "gamma_s scaled by stiffness_scale^0.6 (same restitution and tangential impulse per "
@@ -134,8 +145,9 @@ def write(rows, s, k15, out, prov):
              "E = 2.03e9 with their Welch 95 % interval.", "",
              "**Stationarity.** A run that the detection test (MSER) does not find stationary "
              "within its 1.8 s enters with its fixed-window value (the last "
-             f"{rows[REF]['config'].numerics.analysis_window:.0%} of the run) instead of a "
-             "steady mean: " + "; ".join(
+             f"{next(r for r in rows.values() if r['ref'])['config'].numerics.analysis_window:.0%} "
+             "of the run) "
+             "instead of a steady mean: " + "; ".join(
                  f"E = {r['E']:.3g} Pa: {r['runs'] - r['stationary']} of {r['runs']} runs "
                  f"(amplitude), {r['fallback']} fixed-window values in all"
                  for r in rows.values())
@@ -143,15 +155,18 @@ def write(rows, s, k15, out, prov):
              "longer runs are the remedy (the thesis modulus costs 6.3× the others).", ""]
     lines += scaffold.table(
         ["E [Pa]", "t_c at 1 m/s [s]", "dt [s]", "Z/U per frequency", "resonant Z/U",
-         "change of resonant Z", f"loss per cycle at {s['freqs'][k15]:g} Hz [J]",
+         "change of resonant Z", f"loss per cycle at {freqs[k15]:g} Hz [J]",
          "change of loss", "stationary runs", "balance error", "wall [s]"],
         [[f"{r['E']:.3g}", f"{r['t_c']:.3g}", f"{r['dt']:.3g}",
           ", ".join(f"{z / U:.2f}" for z in r["Z"].mean(-1)),
           scaffold.pm(*scaffold.mean_se(r["Z_peak"] / U), ".3f", ".3f"), verdict(r, "peak"),
-          scaffold.pm(*scaffold.mean_se(r["loss15"]), ".3f", ".3f"), verdict(r, "loss"),
+          scaffold.pm(*scaffold.mean_se(r["loss"][k15]), ".3f", ".3f"), verdict(r, "loss"),
           f"{r['stationary']} of {r['runs']}", f"{float(np.max(r['balance'])):.1e}",
-          f"{r['wall']:.0f}"] for r in rows.values()])
+          f"{r['wall_time']:.0f}"] for r in rows.values()])
     scaffold.write_summary(out, lines)
+
+
+main = scaffold.entry(__file__, __doc__, compute, report=report)
 
 
 if __name__ == "__main__":

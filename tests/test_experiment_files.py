@@ -36,6 +36,30 @@ def test_every_stored_result_is_a_study_file_with_its_provenance(path):
     assert "(study results)" in describe(str(path))
 
 
+@pytest.mark.parametrize("name", [n for n in STUDIES if (EXPERIMENTS / n / "data.h5").exists()])
+def test_stored_data_reproduce_their_summaries(name, tmp_path):
+    """``--from-data`` computes nothing: from the stored ``data.h5`` alone it writes the stored
+    ``summary.md`` byte for byte and every stored figure, and leaves the data file as it was."""
+    import shutil
+
+    stored = EXPERIMENTS / name
+    shutil.copy(stored / "data.h5", tmp_path / "data.h5")
+    before = (tmp_path / "data.h5").read_bytes()
+    importlib.import_module(f"experiments.{name}").main(
+        ["--from-data", "--out", str(tmp_path), "--no-progress"])
+    assert (tmp_path / "summary.md").read_text() == (stored / "summary.md").read_text()
+    assert ({p.name for p in tmp_path.glob("*.png")} == {p.name for p in stored.glob("*.png")})
+    assert (tmp_path / "data.h5").read_bytes() == before
+
+
+def test_from_data_without_a_result_file_is_a_clear_error(tmp_path, capsys):
+    from experiments import stiffness
+
+    with pytest.raises(SystemExit) as e:
+        stiffness.main(["--from-data", "--out", str(tmp_path / "nowhere")])
+    assert e.value.code == 2 and "--from-data: no result file" in capsys.readouterr().err
+
+
 def test_a_study_file_is_written_and_described(tmp_path):
     from jaxdamp.io.common import put
     from jaxdamp.io.describe import describe
@@ -51,6 +75,36 @@ def test_a_study_file_is_written_and_described(tmp_path):
     assert "amplitude: (2,) [m]" in text and "settings" in text and "beds/" in text
     with pytest.raises(ValueError, match="git"):
         create(tmp_path / "bad.h5", {k: v for k, v in prov.items() if k != "git"})
+
+
+def test_a_study_file_reads_back_whole(tmp_path):
+    """:func:`jaxdamp.io.study.load`: datasets as arrays or numbers, attributes decoded as
+    written, each dataset's attributes in ``meta``; a file of another format is refused."""
+    import numpy as np
+
+    from jaxdamp.io.common import put
+    from jaxdamp.io.study import create, load
+
+    prov = dict(command="c", jaxdamp_version="0", git="abc", machine="here", elapsed_s=90.0)
+    with create(tmp_path / "data.h5", prov, settings={"R": 2, "f": [1.5]}, label="a b") as h:
+        put(h, "amplitude", [0.01, 0.02], "m", dims="frequency")
+        g = h.create_group("beds")
+        g.attrs["n"] = 3
+        put(g, "count", 7, "1")
+        g.create_dataset("names", data=np.array([b"x", b"yz"]))
+        g.create_dataset("labels", data=["p", "qr"], dtype=h5py.string_dtype())
+    d = load(tmp_path / "data.h5")
+    assert d.attrs["settings"] == {"R": 2, "f": [1.5]} and d.attrs["label"] == "a b"
+    assert d.attrs["elapsed_s"] == 90.0 and d.attrs["git"] == "abc"
+    np.testing.assert_array_equal(d["amplitude"], [0.01, 0.02])
+    assert d.meta["amplitude"] == {"units": "m", "dims": "frequency"}
+    assert d["beds"].attrs["n"] == 3 and d["beds"]["count"] == 7
+    assert list(d["beds"]["names"]) == ["x", "yz"]
+    assert list(d["beds"]["labels"]) == ["p", "qr"]
+    with h5py.File(tmp_path / "other.h5", "w") as h:
+        h.attrs["format"] = "jaxdamp-sweep/2"
+    with pytest.raises(ValueError, match="not a study file"):
+        load(tmp_path / "other.h5")
 
 
 def _sources():

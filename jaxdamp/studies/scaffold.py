@@ -1,26 +1,34 @@
-"""What every study script shares: the command line, the provenance, the result file, figures,
-tables and the one estimate and formatter.
+"""What every study script shares: the command line, the provenance, the result file, the
+report from it, figures, tables and the one estimate and formatter.
 
-A study (``experiments/<name>.py``, or a script of yours) computes, judges and writes
-``data.h5`` (:mod:`jaxdamp.io.study`), figures and ``summary.md`` into ``--out`` (default: the
-folder ``<name>/`` beside the script)::
+A study (``experiments/<name>.py``, or a script of yours) computes and records its numbers in
+``data.h5`` (:mod:`jaxdamp.io.study`); its report draws the figures and writes ``summary.md``
+from that file alone, so a stored ``data.h5`` reproduces its summary (``--from-data``). Both go
+into ``--out`` (default: the folder ``<name>/`` beside the script)::
 
     from jaxdamp.studies import scaffold
 
     def compute(quick, log, ctx):          # ctx: Context (out folder, progress, options)
         result = ...                       # the study's numbers and verdicts
-        return result, lambda out, prov: write(result, out, prov)
+        return result, lambda out, prov: record(result, out, prov)
 
-    main = scaffold.entry(__file__, __doc__, compute)
+    def record(result, out, prov):         # data.h5 and nothing else
+        with scaffold.data_file(out, prov, settings=...) as h:
+            ...
+
+    def report(data, out):                 # data: data.h5 read back (io.study.Group)
+        ...                                # figures, then scaffold.write_summary(out, lines)
+
+    main = scaffold.entry(__file__, __doc__, compute, report=report)
 
     if __name__ == "__main__":
         main()
 
-``python <name>.py [--quick] [--out DIR] [--no-progress]``; ``write`` uses :func:`data_file`,
-:func:`subplots` and :func:`save_figure` (the figures' style of :mod:`jaxdamp.figures`),
-:func:`table`, :func:`head` (title and provenance) and :func:`write_summary`; every "mean ± SE" is
-:func:`pm` of :func:`mean_se` or of an :class:`~jaxdamp.analysis.stats.Estimate`
-(:func:`across`).
+``python <name>.py [--quick] [--out DIR] [--no-progress] [--from-data]``; ``record`` uses
+:func:`data_file`; ``report`` uses :func:`subplots` and :func:`save_figure` (the figures' style
+of :mod:`jaxdamp.figures`), :func:`table`, :func:`head` (title and the provenance kept in
+``data.attrs``) and :func:`write_summary`; every "mean ± SE" is :func:`pm` of :func:`mean_se`
+or of an :class:`~jaxdamp.analysis.stats.Estimate` (:func:`across`).
 """
 
 from __future__ import annotations
@@ -158,31 +166,52 @@ def _study_flags(argv: list[str]) -> str:
     return " ".join(out)
 
 
-def run(file: str, doc: str, argv, compute, options=None):
+def run(file: str, doc: str, argv, compute, options=None, report=None):
     """Parse ``--quick``, ``--out`` (default: ``<name>/`` beside the study ``file``),
-    ``--no-progress`` and, with ``options(parser)``, the study's own options (in
-    ``ctx.args``); ``compute(quick, log, ctx)`` (``ctx``: :class:`Context`) returns
-    ``(result, writer)``; ``writer(out_dir, provenance)`` writes the files. Returns
-    ``result``."""
+    ``--no-progress``, ``--from-data`` and, with ``options(parser)``, the study's own options
+    (in ``ctx.args``); ``compute(quick, log, ctx)`` (``ctx``: :class:`Context`) returns
+    ``(result, writer)``; ``writer(out_dir, provenance)`` writes ``data.h5`` (with a
+    ``report``; without one, every file) and ``report(data, out_dir)`` writes the figures and
+    the summary from ``data.h5`` read back (:func:`jaxdamp.io.study.load`). With
+    ``--from-data`` nothing is computed: the report is written from the ``data.h5`` in
+    ``--out``. Returns ``result`` (with ``--from-data``, the data read)."""
     file = os.path.abspath(file)
     ap = argparse.ArgumentParser(description=doc,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="test-sized settings (minutes)")
     ap.add_argument("--out", default=os.path.splitext(file)[0], help="output folder")
     ap.add_argument("--no-progress", action="store_true")
+    if report is not None:
+        ap.add_argument("--from-data", action="store_true",
+                        help="compute nothing: redraw the figures and rewrite summary.md from "
+                             "the data.h5 in --out (a stored result reproduces its summary)")
     if options is not None:
         options(ap)
     argv = sys.argv[1:] if argv is None else list(argv)
     args = ap.parse_args(argv)
+    data_path = os.path.join(args.out, "data.h5")
+    if getattr(args, "from_data", False):
+        if not os.path.isfile(data_path):
+            ap.error(f"--from-data: no result file {data_path} (run the study first, or give "
+                     "--out the folder that holds it)")
+        from jaxdamp.io.study import load
+
+        data = load(data_path)
+        report(data, args.out)
+        return data
     log = (lambda m: print(m, flush=True)) if not args.no_progress else (lambda m: None)
     t0 = time.perf_counter()
     result, writer = compute(args.quick, log, Context(args.out, not args.no_progress, args))
     os.makedirs(args.out, exist_ok=True)
     writer(args.out, provenance(file, args.quick, time.perf_counter() - t0, _study_flags(argv)))
+    if report is not None:
+        from jaxdamp.io.study import load
+
+        report(load(data_path), args.out)
     return result
 
 
-def entry(file: str, doc: str, compute, options=None):
+def entry(file: str, doc: str, compute, options=None, report=None):
     """The study's ``main(argv=None)`` (:func:`run` of the study ``file`` with its docstring
-    ``doc``): ``main = scaffold.entry(__file__, __doc__, compute)``."""
-    return lambda argv=None: run(file, doc, argv, compute, options)
+    ``doc``): ``main = scaffold.entry(__file__, __doc__, compute, report=report)``."""
+    return lambda argv=None: run(file, doc, argv, compute, options, report)
