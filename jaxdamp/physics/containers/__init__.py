@@ -8,8 +8,9 @@ everything about it side by side:
 * the JAX contact form ``sides_jax(bx, by, section)``: the distances ``(N, W)`` from the grain
   centres ``(bx, by)`` (box frame) to its ``W ≤ MAX_SIDES`` side walls, their inward normals
   ``(nx, ny)`` (constants ``(W,)`` for planes, ``(N, W)`` for curved walls) and their
-  curvatures (``1/R_wall``, 0 for a plane; a concave wall's effective contact radius is
-  ``R* = R_i / (1 − R_i κ)``, :func:`effective_radius`);
+  contact curvatures ``κ`` (0 for a plane; a concave wall's effective contact radius is
+  ``R* = R_i / (1 − R_i κ)``, :func:`effective_radius`; a wall curved in one direction only,
+  as the cylinder's, enters with half its curvature: the mean of its principal curvatures);
 * its scalar form for the compiled kernel, ``side_contacts_scalar``: the contacts of one
   grain with its side walls, added to the grain's sums (each wall by
   :func:`jaxdamp.physics.containers._scalar.add_wall_scalar`; the walls unrolled, so that a
@@ -39,7 +40,7 @@ class Container(NamedTuple):
     """A container's forms (module docstring); ``id``: its number in the scalar dispatch;
     ``curved``: whether a side wall is curved (the JAX form then forms its effective radius
     per contact); ``fields``: its own dimensions, keys of its ``[container]`` table;
-    ``curvature(config)``: the largest curvature of its walls [1/m] (0: all planes), which
+    ``curvature(config)``: the largest contact curvature of its walls [1/m] (0: all planes), which
     shortens the stiffest wall contact and so the time step."""
 
     name: str

@@ -4,10 +4,17 @@
 In the box frame its axis stands at ``(R_c, R_c)``, so the section's bounding square is
 ``[0, 2 R_c]²`` (the frame of the box's corner, where lattices, figures and exports start). Its
 one side wall is concave seen from the grains: at a grain centre ``(x, y)`` at distance ``ρ``
-from the axis the wall is ``R_c − ρ`` away, its inward normal is ``−(x − R_c, y − R_c)/ρ`` and
-its curvature ``κ = 1/R_c``, so a grain of radius ``R`` touching it has the effective contact
-radius ``R* = R R_c / (R_c − R)`` (:func:`jaxdamp.physics.containers.effective_radius`: a
-concave wall is stiffer than a plane). ``Params.section`` is ``(R_c,)``.
+from the axis the wall is ``R_c − ρ`` away and its inward normal is ``−(x − R_c, y − R_c)/ρ``.
+
+**Contact curvature.** The wall is curved in one direction only (``−1/R_c`` around the axis, 0
+along it), so a sphere touching it makes an elliptical Hertz contact. Its effective radius is
+taken from the mean relative curvature, ``1/R* = 1/R − 1/(2 R_c)``: the wall enters with the
+contact curvature ``κ = 1/(2 R_c)`` (:data:`CONTACT_CURVATURE` of the section's ``1/R_c``) in
+``R* = R / (1 − R κ)`` (:func:`jaxdamp.physics.containers.effective_radius`). This is LAMMPS'
+convention (``fix wall/gran ... zcylinder`` gives the wall the radius ``−2 R_c``), and it lies
+within 1 % of the equivalent radius ``√(R' R'')`` of the elliptical contact (Johnson, *Contact
+Mechanics*, §4.2; ``R' = 1/(1/R − 1/R_c)``, ``R'' = R``) for ``R_c ≥ 5 R``. A concave wall is
+stiffer than a plane. ``Params.section`` is ``(R_c,)``.
 
 Example::
 
@@ -33,6 +40,9 @@ from jaxdamp.physics.containers._scalar import add_wall_scalar
 
 #: The container's own dimensions (keys of its ``[container]`` table beside ``shape``, ``Lz``).
 FIELDS = ("radius",)
+#: The side wall's contact curvature per unit of its section's curvature ``1/R_c``: the mean
+#: of its two principal curvatures (module docstring).
+CONTACT_CURVATURE = 0.5
 
 
 def _radius(config) -> float:
@@ -46,7 +56,7 @@ def section(config) -> np.ndarray:
 
 def sides_jax(bx, by, section):
     """Distance ``(N,)`` from grain centres ``(bx, by)`` (box frame) to the side wall, its
-    inward normal ``(N, 1)`` each, and its curvature ``1/R_c``."""
+    inward normal ``(N, 1)`` each, and its contact curvature ``1/(2 R_c)``."""
     Rc = section[0]
     rho = jnp.stack([bx - Rc, by - Rc], axis=-1)
     d = safe_norm(rho)
@@ -54,7 +64,7 @@ def sides_jax(bx, by, section):
     inv = 1.0 / jnp.where(off, d, 1.0)
     nx = jnp.where(off, -rho[:, 0] * inv, 1.0)
     ny = jnp.where(off, -rho[:, 1] * inv, 0.0)
-    return (Rc - d,), (nx[:, None], ny[:, None]), (1.0 / Rc,)
+    return (Rc - d,), (nx[:, None], ny[:, None]), (CONTACT_CURVATURE / Rc,)
 
 
 @scalar_form
@@ -78,13 +88,13 @@ def side_contacts_scalar(law, x, y, section, Ri, wk, i, vx, vy, vz, sx, sy, sz, 
 
 @scalar_form
 def curvature_scalar(section):
-    """The side wall's curvature ``1/R_c`` [1/m] from ``Params.section``."""
-    return 1.0 / section[0]
+    """The side wall's contact curvature ``1/(2 R_c)`` [1/m] from ``Params.section``."""
+    return CONTACT_CURVATURE / section[0]
 
 
 def curvature(config) -> float:
-    """The side wall's curvature ``1/R_c`` [1/m]."""
-    return 1.0 / _radius(config)
+    """The side wall's contact curvature ``1/(2 R_c)`` [1/m]."""
+    return CONTACT_CURVATURE / _radius(config)
 
 
 def extent(config) -> tuple[float, float, float, float]:
