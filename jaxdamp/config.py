@@ -68,24 +68,42 @@ class Material:
     linear_stiffness: float | None = None
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class Species:
     """One kind of grain.
 
     Attributes:
-      count: number of grains.
+      count: number of grains; or, instead, one of
+      mass_ratio: the species' mass over the primary's mass ``M`` [-], or
+      fill_fraction: the volume of the species' bed at random packing over the cavity's
+        volume [-] (:mod:`jaxdamp.cases.filling`; validation turns either into ``count`` and
+        keeps it beside the statement).
       radius: mean radius [m].
       radius_spread: relative half-width of a uniform radius distribution (0.04 means radii
         uniformly in ``radius * [0.96, 1.04]``), drawn with the run's seed.
       material: the grains' :class:`Material`.
       name: label used in outputs.
+
+    Example (TOML)::
+
+        [[grains]]
+        mass_ratio = 0.1          # 10 % of the primary's mass
+        radius = 0.003
+        [grains.material]
+        ...
     """
 
-    count: int
+    count: int | None = None
+    mass_ratio: float | None = None
+    fill_fraction: float | None = None
     radius: float
     material: Material
     radius_spread: float = 0.0
     name: str = "grains"
+
+
+#: The ways a species states its fill (:class:`Species`), the count first.
+FILL_KEYS = ("count", "mass_ratio", "fill_fraction")
 
 
 @dataclass(frozen=True)
@@ -394,6 +412,10 @@ class Config:
     # -- convenience -------------------------------------------------------------------------
     @property
     def n_grains(self) -> int:
+        if any(s.count is None for s in self.grains):
+            raise ConfigError("the grain counts are stated as mass_ratio or fill_fraction: "
+                              "validate the configuration first (jaxdamp.validation.validate "
+                              "turns them into counts)")
         return sum(s.count for s in self.grains)
 
     @property
@@ -539,7 +561,8 @@ def missing_keys(data: Any, cls=None, path: str = "") -> list[str]:
 _TOP_KEYS = {
     "system": 'system ("primary", "driven" or "impact")',
     "frequency": "frequency [Hz]",
-    "grains": "the grains ([[grains]] tables: count, radius, [grains.material])",
+    "grains": "the grains ([[grains]] tables: count (or mass_ratio, or fill_fraction), radius, "
+              "[grains.material])",
     "box": "the box ([box] table: Lx, Ly, Lz [m]; or a [container] table with its shape)",
 }
 
@@ -642,7 +665,10 @@ def load_toml(path: str, base: Config | None = None) -> Config:
                 "or start a whole file from a preset: jaxdamp presets --show NAME > my.toml "
                 "(the names: jaxdamp presets)")
         return from_dict(data)
-    return from_dict(_one_container(_deep_merge(base.to_dict(), data), set(data)))
+    merged = _one_container(_deep_merge(base.to_dict(), data), set(data))
+    if "grains" not in data:  # the base's grains, in a cavity or under a mass the file may set
+        _restate(merged, [])
+    return from_dict(merged)
 
 
 def _one_container(data: dict, given) -> dict:
@@ -719,7 +745,27 @@ def apply_overrides(config: Config, overrides: list[str] | dict[str, Any]) -> Co
     tops = {key.split(".", 1)[0] for key, _ in items}
     if "container" in tops and config.container is None or "box" in tops and config.box is None:
         _one_container(data, tops)  # a new container table replaces the other one
+    _restate(data, [key for key, _ in items])
     return from_dict(data)
+
+
+def _restate(data: dict, keys: list[str]) -> None:
+    """After a change (``keys``: the dotted keys it set) to the dict of a configuration whose
+    species may state their fill by ``mass_ratio`` or ``fill_fraction``: a species whose fill
+    the change sets keeps that statement alone (the others cleared); every other stating
+    species has its count cleared, to be derived again (:mod:`jaxdamp.cases.filling`: the
+    change may have moved the primary's mass or the cavity)."""
+    grains = data.get("grains")
+    if not isinstance(grains, list) or "grains" in keys:
+        return
+    for i, sp in enumerate(grains):
+        if not isinstance(sp, dict):
+            continue
+        chosen = [k for k in FILL_KEYS if f"grains.{i}.{k}" in keys]
+        if chosen:
+            sp.update({k: None for k in FILL_KEYS if k not in chosen})
+        elif any(sp.get(k) is not None for k in FILL_KEYS[1:]):
+            sp["count"] = None
 
 
 def _set_path(data: dict, key: str, value: Any, created: set) -> None:

@@ -290,7 +290,9 @@ def _container_shape(config: Config) -> None:
 
 
 def validate(config: Config) -> Config:
-    """Raise :class:`ConfigError` for any invalid value; return the config unchanged."""
+    """Raise :class:`ConfigError` for any invalid value; return the config, with every
+    species' count derived from its ``mass_ratio`` or ``fill_fraction`` where it states one
+    (:func:`jaxdamp.cases.filling.resolve`; otherwise unchanged)."""
     if config.system not in SYSTEMS:
         raise ConfigError(f"system = {config.system!r}: expected one of {SYSTEMS}")
     if config.mixing not in MIXING:
@@ -396,6 +398,9 @@ def validate(config: Config) -> Config:
     from jaxdamp.physics.containers import container
 
     _container_shape(config)
+    from jaxdamp.cases.filling import resolve
+
+    config = resolve(config)  # counts from mass ratios and fill fractions
     vessel = container(config)
     lid = vessel.height(config)
     volume = 0.0

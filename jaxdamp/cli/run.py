@@ -51,7 +51,7 @@ def cmd_run(args) -> int:
     R = replicates(args)
     check_outputs([args.out], args.overwrite, keep=resume_or_overwrite(args),
                   resumable=[args.out])
-    validate(cfg)
+    cfg = validate(cfg)
     check_periods(cfg)
     from jaxdamp.studies.runner import run
 

@@ -190,7 +190,7 @@ def run(
         (for time-limited jobs); the summary then covers the part simulated so far.
     """
     say = echo or (lambda *a, **k: None)
-    validate(config)
+    config = validate(config)  # counts from mass ratios and fill fractions
     if config.system == "impact":
         raise ConfigError(
             "system = 'impact' (S3, the single-particle model) has no DEM run file: use "

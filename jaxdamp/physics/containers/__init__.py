@@ -17,10 +17,10 @@ everything about it side by side:
   grain touching none costs a few compares), dispatched by :func:`side_contacts_scalar`;
 * its host-side geometry: ``section(config)`` (the numbers of ``Params.section``),
   ``extent`` and ``inside`` (pouring the lattice, :mod:`jaxdamp.engine.packing`),
-  ``fit_error`` and ``base_area`` (the fit checks of :mod:`jaxdamp.validation`, the design
-  space's bed height), ``describe`` (messages), ``outline`` (figures and export), and the
-  configuration keys of its lid height and of its base (the settled-bed cache and the design
-  variable ``base``).
+  ``fit_error``, ``base_area`` and ``perimeter`` (the fit checks of :mod:`jaxdamp.validation`,
+  the design space's bed height, the random packing of a fill, :mod:`jaxdamp.cases.filling`),
+  ``describe`` (messages), ``outline`` (figures and export), and the configuration keys of
+  its lid height and of its base (the settled-bed cache and the design variable ``base``).
 
 The wall groups every engine reports are the floor and the lid (``State.f_floor_lid``,
 ``n_floor``, ``n_lid``) and the sides (the rest); the work channels are
@@ -53,6 +53,7 @@ class Container(NamedTuple):
     extent: Callable
     inside: Callable
     base_area: Callable
+    perimeter: Callable
     fit_error: Callable
     describe: Callable
     outline: Callable
@@ -71,15 +72,14 @@ class Container(NamedTuple):
 
 
 BOX = Container("box", 0, False, box.FIELDS, box.curvature, box.section, box.sides_jax, box.extent,
-                box.inside, box.base_area, box.fit_error, box.describe, box.outline, "box.Lz",
-                ("box.Lx", "box.Ly"))
+                box.inside, box.base_area, box.perimeter, box.fit_error, box.describe,
+                box.outline, "box.Lz", ("box.Lx", "box.Ly"))
 CYLINDER = Container("cylinder", 1, True, cylinder.FIELDS, cylinder.curvature,
                      cylinder.section,
                      cylinder.sides_jax, cylinder.extent, cylinder.inside, cylinder.base_area,
-                     cylinder.fit_error, cylinder.describe, cylinder.outline, "container.Lz",
-                     ("container.radius",))
+                     cylinder.perimeter, cylinder.fit_error, cylinder.describe,
+                     cylinder.outline, "container.Lz", ("container.radius",))
 
-#: The containers by name.
 CONTAINERS: dict[str, Container] = {c.name: c for c in (BOX, CYLINDER)}
 _CYLINDER = CYLINDER.id
 

@@ -87,6 +87,11 @@ def base_area(config) -> float:
     return float(config.box.Lx * config.box.Ly)
 
 
+def perimeter(config) -> float:
+    """Perimeter of the section [m] (with :func:`base_area`, its hydraulic diameter)."""
+    return float(2.0 * (config.box.Lx + config.box.Ly))
+
+
 def fit_error(config, diameter: float, name: str) -> str | None:
     """Why a grain of ``diameter`` [m] (``name`` and radius text) does not fit across the
     section, or ``None``."""

@@ -114,6 +114,11 @@ def base_area(config) -> float:
     return math.pi * _radius(config) ** 2
 
 
+def perimeter(config) -> float:
+    """``2 π R_c`` [m]."""
+    return 2.0 * math.pi * _radius(config)
+
+
 def fit_error(config, diameter: float, name: str) -> str | None:
     """Why a grain of ``diameter`` [m] does not fit across the section, or ``None``."""
     Rc = _radius(config)
