@@ -152,3 +152,18 @@ def test_the_command_line_refuses_a_fill_that_does_not_fit(capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "Traceback" not in err
     assert "grains.0.mass_ratio ≤ 0.32" in err
+
+
+def test_the_cylinder_preset_states_the_thesis_mass_ratio(tmp_path, capsys):
+    """``sanchez2012-cylinder``: the thesis' 250 grains from μ = 0.0958 in a cylinder of the
+    box's base area; ``jaxdamp presets --show`` prints the statement, and the printed TOML is
+    the preset again."""
+    cfg = validate(presets.get("sanchez2012-cylinder"))
+    assert cfg.grains[0].count == 250 and cfg.container.shape == "cylinder"
+    assert math.pi * cfg.container.dimension("radius") ** 2 == pytest.approx(0.03675**2,
+                                                                              rel=1e-5)
+    assert cli.main(["presets", "--show", "sanchez2012-cylinder"]) == 0
+    text = capsys.readouterr().out
+    assert "mass_ratio = 0.0958" in text and "# count = (unset)" in text
+    (tmp_path / "c.toml").write_text(text)
+    assert validate(load_toml(str(tmp_path / "c.toml"))) == cfg

@@ -14,6 +14,7 @@ from jaxdamp.config import (
     Box,
     Config,
     ConfigError,
+    Container,
     Drive,
     Impactor,
     Material,
@@ -49,6 +50,22 @@ def sanchez2012_optimal() -> Config:
             "dt = 8.75e-8 s, 13.12 s per frequency. Set numerics.stiffness_scale = 1 for the "
             "thesis modulus. Duration 5 s (thesis 13.12 s)."
         ),
+    )
+
+
+def sanchez2012_cylinder() -> Config:
+    """The thesis damper as designers build it: its grains in a drilled cylinder of the box's
+    base area, filled by the thesis' mass ratio (``mass_ratio``: :mod:`jaxdamp.cases.filling`)."""
+    base = sanchez2012_optimal()
+    radius = round(math.sqrt(base.box.Lx * base.box.Ly / math.pi), 6)
+    return dataclasses.replace(
+        base, name="sanchez2012-cylinder", box=None,
+        container=Container("cylinder", base.box.Lz, (("radius", radius),)),
+        grains=(dataclasses.replace(base.grains[0], count=None, mass_ratio=0.0958),),
+        notes=(f"The thesis' optimal damper in a cylinder of radius {radius} m (the box's base "
+               f"area), Lz = {base.box.Lz} m, filled to the thesis' mass ratio μ = 0.0958 "
+               "(250 grains of 3 mm steel on M = 2.37 kg; D/d = 6.9). Beyond the thesis: "
+               "its numerics and modulus are those of sanchez2012-optimal."),
     )
 
 
@@ -163,6 +180,7 @@ def varela2023_class(klass: str, sigma: float = 0.5) -> Config:
 
 PRESETS = {
     "sanchez2012-optimal": sanchez2012_optimal,
+    "sanchez2012-cylinder": sanchez2012_cylinder,
     "sanchez2012-random": sanchez2012_random,
     "sanchez2012-chain": sanchez2012_chain,
     "sanchez2012-sec31": lambda: sanchez2012_sec31(250),
