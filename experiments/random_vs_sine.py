@@ -1,39 +1,28 @@
-"""Random excitation against stepped sine on the thesis damper (issue 16: "random vs stepped
-sine").
+"""Random excitation against stepped sine on the thesis damper (issue 16).
 
     python experiments/random_vs_sine.py            # ~30 min on 2 cores
     python experiments/random_vs_sine.py --quick    # ~2 min, test-sized
 
-The same damper (``sanchez2012-optimal``: 250 grains, Lz = 0.1225 m, on its 1-DOF primary)
-under two lab excitations:
-
-* **random** (``jaxdamp random``): band-limited random base motion, flat base acceleration
-  density over 10–20 Hz at several levels, a random-phase multisine with lines every 0.25 Hz
-  (period 4 s), ``R`` realisations per level (independently poured beds, each with its own
-  phases); H1 = G_uz/G_uu pooled over whole periods after the stationary start detected by
-  MSER, its coherence, and the SE of |H1| between realisations;
-* **stepped sine** (``jaxdamp frf``): base amplitudes ``U`` at 14–16 Hz (lines of the random
-  test), ``R`` beds per point, each run's steady state detected by MSER.
-
-The damper is nonlinear: its FRF depends on the vibration amplitude, and a random response
-has a distribution of amplitudes, not one. **Amplitude matching convention**: a random level
-is set beside the sine amplitude ``U`` whose resonant response has the same RMS of the
-primary's displacement ``z``, i.e. ``√2 z_rms(random) ≈ Z(sine, resonance)``; a pair is
-compared when the two differ by less than 25 %. Verdict per matched pair and line: the Welch
-95 % interval of |H1| − Z/U across realisations.
+``sanchez2012-optimal`` (250 grains, Lz = 0.1225 m), ``R`` independently poured beds per level
+and point, under **random** base motion (``jaxdamp random``: flat acceleration density over
+10–20 Hz at several levels, random-phase multisine; H1 = G_uz/G_uu over whole periods after the
+MSER-detected start, coherence, |H1| per realisation) and **stepped sine** (``jaxdamp frf``:
+amplitudes ``U`` at 14–16 Hz, lines of the multisine). The FRF of this nonlinear damper depends
+on the amplitude: a random level is compared with the ``U`` whose resonant Z is within 25 % of
+√2 z_rms(random); verdict per pair and line: the Welch 95 % interval of |H1| − Z/U.
 
 Writes ``data.h5``, ``figure.png``, ``summary.md``.
 """
 
 from __future__ import annotations
 
-import os
-
 import numpy as np
 
 from jaxdamp.analysis.stats import welch
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
+from jaxdamp.figures import random_figure
+from jaxdamp.figures.response import draw_replicates
 from jaxdamp.studies import random as rnd
 from jaxdamp.studies import scaffold
 from jaxdamp.studies.grid import steady_replicates
@@ -46,6 +35,7 @@ except ImportError:  # run as a file: python experiments/<name>.py
 
 #: amplitudes may differ by this fraction for a random level and a sine amplitude to be compared
 MATCH = 0.25
+SPECTRA = ("f", "H", "mag_se", "coherence")  # each random level's H1 spectrum, for the figure
 
 
 def settings(quick: bool) -> dict:
@@ -59,131 +49,112 @@ def settings(quick: bool) -> dict:
 
 def compute(quick: bool, log, ctx):
     s = settings(quick)
-    cfg = presets.get("sanchez2012-optimal")
-    if s["settle"] is not None:
-        cfg = apply_overrides(cfg, {"numerics.settle_time": s["settle"]})
-    lo, hi = s["band"]
-    rcfg = apply_overrides(cfg, {"random.psd": [[lo, s["S"]], [hi, s["S"]]],
+    cfg = apply_overrides(presets.get("sanchez2012-optimal"), {} if s["settle"] is None
+                          else {"numerics.settle_time": s["settle"]})
+    rcfg = apply_overrides(cfg, {"random.psd": [[x, s["S"]] for x in s["band"]],
                                  "random.resolution": s["resolution"]})
-    log(f"random: {lo}–{hi} Hz, S = {s['S']} (m/s²)²/Hz × {s['scales']}, "
-        f"{s['random_s']} s, R = {s['R']}")
     ran = rnd.measure(rcfg, s["scales"], duration=s["random_s"], replicates=s["R"],
                       out=ctx.raw(f"random_R{s['R']}.h5"), reuse=True, progress=ctx.progress,
                       echo=None)
-    log(f"stepped sine: U = {s['U']} m × f = {s['f']} Hz, {s['sine_s']} s, R = {s['R']}")
     res = reuse_or_run(apply_overrides(cfg, {"numerics.duration": s["sine_s"]}),
                        {"primary.U": s["U"], "frequency": s["f"]},
                        ctx.raw(f"sine_R{s['R']}.h5"), progress=ctx.progress, echo=None,
                        replicates=s["R"])
     st = steady_replicates(res, "amplitude")
-    Z = st.values[0]  # (U, F, R)
-    ratio = Z / np.asarray(s["U"])[:, None, None]
-    f = np.asarray(s["f"])
+    Z, f, levels = st.values[0], np.asarray(s["f"]), ran.levels  # Z: (U, F, R)
     # random: |H1| per realisation at the sine's frequencies (lines of the multisine)
-    lines = [[int(np.argmin(np.abs(lev["f"] - x))) for x in f] for lev in ran.levels]
-    for lev, k in zip(ran.levels, lines):
-        assert np.allclose(lev["f"][k], f), "the sine frequencies must be lines of the multisine"
-    mag = np.array([np.abs(lev["H_each"][:, k]).T for lev, k in zip(ran.levels, lines)])
-    mag_pooled = np.array([np.abs(lev["H"][k]) for lev, k in zip(ran.levels, lines)])
-    coh = np.array([lev["coherence"][k] for lev, k in zip(ran.levels, lines)])
-    z_rms = np.array([lev["z_rms"] for lev in ran.levels])  # (P, R)
-    Z_res = Z.mean(axis=-1).max(axis=1)  # each U's resonant amplitude
-    pairs = []
-    for i, z in enumerate(z_rms):
-        amp = np.sqrt(2.0) * z.mean()
-        pairs += [dict(level=i, U=u, amp=amp, rows=[welch(mag[i, j], ratio[u, j])
-                                                     for j in range(len(f))])
-                  for u in range(len(s["U"])) if abs(amp / Z_res[u] - 1.0) <= MATCH]
-    result = dict(settings=s, f=f, U=np.asarray(s["U"]), Z=Z, ratio=ratio, mag=mag,
-                  mag_pooled=mag_pooled, coh=coh, z_rms=z_rms, a_rms=np.array(
-                      [lev["a_rms"] for lev in ran.levels]), Z_res=Z_res,
-                  j_res=Z.mean(axis=-1).argmax(axis=1), pairs=pairs,
-                  stationary=int(st.stationary.sum()), runs=int(Z.size),
-                  fallback=st.fallback[0],
-                  random_stationary=int(sum(lev["stationary"].sum() for lev in ran.levels)),
-                  segments=[lev["segments"] for lev in ran.levels], levels=ran.levels,
-                  period=ran.period,
-                  wall=dict(random=float(ran.sweep.summary["wall_time"]), sine=st.wall))
-    return result, lambda out, prov: write(result, out, prov)
+    lines = [[int(np.argmin(np.abs(lev["f"] - x))) for x in f] for lev in levels]
+    assert all(np.allclose(lev["f"][k], f) for lev, k in zip(levels, lines)), "sine f: not lines"
+    at = lambda key: np.array([lev[key][..., k] for lev, k in zip(levels, lines)])  # noqa: E731
+    every = lambda key: np.array([lev[key] for lev in levels])  # noqa: E731
+    result = dict(settings=s, f=f, U=np.asarray(s["U"]), Z=Z, scales=np.asarray(s["scales"]),
+                  ratio=Z / np.asarray(s["U"])[:, None, None],
+                  mag=np.abs(at("H_each")).transpose(0, 2, 1), mag_pooled=np.abs(at("H")),
+                  coh=at("coherence"), z_rms=every("z_rms"), a_rms=every("a_rms"),
+                  spectra={k: np.abs(every(k)) for k in SPECTRA},  # (level, line)
+                  run_stats=dict(sine_stationary=int(st.stationary.sum()),
+                                 random_stationary=int(every("stationary").sum()),
+                                 segments=every("segments").tolist(), sine_wall_s=st.wall,
+                                 random_wall_s=float(ran.sweep.summary["wall_time"])))
+    return result, lambda out, prov: record(result, out, prov)
 
 
-def write(r, out, prov):
-    s, f = r["settings"], r["f"]
-    with scaffold.data_file(out, prov, convention="amplitudes matched by the RMS of z: sqrt(2) "
+def record(r, out, prov):
+    with scaffold.data_file(out, prov, settings=r["settings"], **r["run_stats"],
+                            convention="amplitudes matched by the RMS of z: sqrt(2) "
                             "z_rms(random) vs the sine's resonant Z, within 25 %") as h:
         for k, unit in (("f", "Hz"), ("U", "m"), ("Z", "m"), ("ratio", "1"), ("mag", "1"),
-                        ("mag_pooled", "1"), ("coh", "1"), ("z_rms", "m"), ("a_rms", "m/s^2")):
+                        ("mag_pooled", "1"), ("coh", "1"), ("z_rms", "m"), ("a_rms", "m/s^2"),
+                        ("scales", "1")):
             h.create_dataset(k, data=r[k]).attrs["units"] = unit
-        h.create_dataset("scales", data=np.asarray(s["scales"])).attrs["units"] = "1"
-    from jaxdamp.figures import random_figure
+        for k, unit in zip(SPECTRA, ("Hz", "1", "1", "1")):  # H: the pooled |H1|
+            h.create_dataset(f"spectra/{k}", data=r["spectra"][k]).attrs.update(
+                units=unit, dims="level, line")
 
-    labels = [f"random, a_rms {r['a_rms'][i]:.3g} m/s², √2 z_rms "
-              f"{1e3 * np.sqrt(2) * r['z_rms'][i].mean():.3g} mm" for i in range(len(r["levels"]))]
-    fig = random_figure(r["levels"], labels, log=False,
-                        title="thesis damper: H1 from random base motion vs stepped sine (± 2 SE)")
-    ax = fig.axes[0]
-    for u, U in enumerate(r["U"]):
-        m, e = scaffold.mean_se(r["ratio"][u])
-        ax.errorbar(r["f"], m, yerr=2 * np.nan_to_num(e), fmt="s", ms=4, capsize=2,
-                    label=f"stepped sine, U = {1e3 * U:g} mm (resonant Z "
-                          f"{1e3 * r['Z_res'][u]:.3g} mm)")
-    ax.legend(fontsize=6.5)
-    fig.savefig(os.path.join(out, "figure.png"), dpi=120)
 
+def report(data, out):
+    s, f, prov = data.attrs["settings"], data["f"], data.attrs
+    U, scales, z_rms, ratio = data["U"], data["scales"], data["z_rms"], data["ratio"]
+    R, Z_res = data["Z"].shape[-1], data["Z"].mean(axis=-1).max(axis=1)  # each U's resonant Z
+    q = np.sqrt(2.0) * z_rms.mean(axis=1)[:, None] / Z_res  # (level, U): the amplitude match
+    pairs = [(i, u, q[i, u], [welch(data["mag"][i, j], ratio[u, j]) for j in range(len(f))])
+             for i, u in zip(*np.nonzero(np.abs(q - 1.0) <= MATCH))]
+    if "spectra" in data:  # files before 2026-12-05 hold |H1| at the sine's lines only
+        fig = random_figure(
+            [{k: v[i] for k, v in data["spectra"].items()} for i in range(len(scales))],
+            [f"random, a_rms {data['a_rms'][i]:.3g} m/s², √2 z_rms "
+             f"{1e3 * np.sqrt(2) * z_rms[i].mean():.3g} mm" for i in range(len(scales))],
+            log=False, title="thesis damper: H1 from random base motion vs stepped sine (± 2 SE)")
+        for u, Uu in enumerate(U):
+            draw_replicates(fig.axes[0], f, ratio[u], fmt="s", ms=4, capsize=2, label=f"stepped "
+                            f"sine, U = {1e3 * Uu:g} mm (resonant Z {1e3 * Z_res[u]:.3g} mm)")
+        fig.axes[0].legend(fontsize=6.5)
+        fig.set_layout_engine("none")  # laid out by save_figure (tight), not constrained
+        scaffold.save_figure(fig, out)
+
+    join = lambda xs, k=1.0: ", ".join(f"{k * x:g}" for x in xs)  # noqa: E731
     L = [*scaffold.head("Random excitation against stepped sine (issue 16)", prov),
-         f"Damper: `sanchez2012-optimal` (250 grains, Lz = 0.1225 m). Random base motion: flat "
-         f"acceleration density {s['S']} (m/s²)²/Hz × scale "
-         f"{', '.join(f'{x:g}' for x in s['scales'])} "
-         f"over {s['band'][0]:g}–{s['band'][1]:g} Hz, random-phase multisine with lines every "
-         f"{s['resolution']} Hz (period {r['period']:g} s), {s['random_s']} s per run; stepped "
-         f"sine at U = {', '.join(f'{1e3 * u:g}' for u in s['U'])} mm × f = "
-         f"{', '.join(f'{x:g}' for x in f)} Hz, {s['sine_s']} s per run. **{s['R']} independent "
-         f"realisations** per level and point (independently poured beds; each random "
-         f"realisation its own phases). Random: stationary start detected (MSER on the mean "
-         f"square of z − u) in {r['random_stationary']} of {len(s['scales']) * s['R']} runs; "
-         f"periods averaged per level: {', '.join(map(str, r['segments']))}. Sine: steady "
-         f"state detected in {r['stationary']} of {r['runs']} runs (the others: fixed final "
-         f"window). Compute: random {r['wall']['random']:.0f} s, sine {r['wall']['sine']:.0f} s "
-         "(settling excluded).", "",
+         f"Random base motion: flat acceleration density {s['S']} (m/s²)²/Hz × scale "
+         f"{join(scales)} over {s['band'][0]:g}–{s['band'][1]:g} Hz, lines every "
+         f"{s['resolution']} Hz (period {1 / s['resolution']:g} s), {s['random_s']} s per run; "
+         f"stepped sine at U = {join(U, 1e3)} mm × f = {join(f)} Hz, {s['sine_s']} s per run. "
+         f"**{R} independent realisations** per level and point. Random: stationary start "
+         f"detected (MSER on the mean square of z − u) in {prov['random_stationary']} of "
+         f"{len(scales) * R} runs; periods averaged per level: {join(prov['segments'])}. Sine: "
+         f"steady state detected in {prov['sine_stationary']} of {data['Z'].size} runs (the "
+         f"others: fixed final window). Compute: random {prov['random_wall_s']:.0f} s, sine "
+         f"{prov['sine_wall_s']:.0f} s (settling excluded).", "",
          "Convention: amplitudes matched by the RMS of the primary's displacement, "
          f"√2 z_rms(random) against the sine's resonant Z, within {100 * MATCH:g} %; "
-         "frequencies matched exactly (the sine's frequencies are lines of the multisine). "
-         "Verdict: Welch 95 % interval of |H1| − Z/U across realisations (|H1| of each "
-         "realisation from its own periods).", "",
+         "verdict: Welch 95 % interval of |H1| − Z/U across realisations.", "",
          "## Random levels", ""]
     L += scaffold.table(["scale", "a_rms [m/s²]", "√2 z_rms [mm]"]
                         + [f"\\|H1\\| {x:g} Hz (γ²)" for x in f], [
-        [f"{sc:g}", f"{r['a_rms'][i]:.3g}",
-         scaffold.pm(*scaffold.mean_se(np.sqrt(2) * r["z_rms"][i]), 3, scale=1e3)]
+        [f"{sc:g}", f"{data['a_rms'][i]:.3g}",
+         scaffold.pm(*scaffold.mean_se(np.sqrt(2) * z_rms[i]), 3, scale=1e3)]
         + [f"{scaffold.pm(m, e, 3)} ({c:.3f})"
-           for m, e, c in zip(*scaffold.mean_se(r["mag"][i]), r["coh"][i])]
-        for i, sc in enumerate(s["scales"])])
-    L += ["", "## Stepped sine", ""]
-    L += scaffold.table(["U [mm]", "resonant Z [mm]"] + [f"Z/U {x:g} Hz" for x in f], [
-        [f"{1e3 * U:g}", f"{1e3 * r['Z_res'][u]:.3g}"]
-        + [scaffold.pm(m, e, 3) for m, e in zip(*scaffold.mean_se(r["ratio"][u]))]
-        for u, U in enumerate(s["U"])])
-    L += ["", "## Matched pairs", ""]
-    if not r["pairs"]:
-        L.append(f"No random level's √2 z_rms lies within {100 * MATCH:g} % of a sine's "
-                 "resonant Z: no matched pair (see the tables).")
-    else:
-        said = [[verdict(d, h, "agree", "random above", "random below") for d, h in p["rows"]]
-                for p in r["pairs"]]
-        L += scaffold.table(["scale", "U [mm]", "√2 z_rms / Z_res"]
-                            + [f"{x:g} Hz: \\|H1\\| − Z/U" for x in f], [
-            [f"{s['scales'][p['level']]:g}", f"{1e3 * s['U'][p['U']]:g}",
-             f"{p['amp'] / r['Z_res'][p['U']]:.2f}"]
-            + [f"{scaffold.pm(d, h, '+.3g')} ({v})" for (d, h), v in zip(p["rows"], said_p)]
-            for p, said_p in zip(r["pairs"], said)])
-        L += ["", "Matched lines that agree within the 95 % interval: "
-              f"{sum(v.count('agree') for v in said)} of {sum(map(len, said))}."]
-    L += ["", "Figure: `figure.png` (|H1| ± 2 SE of each random level with its coherence, sine "
-          "points ± 2 SE). Data: `data.h5`."]
+           for m, e, c in zip(*scaffold.mean_se(data["mag"][i]), data["coh"][i])]
+        for i, sc in enumerate(scales)])
+    L += ["", "## Stepped sine", ""] + scaffold.table(
+        ["U [mm]", "resonant Z [mm]"] + [f"Z/U {x:g} Hz" for x in f],
+        [[f"{1e3 * Uu:g}", f"{1e3 * Z_res[u]:.3g}"]
+         + [scaffold.pm(m, e, 3) for m, e in zip(*scaffold.mean_se(ratio[u]))]
+         for u, Uu in enumerate(U)])
+    said = lambda d, h: verdict(d, h, "agree", "random above", "random below")  # noqa: E731
+    rows = [[f"{scales[i]:g}", f"{1e3 * U[u]:g}", f"{qi:.2f}"]
+            + [f"{scaffold.pm(d, h, '+.3g')} ({said(d, h)})" for d, h in dh]
+            for i, u, qi, dh in pairs]
+    agree = sum(c.endswith("(agree)") for row in rows for c in row)
+    L += ["", "## Matched pairs", ""] + (scaffold.table(
+        ["scale", "U [mm]", "√2 z_rms / Z_res"] + [f"{x:g} Hz: \\|H1\\| − Z/U" for x in f], rows)
+        + ["", "Matched lines that agree within the 95 % interval: "
+              f"{agree} of {len(f) * len(rows)}."]
+        if rows else [f"No random level's √2 z_rms lies within {100 * MATCH:g} % of a sine's "
+                      "resonant Z: no matched pair (see the tables)."])
     scaffold.write_summary(out, L)
 
 
-main = scaffold.entry(__file__, __doc__, compute)
+main = scaffold.entry(__file__, __doc__, compute, report=report)
 
 
 if __name__ == "__main__":
