@@ -20,6 +20,7 @@ import numpy as np
 from jaxdamp.analysis.stats import replicate_extrema, welch
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides, from_dict
+from jaxdamp.figures.response import draw_replicates
 from jaxdamp.io.common import put
 from jaxdamp.physics.model import collision_time_limit, grain_radii
 from jaxdamp.studies import scaffold
@@ -88,19 +89,16 @@ def report(data, out):
     ref = rows.get(REF, rows[s["scales"][-1]])
     U = ref["config"].primary.U
     fig, (a1, a2) = scaffold.subplots(1, 2, figsize=(10, 4))
-    se = lambda x: 2 * scaffold.standard_error(x)  # noqa: E731
     for r in rows.values():
-        a1.errorbar(freqs, r["Z"].mean(-1) / U, yerr=se(r["Z"]) / U, fmt="o-", capsize=3,
-                    label=f"E = {r['E']:.3g} Pa (dt = {r['dt']:.2g} s)")
-        a2.errorbar(freqs, r["loss"].mean(-1), yerr=se(r["loss"]), fmt="o-", capsize=3,
-                    label=f"E = {r['E']:.3g} Pa")
+        draw_replicates(a1, freqs, r["Z"] / U, label=f"E = {r['E']:.3g} Pa (dt = {r['dt']:.2g} s)")
+        draw_replicates(a2, freqs, r["loss"], label=f"E = {r['E']:.3g} Pa")
     a1.set(xlabel="excitation frequency f [Hz]", ylabel="amplitude ratio Z / U  [-]")
     a2.set(xlabel="excitation frequency f [Hz]", ylabel="granular loss per cycle [J]")
     a1.set_title(f"optimal box (Lz = 0.1225 m, C = 7.6 N s/m): response, R = {R} beds ± 2 SE",
                  fontsize=9)
     a2.set_title("energy dissipated by the grains per period", fontsize=9)
-    a1.legend(fontsize=7)
-    a2.legend(fontsize=7)
+    for a in (a1, a2):
+        a.legend(fontsize=7)
     scaffold.save_figure(fig, out)
 
     def verdict(r, values):
@@ -112,7 +110,6 @@ def report(data, out):
 
     lines = scaffold.head("Stiffness sensitivity at the optimal box, with replicates", prov,
                           prov["sweep_wall_s"])
-    lines[2] += " Data `data.h5`, figure `figure.png`."
     lines += [f"`sanchez2012-optimal` (Lz = 0.1225 m, C = 7.6 N s/m, N = 250), frequencies "
               f"{list(freqs)} Hz × **R = {R} independently poured beds** (seeds 0…{R - 1}, "
               f"the same at every modulus), {s['duration']} s per run after settling; steady "
