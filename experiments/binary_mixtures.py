@@ -7,19 +7,16 @@
 The reference (300 steel grains, R = 2.5 mm) and binary mixtures of class a (equal mass), b
 (equal number), c (equal number and mass) at size ratios σ (SPEC §5) in an 8 cm cube at 70 Hz,
 A_d = 2–4 cm: per family one batched amplitude sweep of ``--replicates`` seeded beds
-(:func:`jaxdamp.studies.efficiency.measure`; small σ on a shorter protocol); each bed's steady
-state by MSER on its per-period ``E_d``; means over beds ± SE, Welch 95 % against the
-reference. Beyond the paper: the segregation index S per period, every class three ways
-(⟨E_d⟩/m, ⟨E_d⟩, energy per period). Writes ``data.h5``, from it ``summary.md`` (each claim
-with the numbers that decide it), ``claims.json`` (A_opt per bed), ``efficiency.png``,
-``segregation.png``, ``contacts_force.png``, ``phase_plots.png``, ``snapshots.png`` (the
-paper's figs. 2–12); raw sweeps in ``raw/`` (reused and resumed on re-runs).
+(:func:`jaxdamp.studies.efficiency.measure`; small σ on a shorter protocol), each bed's steady
+state by MSER on its per-period ``E_d``, means over beds ± SE, Welch 95 % against the reference;
+beyond the paper, the segregation index S and three normalisations. Writes ``data.h5``, from it
+``summary.md``, ``claims.json`` (A_opt per bed) and the paper's figs. 2–12 (``efficiency``,
+``segregation``, ``contacts_force``, ``phase_plots``, ``snapshots.png``); raw sweeps in ``raw/``.
 """
 
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import os
 import time
@@ -29,6 +26,7 @@ import numpy as np
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides, from_dict
 from jaxdamp.figures import save, snapshot_grid_figure
+from jaxdamp.io.common import put, write_steady
 from jaxdamp.physics.model import grain_radii, grain_species
 from jaxdamp.studies import efficiency as ef
 from jaxdamp.studies import scaffold
@@ -47,37 +45,17 @@ AT3_UNITS = {"contacts_species": "1", "contacts_peak": "1", "force_peak": "N", "
              "vz_max": "m/s"}
 
 
-def settings(args):
-    if args.quick:
-        return dict(amps=[0.025, 0.035], periods=2, transient=1, sigmas=[0.5], low_sigmas=[],
-                    low_periods=0, low_transient=0, low_amps=[], replicates=2)
-    return dict(amps=list(np.round(np.linspace(0.02, 0.04, 9), 6)), periods=args.periods,
-                transient=args.transient, sigmas=args.sigmas, low_sigmas=args.low_sigmas,
-                low_periods=args.low_periods, low_transient=args.low_transient,
-                low_amps=[0.02, 0.03, 0.04], replicates=args.replicates)
-
-
-def run_family(name, sigma, protocol, ctx, replicates):
-    """One family's amplitude sweep with ``replicates`` beds per amplitude (resumable file);
-    ``protocol``: ``(amplitudes, periods, transient, settle time or None)``."""
-    amps, periods, transient, settle = protocol
-    cfg = presets.family(name, sigma)
-    if settle is not None:  # quick mode: the transient period erases the start anyway
-        cfg = cfg.replace(numerics=dataclasses.replace(cfg.numerics, settle_time=settle))
-    tag = name.split("-")[1] + (f"_sigma{sigma:g}" if sigma is not None else "")
-    path = ctx.raw(f"{tag}_a{len(amps)}_t{transient}_p{periods}_R{replicates}.h5")
-    r = ef.measure(cfg, amps, periods=periods, transient=transient, out=path,
-                   progress=ctx.progress, echo=None, replicates=replicates)
-    return dict(name=name, sigma=sigma, result=r, periods=periods, transient=transient,
-                path=path, klass=name.split("-")[1])
-
-
 def options(ap):
+    def at_least_one(text):
+        if int(text) < 1:
+            raise argparse.ArgumentTypeError(f"{text}: at least 1 bed per amplitude")
+        return int(text)
+
     sigmas = lambda t: [float(x) for x in t.split(",") if x]  # noqa: E731
     ap.add_argument("--sigmas", type=sigmas, default=[0.3, 0.5, 0.7, 0.9], help="size ratios, "
                     "full protocol (~6 min per σ and bed on 2 cores at σ = 0.5, ~10 at 0.3)")
     ap.add_argument("--low-sigmas", type=sigmas, default=[0.1], help="size ratios, 3 amplitudes")
-    ap.add_argument("--replicates", type=_at_least_one, default=3,
+    ap.add_argument("--replicates", type=at_least_one, default=3,
                     help="independently seeded beds per amplitude (≥ 2 for intervals)")
     for flag, default in (("--periods", 50), ("--transient", 10), ("--low-periods", 5),
                           ("--low-transient", 3)):
@@ -85,31 +63,34 @@ def options(ap):
     ap.add_argument("--classes", default="abc")
 
 
-def _at_least_one(text):
-    if int(text) < 1:
-        raise argparse.ArgumentTypeError(f"{text}: at least 1 bed per amplitude")
-    return int(text)
-
-
 def compute(quick, log, ctx):
-    s = settings(ctx.args)
-    full = (s["amps"], s["periods"], s["transient"], 0.02 if quick else None)
-    low = (s["low_amps"], s["low_periods"], s["low_transient"], None)
+    a = ctx.args
+    if quick:  # protocols: (amplitudes, periods, transient, settle time or None)
+        full, low, sigmas, low_sigmas, R = ([0.025, 0.035], 2, 1, 0.02), None, [0.5], [], 2
+    else:
+        full = (list(np.round(np.linspace(0.02, 0.04, 9), 6)), a.periods, a.transient, None)
+        low = ([0.02, 0.03, 0.04], a.low_periods, a.low_transient, None)
+        sigmas, low_sigmas, R = a.sigmas, a.low_sigmas, a.replicates
     plan = [("reference", None, full)] + [
-        (k, sigma, p) for k in ctx.args.classes
-        for sigma, p in [(x, full) for x in s["sigmas"]] + [(x, low) for x in s["low_sigmas"]]]
-    runs = [run_family(f"varela2023-{k}", sigma, p, ctx, s["replicates"]) for k, sigma, p in plan]
+        (k, sigma, p) for k in a.classes
+        for sigma, p in [(x, full) for x in sigmas] + [(x, low) for x in low_sigmas]]
+    runs = []
+    for klass, sigma, (amps, periods, transient, settle) in plan:  # one sweep, R beds per point
+        cfg = presets.family(f"varela2023-{klass}", sigma)
+        if settle is not None:  # quick mode: the transient period erases the start anyway
+            cfg = apply_overrides(cfg, {"numerics.settle_time": settle})
+        tag = klass + (f"_sigma{sigma:g}" if sigma is not None else "")
+        path = ctx.raw(f"{tag}_a{len(amps)}_t{transient}_p{periods}_R{R}.h5")  # resumable
+        r = ef.measure(cfg, amps, periods=periods, transient=transient, out=path,
+                       progress=ctx.progress, echo=None, replicates=R)
+        runs.append(dict(name=f"varela2023-{klass}", sigma=sigma, result=r, periods=periods,
+                         transient=transient, klass=klass))
     drift = [] if quick else balance_drift(ctx.progress)
     return runs, lambda out, prov: record(out, prov, runs, drift)
 
 
 def at3(amplitudes):
     return int(np.argmin(np.abs(np.asarray(amplitudes) - 0.03)))
-
-
-def quarters(t, frequency):
-    """The quarter period (0: the box at its top) of each of the snapshots' times ``t``."""
-    return [int(round((x * frequency % 1.0) * 4)) % 4 for x in t]
 
 
 def est(x):
@@ -125,9 +106,8 @@ def versus(x, y):
 
 
 def at3_stats(r, ref):
-    """Each bed's phase features at 3 cm (its own phase curves over its analysed periods),
-    :data:`AT3_UNITS`, across beds (:func:`est`) and against the reference's (``ref``; None:
-    the reference itself) by :func:`versus`."""
+    """Each bed's phase features at 3 cm (:data:`AT3_UNITS`, from its own phase curves over its
+    analysed periods) across beds (:func:`est`) and against the reference's (:func:`versus`)."""
     def bed_phase(r):  # (R,) or per species (R, S)
         ph, k = r.replicate_phase, at3(r.amplitudes)
         f = np.abs(np.asarray(ph["force_floor_lid"][k]))  # (R, spp)
@@ -138,28 +118,26 @@ def at3_stats(r, ref):
 
     b = bed_phase(r)
     st = {k: [est(v) for v in b[k].T] if b[k].ndim == 2 else est(b[k]) for k in AT3_UNITS}
-    if ref is not None:
+    if ref is not r:
         br = bed_phase(ref)
-        st.update(force_peak_vs_ref=versus(b["force_peak"], br["force_peak"]),
-                  force_mean_vs_ref=versus(b["force_mean"], br["force_mean"]),
+        st.update({f"{k}_vs_ref": versus(b[k], br[k]) for k in ("force_peak", "force_mean")},
                   vz_max_vs_ref=[versus(v, br["vz_max"][:, 0]) for v in b["vz_max"].T])
     return dict(st, units=AT3_UNITS)
 
 
 def snapshot_stats(r, ref):
-    """Per snapshot (the quarter points of every bed's last period) at 3 cm, across beds: the
-    spread (std) of all grain heights above the floor, each species' mean height [cm] and the
-    spread against the reference's (``ref``)."""
+    """Per snapshot (quarter points of every bed's last period) at 3 cm, across beds: the spread
+    (std) of grain heights above the floor [cm], each species' mean height, spread vs ``ref``'s."""
     def heights(r):  # (R, Q, N)
         rows = at3(r.amplitudes) * r.replicates + np.arange(r.replicates)
         return (r.snapshots["r"][rows][..., 2] - r.snapshots["z_box"][rows][..., None]) * 100
 
-    z, sp = heights(r), grain_species(r.config)
-    st = {"units": "cm", "quarter": quarters(r.snapshots["t"], r.config.frequency),
+    z, sp, f = heights(r), grain_species(r.config), r.config.frequency
+    st = {"units": "cm", "quarter": [int(round((t * f % 1.0) * 4)) % 4 for t in r.snapshots["t"]],
           "spread": [est(x) for x in z.std(axis=2).T]}
     for i, key in enumerate(("h_large", "h_small")[: sp.max() + 1]):
         st[key] = [est(x) for x in z[..., sp == i].mean(axis=2).T]
-    if ref is not None:
+    if ref is not r:
         st["spread_vs_ref"] = [versus(x, y)[2] for x, y in zip(z.std(axis=2).T,
                                                                   heights(ref).std(axis=2).T)]
     return st
@@ -169,46 +147,36 @@ def record(out, prov, runs, drift):
     ref = runs[0]["result"]
     groups = [run["name"] + (f"/sigma_{run['sigma']:g}" if run["sigma"] else "") for run in runs]
     attrs = dict(families=groups, balance_drift=drift) if drift else dict(families=groups)
+    units = dict(summary=ef.SUMMARY_UNITS, phase=ef.PHASE_UNITS, per_period=ef.PER_PERIOD_UNITS)
     with scaffold.data_file(out, prov, E_max="4 m A_d^2 omega^2", **attrs) as h:
         for run, path in zip(runs, groups):
             r = run["result"]
             g = h.create_group(path)
             g.attrs.update(config=r.config.to_json(), periods=run["periods"],
                            transient_periods=run["transient"], replicates=r.replicates,
-                           wall_time=r.wall_time, at_3cm=json.dumps(
-                               at3_stats(r, None if r is ref else ref)))
-            g.create_dataset("amplitude", data=r.amplitudes).attrs["units"] = "m"
+                           wall_time=r.wall_time, at_3cm=json.dumps(at3_stats(r, ref)))
+            put(g, "amplitude", r.amplitudes, "m")
             a_opt = ef.optimal_amplitudes(r.amplitudes, r.steady["E_d_per_mass"]["values"])
-            g.create_dataset("A_opt", data=a_opt).attrs["units"] = "m"
-            for part, units in (("summary", ef.SUMMARY_UNITS),
-                                ("replicate_summary", ef.SUMMARY_UNITS),
-                                ("phase", ef.PHASE_UNITS), ("per_period", ef.PER_PERIOD_UNITS),
-                                ("replicate_per_period", ef.PER_PERIOD_UNITS)):
+            put(g, "A_opt", a_opt, "m")
+            for part in [*units, "replicate_summary", "replicate_per_period"]:
                 for k, v in getattr(r, part).items():
-                    g.create_dataset(f"{part}/{k}", data=v).attrs["units"] = units.get(k, "")
-            for q, e in r.steady.items():
-                u = "1/kg" if q.endswith("per_mass") else "1"
-                for k, v in e.items():
-                    d = g.create_dataset(f"steady/{q}/{k}", data=v)
-                    if k in ("mean", "se", "ci95", "values", "batch_se", "start"):
-                        d.attrs["units"] = "s" if k == "start" else u
+                    put(g, f"{part}/{k}", v, units[part.removeprefix("replicate_")].get(k, ""))
+            write_steady(g, r.steady, r.replicates,
+                         lambda q: "1/kg" if q.endswith("per_mass") else "1")
             if r.snapshots is not None and run["klass"] in ("reference", "a"):
-                g.attrs["snapshots_3cm"] = json.dumps(snapshot_stats(r, None if r is ref else ref))
+                g.attrs["snapshots_3cm"] = json.dumps(snapshot_stats(r, ref))
                 row = at3(r.amplitudes) * r.replicates  # the first bed at 3 cm, for the figure
                 for k, u in (("t", "s"), ("r", "m"), ("z_box", "m")):
-                    x = np.asarray(r.snapshots[k])[() if k == "t" else row]
-                    g.create_dataset(f"snapshots/{k}", data=x).attrs["units"] = u
+                    put(g, f"snapshots/{k}", r.snapshots[k][() if k == "t" else row], u)
 
 
 def balance_drift(progress, amplitude=0.03, periods=5, transient=2, replicates=3):
-    """The reference's balance residual gained over the analysed periods / the dissipation in
-    them, and ⟨E_d⟩, across ``replicates`` beds for dt = t_c/50 (the default) and t_c/100
-    (Verlet's error per collision ∝ (dt/t_c)^2.5: ~5.7× less); ⟨E_d⟩ of the two compared."""
+    """The reference's balance residual gained over the analysed periods / their dissipation,
+    and ⟨E_d⟩, across beds at dt = t_c/50 (default) and t_c/100 (Verlet: ~5.7× less error)."""
     rows, e_ds = [], []
     for n in (50, 100):
-        cfg = apply_overrides(presets.family("varela2023-reference"),
-                              {"drive.amplitude": amplitude, "numerics.dt_per_collision": n})
-        cfg = ef.protocol(cfg, periods=periods, transient=transient)
+        cfg = ef.protocol(apply_overrides(presets.family("varela2023-reference"), {
+            "drive.amplitude": amplitude, "numerics.dt_per_collision": n}), periods, transient)
         t0 = time.perf_counter()
         res = sweep(cfg, {"drive.amplitude": [amplitude]}, progress=progress, echo=None,
                     replicates=replicates)
@@ -229,28 +197,20 @@ def balance_drift(progress, amplitude=0.03, periods=5, transient=2, replicates=3
 
 
 def families(data):
-    """The stored families in the order run, each a dict: its group ``g``, ``klass``,
-    ``sigma``, ``config``, ``amps``, ``periods``, ``transient``, ``R``, ``wall``."""
+    """The stored families in run order: dicts of ``g`` (group), ``klass``, ``sigma``, ``config``,
+    ``amps``, ``periods``, ``transient``, ``R``, ``wall``, ``label`` (tables), ``legend``."""
     out = []
     for path in data.attrs["families"]:
         name, _, sub = path.partition("/")
-        g = data[name][sub] if sub else data[name]
-        out.append(dict(g=g, klass=name.split("-")[1], sigma=float(sub[6:]) if sub else None,
-                        config=from_dict(g.attrs["config"]), amps=g["amplitude"],
-                        periods=g.attrs["periods"], transient=g.attrs["transient_periods"],
-                        R=g.attrs["replicates"], wall=g.attrs["wall_time"]))
+        g, sigma = (data[name][sub], float(sub[6:])) if sub else (data[name], None)
+        periods, transient = g.attrs["periods"], g.attrs["transient_periods"]
+        short = f" ({transient} + {periods} periods)" if periods != 50 else ""
+        out.append(dict(g=g, klass=name.split("-")[1], sigma=sigma, periods=periods,
+                        transient=transient, config=from_dict(g.attrs["config"]),
+                        amps=g["amplitude"], R=g.attrs["replicates"], wall=g.attrs["wall_time"],
+                        label=name.split("-")[1] + (f" σ={sigma:g}" if sub else ""),
+                        legend=f"σ = {sigma:g}{short}" if sub else "reference (σ = 1)"))
     return out
-
-
-def fam_label(run):
-    return run["klass"] + (f" σ={run['sigma']:g}" if run["sigma"] is not None else "")
-
-
-def plot_label(run):
-    if run["sigma"] is None:
-        return "reference (σ = 1)"
-    return f"σ = {run['sigma']:g}" + (f" ({run['transient']} + {run['periods']} periods)"
-                                      if run["periods"] != 50 else "")
 
 
 #: A class's dissipation per bed three ways, ``(P, R)`` (NaN: not stationary): the paper's
@@ -281,26 +241,32 @@ def per_species(run, stats, digits=3):
 
 
 def segregation_at3(run):
-    """S at 3 cm over each bed's analysed periods, and its trend per period, as text."""
+    """S at 3 cm over each bed's analysed periods, its trend per period and the sign of S (its
+    95 % interval against 0), as text (``sign`` None where S is not finite)."""
     win = run["g"]["replicate_per_period"]["segregation"][at3(run["amps"])][:, -run["periods"]:]
     if not np.isfinite(win).all():
-        return {"S": "–", "trend": "–", "values": None}
+        return {"S": "–", "trend": "–", "sign": None}
+    e = scaffold.across(win.mean(axis=1))
+    sign = ("large grains higher" if e.mean - e.ci95 > 0 else "large grains lower"
+            if e.mean + e.ci95 < 0 else "not distinguishable from 0"
+            ) if np.isfinite(e.ci95) else "undetermined"
     x = np.arange(win.shape[1])
     slopes = [np.polyfit(x, w, 1)[0] for w in win] if win.shape[1] > 1 else [np.nan]
-    return {"S": fmt(win.mean(axis=1)), "trend": fmt(slopes, 2), "values": win.mean(axis=1)}
+    return {"S": fmt(win.mean(axis=1)), "trend": fmt(slopes, 2), "sign": sign}
 
 
-def _class_panels(classes, rows, title, width=5, height=4.2):
-    """One column per class, one row per ``(xlabel, ylabel, draw(ax, klass))`` of ``rows``."""
+def class_panels(out, name, title, classes, rows, width=5, height=4.2):
+    """``name``: one column per class, one row per ``(xlabel, ylabel, draw, *args)`` of ``rows``
+    (``draw(ax, klass, *args)``)."""
     n = max(len(classes), 1)
     fig, axes = scaffold.subplots(len(rows), n, figsize=(width * n, height), squeeze=False)
     for j, klass in enumerate(classes):
-        for ax, (xlabel, ylabel, draw) in zip(axes[:, j], rows):
-            draw(ax, klass)
+        for ax, (xlabel, ylabel, draw, *args) in zip(axes[:, j], rows):
+            draw(ax, klass, *args)
             ax.set(xlabel=xlabel, ylabel=ylabel)
             ax.legend(fontsize=7)
         axes[0, j].set_title(f"{CLASS_NAMES[klass]}{title}", fontsize=9)
-    return fig
+    scaffold.save_figure(fig, out, name)
 
 
 def figures(out, runs, classes):
@@ -311,8 +277,7 @@ def figures(out, runs, classes):
         for run in [ref] + family(klass):
             st = run["g"]["steady"]["E_d_per_mass"]
             ax.errorbar(run["amps"] * 100, st["mean"], yerr=st["ci95"],
-                        fmt="o-" if run is not ref else "ks-", ms=3.5, capsize=2,
-                        label=plot_label(run))
+                        fmt="ks-" if run is ref else "o-", ms=3.5, capsize=2, label=run["legend"])
         ax.axvline(A_PAPER * 100, color="0.6", ls=":", lw=1)
 
     def segregation(ax, klass):  # segregation index per period at 3 cm
@@ -320,19 +285,17 @@ def figures(out, runs, classes):
             seg = run["g"]["replicate_per_period"]["segregation"][at3(run["amps"])]  # (R, n)
             t = np.arange(1, seg.shape[1] + 1)
             m, se = seg.mean(axis=0), np.nan_to_num(scaffold.standard_error(seg, axis=0))
-            (line,) = ax.plot(t, m, lw=1.2, label=plot_label(run))
+            (line,) = ax.plot(t, m, lw=1.2, label=run["legend"])
             ax.fill_between(t, m - se, m + se, color=line.get_color(), alpha=0.25, lw=0)
         ax.axhline(0.0, color="0.5", lw=0.8)
 
-    def phase_curve(key):  # contacts or force vs phase at 3 cm, replicate means
-        def draw(ax, klass):
-            for run in [ref] + family(klass):
-                ph, k = run["g"]["phase"], at3(run["amps"])
-                ax.plot(ph["phase"][k], ph[key][k], "k-" if run is ref else "-", lw=1,
-                        label=plot_label(run))
-        return draw
+    def phase_curve(ax, klass, key):  # at 3 cm, mean over beds (figs. 4, 5, 7, 10, 11)
+        for run in [ref] + family(klass):
+            ph, k = run["g"]["phase"], at3(run["amps"])
+            ax.plot(ph["phase"][k], ph[key][k], "k-" if run is ref else "-", lw=1,
+                    label=run["legend"])
 
-    def phase_plot(ax, klass):  # centre of mass v_z(z) per species at σ = 0.5
+    def phase_plot(ax, klass):  # centre of mass v_z(z) per species at σ = 0.5 (figs. 8, 12)
         for run in [ref] + [r for r in family(klass) if r["sigma"] == 0.5]:
             ph, k = run["g"]["phase"], at3(run["amps"])
             zc, vc = ph["z_cm_species"][k], ph["vz_cm_species"][k]
@@ -340,34 +303,29 @@ def figures(out, runs, classes):
             for sp, spec in enumerate(run["config"].grains):
                 ax.plot(close(zc[:, sp]) * 100, close(vc[:, sp]),
                         "k-" if run is ref else ("-" if sp == 0 else "--"), lw=1.2,
-                        label=f"{plot_label(run)}: {spec.name}")
+                        label=f"{run['legend']}: {spec.name}")
 
     x_phase = "phase t/T [1] (box at its top at 0)"
-    scaffold.save_figure(_class_panels(classes, [(
+    class_panels(out, "efficiency.png", "", classes, [(
         "drive amplitude A_d [cm] (dotted: the paper's A_opt)",
-        "⟨E_d⟩ / m [1/kg] (mean, 95 % interval across beds)", efficiency)], ""),
-        out, "efficiency.png")
-    scaffold.save_figure(_class_panels(classes, [(
-        "drive period (transient first)", "segregation index S [1] (mean ± SE)", segregation)],
-        ", A_d = 3 cm"), out, "segregation.png")
-    scaffold.save_figure(_class_panels(classes, [  # figs. 4, 5, 7, 10, 11
-        (x_phase, "grains touching floor or lid [1]", phase_curve("contacts")),
-        (x_phase, "vertical force on floor + lid [N]", phase_curve("force_floor_lid"))],
-        ", A_d = 3 cm (mean over beds)", height=7), out, "contacts_force.png")
-    scaffold.save_figure(_class_panels(  # figs. 8, 12
-        [k for k in "bc" if k in classes], [("z [cm] (lab frame)", "v_z [m/s]", phase_plot)],
-        ": centre of mass, A_d = 3 cm", width=6, height=4.5), out, "phase_plots.png")
+        "⟨E_d⟩ / m [1/kg] (mean, 95 % interval across beds)", efficiency)])
+    class_panels(out, "segregation.png", ", A_d = 3 cm", classes, [(
+        "drive period (transient first)", "segregation index S [1] (mean ± SE)", segregation)])
+    class_panels(out, "contacts_force.png", ", A_d = 3 cm (mean over beds)", classes, [
+        (x_phase, "grains touching floor or lid [1]", phase_curve, "contacts"),
+        (x_phase, "vertical force on floor + lid [N]", phase_curve, "force_floor_lid")], height=7)
+    class_panels(out, "phase_plots.png", ": centre of mass, A_d = 3 cm",
+                 [k for k in "bc" if k in classes],
+                 [("z [cm] (lab frame)", "v_z [m/s]", phase_plot)], width=6, height=4.5)
 
-    # snapshots (fig. 3): reference and class a at the smallest σ run, first bed, as recorded
-    a_runs = family("a")
-    shown = [ref] + ([min(a_runs, key=lambda r: r["sigma"])] if a_runs else [])
+    shown = [ref] + sorted(family("a"), key=lambda r: r["sigma"])[:1]  # fig. 3: smallest σ
     if all("snapshots" in run["g"] for run in shown):
         rows = []
         for run in shown:
-            sn, f, c = run["g"]["snapshots"], run["config"].frequency, run["config"]
-            frames = [(f"t/T = {t * f:.2f}: {CAPTIONS[q]}", r, z) for t, q, r, z in zip(
-                sn["t"], quarters(sn["t"], f), sn["r"], sn["z_box"]) if q in CAPTIONS]
-            rows.append((f"{'reference' if run is ref else 'class a, ' + plot_label(run)}, "
+            sn, c, st = run["g"]["snapshots"], run["config"], run["g"].attrs["snapshots_3cm"]
+            frames = [(f"t/T = {t * c.frequency:.2f}: {CAPTIONS[q]}", r, z) for t, q, r, z in zip(
+                sn["t"], st["quarter"], sn["r"], sn["z_box"]) if q in CAPTIONS]
+            rows.append((f"{'reference' if run is ref else 'class a, ' + run['legend']}, "
                          "A_d = 3 cm", frames, grain_radii(c), grain_species(c), c))
         save(snapshot_grid_figure(rows, "driven box at 70 Hz"), os.path.join(out, "snapshots.png"))
 
@@ -376,7 +334,7 @@ def report(data, out):
     runs, prov, drift = families(data), data.attrs, data.attrs.get("balance_drift")
     figures(out, runs, sorted({run["klass"] for run in runs[1:]}))
     with open(os.path.join(out, "claims.json"), "w") as fh:
-        json.dump({fam_label(r): {"A_opt_cm": [float(x) for x in r["g"]["A_opt"] * 100]}
+        json.dump({r["label"]: {"A_opt_cm": [float(x) for x in r["g"]["A_opt"] * 100]}
                    for r in runs}, fh, indent=1)
     ref, per_mass = runs[0], NORMALISATIONS["⟨E_d⟩/m"]
     amps, R, full = ref["amps"], ref["R"], ref["transient"] + ref["periods"]
@@ -395,7 +353,7 @@ def report(data, out):
       "per-period E_d finds no steady state; mean over beds ± SE, 'above'/'below' where the "
       "Welch 95 % interval excludes 0 (the paper's error bars: the spread over one run).\n")
     P("Stationary beds (detected / run, over all amplitudes): " + "; ".join(
-        f"{fam_label(r)} {int(np.sum(st))}/{st.size}"
+        f"{r['label']} {int(np.sum(st))}/{st.size}"
         for r in runs for st in [r["g"]["steady"]["E_d"]["stationary"]]) + ".\n")
     P("## ⟨E_d⟩/m [1/kg] per family (mean ± SE across beds)\n")
     rows = []
@@ -403,7 +361,7 @@ def report(data, out):
         c, ao, wall = run["config"], run["g"]["A_opt"], run["wall"]
         cells = {round(a, 6): fmt(per_mass(run)[i]) for i, a in enumerate(run["amps"])}
         steps = (run["transient"] + run["periods"]) / c.frequency / c.numerics.dt
-        rows.append([fam_label(run), c.n_grains, f"{run['g']['summary']['mass'][0]:.4f}",
+        rows.append([run["label"], c.n_grains, f"{run['g']['summary']['mass'][0]:.4f}",
                      f"{c.numerics.dt:.3g}", f"{run['transient']} + {run['periods']}"]
                     + [cells.get(round(a, 6), "–") for a in amps]
                     + [fmt(ao * 100) if np.isfinite(ao).any() else "–",
@@ -413,15 +371,13 @@ def report(data, out):
                             + [f"{a * 100:g} cm" for a in amps]
                             + ["A_opt [cm]", "sweep wall [s]"], rows)
     low = [run for run in runs if run["periods"] != ref["periods"]]
-    if low:  # the full protocol projected at this run's cost per period
-        projected = lambda run: (run["wall"] * 9 / len(run["amps"]) * full  # noqa: E731
-                                 / (run["transient"] + run["periods"]) / 60)
+    if low:  # the full protocol projected at each run's cost per period
         P("\nSmall size ratios ran a shorter protocol (" + "; ".join(
-            f"{fam_label(run)}: {len(run['amps'])} amplitudes × {run['transient']} + "
+            f"{run['label']}: {len(run['amps'])} amplitudes × {run['transient']} + "
             f"{run['periods']} periods × {R} beds in {run['wall']:.0f} s, the full protocol "
             f"(9 amplitudes × {ref['transient']} + {ref['periods']} periods × {R} beds) projected "
-            f"at {projected(run):.0f} min"
-            for run in low) + ").")
+            f"at {run['wall'] * 9 / len(run['amps']) * full / n / 60:.0f} min"
+            for run in low for n in [run["transient"] + run["periods"]]) + ").")
     worst = max(float(np.max(run["g"]["replicate_summary"]["balance_error"])) for run in runs)
     P("\nEnergy balance (max |residual| / max input work over the run), worst over all points "
       f"and beds: {worst:.2e}.\n")
@@ -444,7 +400,7 @@ def report(data, out):
     for run in runs:
         k, rs, st, seg = (at3(run["amps"]), run["g"]["replicate_summary"],
                           run["g"].attrs["at_3cm"], segregation_at3(run))
-        rows.append([fam_label(run), fmt(per_mass(run)[k]), fmt(rs["wall_fraction"][k]),
+        rows.append([run["label"], fmt(per_mass(run)[k]), fmt(rs["wall_fraction"][k]),
                      fmt(rs["contacts_mean"][k]), per_species(run, st["contacts_species"]),
                      show(st["contacts_peak"]), show(st["force_peak"], 4),
                      per_species(run, st["vz_max"]), seg["S"], seg["trend"]])
@@ -461,21 +417,18 @@ def report(data, out):
 
 def claims(runs):
     """One line per claim of SPEC §5 with the numbers and the interval that decide it."""
-    ref = runs[0]
-    amps = ref["amps"]
+    ref, amps = runs[0], runs[0]["amps"]
     full = [r for r in runs if len(r["amps"]) == len(amps)]  # ref first
-    # A_opt ≈ 2.8 cm for every σ
     opt = [(run, e) for run in full for e in [scaffold.across(run["g"]["A_opt"])]
-          if np.isfinite(e.mean)]
+           if np.isfinite(e.mean)]
     inside = sum(bool(np.isfinite(e.ci95) and abs(e.mean - A_PAPER) <= e.ci95) for _, e in opt)
     out = ["**A_opt ≈ 2.8 cm for every σ** (each bed's largest ⟨E_d⟩/m, parabola through "
            "its top three amplitudes; mean ± SE across beds, cm): "
-           + "; ".join(f"{fam_label(run)} {scaffold.pm(e.mean, e.se, '.3f', '.3f', scale=100)}"
+           + "; ".join(f"{run['label']} {scaffold.pm(e.mean, e.se, '.3f', '.3f', scale=100)}"
                        for run, e in opt)
            + f". The paper's 2.8 cm lies inside the 95 % interval for {inside} of "
            f"{len(opt)} families. Depends on E_max ∝ A_d² (our reading of the paper)."]
-    # class vs reference above A_opt, at every σ; the three normalisations
-    above = np.flatnonzero(amps > A_PAPER + 1e-9)
+    above = np.flatnonzero(amps > A_PAPER + 1e-9)  # each class vs the reference above A_opt
     for run in full[1:]:
         klass, want = run["klass"], EXPECT[run["klass"]]
         parts = {name: [ef.compare_beds(fn(run)[i], fn(ref)[i]) for i in above]
@@ -511,15 +464,14 @@ def diagnostics(runs):
 
     out = []
     for run in runs[1:]:  # every class and σ (the paper shows σ = 0.5)
-        k, klass, st = at3(run["amps"]), run["klass"], run["g"].attrs["at_3cm"]
-        c = run["g"]["replicate_summary"]["contacts_mean"][k]
+        klass, st = run["klass"], run["g"].attrs["at_3cm"]
+        c = run["g"]["replicate_summary"]["contacts_mean"][at3(run["amps"])]
         cmp = ef.compare_beds(c, c_ref)
-        want = "above" if klass == "a" else "below"
+        want, word = ("above", "more") if klass == "a" else ("below", "fewer")
         text = (f"**class {klass} (σ = {run['sigma']:g}) at 3 cm, wall contacts**: {fmt(c)} "
                 f"grains on floor or lid on average vs {fmt(c_ref)} for the reference (difference "
                 f"{scaffold.pm(cmp.diff, cmp.half, '+.2f', '.2f')}, Welch 95 %: {cmp.verdict}; "
-                f"paper: {'more' if want == 'above' else 'fewer'}; "
-                f"{'as the paper' if cmp.verdict == want else 'not as the paper'}); per species "
+                f"paper: {word}; {'' if cmp.verdict == want else 'not '}as the paper); per species "
                 + per_species(run, st["contacts_species"]))
         if klass in "ac":
             text += ("; **wall force** (each bed's phase curve) peak "
@@ -536,28 +488,15 @@ def diagnostics(runs):
             text += (f"; **largest centre-of-mass speed** (each bed's phase curve) {speeds} "
                      f"(paper: {want_v})")
         out.append(text + ".")
-    # segregation (paper fig. 3: "size segregation appears")
-    seg_rows = []
-    for run in runs[1:]:
-        sg = segregation_at3(run)
-        if sg["values"] is None:
-            continue
-        e = scaffold.across(sg["values"])
-        sign = ("large grains higher" if e.mean - e.ci95 > 0 else "large grains lower"
-                if e.mean + e.ci95 < 0 else "not distinguishable from 0"
-                ) if np.isfinite(e.ci95) else "undetermined"
-        seg_rows.append(f"{fam_label(run)} {sg['S']} ({sign})")
-    if seg_rows:
+    seg = [f"{run['label']} {sg['S']} ({sg['sign']})" for run in runs[1:]
+           for sg in [segregation_at3(run)] if sg["sign"]]
+    if seg:  # paper fig. 3: "size segregation appears"
         out.append("**Size segregation at 3 cm** (index S over the analysed periods, mean ± SE "
-                   "across beds; 95 % interval against 0): " + "; ".join(seg_rows) + ". In a "
+                   "across beds; 95 % interval against 0): " + "; ".join(seg) + ". In a "
                    "well-mixed bed of unequal radii S is not exactly 0 (small centres reach "
                    "R_large − R_small closer to the floor), so a small |S| is not segregation.")
-    # fig. 3: spread in the snapshots (last period of every bed)
-    for run in runs:
-        sn = run["g"].attrs.get("snapshots_3cm")
-        if run["sigma"] is None or sn is None or run["klass"] != "a":
-            continue
-        spread_ref = ref["g"].attrs["snapshots_3cm"]["spread"]
+    for run in [r for r in runs[1:] if "snapshots_3cm" in r["g"].attrs]:  # fig. 3: the spread
+        sn = run["g"].attrs["snapshots_3cm"]
         out.append(f"fig. 3, class a σ = {run['sigma']:g} at 3 cm, snapshots of the last "
                    "period of every bed (phase: mean height of large / small grains above the "
                    "floor, spread (std) of all heights, mean ± SE across beds): " + "; ".join(
@@ -565,7 +504,7 @@ def diagnostics(runs):
                        f"reference {show(s_ref)} cm ({v}, Welch 95 %)"
                        for q, hl, hs, s, s_ref, v in zip(
                            sn["quarter"], sn["h_large"], sn["h_small"], sn["spread"],
-                           spread_ref, sn["spread_vs_ref"])) + ".")
+                           ref["g"].attrs["snapshots_3cm"]["spread"], sn["spread_vs_ref"])) + ".")
     return out
 
 
