@@ -1,16 +1,16 @@
 """How densely do jaxdamp's settled beds pack in a cylinder, against the published wall effect
 of random packing? ``python experiments/cylinder_packing.py [--quick]`` (issue 35).
 
-The thesis' 3 mm steel grains (μ = 0.3, the preset's reduced modulus) poured by jaxdamp's
-settling protocol (FCC lattice, gravity, drag; :func:`jaxdamp.engine.packing.settle_many`)
-into cylinders of ``D/d`` = 5, 7, 10, 14, 20, filled by ``fill_fraction``
-(:mod:`jaxdamp.cases.filling`), ``R`` beds each (seeds 0…R−1). The solid fraction of the bed
-between 2 d above the floor and 2 d below its top, over the whole section (the spheres' volume
-inside that slab, exactly, by spherical caps), is set against Dixon's (1988) random packing
-``φ(d/D)``, the relation that turns a fill fraction into a count. Verdict: "agrees" where the 95 % interval of the
-difference lies within ±0.015 (the two published correlations differ by up to 0.012 over
-``D/d`` = 5–20, and fit their data to about 0.006 in φ), "differs" where it excludes 0 and
-leaves that margin, else "undecided". Writes ``data.h5``, ``figure.png`` and ``summary.md``.
+The thesis' 3 mm steel grains (μ = 0.3, the preset's reduced modulus) poured by jaxdamp's settling
+protocol (FCC lattice, gravity, drag; :func:`jaxdamp.engine.packing.settle_many`) into cylinders of
+``D/d`` = 5, 7, 10, 14, 20, filled by ``fill_fraction`` (:mod:`jaxdamp.cases.filling`), ``R`` beds
+each (seeds 0…R−1). The solid fraction of the bed between 2 d above the floor and 2 d below its
+top, over the whole section (the spheres' volume inside that slab, exactly, by spherical caps), is
+set against Dixon's (1988) random packing ``φ(d/D)``, the relation that turns a fill fraction into
+a count. Verdict: "agrees" where the 95 % interval of the difference lies within ±0.015 (the two
+published correlations differ by up to 0.012 over ``D/d`` = 5–20, and fit their data to about 0.006
+in φ), "differs" where it excludes 0 and leaves that margin, else "undecided". Writes ``data.h5``,
+``figure.png`` and ``summary.md``.
 """
 
 import dataclasses
