@@ -64,11 +64,16 @@ def test_the_scalar_and_jax_forms_of_every_container_agree(name):
         acc = containers.side_contacts_scalar(
             vessel.id, law.id, x[i], y[i], sec, R, wk, 0, v[i, 0],
             v[i, 1], v[i, 2], R * w[i, 0], R * w[i, 1], R * w[i, 2], 0.0, 0.0, 1.0,
-            (0.0,) * 10)
+            (0.0,) * 11)
         jax_side = np.concatenate([np.asarray(f.force)[0], np.asarray(f.torque)[0],
                                    [float(f.elastic_energy), float(f.normal_loss),
                                     float(f.friction_loss), float(f.box_z)]])
-        np.testing.assert_allclose(acc, jax_side, rtol=1e-9, atol=1e-12 * (1 + abs(jax_side).max()))
+        np.testing.assert_allclose(acc[:10], jax_side, rtol=1e-9,
+                                   atol=1e-12 * (1 + abs(jax_side).max()))
+        # the side walls' own count and loss (the grain is far from floor and lid)
+        assert acc[10] == int(f.n_side) and int(f.n_floor) == int(f.n_lid) == 0
+        np.testing.assert_allclose(np.asarray(f.group_loss), [0.0, 0.0, acc[7] + acc[8]],
+                                   rtol=1e-9, atol=1e-300)
         touching += acc[6] > 0
     assert touching > n // 3  # the comparison saw contacts, not only zeros
     gaps, (nx, ny), kappa = vessel.sides_jax(x, y, section)
@@ -177,7 +182,7 @@ from helpers import ENGINES, config, run_steps, start  # noqa: E402
 
 from jaxdamp.config import Material, from_dict  # noqa: E402
 from jaxdamp.physics import restitution as rst  # noqa: E402
-from jaxdamp.physics.model import build  # noqa: E402
+from jaxdamp.physics.model import CH, build  # noqa: E402
 
 R = 2.5e-3
 RC = 4e-3  # R* = 2 R RC / (2 RC - R) = 1.45 R: the contact is ~7 % shorter than on a plane
@@ -326,10 +331,48 @@ def test_a_cylindrical_damper_settles_and_runs_on_both_engines():
     cfg = apply_overrides(_cylinder(base, rc, base.box.Lz), {"system": "driven",
                                                             "drive": {"amplitude": 0.01}})
     vel = np.tile([0.3, -0.2, 0.5], (len(bed.r), 1))  # thrown at the wall, lid and each other
-    ends = []
+    ends, recs = [], []
     for engine in ("native", "jax"):
         model, pb, st, nbrs = start(cfg, bed.r, vel)
-        st, _, _ = run_steps(model, pb, st, nbrs, 30, 10, engine=engine)
+        st, _, rec = run_steps(model, pb, st, nbrs, 30, 10, engine=engine)
         ends.append(np.asarray(st.r[0]))
+        recs.append(rec)
     assert np.abs(ends[0] - ends[1]).max() < 1e-12
     assert not np.allclose(ends[0], bed.r, atol=1e-4)  # it moved
+    # the wall groups apart: counts and losses at the floor, the lid and the side wall,
+    # the same on both engines, the losses adding up to the grain-wall channels
+    for rec in recs:
+        work = rec["work"]
+        groups = work[:, [CH["pw_floor"], CH["pw_lid"], CH["pw_side"]]]
+        total = work[:, CH["pw_normal"]] + work[:, CH["pw_friction"]]
+        np.testing.assert_allclose(groups.sum(axis=1), total, rtol=1e-12, atol=1e-15)
+        assert (groups[-1] > 0).all()  # the thrown bed hit all three
+        assert rec["n_floor"].max() > 0 and rec["n_lid"].max() > 0 and rec["n_side"].max() > 0
+    np.testing.assert_allclose(recs[0]["work"], recs[1]["work"], rtol=1e-9, atol=1e-15)
+    for k in ("n_floor", "n_lid", "n_side"):
+        np.testing.assert_array_equal(recs[0][k], recs[1][k])
+
+
+def test_the_wall_groups_count_contacts_by_wall():
+    """A grain pressed into the floor and the corner of the box touches the floor and two side
+    walls (``n_side`` counts contacts, not grains); in a cylinder the same grain at the wall
+    touches one. Moving straight down, it compresses the floor (a normal loss, the floor's)
+    and slides along the side walls (a friction loss, the sides')."""
+    import jax.numpy as jnp
+
+    from jaxdamp.physics.walls import wall_forces
+
+    base = presets.get("sanchez2012-optimal")
+    one = apply_overrides(base, {"grains.0.count": 1})
+    R = one.grains[0].radius
+    for cfg, at, sides in ((one, [0.99 * R, 0.99 * R], 2),
+                           (_cylinder(one, 0.02, one.box.Lz), [0.99 * R, 0.02], 1)):
+        model, p = build(cfg)
+        r = jnp.asarray([[at[0], at[1], 0.99 * R]])
+        v = jnp.asarray([[0.0, 0.0, -0.1]])
+        f = wall_forces(r, v, jnp.zeros((1, 3)), 0.0, 0.0, p, model)
+        assert (int(f.n_floor), int(f.n_lid), int(f.n_side)) == (1, 0, sides)
+        loss = np.asarray(f.group_loss)
+        assert loss[0] > 0 and loss[1] == 0 and loss[2] > 0
+        np.testing.assert_allclose(loss, [float(f.normal_loss), 0.0, float(f.friction_loss)],
+                                   rtol=1e-14)

@@ -181,6 +181,29 @@ def test_resume_refuses_a_damaged_file_in_one_line(tmp_path):
         run(cfg, out=str(out), resume=True, progress=False, echo=None)
 
 
+def test_resume_refuses_a_checkpoint_of_an_older_version_in_one_line(tmp_path):
+    """A file written before the wall groups (no ``n_side``, 7 work channels) cannot go on
+    bit-identically: the resume says so instead of failing deep in the driver."""
+    from jaxdamp.studies.runner import run
+
+    cfg = _small_config()
+    out = tmp_path / "old.h5"
+    run(cfg, out=str(out), progress=False, echo=None, max_chunks=1)
+    with h5py.File(out, "a") as h:
+        del h["checkpoint/state/n_side"]
+    with pytest.raises(ConfigError, match=r"written by an older jaxdamp \(its state lacks "
+                                          r"n_side\); it cannot be continued"):
+        run(cfg, out=str(out), resume=True, progress=False, echo=None)
+    out = tmp_path / "older.h5"
+    run(cfg, out=str(out), progress=False, echo=None, max_chunks=1)
+    with h5py.File(out, "a") as h:
+        work = h["checkpoint/state/work"][()]
+        del h["checkpoint/state/work"]
+        h["checkpoint/state/work"] = work[..., :7]
+    with pytest.raises(ConfigError, match=r"it has 7 work channels, this version 10"):
+        run(cfg, out=str(out), resume=True, progress=False, echo=None)
+
+
 def _tmpfs(path, size):
     os.makedirs(path, exist_ok=True)
     done = subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}", "tmpfs", str(path)],

@@ -422,7 +422,7 @@ def steady_state_summary(config: Config, records: dict, final: State, t_window: 
       final ``|input| + losses`` [-].
     """
     from jaxdamp.physics.energy import granular_loss
-    from jaxdamp.physics.model import CH, CHANNELS
+    from jaxdamp.physics.model import CH, CHANNELS, LOSSES
 
     summary: dict = {}
     units: dict = {}
@@ -451,7 +451,7 @@ def steady_state_summary(config: Config, records: dict, final: State, t_window: 
     units["phase"] = "rad"
     summary["mean_vz_bed"] = float(np.mean(records["vz_cm"][i0:]))
     units["mean_vz_bed"] = "m/s"
-    scale = abs(work[-1, CH["input"]]) + work[-1, CH["primary_damping"]:].sum()
+    scale = abs(work[-1, CH["input"]]) + work[-1, LOSSES].sum()
     resid = np.max(np.abs(records["balance_residual"]))
     summary["balance_error"] = float(resid / scale) if scale > 0 else float(resid)
     units["balance_error"] = "1"

@@ -79,13 +79,15 @@ MAX_REGISTERS: int | None = None
 #: its inputs with room for the most any grain needed (a pure function of its inputs).
 NEIGHBOURS = 16
 #: The values the block sums per step (a tree in shared memory).
-_SUMS = ("e_walls", "pw_n", "pw_f", "box_z", "floor_lid", "n_floor", "n_lid", "drag",
-         "pp_e", "pp_n", "pp_f", "health")
+_SUMS = ("e_walls", "pw_n", "pw_f", "box_z", "floor_lid", "n_floor", "n_lid", "n_wall",
+         "l_floor", "l_lid", "drag", "pp_e", "pp_n", "pp_f", "health")
 N_SUMS = len(_SUMS)
+#: Where the sums of the pair pass start (the grain pass fills the ones before).
+_PAIR_SUMS = _SUMS.index("pp_e")
 _DRIVEN = DRIVEN.id
-_IN, _PRIM, _PPN, _PPF, _PWN, _PWF, _DRAG = (
+_IN, _PRIM, _PPN, _PPF, _PWN, _PWF, _DRAG, _PW_FLOOR, _PW_LID, _PW_SIDE = (
     CH[k] for k in ("input", "primary_damping", "pp_normal", "pp_friction", "pw_normal",
-                    "pw_friction", "drag"))
+                    "pw_friction", "drag", "pw_floor", "pw_lid", "pw_side"))
 #: Per-system scratch in device memory: per-grain rows ``(n, 3)`` / ``(n, 4)`` (the CPU
 #: kernel's layout: its grain pass runs on them) and the structure's vectors.
 _SCRATCH = ("r1", "vp", "rw", "ref", "F", "T", "wk", "wks", "y1", "ydp", "xs", "xds", "acc",
@@ -280,6 +282,7 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
         box_z = 0.0
         n_floor = 0.0
         n_lid = 0.0
+        n_side = 0.0
         first = True
         if tid == 0:
             sh[3] = 0.0  # set once the state blows up (read by all after a barrier)
@@ -306,6 +309,7 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                         vp[i, c] = vb[i, c] + dt * ab[i, c]
                         rw[i, c] = Rb[i] * (wb[i, c] + dt * alb[i, c])
                 (parts[0], parts[1], parts[2], parts[3], parts[4], parts[5], parts[6], parts[7],
+                 parts[8], parts[9], parts[10],
                  far) = grain_walls(shape, law, tid, n, nt, r1, vp, rw, Rb, mb, ref, wk, wks, sec,
                                     Fs, Ts, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
                 if cuda.syncthreads_or(1 if far else 0) or first:
@@ -332,7 +336,7 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                             cuda.atomic.max(status, b, m)
                     cuda.syncthreads()
                 # this thread's grains: pairs, corrector, rotation
-                for k in range(8, N_SUMS):
+                for k in range(_PAIR_SUMS, N_SUMS):
                     parts[k] = 0.0
                 for i in range(tid, n, nt):
                     ux, uy, uz = vp[i, 0], vp[i, 1], vp[i, 2]
@@ -358,9 +362,9 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                             tx -= Rb[i] * cx
                             ty -= Rb[i] * cy
                             tz -= Rb[i] * cz
-                            parts[8] += e
-                            parts[9] += ln
-                            parts[10] += lf
+                            parts[11] += e
+                            parts[12] += ln
+                            parts[13] += lf
                     # the velocity-Verlet corrector and the rotation by the mid-step spin
                     im = 1.0 / mb[i]
                     iI = 1.0 / Ib[i]
@@ -378,7 +382,7 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                         wb[i, c] = wb[i, c] + 0.5 * dt * (alb[i, c] + al1)
                         alb[i, c] = al1
                         rb[i, c] = r1[i, c]
-                    parts[11] += h
+                    parts[14] += h
                     qw, qx, qy, qz, ok = rotate_series_scalar(qb[i, 0], qb[i, 1], qb[i, 2],
                                                               qb[i, 3], ox, oy, oz, dt)
                     if not ok:
@@ -390,18 +394,21 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                 block_sum(red, tid, nt, N_SUMS, False)
                 if tid == 0:  # the mount's response, the energy channels, the finite check
                     t1 = sh[0]
-                    e_el = red[0, 0] + 0.5 * red[8, 0]
+                    e_el = red[0, 0] + 0.5 * red[11, 0]
                     pw_n, pw_f, box_z, floor_lid = red[1, 0], red[2, 0], red[3, 0], red[4, 0]
                     n_floor, n_lid = red[5, 0], red[6, 0]
-                    pp_n, pp_f = 0.5 * red[9, 0], 0.5 * red[10, 0]
+                    n_side = red[7, 0] - n_floor - n_lid
+                    pp_n, pp_f = 0.5 * red[12, 0], 0.5 * red[13, 0]
                     zdd1, pw[_IN], pw[_PRIM] = respond_scalar(mount, t1, z1, zdp, y1, ydp,
                                                               box_z, prow, po, n_lines, xs,
                                                               xds, acc, tmp)
                     zd1 = zdp if prescribed else zd + 0.5 * dt * (zdd + zdd1)
                     pw[_PPN], pw[_PPF], pw[_PWN], pw[_PWF] = pp_n, pp_f, pw_n, pw_f
-                    pw[_DRAG] = drag * red[7, 0]
+                    pw[_DRAG] = drag * red[10, 0]
+                    pw[_PW_FLOOR], pw[_PW_LID] = red[8, 0], red[9, 0]
+                    pw[_PW_SIDE] = pw_n + pw_f - red[8, 0] - red[9, 0]
                     health = box_z + e_el + pp_n + pp_f + pw_n + pw_f + z1 + zdp + zdd1
-                    health += red[11, 0]
+                    health += red[14, 0]
                     if not math.isfinite(health):
                         zd = math.nan
                         sh[3] = 1.0
@@ -433,13 +440,13 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                 e_prim = energy_scalar(mount, t, z, zd, yv, ydv, prow, po, n_lines, xs, xds)
                 record_row(rec[b, k_rec], t, z, zd, yv, e_prim, rb, vb, wb, mb, Ib, Rb, grav, Lz,
                            ez, e_el, e_start, imp0 / record_every, imp1 / record_every, n_floor,
-                           n_lid, work, bounds)
+                           n_lid, n_side, work, bounds)
             cuda.syncthreads()
         if tid == 0:
             row[so.z], row[so.zd], row[so.zdd], row[so.t] = z, zd, zdd, t
             row[so.z_max], row[so.z_min], row[so.step] = zmax, zmin, step
             row[so.e_elastic], row[so.f_floor_lid], row[so.f_box] = e_el, floor_lid, box_z
-            row[so.n_floor], row[so.n_lid] = n_floor, n_lid
+            row[so.n_floor], row[so.n_lid], row[so.n_side] = n_floor, n_lid, n_side
 
     return advance
 

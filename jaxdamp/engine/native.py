@@ -80,9 +80,9 @@ _DRIVEN = DRIVEN.id
 _BOX = CONTAINERS["box"].id
 
 #: The work channels' places (:data:`jaxdamp.physics.model.CHANNELS`, shared with the JAX engine).
-_IN, _PRIM, _PPN, _PPF, _PWN, _PWF, _DRAG = (
+_IN, _PRIM, _PPN, _PPF, _PWN, _PWF, _DRAG, _PW_FLOOR, _PW_LID, _PW_SIDE = (
     CH[k] for k in ("input", "primary_damping", "pp_normal", "pp_friction", "pw_normal",
-                    "pw_friction", "drag"))
+                    "pw_friction", "drag", "pw_floor", "pw_lid", "pw_side"))
 
 #: Where each field starts in a packed row (:func:`offsets`), read by name in the kernel.
 StateOffsets = namedtuple("StateOffsets", STATE_FIELDS)
@@ -324,8 +324,9 @@ if AVAILABLE:
         registers, :func:`~jaxdamp.physics.containers.section_scalar`) into ``F``, ``T``;
         returns the
         sums ``(elastic energy, normal loss, friction loss, box_z, floor + lid force, grains on
-        the floor, on the lid, Σ m v², whether a grain moved more than skin/2 since the list
-        was built)``. Inlined where ``shape`` is a constant, the container's branch folds away:
+        the floor, on the lid, wall contacts (all walls), the floor's loss, the lid's loss,
+        Σ m v², whether a grain moved more than skin/2 since the list was built)``. Inlined
+        where ``shape`` is a constant, the container's branch folds away:
         :func:`_advance_one` keeps a copy for the box."""
         e_el = 0.0
         pw_n = 0.0
@@ -334,6 +335,9 @@ if AVAILABLE:
         floor_lid = 0.0
         n_floor = 0.0
         n_lid = 0.0
+        n_wall = 0.0
+        l_floor = 0.0
+        l_lid = 0.0
         pdrag = 0.0
         far = False
         for i in range(lo, n, step):
@@ -360,24 +364,27 @@ if AVAILABLE:
             # walls: the floor, the lid, then the container's sides (inward normals);
             # most grains touch none, so the common path is a compare per wall; box_z
             # sums the force on the box along the axis e
-            acc = (fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z)
+            acc = (fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z, n_wall)
             if floor < Ri:
-                acc, gz = add_wall_scalar(law, Ri - floor, 0.0, 0.0, 1.0, wx, wy, wz, sx, sy, sz,
-                                          Ri, wk[i, 0], wk[i, 1], wk[i, 2], wk[i, 3], ex, ey, ez,
-                                          acc)
+                acc, gz, loss = add_wall_scalar(law, Ri - floor, 0.0, 0.0, 1.0, wx, wy, wz, sx,
+                                                sy, sz, Ri, wk[i, 0], wk[i, 1], wk[i, 2],
+                                                wk[i, 3], ex, ey, ez, acc)
                 floor_lid -= gz
                 n_floor += 1.0
+                l_floor += loss
             if Lz - floor < Ri:
-                acc, gz = add_wall_scalar(law, Ri - (Lz - floor), 0.0, 0.0, -1.0, wx, wy, wz, sx,
-                                          sy, sz, Ri, wk[i, 0], wk[i, 1], wk[i, 2], wk[i, 3], ex,
-                                          ey, ez, acc)
+                acc, gz, loss = add_wall_scalar(law, Ri - (Lz - floor), 0.0, 0.0, -1.0, wx, wy,
+                                                wz, sx, sy, sz, Ri, wk[i, 0], wk[i, 1],
+                                                wk[i, 2], wk[i, 3], ex, ey, ez, acc)
                 floor_lid -= gz
                 n_lid += 1.0
-            fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z = side_contacts_scalar(
+                l_lid += loss
+            fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z, n_wall = side_contacts_scalar(
                 shape, law, bx, by, sec, Ri, wks, i, wx, wy, wz, sx, sy, sz, ex, ey, ez, acc)
             F[i, 0], F[i, 1], F[i, 2] = fx, fy, fz
             T[i, 0], T[i, 1], T[i, 2] = tx, ty, tz
-        return e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, pdrag, far
+        return (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
+                pdrag, far)
 
     @_kernel()
     def _pair_forces(law, r, v, rw, R, pi, pj, pc, npairs, F, T):
@@ -577,6 +584,7 @@ if AVAILABLE:
         box_z = 0.0
         n_floor = 0.0
         n_lid = 0.0
+        n_side = 0.0
         for k_rec in range(n_records):
             imp0 = 0.0
             imp1 = 0.0
@@ -593,15 +601,16 @@ if AVAILABLE:
                 for j in range(3 * n):
                     rwf[j] = R3[j] * (wf[j] + dt * alf[j])
                 if shape == _BOX:  # the common container: a copy with its branch folded
-                    (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, pdrag,
-                     far) = grain_walls(_BOX, law, 0, n, 1, r1, vp, rw, Rb, mb, ref, wk, wks,
-                                         sec, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
-                                         half_skin2)
+                    (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
+                     pdrag, far) = grain_walls(_BOX, law, 0, n, 1, r1, vp, rw, Rb, mb, ref, wk,
+                                               wks, sec, F, T, ex, ey, ez, z1, zdp, Lz, grav,
+                                               drag, half_skin2)
                 else:
-                    (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, pdrag,
-                     far) = grain_walls(shape, law, 0, n, 1, r1, vp, rw, Rb, mb, ref, wk, wks,
-                                         sec, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
-                                         half_skin2)
+                    (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
+                     pdrag, far) = grain_walls(shape, law, 0, n, 1, r1, vp, rw, Rb, mb, ref, wk,
+                                               wks, sec, F, T, ex, ey, ez, z1, zdp, Lz, grav,
+                                               drag, half_skin2)
+                n_side = n_wall - n_floor - n_lid
                 if n > 1 and far:  # a grain moved more than skin/2: list the pairs anew
                     npairs, pi, pj, pc = _pairs(r1, ex * z1, ey * z1, ez * z1, cutoff, pi, pj,
                                                 pc, ref, Rb, mb, sid, tab, law)
@@ -614,6 +623,8 @@ if AVAILABLE:
                 zd1 = zdp if prescribed else zd + 0.5 * dt * (zdd + zdd1)
                 pw[_PPN], pw[_PPF], pw[_PWN], pw[_PWF] = pp_n, pp_f, pw_n, pw_f
                 pw[_DRAG] = drag * pdrag
+                pw[_PW_FLOOR], pw[_PW_LID] = l_floor, l_lid
+                pw[_PW_SIDE] = pw_n + pw_f - l_floor - l_lid
                 health = box_z + e_el + pp_n + pp_f + pw_n + pw_f + z1 + zdp + zdd1
                 health += _correct(n, dt, wb, alb, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f,
                                    qs, qn)
@@ -643,14 +654,14 @@ if AVAILABLE:
             e_prim = energy_scalar(mount, t, z, zd, yv, ydv, prow, po, n_lines, xs, xds)
             record_row(rec[b, k_rec], t, z, zd, yv, e_prim, rb, vb, wb, mb, Ib, Rb, grav, Lz, ez,
                        e_el, e_start, imp0 / record_every, imp1 / record_every, n_floor, n_lid,
-                       work, bounds)
+                       n_side, work, bounds)
         for i in range(n):
             for k in range(4):
                 qb[i, k] = qs[k, i]
         row[so.z], row[so.zd], row[so.zdd], row[so.t] = z, zd, zdd, t
         row[so.z_max], row[so.z_min], row[so.step] = zmax, zmin, step
         row[so.e_elastic], row[so.f_floor_lid], row[so.f_box] = e_el, floor_lid, box_z
-        row[so.n_floor], row[so.n_lid] = n_floor, n_lid
+        row[so.n_floor], row[so.n_lid], row[so.n_side] = n_floor, n_lid, n_side
 
     @_kernel(parallel=True)
     def _advance(n_records, record_every, dims, skin, st, pm, so, po, sid, bounds, rec):

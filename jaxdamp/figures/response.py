@@ -306,8 +306,10 @@ def energy_figure(t, work, channels, residual, *, t0=None, t1=None, title="", pa
     a2.set_ylabel("granular loss [J]")
     a2.legend(fontsize=8, loc="upper left", ncol=2)
     a3.plot(t, res, "-", color="tab:purple", lw=0.9)
+    from jaxdamp.physics.model import CHANNELS, LOSSES  # the physics: on use
+
     turnover = np.abs(col.get("input", np.zeros_like(t))) + sum(
-        np.abs(v) for k, v in col.items() if k != "input")
+        np.abs(col[k]) for k in CHANNELS[LOSSES] if k in col)  # not the wall breakdown
     rel = float(np.max(np.abs(res)) / max(np.max(turnover), 1e-300))
     a3.set_ylabel("balance residual [J]")
     a3.set_xlabel("time t [s]")

@@ -176,6 +176,27 @@ def damaged_checkpoint(arrays: dict) -> str | None:
     return None
 
 
+def outdated_checkpoint(arrays: dict, path) -> str | None:
+    """The one-line refusal to continue a file whose checkpoint an older jaxdamp wrote (a
+    state field it did not have yet, or fewer work channels), or ``None``. Such a state
+    cannot go on bit-identically: the fields it lacks have no history to restore."""
+    import dataclasses
+
+    from jaxdamp.physics.model import N_CHANNELS, State  # the physics: on use
+
+    optional = {"y", "yd", "ydd"}  # before multi-DOF structures: one DOF, nothing to restore
+    missing = [f.name for f in dataclasses.fields(State)
+               if f.name not in optional and f"state/{f.name}" not in arrays]
+    work = arrays.get("state/work")
+    channels = np.shape(work)[-1] if work is not None else N_CHANNELS
+    if not missing and channels == N_CHANNELS:
+        return None
+    what = (f"its state lacks {', '.join(missing)}" if missing else
+            f"it has {channels} work channels, this version {N_CHANNELS}")
+    return (f"--resume: {path} was written by an older jaxdamp ({what}); it cannot be "
+            "continued — start it again with --overwrite")
+
+
 def damaged_message(path, why: str) -> str:
     """The one-line refusal to continue a damaged file."""
     return (f"--resume: {path} is damaged ({why}); it cannot be continued — start it again "

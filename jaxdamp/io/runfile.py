@@ -12,7 +12,7 @@ Schema of a run file (every dataset has a ``units`` attribute; see ``docs/output
                             every grain below numerics.settle_speed before settle_time ran out);
                             r0 (N,3) settled positions (box frame) [m]
     /series/<name> (T,)     sampled time series (see jaxdamp.physics.energy.RECORD_UNITS);
-    /series/work (T, 7)     cumulative work channels, attr 'channels'
+    /series/work (T, 10)    cumulative work channels, attr 'channels'
     /snapshots/t (S,)       s;  /snapshots/r (S,N,3) m;  /snapshots/q (S,N,4) unit quaternions
     /summary                attrs: steady-state scalars (units in attr 'units' JSON)
     /steady/<quantity>/...  steady-state estimates from the detected steady state

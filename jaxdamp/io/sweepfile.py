@@ -39,6 +39,7 @@ from jaxdamp.io.common import (
     damaged_checkpoint,
     damaged_message,
     damaged_series,
+    outdated_checkpoint,
     put,
     stamp,
     write_checkpoint,
@@ -193,6 +194,8 @@ class SweepFile:
                          if isinstance(o, h5py.Dataset) else None)
         if (why := damaged_checkpoint(arrays)) is not None:
             raise ConfigError(damaged_message(path, why))
+        if (refusal := outdated_checkpoint(arrays, path)) is not None:
+            raise ConfigError(refusal)
         return arrays, chunk, wall
 
     # -- while running --------------------------------------------------------------------

@@ -7,6 +7,9 @@ Mechanical energy of one system::
 
 and the balance ``W_input = E(t) - E(0) + W_primary_damping + Σ granular losses + W_drag``,
 whose residual is recorded. For S2 the input is the work of the moving walls on the grains.
+The losses are the channels :data:`~jaxdamp.physics.model.LOSSES`; the grain–wall losses are
+also reported by wall group (``pw_floor``, ``pw_lid``, ``pw_side``), a breakdown of
+``pw_normal + pw_friction`` outside the balance.
 """
 
 from __future__ import annotations
@@ -14,7 +17,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from jaxdamp.physics.contact import scalar_form
-from jaxdamp.physics.model import CH, N_CHANNELS, Model, Params, State
+from jaxdamp.physics.model import CH, LOSSES, N_CHANNELS, Model, Params, State
 from jaxdamp.physics.mounts import mount_of
 
 
@@ -39,7 +42,7 @@ def mechanical_energy(st: State, p: Params, model: Model):
 
 def balance_residual(st: State, p: Params, model: Model):
     """``E(t) - E(0) + losses - input`` [J]; zero for exact bookkeeping."""
-    losses = st.work[CH["primary_damping"] :].sum()
+    losses = st.work[LOSSES].sum()
     return mechanical_energy(st, p, model) - st.e_start + losses - st.work[CH["input"]]
 
 
@@ -47,6 +50,8 @@ def granular_loss(work):
     """Total granular dissipation [J] from the work channels ``(..., N_CHANNELS)``."""
     return work[..., CH["pp_normal"] : CH["pw_friction"] + 1].sum(axis=-1)
 
+
+_LOSS_FIRST, _LOSS_END = LOSSES.start, LOSSES.stop
 
 #: Time series recorded at every sample, with units.
 RECORD_UNITS = {
@@ -62,6 +67,7 @@ RECORD_UNITS = {
     "force_box": "N",
     "n_floor": "1",
     "n_lid": "1",
+    "n_side": "1",
     "z_cm_species": "m",
     "vz_cm_species": "m/s",
     "n_floor_species": "1",
@@ -103,6 +109,7 @@ def record(st: State, p: Params, model: Model, mean_forces) -> dict:
         force_box=mean_forces[1],
         n_floor=st.n_floor.astype(jnp.int32),
         n_lid=st.n_lid.astype(jnp.int32),
+        n_side=st.n_side.astype(jnp.int32),
         **_species_records(st, p, model),
         e_kinetic=kin,
         e_rotational=rot,
@@ -115,7 +122,7 @@ def record(st: State, p: Params, model: Model, mean_forces) -> dict:
 
 
 #: Integer-valued records (stored as int32).
-INT_RECORDS = ("n_floor", "n_lid", "n_floor_species", "n_lid_species")
+INT_RECORDS = ("n_floor", "n_lid", "n_side", "n_floor_species", "n_lid_species")
 
 
 def record_layout(model: Model) -> list[tuple[str, tuple]]:
@@ -129,7 +136,7 @@ def record_layout(model: Model) -> list[tuple[str, tuple]]:
 
 @scalar_form
 def record_row(out, t, z, zd, y, e_prim, r, v, w, mass, inertia, radius, gravity, Lz, ez,
-               e_elastic, e_start, f_floor_lid, f_box, n_floor, n_lid, work, bounds):
+               e_elastic, e_start, f_floor_lid, f_box, n_floor, n_lid, n_side, work, bounds):
     """Scalar form of :func:`record` (the native engine's samples): one sample written into
     the flat row ``out`` in the order of :func:`record_layout`. ``y``: the structure's other
     degrees of freedom, ``e_prim``: the primary's energy at ``t`` (:func:`primary_energy`),
@@ -163,7 +170,8 @@ def record_row(out, t, z, zd, y, e_prim, r, v, w, mass, inertia, radius, gravity
     k += y.shape[0]
     out[k], out[k + 1], out[k + 2], out[k + 3] = mz / m_tot, mv / m_tot, lo, hi
     out[k + 4], out[k + 5], out[k + 6], out[k + 7] = f_floor_lid, f_box, n_floor, n_lid
-    k += 8
+    out[k + 8] = n_side
+    k += 9
     for s in range(S):
         ms = 0.0
         msz = 0.0
@@ -188,7 +196,7 @@ def record_row(out, t, z, zd, y, e_prim, r, v, w, mass, inertia, radius, gravity
     losses = 0.0
     for c in range(work.shape[0]):
         out[k + c] = work[c]
-        if c >= 1:  # every channel after the input: primary damping, granular losses, drag
+        if _LOSS_FIRST <= c < _LOSS_END:  # primary damping, granular losses, drag (LOSSES)
             losses += work[c]
     k += work.shape[0]
     out[k] = kin + rot + grav + e_elastic + e_prim - e_start + losses - work[0]

@@ -46,8 +46,10 @@ class Forces(NamedTuple):
     floor_lid_z: jnp.ndarray  # on floor + lid only [N]
     n_floor: jnp.ndarray
     n_lid: jnp.ndarray
+    n_side: jnp.ndarray
     elastic_energy: jnp.ndarray  # [J]
     losses: jnp.ndarray  # (4,) pp_normal, pp_friction, pw_normal, pw_friction powers [W]
+    wall_groups: jnp.ndarray  # (3,) pw_floor, pw_lid, pw_side powers [W]
 
 
 def forces(r, v, w, z_box, zd_box, idx, p: Params, model: Model) -> Forces:
@@ -63,8 +65,10 @@ def forces(r, v, w, z_box, zd_box, idx, p: Params, model: Model) -> Forces:
         floor_lid_z=wf.floor_lid_z,
         n_floor=wf.n_floor,
         n_lid=wf.n_lid,
+        n_side=wf.n_side,
         elastic_energy=pf.elastic_energy + wf.elastic_energy,
         losses=jnp.stack([pf.normal_loss, pf.friction_loss, wf.normal_loss, wf.friction_loss]),
+        wall_groups=wf.group_loss,
     )
 
 
@@ -80,10 +84,11 @@ body_force_scalar = scalar_form(body_force)
 
 def _powers(fo: Forces, mount, z, zd, y, yd, t, v_pred, p: Params):
     """Channel powers [W] at one force evaluation (see :data:`jaxdamp.physics.model.CHANNELS`):
-    the mount's input and damping, the granular losses and the settling drag."""
+    the mount's input and damping, the granular losses, the settling drag and the grain–wall
+    losses by wall group."""
     p_in, p_c = mount.powers(fo.box_z, z, zd, y, yd, t, p)
     p_drag = p.drag * jnp.sum(p.mass * jnp.sum(v_pred * v_pred, axis=-1))
-    return jnp.concatenate([jnp.stack([p_in, p_c]), fo.losses, p_drag[None]])
+    return jnp.concatenate([jnp.stack([p_in, p_c]), fo.losses, p_drag[None], fo.wall_groups])
 
 
 def rotate(q, w, dt):
@@ -184,6 +189,7 @@ def _finish(state_fields: dict, fo: Forces, power, p: Params) -> State:
         f_box=fo.box_z,
         n_floor=fo.n_floor,
         n_lid=fo.n_lid,
+        n_side=fo.n_side,
     )
 
 

@@ -36,9 +36,19 @@ from jaxdamp.physics.structure import internal
 #:   primary_damping: viscous loss in the primary's damper C (S1)
 #:   pp_normal, pp_friction, pw_normal, pw_friction: granular losses, grain–grain / grain–wall
 #:   drag:        loss to the settling drag (zero while driving)
-CHANNELS = ("input", "primary_damping", "pp_normal", "pp_friction", "pw_normal", "pw_friction", "drag")
+#:   pw_floor, pw_lid, pw_side: the grain–wall losses (``pw_normal + pw_friction``) split by
+#:                the wall they occur at: the floor, the lid, the container's side walls. A
+#:                breakdown, not a term of the energy balance (:data:`LOSSES` are its terms).
+CHANNELS = ("input", "primary_damping", "pp_normal", "pp_friction", "pw_normal", "pw_friction",
+            "drag", "pw_floor", "pw_lid", "pw_side")
 N_CHANNELS = len(CHANNELS)
 CH = {name: i for i, name in enumerate(CHANNELS)}
+#: The loss channels of the energy balance ``W_input = ΔE + Σ losses``: ``primary_damping``
+#: to ``drag`` (every channel after ``input`` and before the wall breakdown).
+LOSSES = slice(CH["primary_damping"], CH["drag"] + 1)
+#: The wall groups every engine reports apart (contact counts ``n_floor``, ``n_lid``,
+#: ``n_side`` and the channels ``pw_floor``, ``pw_lid``, ``pw_side``).
+WALL_GROUPS = ("floor", "lid", "side")
 
 
 def pytree_dataclass(cls):
@@ -160,7 +170,8 @@ class State:
     ``e_elastic`` [J] elastic contact energy at ``t``; ``e_start`` [J] total mechanical energy
     when accounting started; ``f_floor_lid``, ``f_box`` [N] vertical force of the grains on
     floor + lid and on the whole box along ``e`` at ``t``; ``n_floor``, ``n_lid`` grains
-    touching them;
+    touching them, ``n_side`` contacts with the side walls (a grain in a corner of the box
+    touches two);
     ``z_max``, ``z_min`` [m] box extrema since ``t_window``; ``step`` steps taken.
     """
 
@@ -186,6 +197,7 @@ class State:
     f_box: jnp.ndarray
     n_floor: jnp.ndarray
     n_lid: jnp.ndarray
+    n_side: jnp.ndarray
     z_max: jnp.ndarray
     z_min: jnp.ndarray
 

@@ -33,8 +33,11 @@ class WallForces(NamedTuple):
       box_z: force of the grains on the whole box along the excitation axis ``e`` [N] (for a
         vertical axis their weight is carried here).
       floor_lid_z: vertical force of the grains on floor + lid only [N].
-      n_floor, n_lid: number of grains touching floor / lid.
-      elastic_energy: [J]; normal_loss, friction_loss: dissipated power [W] (all walls).
+      n_floor, n_lid: number of grains touching floor / lid; n_side: contacts with the side
+        walls.
+      elastic_energy: [J]; normal_loss, friction_loss: dissipated power [W] (all walls);
+      group_loss: ``(3,)`` the dissipated power (normal + friction) at the floor, the lid and
+        the side walls [W] (:data:`jaxdamp.physics.model.WALL_GROUPS`).
     """
 
     force: jnp.ndarray
@@ -43,9 +46,11 @@ class WallForces(NamedTuple):
     floor_lid_z: jnp.ndarray
     n_floor: jnp.ndarray
     n_lid: jnp.ndarray
+    n_side: jnp.ndarray
     elastic_energy: jnp.ndarray
     normal_loss: jnp.ndarray
     friction_loss: jnp.ndarray
+    group_loss: jnp.ndarray
 
 
 def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
@@ -86,6 +91,7 @@ def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
                       row[..., MU])
 
     f = Vec(*(x.astype(hi) for x in c.force))  # (N, 2 + W): force of wall on grain
+    loss = (c.normal_loss + c.friction_loss).astype(hi).sum(axis=0)  # (2 + W,) per wall
     return WallForces(
         force=f.sum(axis=1).stack(),
         torque=c.torque.sum(axis=1).stack().astype(hi),
@@ -93,9 +99,11 @@ def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
         floor_lid_z=-(f.z[:, FLOOR] + f.z[:, LID]).sum(),
         n_floor=c.touching[:, FLOOR].sum(),
         n_lid=c.touching[:, LID].sum(),
+        n_side=c.touching[:, LID + 1:].sum(),
         elastic_energy=c.elastic_energy.astype(hi).sum(),
         normal_loss=c.normal_loss.astype(hi).sum(),
         friction_loss=c.friction_loss.astype(hi).sum(),
+        group_loss=jnp.stack([loss[FLOOR], loss[LID], loss[LID + 1:].sum()]),
     )
 
 

@@ -32,6 +32,7 @@ from jaxdamp.io.common import (
     damaged_message,
     damaged_series,
     ensure_space,
+    outdated_checkpoint,
     stop_file,
 )
 from jaxdamp.physics.containers import container
@@ -239,6 +240,9 @@ def run(
         if why is not None:
             rf.close()
             raise ConfigError(damaged_message(out, why))
+        if (refusal := outdated_checkpoint(arrays, out)) is not None:
+            rf.close()
+            raise ConfigError(refusal)
         engine = dict(engine=choice.engine, multiplier=config.numerics.capacity_multiplier)
         batch = driver.restore(model, pb, arrays, **engine)
         rf.truncate(int(attrs["n_records"]), int(attrs["n_snapshots"]))

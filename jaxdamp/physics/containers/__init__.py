@@ -22,10 +22,11 @@ everything about it side by side:
   ``describe`` (messages), ``outline`` (figures and export), and the configuration keys of
   its lid height and of its base (the settled-bed cache and the design variable ``base``).
 
-The wall groups every engine reports are the floor and the lid (``State.f_floor_lid``,
-``n_floor``, ``n_lid``) and the sides (the rest); the work channels are
-:data:`jaxdamp.physics.model.CHANNELS`. Adding a container is a module here and its entry in
-:data:`CONTAINERS` and in the scalar dispatch below.
+The wall groups every engine reports apart are the floor, the lid and the sides
+(:data:`jaxdamp.physics.model.WALL_GROUPS`: ``State.n_floor``, ``n_lid``, ``n_side`` and the
+work channels ``pw_floor``, ``pw_lid``, ``pw_side`` of :data:`jaxdamp.physics.model.CHANNELS`;
+``State.f_floor_lid`` is the force on floor and lid). Adding a container is a module here and
+its entry in :data:`CONTAINERS` and in the scalar dispatch below.
 """
 
 from __future__ import annotations
@@ -100,7 +101,8 @@ def side_contacts_scalar(shape, law, x, y, section, Ri, wk, i, vx, vy, vz, sx, s
     (:func:`side_curvature_scalar`), velocity ``v`` relative to the walls, spin ``R ω``) with
     the side walls of container number ``shape`` (``section``: ``Params.section`` as the tuple
     of :func:`section_scalar`), added to
-    ``acc = (fx, fy, fz, tx, ty, tz, elastic energy, normal loss, friction loss, box_z)``."""
+    ``acc = (fx, fy, fz, tx, ty, tz, elastic energy, normal loss, friction loss, box_z,
+    contacts)``."""
     if shape == _CYLINDER:
         return cylinder.side_contacts_scalar(law, x, y, section, Ri, wk, i, vx, vy, vz, sx, sy,
                                              sz, ex, ey, ez, acc)

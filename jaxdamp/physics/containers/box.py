@@ -57,16 +57,16 @@ def side_contacts_scalar(law, x, y, section, Ri, wk, i, vx, vy, vz, sx, sy, sz, 
         return acc
     k, g, gs, mu = wk[i, 0], wk[i, 1], wk[i, 2], wk[i, 3]
     if x < Ri:
-        acc, _ = add_wall_scalar(law, Ri - x, 1.0, 0.0, 0.0, vx, vy, vz, sx, sy, sz, Ri, k, g,
+        acc, _, _ = add_wall_scalar(law, Ri - x, 1.0, 0.0, 0.0, vx, vy, vz, sx, sy, sz, Ri, k, g,
                                  gs, mu, ex, ey, ez, acc)
     if section[0] - x < Ri:
-        acc, _ = add_wall_scalar(law, Ri - (section[0] - x), -1.0, 0.0, 0.0, vx, vy, vz, sx, sy,
+        acc, _, _ = add_wall_scalar(law, Ri - (section[0] - x), -1.0, 0.0, 0.0, vx, vy, vz, sx, sy,
                               sz, Ri, k, g, gs, mu, ex, ey, ez, acc)
     if y < Ri:
-        acc, _ = add_wall_scalar(law, Ri - y, 0.0, 1.0, 0.0, vx, vy, vz, sx, sy, sz, Ri, k, g,
+        acc, _, _ = add_wall_scalar(law, Ri - y, 0.0, 1.0, 0.0, vx, vy, vz, sx, sy, sz, Ri, k, g,
                                  gs, mu, ex, ey, ez, acc)
     if section[1] - y < Ri:
-        acc, _ = add_wall_scalar(law, Ri - (section[1] - y), 0.0, -1.0, 0.0, vx, vy, vz, sx, sy,
+        acc, _, _ = add_wall_scalar(law, Ri - (section[1] - y), 0.0, -1.0, 0.0, vx, vy, vz, sx, sy,
                               sz, Ri, k, g, gs, mu, ex, ey, ez, acc)
     return acc
 

@@ -81,7 +81,7 @@ def side_contacts_scalar(law, x, y, section, Ri, wk, i, vx, vy, vz, sx, sy, sz, 
     rho2 = dx * dx + dy * dy
     if rho2 > (Rc - Ri) * (Rc - Ri):
         d = math.sqrt(rho2)
-        acc, _ = add_wall_scalar(law, Ri - (Rc - d), -dx / d, -dy / d, 0.0, vx, vy, vz, sx, sy,
+        acc, _, _ = add_wall_scalar(law, Ri - (Rc - d), -dx / d, -dy / d, 0.0, vx, vy, vz, sx, sy,
                               sz, Ri, wk[i, 0], wk[i, 1], wk[i, 2], wk[i, 3], ex, ey, ez, acc)
     return acc
 
