@@ -400,18 +400,13 @@ def validate(config: Config) -> Config:
     _container_shape(config)
     from jaxdamp.cases.filling import resolve
 
-    config = resolve(config)  # counts from mass ratios and fill fractions
     vessel = container(config)
     lid = vessel.height(config)
-    volume = 0.0
-    for i, sp in enumerate(config.grains):
+    for i, sp in enumerate(config.grains):  # one grain fits, before a fill is reckoned
         name = f"grains.{i}"
-        if not _integer(sp.count) or sp.count < 0:
-            raise ConfigError(f"{name}.count = {sp.count!r}: must be a non-negative integer")
         _positive(sp.radius, f"{name}.radius")
         if not 0.0 <= sp.radius_spread < 1.0:
             raise ConfigError(f"{name}.radius_spread = {sp.radius_spread}: must be in [0, 1)")
-        _material(sp.material, f"{name}.material", grain=True)
         r_max = sp.radius * (1.0 + sp.radius_spread)
         grain = (f"{name}.radius = {sp.radius} (largest {r_max:.4g} m): a grain of diameter "
                  f"{2 * r_max:.4g} m")
@@ -420,6 +415,13 @@ def validate(config: Config) -> Config:
             why = f"{grain} does not fit {vessel.lid_key} = {lid} m"
         if why is not None:
             raise ConfigError(why)
+    config = resolve(config)  # counts from mass ratios and fill fractions
+    volume = 0.0
+    for i, sp in enumerate(config.grains):
+        name = f"grains.{i}"
+        if not _integer(sp.count) or sp.count < 0:
+            raise ConfigError(f"{name}.count = {sp.count!r}: must be a non-negative integer")
+        _material(sp.material, f"{name}.material", grain=True)
         volume += sp.count * 4.0 / 3.0 * math.pi * sp.radius**3
     if volume > 0:
         height = volume / (_DENSEST * vessel.base_area(config))

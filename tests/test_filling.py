@@ -123,6 +123,19 @@ def test_impossible_or_ambiguous_fills_are_refused_by_name_and_limit(change, wor
     assert words in str(err.value)
 
 
+def test_a_cavity_narrower_than_a_grain_is_named_before_the_fill_is_reckoned():
+    """A cylinder narrower than one grain is the grain's misfit, not an overfull fill (the
+    random-packing relation would be extrapolated far outside its range there)."""
+    cyl = validate(presets.get("sanchez2012-cylinder"))
+    for radius in (0.002, 0.003):
+        with pytest.raises(ConfigError) as err:
+            validate(apply_overrides(presets.get("sanchez2012-cylinder"),
+                                     {"container.radius": radius}))
+        assert str(err.value) == ("grains.0.radius = 0.003 (largest 0.003 m): a grain of "
+                                  f"diameter 0.006 m does not fit container.radius = {radius} m")
+    assert cyl.grains[0].count == 250
+
+
 def test_the_largest_mass_ratio_named_fits_and_a_little_more_does_not():
     with pytest.raises(ConfigError) as err:
         validate(apply_overrides(THESIS, {"grains.0.mass_ratio": 5.0}))
