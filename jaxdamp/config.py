@@ -16,6 +16,8 @@ Two systems (docs/physics.md §1):
 Contact damping is given per material either directly (``gamma_n``, ``gamma_s``; thesis) or as a
 coefficient of restitution ``restitution`` at impact speed ``v_ref`` for a like-pair collision
 (paper), which :mod:`jaxdamp.physics.restitution` turns into the dissipative constant ``A``.
+A material may also be named from the table of :mod:`jaxdamp.materials` (``material = "steel"``,
+``wall = "glass"``), resolved to its full :class:`Material` when the configuration is built.
 """
 
 from __future__ import annotations
@@ -26,6 +28,8 @@ import math
 import tomllib
 from dataclasses import dataclass, field, fields, replace
 from typing import Any
+
+from jaxdamp import materials
 
 
 class ConfigError(ValueError):
@@ -89,8 +93,14 @@ class Species:
         [[grains]]
         mass_ratio = 0.1          # 10 % of the primary's mass
         radius = 0.003
-        [grains.material]
-        ...
+        material = "steel"        # from the material table (:mod:`jaxdamp.materials`), or
+        # [grains.material]       # a whole table, or name = "steel" with fields replaced
+        # name = "steel"
+        # mu = 0.1
+
+    A material given by name (``material = "glass"``; ``--set grains.0.material=glass``) is
+    resolved to the table's full :class:`Material` when the configuration is built, so the
+    configuration (and every output file's copy of it) holds the numbers, not the name.
     """
 
     count: int | None = None
@@ -113,7 +123,8 @@ class Box:
     Attributes:
       Lx, Ly: base side lengths [m].
       Lz: inner height [m] (floor to lid).
-      wall: wall :class:`Material`; ``None`` means the material of the first species.
+      wall: wall :class:`Material`; ``None`` means the material of the first species; a
+        name of the material table (``wall = "steel"``) is resolved as for grains.
     """
 
     Lx: float
@@ -133,7 +144,8 @@ class Container:
       size: the container's own dimensions [m] by name, in TOML keys of the table beside
         ``shape`` (the cylinder: ``radius``); each container names its own
         (``Container.fields``), stored here as sorted ``(name, value)`` pairs.
-      wall: wall :class:`Material`; ``None`` means the material of the first species.
+      wall: wall :class:`Material`; ``None`` means the material of the first species; a
+        name of the material table (``wall = "steel"``) is resolved as for grains.
 
     Example (TOML)::
 
@@ -466,6 +478,8 @@ def _build(cls, data: Any, path: str):
         return None
     if dataclasses.is_dataclass(data):
         return data
+    if cls is Material:
+        data = _material_table(data, path)
     if not isinstance(data, dict):
         raise ConfigError(f"{path or 'config'}: expected a table, got {data!r}")
     if cls is Container:
@@ -483,6 +497,40 @@ def _build(cls, data: Any, path: str):
             _refuse_bool(known[name], value, sub)  # (a table's own message says "a table")
         kwargs[name] = _convert(cls, name, value, sub)
     return cls(**kwargs)
+
+
+def _material_table(data: Any, path: str) -> Any:
+    """A material given by name as :class:`Material` fields: ``"steel"`` is the table's entry
+    (:mod:`jaxdamp.materials`), ``{"name": "steel", "mu": 0.1}`` the entry with the other keys
+    replacing its fields; any other table is returned as it is. An unknown name, or a value
+    that is neither a name nor a table, raises :class:`ConfigError` naming the parameter and
+    listing the known names."""
+    if isinstance(data, str):
+        return _named_material(data, path)
+    if isinstance(data, dict) and "name" in data:
+        fields_ = _named_material(data["name"], f"{path}.name")
+        fields_.update({k: v for k, v in data.items() if k != "name"})
+        return fields_
+    if isinstance(data, dict):
+        return data
+    raise ConfigError(f"{path}: expected a material name ({', '.join(materials.names())}) "
+                      f"or a table of its properties, got {data!r}")
+
+
+def named_material(name: str, path: str = "material") -> Material:
+    """The :class:`Material` the table of :mod:`jaxdamp.materials` gives for ``name``; an
+    unknown name raises :class:`ConfigError` naming ``path`` and listing the known names."""
+    return Material(**_named_material(name, path))
+
+
+def _named_material(name: Any, path: str) -> dict:
+    try:
+        return materials.lookup(name).fields()
+    except (KeyError, AttributeError, TypeError):
+        raise ConfigError(f"{path} = {name!r}: not a material of the table; known materials: "
+                          f"{', '.join(materials.names())} (jaxdamp materials lists them, "
+                          "docs/materials.md gives their sources), or give the properties as "
+                          "a table") from None
 
 
 def _container_table(data: dict, path: str) -> dict:
@@ -540,8 +588,8 @@ def missing_keys(data: Any, cls=None, path: str = "") -> list[str]:
     default, in nested tables too (``["system", "box.Lz", "grains.0.material.E"]``); what is
     not a table here is left to :func:`_build`'s messages."""
     cls = Config if cls is None else cls
-    if not isinstance(data, dict):
-        return []
+    if not isinstance(data, dict) or cls is Material and "name" in data:
+        return []  # (a named material: the table gives the rest)
     out = [f"{path}.{n}" if path else n for n in _required(cls) if data.get(n) is None]
     if cls is Config and data.get("box") is None and data.get("container") is None:
         out.insert(min(3, len(out)), "box")  # the container: [box] or [container]
@@ -562,7 +610,7 @@ _TOP_KEYS = {
     "system": 'system ("primary", "driven" or "impact")',
     "frequency": "frequency [Hz]",
     "grains": "the grains ([[grains]] tables: count (or mass_ratio, or fill_fraction), radius, "
-              "[grains.material])",
+              "material = \"steel\" or a [grains.material] table)",
     "box": "the box ([box] table: Lx, Ly, Lz [m]; or a [container] table with its shape)",
 }
 
@@ -682,9 +730,13 @@ def _one_container(data: dict, given) -> dict:
 
 
 def _deep_merge(base: dict, top: dict) -> dict:
+    """``top`` over ``base``, tables merged key by key; a material table that names an entry of
+    the material table (``[box.wall]`` with ``name = "glass"``) replaces the base's material
+    whole, its other keys replacing the entry's fields (not the base's)."""
     out = dict(base)
     for key, value in top.items():
-        if isinstance(value, dict) and isinstance(out.get(key), dict):
+        if isinstance(value, dict) and isinstance(out.get(key), dict) and not (
+                key in _MATERIAL_KEYS and "name" in value):
             out[key] = _deep_merge(out[key], value)
         else:
             out[key] = value
@@ -721,7 +773,9 @@ def apply_overrides(config: Config, overrides: list[str] | dict[str, Any]) -> Co
     ``overrides`` is a list of ``"key=value"`` strings (CLI ``--set``) or a dict of key -> value.
     Setting a missing optional section (``drive.amplitude=0.02`` on an S1 config) creates it;
     setting a ``container`` table on a box configuration (``container.shape=cylinder``,
-    ``container.radius=0.02``, ``container.Lz=0.12``) replaces the box, and back.
+    ``container.radius=0.02``, ``container.Lz=0.12``) replaces the box, and back. A material
+    is set by name too (``grains.0.material=glass``, ``box.wall=steel``; a later
+    ``grains.0.material.mu=0.1`` then replaces one of the named material's fields).
     Raises :class:`ConfigError` naming the key for malformed items or unknown keys.
     """
     if isinstance(overrides, dict):
@@ -781,6 +835,9 @@ def _set_path(data: dict, key: str, value: Any, created: set) -> None:
         if node[part] is None:
             node[part] = {}
             created.add(id(node[part]))
+        elif part in _MATERIAL_KEYS and isinstance(node[part], str):  # a named material:
+            node[part] = {"name": node[part]}  # its fields may be set after the name
+            created.add(id(node[part]))
         node = node[part]
     last = parts[-1]
     if isinstance(node, list):
@@ -791,6 +848,10 @@ def _set_path(data: dict, key: str, value: Any, created: set) -> None:
         node[last] = value
     else:
         raise ConfigError(f"--set {key}: {'.'.join(parts[:-1])!r} is not a table")
+
+
+#: The keys whose value is a :class:`Material` (a table, or a name of the material table).
+_MATERIAL_KEYS = ("material", "wall")
 
 
 def _index(part: str, node: list, where: str) -> int:

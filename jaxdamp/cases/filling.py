@@ -188,5 +188,5 @@ def resolve(config: Config) -> Config:
             f"grains: the fill does not fit the {words}: at random packing (φ = "
             f"{packing_fraction(config, sp):.3f} for grains of diameter "
             f"{2 * sp.radius:.4g} m in a hydraulic diameter of {D:.4g} m, Dixon 1988) the beds "
-            f"would take {total:.3g} of its volume; the most that fits is {limit}")
+            f"would take {total:.3g} times its volume; the most that fits is {limit}")
     return dataclasses.replace(config, grains=tuple(grains))

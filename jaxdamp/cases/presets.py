@@ -24,11 +24,12 @@ from jaxdamp.config import (
     Species,
     Structure,
 )
+from jaxdamp.materials import THESIS_DENSITY, THESIS_E, THESIS_GAMMA_S, THESIS_NU
 
 #: Steel of the thesis (table 3.1 / §3.2): E = 2.03e11 Pa, ν = 0.28, ρ = 8030, μ = 0.3.
 SANCHEZ_STEEL = Material(
-    E=2.03e11, nu=0.28, density=8030.0, mu=0.3, gamma_n=3660.0, gamma_s=10980.0
-)
+    E=THESIS_E, nu=THESIS_NU, density=THESIS_DENSITY, mu=0.3, gamma_n=3660.0,
+    gamma_s=THESIS_GAMMA_S)
 
 
 def sanchez2012_optimal() -> Config:
