@@ -19,6 +19,9 @@ from jaxdamp.studies.sweep import sweep
 
 RUN = ["grains.0.count=30", "numerics.duration=0.1", "numerics.chunk=0.02",
        "numerics.settle_time=0.1"]
+#: the same grains in a cylinder of the box's base area (the README's command line)
+RC = 0.0207
+CYLINDER = ["container.shape=cylinder", f"container.radius={RC}", "container.Lz=0.1225"]
 SWEEP = ["grains.0.count=20", "numerics.duration=0.04", "numerics.chunk=0.02",
          "numerics.settle_time=0.05"]
 
@@ -28,6 +31,14 @@ def run_file(tmp_path_factory):
     path = tmp_path_factory.mktemp("vis") / "run.h5"
     run(apply_overrides(presets.get("sanchez2012-optimal"), RUN), out=str(path), progress=False,
         echo=None)
+    return path
+
+
+@pytest.fixture(scope="module")
+def cylinder_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("vis") / "cylinder.h5"
+    run(apply_overrides(presets.get("sanchez2012-optimal"), RUN + CYLINDER), out=str(path),
+        progress=False, echo=None)
     return path
 
 
@@ -245,6 +256,14 @@ def _read_vtk(path):
             cells = take(size, int).reshape(n, 2)
             assert (cells[:, 0] == 1).all()
             out["vertices"] = cells[:, 1]
+        elif w == "LINES":
+            n, size = int(words[i + 1]), int(words[i + 2])
+            i += 3
+            flat, out["lines"] = take(size, int), []
+            for _ in range(n):
+                out["lines"].append(flat[1:1 + flat[0]])
+                flat = flat[1 + flat[0]:]
+            assert len(flat) == 0
         elif w == "POINT_DATA":
             section = "point"
             i += 2
@@ -259,13 +278,18 @@ def _read_vtk(path):
 def test_export_vtk_frames_and_pvd(run_file, tmp_path, capsys):
     pvd = tmp_path / "vtk" / "grains.pvd"
     assert cli.main(["export", str(run_file), "--format", "vtk", "--out", str(pvd)]) == 0
+    assert "indexing 5 frames of the grains and of the container" in capsys.readouterr().out
     with h5py.File(run_file) as h:
         ts, r, q = h["snapshots/t"][()], h["snapshots/r"][()], h["snapshots/q"][()]
         radius, species = h["grains/radius"][()], h["grains/species"][()]
+        zb = np.interp(ts, h["series/t"][()], h["series/z_box"][()])
+        box = json.loads(h.attrs["config"])["box"]
     N = r.shape[1]
     entries = ET.parse(pvd).getroot().find("Collection").findall("DataSet")
-    assert len(entries) == len(ts)
-    for k, e in enumerate(entries):
+    grains = [e for e in entries if e.get("part") == "0"]
+    walls = [e for e in entries if e.get("part") == "1"]
+    assert len(grains) == len(walls) == len(ts) and len(entries) == 2 * len(ts)
+    for k, e in enumerate(grains):
         assert float(e.get("timestep")) == pytest.approx(ts[k], abs=1e-9)
         d = _read_vtk(pvd.parent / e.get("file"))
         assert d["points"].shape == (N, 3)
@@ -275,10 +299,25 @@ def test_export_vtk_frames_and_pvd(run_file, tmp_path, capsys):
         np.testing.assert_array_equal(d["point"]["species"], species)
         np.testing.assert_allclose(d["point"]["orientation"], q[k], atol=1e-9)
         assert float(d["field"]["TIME"]) == pytest.approx(ts[k], abs=1e-9)
-    series = json.loads((tmp_path / "vtk" / "grains.vtk.series").read_text())
-    assert [f["name"] for f in series["files"]] == [e.get("file") for e in entries]
+    for k, e in enumerate(walls):  # the box's 12 edges, its floor at z_box
+        assert float(e.get("timestep")) == pytest.approx(ts[k], abs=1e-9)
+        d = _read_vtk(pvd.parent / e.get("file"))
+        assert len(d["lines"]) == 12 and all(len(c) == 2 for c in d["lines"])
+        ends = np.array([d["points"][c] for c in d["lines"]])  # (12, 2, 3)
+        lengths = np.sort(np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1))
+        np.testing.assert_allclose(lengths, [box["Lx"]] * 4 + [box["Ly"]] * 4 + [box["Lz"]] * 4,
+                                   atol=1e-11)  # 12 digits written
+        lo, hi = d["points"].min(0), d["points"].max(0)
+        np.testing.assert_allclose(lo, [0, 0, zb[k]], atol=1e-11)
+        np.testing.assert_allclose(hi, [box["Lx"], box["Ly"], zb[k] + box["Lz"]], atol=1e-11)
+        assert float(d["field"]["z_box"]) == pytest.approx(zb[k], abs=1e-11)
+    for name, part in (("grains", grains), ("grains_container", walls)):
+        series = json.loads((tmp_path / "vtk" / f"{name}.vtk.series").read_text())
+        assert [f["name"] for f in series["files"]] == [e.get("file") for e in part]
+        np.testing.assert_allclose([f["time"] for f in series["files"]], ts, atol=1e-9)
     assert sorted(os.listdir(pvd.parent)) == sorted(
-        [e.get("file") for e in entries] + ["grains.pvd", "grains.vtk.series"])
+        [e.get("file") for e in entries]
+        + ["grains.pvd", "grains.vtk.series", "grains_container.vtk.series"])
 
 
 def test_gif_has_one_frame_per_exported_snapshot(run_file, tmp_path, capsys):
@@ -313,7 +352,8 @@ def test_wrong_file_kinds_and_missing_parts_are_named(run_file, sweep_file, tmp_
         assert str(sweep_file) in err and "needs a run file" in err and "sweep file" in err
     err = _error(capsys, ["export", str(sweep_file), "--format", "xyz"])
     assert str(sweep_file) in err and "export --format xyz needs a run file" in err
-    err = _error(capsys, ["plot", str(run_file), "--kind", "snapshot", "--frame", "9", "--out", png])
+    err = _error(capsys, ["plot", str(run_file), "--kind", "snapshot", "--frame", "9", "--out",
+                          png])
     assert "frame 9 out of range" in err and "holds 5 snapshots" in err
     err = _error(capsys, ["plot", str(run_file), "--kind", "band", "--t0", "5", "--t1", "6",
                           "--out", png])
@@ -334,3 +374,196 @@ def test_wrong_file_kinds_and_missing_parts_are_named(run_file, sweep_file, tmp_
     err = _error(capsys, ["plot", str(bare), "--kind", "band", "--out", png])
     assert "/series/force_box" in err
     assert not os.path.exists(png)
+
+
+# -- the view from above, side and top side by side; a cylinder's export --------------------
+def _circles(ax):
+    """Centres (n, 2) and radii (n,) [mm] of the grain circles a plain panel drew."""
+    from matplotlib.collections import PatchCollection
+
+    pc = next(c for c in ax.collections if isinstance(c, PatchCollection))
+    ext = [p.get_extents() for p in pc.get_paths()]
+    return (np.array([[(e.x0 + e.x1) / 2, (e.y0 + e.y1) / 2] for e in ext]),
+            np.array([e.width / 2 for e in ext]), pc)
+
+
+def _inside_outline(centres, radii, segments, sagitta):
+    """Whether every circle lies inside the convex polygon the ``segments`` (m, 2, 2) draw, up
+    to ``sagitta`` (how far a polygon drawn through points of a curved wall lies inside it)
+    plus 1 µm [mm]: the centre inside, at least its radius from every edge."""
+    from matplotlib.path import Path
+    from scipy.spatial import ConvexHull
+
+    pts = segments.reshape(-1, 2)
+    hull = Path(pts[ConvexHull(pts).vertices])
+    a, b = segments[:, 0][None], segments[:, 1][None]  # (1, m, 2)
+    p = centres[:, None]  # (n, 1, 2)
+    u = np.clip(np.sum((p - a) * (b - a), -1) / np.sum((b - a) ** 2, -1), 0, 1)
+    dist = np.linalg.norm(p - (a + u[..., None] * (b - a)), axis=-1).min(1)
+    return hull.contains_points(centres).all() and (dist >= radii - sagitta - 1e-3).all()
+
+
+@pytest.mark.parametrize("bed", ["box", "cylinder"])
+def test_top_view_draws_the_grains_inside_the_section(bed, run_file, cylinder_file, tmp_path,
+                                                     capsys):
+    """``jaxdamp plot --kind snapshot --view top`` writes the PNG; the panel's circles are the
+    grains (x, y in mm, their radii) and lie inside the drawn section: the box's rectangle, or
+    the cylinder's circle of radius R_c around (R_c, R_c) (72 chords: inside it by its sagitta
+    R_c (1 − cos 2.5°) = 0.020 mm at most)."""
+    src = run_file if bed == "box" else cylinder_file
+    out = tmp_path / "top.png"
+    assert cli.main(["plot", str(src), "--kind", "snapshot", "--view", "top", "--out",
+                     str(out)]) == 0
+    img = mpimg.imread(out)
+    assert img.shape[:2] == _png_size("snapshot") and out.stat().st_size > 20_000
+    with h5py.File(src) as h:
+        r, radius = h["snapshots/r"][-1], h["grains/radius"][()]
+        cfg = json.loads(h.attrs["config"])
+    fig = figures.snapshot_from_file(src, view="top")
+    _assert_labelled(fig)
+    ax = fig.axes[0]
+    assert ax.get_xlabel() == "x [mm]" and ax.get_ylabel().startswith("y [mm]")
+    centres, radii, _ = _circles(ax)
+    order = np.lexsort(r[:, :2].T[::-1])
+    drawn = np.lexsort(centres.T[::-1])
+    np.testing.assert_allclose(centres[drawn], r[order, :2] * 1e3, atol=1e-9)
+    np.testing.assert_allclose(radii[drawn], radius[order] * 1e3, rtol=1e-9)
+    segments = np.concatenate([np.stack([np.column_stack(line.get_data())[:-1],
+                                         np.column_stack(line.get_data())[1:]], 1)
+                               for line in ax.get_lines()])
+    pts = segments.reshape(-1, 2)
+    if bed == "box":
+        Lx, Ly = cfg["box"]["Lx"] * 1e3, cfg["box"]["Ly"] * 1e3
+        assert len(ax.get_lines()) == 4  # the floor's 4 edges; the lid's and the posts left out
+        np.testing.assert_allclose([pts.min(0), pts.max(0)], [[0, 0], [Lx, Ly]], atol=1e-12)
+        sagitta = 0.0
+    else:
+        R = RC * 1e3
+        assert len(ax.get_lines()) == 1  # the ring, once
+        np.testing.assert_allclose(np.hypot(*(pts - R).T), R, rtol=1e-12)
+        sagitta = R * (1 - np.cos(np.pi / 72))
+        assert 0.019 < sagitta < 0.02
+    assert _inside_outline(centres, radii, segments, sagitta)
+    # the check can fail: the grains moved by a radius towards a wall are not inside
+    assert not _inside_outline(centres + [radii.max(), 0.0], radii, segments, sagitta)
+
+
+def test_side_and_top_views_side_by_side(cylinder_file, tmp_path):
+    """``view="side,top"``: two panels of the same grains, the side view (x, z − z_box) and the
+    top view (x, y), same colours, one colour bar when coloured by height; three views make the
+    figure half as wide again; unknown views and views on the wrong axes are refused."""
+    from jaxdamp.io.export import OutputFileError
+
+    with h5py.File(cylinder_file) as h:
+        r, radius, species = h["snapshots/r"][-1], h["grains/radius"][()], h["grains/species"][()]
+        zb = float(np.interp(h["snapshots/t"][-1], h["series/t"][()], h["series/z_box"][()]))
+        cfg = from_json(h.attrs["config"])
+    fig = figures.snapshot_figure(r, radius, species, cfg, zb, view="side,top", color="height")
+    _assert_labelled(fig)
+    side, top, bar = fig.axes
+    assert bar._colorbar is not None
+    assert side.get_title() == "side view (x–z)" and top.get_title() == "top view (x–y)"
+    for ax, (i, j), dz in ((side, (0, 2), zb), (top, (0, 1), 0.0)):
+        centres, radii, pc = _circles(ax)
+        assert len(radii) == len(radius)
+        want = (r[:, [i, j]] - [0.0, dz]) * 1e3
+        np.testing.assert_allclose(np.sort(centres, 0), np.sort(want, 0), atol=1e-9)
+    faces = {ax: _circles(ax)[2].get_facecolors()[:, :3] for ax in (side, top)}
+    np.testing.assert_allclose(np.sort(faces[side], 0), np.sort(faces[top], 0), atol=1e-12)
+    out = figures.save(fig, tmp_path / "st.png")
+    assert mpimg.imread(out).shape[:2] == _png_size("snapshot")
+    fig3 = figures.snapshot_figure(r, radius, species, cfg, zb, view=("3d", "side", "top"))
+    assert [ax.name for ax in fig3.axes] == ["3d", "rectilinear", "rectilinear"]
+    w, h = figures.FIGSIZE["snapshot"]
+    np.testing.assert_allclose(fig3.get_size_inches(), [1.5 * w, h])
+    for bad in ("front", "side,side", ""):
+        with pytest.raises(OutputFileError, match="choose 3d, side or top"):
+            figures.snapshot_figure(r, radius, species, cfg, zb, view=bad)
+    ax = figures.figure((3, 3)).subplots()
+    with pytest.raises(OutputFileError, match="needs a projection='3d' axes"):
+        figures.draw_snapshot(ax, r, radius, species, cfg, zb, view="3d")
+
+
+def test_plot_view_option_is_checked(run_file, tmp_path, capsys):
+    png = tmp_path / "v.png"
+    err = _error(capsys, ["plot", str(run_file), "--kind", "snapshot", "--view", "front",
+                          "--out", str(png)])
+    assert "view 'front': choose 3d, side or top" in err
+    err = _error(capsys, ["plot", str(run_file), "--kind", "band", "--view", "top", "--out",
+                          str(png)])
+    assert "--view applies to --kind snapshot only, not band" in err
+    assert not png.exists()
+    assert cli.main(["plot", str(run_file), "--kind", "snapshot", "--view", "side,top",
+                     "--color", "height", "--out", str(png)]) == 0
+    assert mpimg.imread(png).shape[:2] == _png_size("snapshot")
+
+
+def test_export_of_a_cylinder_run(cylinder_file, tmp_path, capsys):
+    """XYZ: the cell is the cylinder's bounding box, 2 R_c × 2 R_c × Lz from (0, 0, z_box),
+    and every grain lies inside the cylinder; VTK: the container's frames hold its two rings
+    (radius R_c around the axis at (R_c, R_c), at z_box and z_box + Lz) and four posts."""
+    xyz, pvd = tmp_path / "c.xyz", tmp_path / "vtk" / "c.pvd"
+    assert cli.main(["export", str(cylinder_file), "--format", "xyz", "--out", str(xyz)]) == 0
+    assert cli.main(["export", str(cylinder_file), "--format", "vtk", "--out", str(pvd)]) == 0
+    with h5py.File(cylinder_file) as h:
+        ts, r, radius = h["snapshots/t"][()], h["snapshots/r"][()], h["grains/radius"][()]
+        zb = np.interp(ts, h["series/t"][()], h["series/z_box"][()])
+        Lz = json.loads(h.attrs["config"])["container"]["Lz"]
+    frames = _read_xyz(xyz)
+    assert len(frames) == len(ts)
+    for k, (head, _, cols) in enumerate(frames):
+        lat = np.array(_header_value(head, "Lattice").split(), float).reshape(3, 3)
+        np.testing.assert_allclose(lat, np.diag([2 * RC, 2 * RC, Lz]), atol=1e-12)
+        origin = np.array(_header_value(head, "Origin").split(), float)
+        np.testing.assert_allclose(origin, [0, 0, zb[k]], atol=1e-11)
+        assert _header_value(head, "container") == "cylinder"
+        np.testing.assert_allclose(cols[:, :3], r[k], atol=1e-9, rtol=0)
+        np.testing.assert_allclose(cols[:, 3], radius, atol=1e-12)
+        rho = np.hypot(cols[:, 0] - RC, cols[:, 1] - RC)
+        assert (rho + cols[:, 3] <= RC + 1e-9).all()  # inside the wall (no overlap here)
+        assert (cols[:, 2] - cols[:, 3] >= origin[2] - 1e-9).all()
+        assert (cols[:, 2] + cols[:, 3] <= origin[2] + Lz).all()
+    walls = [e for e in ET.parse(pvd).getroot().find("Collection").findall("DataSet")
+             if e.get("part") == "1"]
+    assert len(walls) == len(ts)
+    for k, e in enumerate(walls):
+        d = _read_vtk(pvd.parent / e.get("file"))
+        rings = [c for c in d["lines"] if len(c) > 2]
+        posts = [c for c in d["lines"] if len(c) == 2]
+        assert len(rings) == 2 and len(posts) == 4
+        for c, z in zip(rings, (zb[k], zb[k] + Lz)):
+            p = d["points"][c]
+            np.testing.assert_allclose(np.hypot(p[:, 0] - RC, p[:, 1] - RC), RC, atol=1e-11)
+            np.testing.assert_allclose(p[:, 2], z, atol=1e-11)
+            np.testing.assert_allclose(p[0], p[-1], atol=1e-11)  # closed
+        for c in posts:
+            p = d["points"][c]
+            np.testing.assert_allclose(np.hypot(p[:, 0] - RC, p[:, 1] - RC), RC, atol=1e-11)
+            np.testing.assert_allclose(p[:, 2], [zb[k], zb[k] + Lz], atol=1e-11)
+
+
+def test_a_box_driven_along_x_is_drawn_and_exported_where_it_is(tmp_path):
+    """With the drive along x (``direction = (1, 0, 0)``) the box is displaced by z_box along
+    x: the XYZ cell's origin is (z_box, 0, 0), and the top view draws the grains at their
+    box-frame positions r − e z_box, inside the section (built by hand: no run needed)."""
+    import dataclasses
+
+    from jaxdamp.io.export import Snapshots, write_xyz
+
+    cfg = dataclasses.replace(presets.get("sanchez2012-optimal"), direction=(1.0, 0.0, 0.0))
+    L, zb = cfg.box.Lx, 0.004
+    r_box = np.array([[0.002, 0.002, 0.002], [L - 0.002, L / 2, 0.01]])  # near x = 0, x = Lx
+    lab = r_box + [zb, 0.0, 0.0]
+    s = Snapshots(t=np.array([0.1]), r=lab[None], q=np.tile([1.0, 0, 0, 0], (1, 2, 1)),
+                  z_box=np.array([zb]), radius=np.array([0.0015, 0.0015]),
+                  species=np.array([0, 0]), species_names=["steel"], config=cfg,
+                  frames=np.array([0]), path="made.h5")
+    head = _read_xyz(write_xyz(s, tmp_path / "x.xyz"))[0][0]
+    np.testing.assert_allclose(np.array(_header_value(head, "Origin").split(), float),
+                               [zb, 0, 0], atol=1e-15)
+    fig = figures.snapshot_figure(s.r[0], s.radius, s.species, cfg, zb, view="side,top")
+    side, top = fig.axes
+    np.testing.assert_allclose(np.sort(_circles(top)[0], 0), np.sort(r_box[:, :2] * 1e3, 0),
+                               atol=1e-9)
+    np.testing.assert_allclose(np.sort(_circles(side)[0], 0),
+                               np.sort(r_box[:, [0, 2]] * 1e3, 0), atol=1e-9)

@@ -45,7 +45,8 @@ PLOT_KINDS = {
               "losses) and the energy-balance residual, versus time",
     "frf": "sweep file (jaxdamp frf): amplitude ratio Z/U versus frequency per Lz, with the "
            "analytic FRFs and the fitted M_ef, C_ef",
-    "snapshot": "run file: 3-D view of the grains at one snapshot (--frame), box wireframe",
+    "snapshot": "run file: the grains at one snapshot (--frame) and the container, in 3-D, "
+                "or (--view) from the side, from above, or several views side by side",
     "poincare": "run file: stroboscopic section (z_cm, vz_cm) of the bed's centre of mass once "
                 "per drive period",
 }
@@ -76,6 +77,12 @@ def cmd_plot(args) -> int:
     out = args.out or f"{stem}_{args.kind}.png"
     if args.kind == "frf" and (args.t0 is not None or args.t1 is not None):
         raise ConfigError("--t0/--t1 do not apply to --kind frf (a sweep's FRF has no time axis)")
+    if args.view is not None:
+        if args.kind != "snapshot":
+            raise ConfigError(f"--view applies to --kind snapshot only, not {args.kind}")
+        from jaxdamp.figures.bed import parse_views
+
+        parse_views(args.view)  # a bad view named before anything is read or written
     from jaxdamp.io.describe import file_family, what_file
     from jaxdamp.io.export import open_output
 
@@ -96,7 +103,7 @@ def cmd_plot(args) -> int:
     elif args.kind == "energy":
         fig = figures.energy_from_file(args.file, args.t0, args.t1)
     elif args.kind == "snapshot":
-        fig = figures.snapshot_from_file(args.file, args.frame, args.color)
+        fig = figures.snapshot_from_file(args.file, args.frame, args.color, args.view or "3d")
     else:
         fig = figures.poincare_from_file(args.file, args.t0, args.t1, args.phase)
     figures.save(fig, out)
@@ -138,7 +145,8 @@ def cmd_export(args) -> int:
         return 0
     paths = export(args.file, args.format, args.out, args.every)
     if args.format == "vtk":
-        print(f"wrote {paths[0]} indexing {len(paths) - 1} frames ({paths[1]} …)")
+        print(f"wrote {paths[0]} indexing {(len(paths) - 1) // 2} frames of the grains and "
+              f"of the container ({paths[1]} …)")
     else:
         print(f"wrote {paths[0]}")
     return 0
@@ -179,9 +187,11 @@ def register(sub) -> None:
               jaxdamp plot run.h5 --kind band                 (writes run_band.png)
               jaxdamp plot run.h5 --kind band --t0 0.5 --t1 0.7 --out bed.png
               jaxdamp plot run.h5 --kind snapshot --frame 0 --color height
+              jaxdamp plot run.h5 --kind snapshot --view side,top     (side and top views)
               jaxdamp plot frf.h5 --kind frf --out frf.png
             Run files come from `jaxdamp run --out`, sweep files from `jaxdamp frf --out`
-            (`jaxdamp info FILE` tells which); times are in seconds from the start of the drive."""),
+            (`jaxdamp info FILE` tells which); times are in seconds from the start of the
+            drive."""),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     pl.add_argument("file", metavar="FILE.h5", help="run file or sweep file")
@@ -195,6 +205,9 @@ def register(sub) -> None:
                     help="snapshot index for --kind snapshot (default -1, the last)")
     pl.add_argument("--color", choices=["species", "height"], default="species",
                     help="grain colour for snapshot: species, or height above the floor")
+    pl.add_argument("--view", metavar="VIEW[,VIEW]",
+                    help="snapshot: 3d (default; lab frame), side (x-z), top (x-y, from above), "
+                         "or several side by side, e.g. side,top (box frame, grains to scale)")
     pl.add_argument("--phase", type=finite_float, default=0.0, metavar="RAD",
                     help="poincare: section phase within the drive period [rad] (default 0, "
                          "the drive's maximum)")
@@ -210,8 +223,9 @@ def register(sub) -> None:
               xyz  one extended-XYZ file, one frame per snapshot (OVITO, ASE): species, position,
                    radius, orientation quaternion (x, y, z, w); the box as Lattice + Origin.
               vtk  one legacy-VTK polydata file per snapshot (FILE_0000.vtk, ...) with radius,
-                   species and orientation point data, a ParaView .pvd collection indexing them
-                   by time, and a .vtk.series file (ParaView >= 5.5) with the same times.
+                   species and orientation point data, the container's edges beside it
+                   (FILE_container_0000.vtk, ...), a ParaView .pvd collection indexing both by
+                   time, and .vtk.series files (ParaView >= 5.5) with the same times.
               gif  animation through Pillow;  mp4  animation through ffmpeg (needs it on PATH).
             examples:
               jaxdamp export run.h5 --format xyz                 (writes run.xyz)
