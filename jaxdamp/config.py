@@ -330,6 +330,10 @@ class Numerics:
       settle_time: maximum simulated time for settling the bed before driving [s].
       settle_speed: settling stops once every grain is slower than this [m/s].
       settle_drag: viscous drag rate [1/s] on grains during settling only.
+      pour: where the grains start before they settle (:mod:`jaxdamp.engine.packing`):
+        ``"lattice"`` (default; an FCC lattice with a small seeded jitter, from the floor
+        up: quick to settle, but the settled bed keeps some of its order) or ``"random"``
+        (uniformly random places in a loose column, the seed choosing them: a random pour).
       engine: ``"auto"`` (by workload, :mod:`jaxdamp.engine.choice`: the compiled CPU kernel
         of :mod:`jaxdamp.engine.native` when JAX runs on the CPU and for small batches beside
         an accelerator), ``"jax"`` (the XLA step, differentiable), ``"native"`` or
@@ -358,6 +362,7 @@ class Numerics:
     settle_time: float = 1.0
     settle_speed: float = 5e-3
     settle_drag: float = 20.0
+    pour: str = "lattice"
     engine: str = "auto"
     precision: str = "float64"
 

@@ -53,6 +53,9 @@ WALL_DAMPING = ("mixed", "calibrated")
 
 #: The engines (``numerics.engine``; :func:`jaxdamp.engine.choice.choose`).
 ENGINES = ("auto", "jax", "native", "fused")
+#: Where the grains start before settling (``numerics.pour``;
+#: :data:`jaxdamp.engine.packing.POURS`).
+POURS = ("lattice", "random")
 #: The contact laws' floating-point types (``numerics.precision``;
 #: :data:`jaxdamp.physics.contact.PRECISIONS`, checked equal by the tests).
 PRECISIONS = ("float64", "float32")
@@ -370,6 +373,8 @@ def validate(config: Config) -> Config:
         _positive(getattr(num, name), f"numerics.{name}")
     _positive(num.settle_time, "numerics.settle_time", allow_zero=True)
     _positive(num.settle_drag, "numerics.settle_drag", allow_zero=True)
+    if num.pour not in POURS:
+        raise ConfigError(f"numerics.pour = {num.pour!r}: expected one of {POURS}")
     if not 0.0 < num.analysis_window <= 1.0:
         raise ConfigError(f"numerics.analysis_window = {num.analysis_window}: must be in (0, 1]")
     _schedule(config)

@@ -376,3 +376,43 @@ def test_the_wall_groups_count_contacts_by_wall():
         assert loss[0] > 0 and loss[1] == 0 and loss[2] > 0
         np.testing.assert_allclose(loss, [float(f.normal_loss), 0.0, float(f.friction_loss)],
                                    rtol=1e-14)
+
+
+def test_a_random_pour_places_grains_apart_inside_any_container_and_settles():
+    """``numerics.pour = "random"``: every grain inside the walls and clear of every other, a
+    loose column (solid fraction ``LOOSE`` over the section), the same places for the same
+    seed and others for another; the bed then settles like a lattice pour."""
+    from jaxdamp.engine.packing import LOOSE, POURS, random_column, settle
+    from jaxdamp.validation import POURS as NAMES
+    from jaxdamp.validation import validate
+
+    assert set(POURS) == set(NAMES)
+    base = presets.get("sanchez2012-optimal")
+    for cfg in (base, _cylinder(base, 0.02, base.box.Lz)):
+        cfg = validate(apply_overrides(cfg, {"grains.0.count": 120,
+                                             "grains.0.radius_spread": 0.2}))
+        model, p = build(cfg)
+        radii = np.asarray(p.radius)
+        r = random_column(radii, cfg, 3)
+        vessel = container(cfg)
+        assert vessel.inside(r[:, 0], r[:, 1], 0.0, cfg).all()
+        for i in range(len(r)):
+            assert vessel.inside(r[i:i + 1, 0], r[i:i + 1, 1], radii[i] * (1 - 1e-12), cfg)[0]
+        d = np.linalg.norm(r[:, None] - r[None], axis=-1) + np.eye(len(r))
+        assert (d >= radii[:, None] + radii[None] - 1e-12).all()
+        assert (r[:, 2] >= radii * (1 - 1e-12)).all()
+        column = (4 / 3 * np.pi * radii**3).sum() / (LOOSE * vessel.base_area(cfg))
+        assert r[:, 2].max() <= column + 3 * radii.max()
+        np.testing.assert_array_equal(random_column(radii, cfg, 3), r)
+        assert not np.allclose(random_column(radii, cfg, 4), r)
+    cfg = validate(apply_overrides(base, {"grains.0.count": 60, "numerics.pour": "random",
+                                          "numerics.settle_time": 0.4}))
+    model, p = build(cfg)
+    radii = np.asarray(p.radius)
+    top = float((random_column(radii, cfg, 0)[:, 2] + radii).max())  # the poured column
+    bed = settle(cfg, model, p)
+    assert bed.settled and bed.height < 0.7 * top
+    from jaxdamp.config import ConfigError
+
+    with pytest.raises(ConfigError, match=r"numerics.pour = 'rain': expected one of"):
+        validate(apply_overrides(base, {"numerics.pour": "rain"}))

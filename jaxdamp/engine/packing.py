@@ -1,4 +1,5 @@
-"""Initial packing: grains on an FCC lattice (seeded jitter), then settled under gravity.
+"""Initial packing: grains on an FCC lattice (seeded jitter) or poured at random places
+(``numerics.pour``), then settled under gravity.
 
 Settling pours the grains into the box with its lid lifted out of the way (as a damper is
 filled before it is closed), with the box at rest at its starting height and a viscous drag
@@ -65,6 +66,60 @@ def fcc_lattice(radii: np.ndarray, config: Config, seed: int) -> np.ndarray:
     return sites[order]
 
 
+#: The solid fraction of the loose column a random pour starts from: below the jamming limit of
+#: random sequential addition of equal spheres (0.38, Torquato, Uche & Stillinger, Phys. Rev. E
+#: 74:061308, 2006), so that a free site is found in a few draws.
+LOOSE = 0.25
+
+
+def random_column(radii: np.ndarray, config: Config, seed: int) -> np.ndarray:
+    """Box-frame positions ``(N, 3)`` [m] of non-overlapping grains at uniformly random places
+    in a column of the container's section (random sequential addition, the largest grains
+    first), the column ``V_grains / (LOOSE · A)`` high: a random pour, without the order a
+    lattice leaves in the settled bed (``experiments/cylinder_packing.py``).
+
+    Each grain is drawn uniformly in the section's bounding rectangle and the column's height
+    until it lies inside the walls and clear of every grain placed before it (a grid of cells
+    of the largest diameter finds its neighbours)."""
+    n = len(radii)
+    if n == 0:
+        return np.zeros((0, 3))
+    vessel = container(config)
+    r_max = float(radii.max())
+    x0, x1, y0, y1 = vessel.extent(config)
+    area = vessel.base_area(config)
+    height = float((4.0 / 3.0 * math.pi * radii**3).sum()) / (LOOSE * area) + 2.0 * r_max
+    rng = np.random.default_rng(seed)
+    cell = 2.0 * r_max
+    grid: dict[tuple[int, int, int], list[int]] = {}
+    out = np.empty((n, 3))
+    order = np.argsort(-radii, kind="stable")
+    for i in order:
+        a = float(radii[i])
+        for _ in range(100_000):
+            p = rng.uniform((x0, y0, a), (x1, y1, a + height))
+            if not vessel.inside(p[:1], p[1:2], a, config)[0]:
+                continue
+            c = tuple(int(v) for v in np.floor(p / cell))
+            near = [j for dx in (-1, 0, 1) for dy in (-1, 0, 1) for dz in (-1, 0, 1)
+                    for j in grid.get((c[0] + dx, c[1] + dy, c[2] + dz), ())]
+            if near:
+                d2 = ((out[near] - p) ** 2).sum(axis=1)
+                if (d2 < (radii[near] + a) ** 2).any():
+                    continue
+            out[i] = p
+            grid.setdefault(c, []).append(int(i))
+            break
+        else:
+            raise ConfigError("could not pour the grains at random: no free place found")
+    return out
+
+
+#: The pours by name (``numerics.pour``): ``(radii, config, seed) -> positions (N, 3)`` in the
+#: box frame.
+POURS = {"lattice": fcc_lattice, "random": random_column}
+
+
 class SettledBed(NamedTuple):
     """A bed at rest. ``r``, ``v``, ``w``: ``(N, 3)``; ``q``: ``(N, 4)``; box-frame positions
     (floor at ``z = 0``). ``height`` [m] top of the highest grain above the floor;
@@ -95,8 +150,8 @@ class SettledBed(NamedTuple):
 
 
 def settle(config: Config, model: Model, params: Params, progress=None) -> SettledBed:
-    """Drop the grains from the lattice into the (lid-less) box and let them come to rest
-    (``progress`` as in :func:`settle_many`)."""
+    """Drop the grains from where they were poured (``numerics.pour``) into the (lid-less) box
+    and let them come to rest (``progress`` as in :func:`settle_many`)."""
     return settle_many([config], model, [params], progress)[0]
 
 
@@ -120,7 +175,7 @@ def settle_many(configs: list[Config], model: Model, params: list[Params],
     settle_model = dataclasses.replace(model, system="driven")
     r0, ps = [], []
     for config, prm in zip(configs, params):
-        r = fcc_lattice(np.asarray(prm.radius), config, config.numerics.seed)
+        r = POURS[config.numerics.pour](np.asarray(prm.radius), config, config.numerics.seed)
         top = float((r[:, 2] + np.asarray(prm.radius)).max())
         r0.append(r)
         ps.append(dataclasses.replace(
