@@ -26,17 +26,15 @@ snapshots and the beds' results in ``--out/raw`` (git-ignored).
 
 from __future__ import annotations
 
-import json
 import math
 import os
 import time
 
 import numpy as np
 
-from jaxdamp.analysis.uncertainty import ar1_standard_error, lag1_autocorrelation
 from jaxdamp.io.common import put
-from jaxdamp.io.study import Group
 from jaxdamp.peers import lammps
+from jaxdamp.peers.lammps import ATTR_UNITS, analyse_group, phase_average
 from jaxdamp.studies import scaffold
 
 PRESET = "varela2023-reference"
@@ -52,13 +50,18 @@ def settings(quick: bool) -> dict:
                 closure_periods=2, replicates=REPLICATES)
 
 
-def case_config(amplitude: float, n_periods: int, settle_time=None, seed=None):
-    """The reference preset at ``amplitude`` for ``n_periods`` (samples every T/500), its bed
-    poured with ``numerics.seed = seed`` (``None``: the preset's seed)."""
+def reference():
+    """The preset this study checks (the box)."""
     from jaxdamp.cases import presets
+
+    return presets.get(PRESET)
+
+
+def case_config(base, amplitude: float, n_periods: int, settle_time=None, seed=None):
+    """``base`` at ``amplitude`` for ``n_periods`` (samples every T/500), its bed poured with
+    ``numerics.seed = seed`` (``None``: the preset's seed)."""
     from jaxdamp.config import apply_overrides
 
-    base = presets.get(PRESET)
     T = 1.0 / base.frequency
     ov = {"drive.amplitude": amplitude, "numerics.duration": (n_periods + 0.02) * T,
           "numerics.chunk": T / 5, "numerics.record_dt": T / 500}
@@ -69,220 +72,15 @@ def case_config(amplitude: float, n_periods: int, settle_time=None, seed=None):
     return apply_overrides(base, ov)
 
 
-def jaxdamp_case(amplitude: float, n_periods: int, settle_time=None, progress=False, seed=None):
-    """``jaxdamp.studies.runner.run`` of the reference preset at ``amplitude`` for ``n_periods``,
-    the bed poured with ``seed`` (see :func:`case_config`)."""
-    from jaxdamp.physics.energy import granular_loss
-    from jaxdamp.studies import runner
-
-    cfg = case_config(amplitude, n_periods, settle_time, seed)
-    T = 1.0 / cfg.frequency
-    t0 = time.perf_counter()
-    res = runner.run(cfg, progress=progress, snapshots=False, echo=None)
-    elapsed = time.perf_counter() - t0
-    rec = res.records
-    t = np.concatenate([[0.0], rec["t"]])
-    loss = np.concatenate([[0.0], granular_loss(rec["work"])])
-    tb = np.arange(n_periods + 1) * T
-    if t[-1] < tb[-1] - 1e-12:
-        raise RuntimeError(f"jaxdamp records end at {t[-1]} s < last boundary {tb[-1]} s")
-    D = np.interp(tb, t, loss)
-    inp = np.concatenate([[0.0], rec["work"][:, 0]])
-    resid = np.asarray(rec["balance_residual"])
-    return dict(config=cfg, result=res, t=tb, D=D, dt=float(res.summary["dt"]),
-                wall=float(res.summary["wall_time"]), elapsed=elapsed,
-                balance=float(res.summary["balance_error"]),
-                residual=float(np.max(np.abs(resid))), residual_final=float(resid[-1]),
-                input_final=float(inp[-1]), bed=res.bed, bed_r=np.asarray(res.bed.r),
-                bed_v=np.asarray(res.bed.v), settled=bool(res.bed.settled),
-                bed_height=float(res.bed.height), bed_max_speed=float(res.bed.max_speed),
-                records={k: np.asarray(rec[k]) for k in ("t", "z_cm", "z_box")})
-
-
-# one bed in both codes, kept in raw/beds/ for a re-run with the same settings
-JD_SCALARS = ("dt", "wall", "elapsed", "balance", "residual", "residual_final", "input_final",
-              "settled", "bed_height", "bed_max_speed")
-LM_ARRAYS = ("steps", "t", "W", "E", "D", "elastic", "kinetic", "thermo")
-LM_SCALARS = ("wall", "loop_time", "n_steps")
-
-
-def bed_key(amplitude: float, seed: int, s: dict) -> dict:
-    """What a stored bed must match to be reused."""
-    return dict(preset=PRESET, amplitude=float(amplitude), seed=int(seed),
-                transient=int(s["transient"]), periods=int(s["periods"]),
-                settle_time=s["settle_time"])
-
-
-def save_bed(path: str, key: dict, jd: dict, lm: dict) -> None:
-    os.makedirs(os.path.dirname(path), exist_ok=True)
-    meta = dict(key=key, jd={k: jd[k] for k in JD_SCALARS}, lm={k: lm[k] for k in LM_SCALARS})
-    arrays = {f"lm_{k}": np.asarray(lm[k]) for k in LM_ARRAYS}
-    arrays.update(jd_t=jd["t"], jd_D=jd["D"], bed_r=jd["bed_r"], bed_v=jd["bed_v"],
-                  **{f"rec_{k}": v for k, v in jd["records"].items()})
-    tmp = path + ".tmp.npz"
-    np.savez(tmp, meta=json.dumps(meta), **arrays)
-    os.replace(tmp, path)
-
-
-def load_bed(path: str, key: dict):
-    """``(jd, lm)`` of a stored bed with this ``key``, else None."""
-    if not os.path.exists(path):
-        return None
-    with np.load(path) as z:
-        meta = json.loads(str(z["meta"]))
-        if meta["key"] != key:
-            return None
-        jd = dict(meta["jd"], t=z["jd_t"], D=z["jd_D"], bed_r=z["bed_r"], bed_v=z["bed_v"],
-                  records={k: z[f"rec_{k}"] for k in ("t", "z_cm", "z_box")})
-        lm = dict(meta["lm"], **{k: z[f"lm_{k}"] for k in LM_ARRAYS})
-    jd["config"] = case_config(key["amplitude"], key["transient"] + key["periods"],
-                               key["settle_time"], key["seed"])
-    return jd, lm
-
-
-def run_bed(amplitude: float, seed: int, s: dict, raw: str, exe, progress: bool, log) -> dict:
-    """One bed poured by jaxdamp with ``seed``, driven at ``amplitude`` in jaxdamp and, from
-    the same settled state, in LAMMPS; reused from ``raw/beds`` when stored with the same
-    settings."""
-    n_total = s["transient"] + s["periods"]
-    key = bed_key(amplitude, seed, s)
-    path = os.path.join(raw, "beds", f"A{amplitude * 100:g}cm_seed{seed}.npz")
-    got = load_bed(path, key)
-    if got is not None:
-        jd, lm = got
-        log(f"A_d = {amplitude * 100:g} cm, seed {seed}: reused {path}")
-        return dict(seed=seed, jd=jd, lm=lm, mp=lammps.build_mapping(jd["config"]), reused=True)
-    # jaxdamp first: its settled bed is the initial state of both codes
-    log(f"A_d = {amplitude * 100:g} cm, seed {seed}: jaxdamp ...")
-    jd = jaxdamp_case(amplitude, n_total, s["settle_time"], progress=progress, seed=seed)
-    cfg = jd["config"]
-    mp = lammps.build_mapping(cfg)
-    assert abs(mp.dt - jd["dt"]) < 1e-15
-    log(f"  jaxdamp: dt = {jd['dt']:.6g} s, {jd['wall']:.1f} s stepping "
-        f"({jd['elapsed']:.1f} s with settling); LAMMPS ...")
-    lm = lammps.driven_bed(mp, cfg, amplitude, jd["bed_r"], jd["bed_v"], n_total, raw, exe=exe,
-                           tag=f"_seed{seed}")
-    log(f"  LAMMPS: {lm['wall']:.1f} s")
-    save_bed(path, key, jd, lm)
-    return dict(seed=seed, jd=jd, lm=lm, mp=mp, reused=False)
-
-
-def phase_average(t, y, T, n_bins=50, t0=0.0):
-    """Mean of ``y`` in ``n_bins`` phase bins of the drive over samples with ``t >= t0``."""
-    t, y = np.asarray(t), np.asarray(y)
-    keep = t >= t0
-    ph = np.mod(t[keep] / T, 1.0)
-    idx = np.minimum((ph * n_bins).astype(int), n_bins - 1)
-    s = np.bincount(idx, y[keep], n_bins)
-    c = np.bincount(idx, None, n_bins)
-    return (np.arange(n_bins) + 0.5) / n_bins, s / np.maximum(c, 1)
-
-
-def within_run(d) -> tuple[float, float, float]:
-    """Mean, standard deviation and the within-run standard error (serial correlation
-    allowed for: :func:`jaxdamp.analysis.uncertainty.ar1_standard_error`) of a per-period
-    series."""
-    d = np.asarray(d, float)
-    sd = float(d.std(ddof=1)) if len(d) > 1 else math.nan
-    return float(d.mean()), sd, ar1_standard_error(d)
-
-
-KEY = "granular_loss_per_cycle"
-
-
-def window(dl, dj, s: dict, T: float):
-    """``(start, stationary, detections)`` of one bed: the window common to both codes'
-    per-period series (MSER on both, never before the transient:
-    :func:`jaxdamp.analysis.stats.shared_window`) and each code's own detection."""
-    from jaxdamp.analysis import stats as jstats
-
-    series = [{"t_start": np.arange(len(dl)) * T, KEY: np.asarray(x)} for x in (dl, dj)]
-    kw = dict(min_discard=s["transient"], min_keep=min(5, s["periods"]))
-    w = jstats.shared_window(series, keys=(KEY,), **kw)
-    return int(w["start"]), bool(w["stationary"]), [jstats.detect(x, **kw) for x in series]
-
-
-#: Units of the attributes in data.h5 (of the root and of each bed).
-ATTR_UNITS = dict(lammps_wall_time="s", lammps_loop_time="s", jaxdamp_wall_time="s",
-                  jaxdamp_elapsed="s", jaxdamp_residual_max="J", jaxdamp_residual_per_period="J",
-                  z_cm_difference="m", z_cm_swing="m", window_start="periods",
-                  checks_wall_time="s", bed_max_speed_range="m/s")
-UNITS = dict(dissipation_per_period="J", cumulative_dissipation="J", input_work="J",
-             mechanical_energy="J", elastic_energy="J", boundary_time="s", z_cm_phase="m")
-
-
-def stored_bed(b: dict, s: dict, T: float) -> Group:
-    """One bed of :func:`run_bed` as ``data.h5`` keeps it: per code the dissipation per period
-    and the values at the period boundaries (``z_cm_phase``: jaxdamp's phase-averaged height);
-    as attributes the window, times, residuals and the phase-averaged heights' comparison."""
-    lm, jd = b["lm"], b["jd"]
-    dl, dj = np.diff(lm["D"]), np.diff(jd["D"])
-    start, stationary, _ = window(dl, dj, s, T)
-    tab, rec = lm["thermo"], jd["records"]
-    _, zl = phase_average(tab[:, 1], tab[:, 2], T, t0=start * T)
-    _, zj = phase_average(rec["t"], np.asarray(rec["z_cm"]) - np.asarray(rec["z_box"]), T,
-                          t0=start * T)
-    attrs = dict(seed=b["seed"], window_start=start, stationary=stationary,
-                 lammps_wall_time=lm["wall"], lammps_loop_time=lm["loop_time"],
-                 jaxdamp_wall_time=jd["wall"], jaxdamp_elapsed=jd["elapsed"],
-                 jaxdamp_balance_error=jd["balance"], jaxdamp_residual_max=jd["residual"],
-                 jaxdamp_residual_per_period=jd["residual_final"] / (len(jd["t"]) - 1),
-                 bed_settled=bool(jd["settled"]), reused=bool(b["reused"]),
-                 z_cm_difference=float(np.max(np.abs(zl - zj))),
-                 z_cm_swing=float(zl.max() - zl.min()))
-    return Group({"lammps": Group(dict(
-        dissipation_per_period=dl, cumulative_dissipation=lm["D"], input_work=lm["W"],
-        mechanical_energy=lm["E"], elastic_energy=lm["elastic"], boundary_time=lm["t"],
-        thermo=tab)), "jaxdamp": Group(dict(
-            dissipation_per_period=dj, cumulative_dissipation=jd["D"], boundary_time=jd["t"],
-            z_cm_phase=zj))}, attrs)
-
-
-def analyse_bed(g, s: dict, T: float, dt: float) -> dict:
-    """One bed in both codes (:func:`stored_bed`, or read back): its attributes, the window,
-    each code's mean over it, their difference and the within-run figures."""
-    lm, jd = g["lammps"], g["jaxdamp"]
-    start, stationary, dets = window(lm["dissipation_per_period"], jd["dissipation_per_period"],
-                                     s, T)
-    dl, dj = lm["dissipation_per_period"][start:], jd["dissipation_per_period"][start:]
-    ml, sl, el = within_run(dl)
-    mj, sj, ej = within_run(dj)
-    close = np.abs(dl - dj) <= 0.01 * np.abs(dj)
-    half, n0 = max(1, len(dl) // 2), s["transient"]
-    steps = int(round(lm["boundary_time"][-1] / dt))
-    return dict(g.attrs, start=start, kept=len(dl), stationary=stationary,
-                start_l=dets[0].period, start_j=dets[1].period,
-                ml=ml, sl=sl, el=el, mj=mj, sj=sj, ej=ej, diff=ml - mj, comb=math.hypot(el, ej),
-                rel=(ml - mj) / mj, lag_l=lag1_autocorrelation(dl), lag_j=lag1_autocorrelation(dj),
-                corr=float(np.corrcoef(dl, dj)[0, 1]) if len(dl) > 2 else math.nan,
-                first_apart=int(np.argmin(close)) if not close.all() else len(dl),
-                transient_l=float(lm["cumulative_dissipation"][n0]),
-                transient_j=float(jd["cumulative_dissipation"][n0]),
-                el_max=float(np.max(lm["elastic_energy"])),
-                halves_l=(float(dl[:half].mean()), float(dl[half:].mean())),
-                halves_j=(float(dj[:half].mean()), float(dj[half:].mean())), dt=dt, steps=steps,
-                us_l=g.attrs["lammps_wall_time"] / steps * 1e6,
-                us_j=g.attrs["jaxdamp_wall_time"] / steps * 1e6)
-
-
-def analyse_amplitude(A: float, beds: list[dict], e_max: float) -> dict:
-    """Across the beds (:func:`analyse_bed`) of one amplitude: each code's mean ± SE of the
-    beds' means, and the per-bed (paired) difference LAMMPS − jaxdamp with its Student-t 95 %
-    interval; the unpaired Welch interval of the two codes' bed means alongside."""
-    from jaxdamp.analysis import stats as jstats
-
-    ok = np.array([r["stationary"] for r in beds])
-    ml, mj = (np.array([r[k] for r in beds]) for k in ("ml", "mj"))
-    el, ej, ed = (jstats.across(x, stationary=ok) for x in (ml, mj, ml - mj))
-    wd, wh = jstats.welch(ml[ok], mj[ok])
-    sd = lambda x: float(np.std(x[ok], ddof=1)) if ok.sum() > 1 else math.nan  # noqa: E731
-    return dict(A=A, e_max=e_max, beds=beds, R=len(beds), n=ed.n,
-                ml=el.mean, sel=el.se, mj=ej.mean, sej=ej.se, sdl=sd(ml), sdj=sd(mj),
-                within_l=float(np.mean([r["el"] for r in beds])),
-                within_j=float(np.mean([r["ej"] for r in beds])),
-                d=ed.mean, sed=ed.se, hw=ed.ci95, welch_d=wd, welch_hw=wh,
-                agree=bool(np.isfinite(ed.ci95) and abs(ed.mean) <= ed.ci95),
-                rel=ed.mean / ej.mean, rel_hw=ed.ci95 / ej.mean)
+def bed_key(base, amplitude: float, seed: int, s: dict) -> dict:
+    """What a stored bed must match to be reused (a container other than the box: its shape and
+    size too)."""
+    key = dict(preset=PRESET)
+    if base.container is not None:
+        c = base.container
+        key.update(container=c.shape, **dict(c.size), Lz=c.Lz)
+    return dict(key, amplitude=float(amplitude), seed=int(seed), transient=int(s["transient"]),
+                periods=int(s["periods"]), settle_time=s["settle_time"])
 
 
 def options(ap) -> None:
@@ -294,6 +92,14 @@ def options(ap) -> None:
 
 
 def compute(quick: bool, log, ctx):
+    run = paired_runs(reference(), quick, log, ctx)
+    return run, lambda out, prov: record(run, out, prov)
+
+
+def paired_runs(base, quick: bool, log, ctx, Rc: float | None = None) -> dict:
+    """The whole comparison of ``base`` (a driven configuration): the mapping checked with
+    LAMMPS (its curved side wall of radius ``Rc`` too, if given), ``R`` paired beds per
+    amplitude in both codes, the undamped closure, the paired analysis per amplitude."""
     args = ctx.args
     s = settings(quick)
     if args.replicates is not None:
@@ -308,55 +114,53 @@ def compute(quick: bool, log, ctx):
     raw = ctx.raw("")
 
     from jaxdamp.analysis.stats import replicate_seed
-    from jaxdamp.cases import presets
 
     version = lammps.version(exe)
     log(f"LAMMPS: {version}")
-    base = presets.get(PRESET)
     T = 1.0 / base.frequency
-    omega = 2 * math.pi * base.frequency
     seeds = [replicate_seed(base.numerics.seed, k) for k in range(s["replicates"])]
 
     # the mapping, verified with LAMMPS at the time step of the default amplitude
     mp0 = lammps.build_mapping(base)
     t0 = time.perf_counter()
-    checks = lammps.mapping_checks(mp0, os.path.join(raw, "checks"), exe)
+    if Rc is None:
+        checks = lammps.mapping_checks(mp0, os.path.join(raw, "checks"), exe)
+    else:
+        checks = lammps.mapping_checks(mp0, os.path.join(raw, "checks"), exe,
+                                       walls=("floor", "lid"), Rc=Rc)
     checks_wall = time.perf_counter() - t0
     log(f"mapping checks: {checks_wall:.1f} s (their results: the summary)")
 
     cases = {}
+    n_total = s["transient"] + s["periods"]
     for A in s["amplitudes"]:
-        beds = [run_bed(A, seed, s, raw, exe, ctx.progress, log) for seed in seeds]
-        for b in beds:
-            b["stored"] = stored_bed(b, s, T)
-        mp = beds[0]["mp"]
-        m_gran = mp.mass * beds[0]["jd"]["config"].grains[0].count
-        cases[A] = dict(beds=beds, mp=mp, e_max=4 * m_gran * A**2 * omega**2, m=m_gran)
+        beds = []
+        for seed in seeds:  # each poured by jaxdamp, driven in both codes from the same state
+            path = os.path.join(raw, "beds", f"A{A * 100:g}cm_seed{seed}.npz")
+            beds.append(lammps.paired_bed(case_config(base, A, n_total, s["settle_time"], seed),
+                                          n_total, bed_key(base, A, seed, s), path, raw, exe,
+                                          ctx.progress, log))
+        cases[A] = lammps.driven_case(A, beds, s, T)
 
     # accounting closure: undamped bed (the first seed's), input work = Δ(mechanical energy)
     A_c = 0.03 if 0.03 in cases else s["amplitudes"][0]
-    c = cases[A_c]["beds"][0]
-    clo = lammps.driven_bed(c["mp"], c["jd"]["config"], A_c, c["jd"]["bed_r"], c["jd"]["bed_v"],
-                            s["closure_periods"], raw, damped=False, exe=exe,
-                            tag=f"_seed{c['seed']}")
-    dE = float(np.max(np.abs(clo["E"] - clo["E"][0])))
-    closure = dict(amplitude=A_c, seed=c["seed"], periods=s["closure_periods"],
-                   D=clo["D"].tolist(), W=clo["W"].tolist(), E=clo["E"].tolist(),
-                   relative=float(np.max(np.abs(clo["D"])) / max(dE, 1e-300)))
+    closure = lammps.closure(cases[A_c]["beds"][0], A_c, s["closure_periods"], raw, exe)
     log(f"closure (undamped, {s['closure_periods']} periods): max |W - ΔE| = "
-        f"{np.max(np.abs(clo['D'])):.3g} J, max |ΔE| = {dE:.3g} J")
+        f"{np.max(np.abs(closure['D'])):.3g} J, max |ΔE| = "
+        f"{np.max(np.abs(np.subtract(closure['E'], closure['E'][0]))):.3g} J")
     table = {}
     for A in sorted(cases):
-        beds = [analyse_bed(b["stored"], s, T, cases[A]["mp"].dt) for b in cases[A]["beds"]]
-        table[A] = analyse_amplitude(A, beds, cases[A]["e_max"])
+        beds = [lammps.analyse_bed(b["stored"], s, T, cases[A]["mp"].dt)
+                for b in cases[A]["beds"]]
+        table[A] = lammps.analyse_amplitude(A, beds, cases[A]["e_max"])
         log(f"A_d = {A * 100:g} cm: LAMMPS − jaxdamp "
             f"{scaffold.pm(table[A]['d'], table[A]['hw'], '+.3g')} J per period (95 %)")
-    run = dict(cases=cases, checks=checks, closure=closure, mapping=mp0, settings=s,
-               table=table, version=version, checks_wall=checks_wall, T=T, seeds=seeds)
-    return run, lambda out, prov: record(run, out, prov)
+    return dict(cases=cases, checks=checks, closure=closure, mapping=mp0, settings=s,
+                table=table, version=version, checks_wall=checks_wall, T=T, seeds=seeds)
 
 
-def record(run: dict, out: str, prov: dict) -> None:
+def record(run: dict, out: str, prov: dict, **attrs) -> None:
+    """``data.h5`` of :func:`paired_runs` (``attrs``: more attributes of the file)."""
     cases, table, s, seeds = run["cases"], run["table"], run["settings"], run["seeds"]
     amps = sorted(cases)
     speeds = [b["jd"]["bed_max_speed"] for c in cases.values() for b in c["beds"]]
@@ -366,42 +170,12 @@ def record(run: dict, out: str, prov: dict) -> None:
             paired="both codes start from the same bed: the difference is taken per bed, its "
                    "interval is the Student-t 95 % one over the beds",
             checks_wall_time=run["checks_wall"], bed_max_speed_range=[min(speeds), max(speeds)],
-            attribute_units=ATTR_UNITS) as h:
+            attribute_units=ATTR_UNITS, **attrs) as h:
         h.attrs.update(transient_periods=s["transient"], periods=s["periods"],
                        replicates=s["replicates"], seeds=np.asarray(seeds))
         put(h, "amplitude", amps, "m")
         for A in amps:
-            c, r = cases[A], table[A]
-            g = h.create_group(f"A_{A * 100:g}cm")
-            g.attrs["mapping"] = json.dumps(c["mp"].as_dict())
-            g.attrs.update(dt=c["mp"].dt, e_max=c["e_max"], granulate_mass=c["m"],
-                           n_stationary=r["n"], lammps_mean=r["ml"], lammps_se=r["sel"],
-                           jaxdamp_mean=r["mj"], jaxdamp_se=r["sej"], difference_mean=r["d"],
-                           difference_se=r["sed"], difference_ci95=r["hw"],
-                           welch_difference=r["welch_d"], welch_ci95=r["welch_hw"],
-                           agree=r["agree"])
-            bs = r["beds"]
-            g.create_dataset("seed", data=np.asarray(seeds))
-            g.create_dataset("stationary", data=np.asarray([x["stationary"] for x in bs]))
-            put(g, "window_start", [x["start"] for x in bs], "periods")
-            for key, name in (("ml", "lammps/mean_per_bed"), ("mj", "jaxdamp/mean_per_bed"),
-                              ("diff", "difference_per_bed")):
-                put(g, name, [x[key] for x in bs], "J per period")
-            for k, b in enumerate(c["beds"]):
-                gb = g.create_group(f"bed_{k}")
-                gb.attrs["config"] = b["jd"]["config"].to_json()
-                gb.attrs.update(b["stored"].attrs)
-                for code in ("lammps", "jaxdamp"):
-                    for name, data in b["stored"][code].items():
-                        if name != "thermo":
-                            put(gb, f"{code}/{name}", data, UNITS[name], **(
-                                {"note": "every period from t = 0; the window starts at "
-                                         "window_start"} if name == "dissipation_per_period"
-                                else {}))
-                        elif k == 0:  # the figure's bed (the others' stay in raw/beds)
-                            gb.create_dataset(f"{code}/thermo", data=data, compression="gzip",
-                                              shuffle=True).attrs["columns"] = \
-                                "step time z_cm vz_cm W (box frame)"
+            lammps.write_case(h, A, cases[A], table[A], seeds)
 
 
 def report(data, out) -> None:
@@ -410,15 +184,15 @@ def report(data, out) -> None:
     amps = [float(x) for x in data["amplitude"]]
     groups = {A: data[f"A_{A * 100:g}cm"] for A in amps}
     T = float(groups[amps[0]]["bed_0"]["jaxdamp"]["boundary_time"][1])  # boundaries at nT
-    table = {}
-    for A, g in groups.items():
-        beds = [analyse_bed(g[f"bed_{k}"], s, T, g.attrs["dt"]) for k in range(len(g["seed"]))]
-        table[A] = analyse_amplitude(A, beds, g.attrs["e_max"])
+    table = {A: analyse_group(A, g, s, T) for A, g in groups.items()}
     figure(groups, table, T, list(a["seeds"]), out)
     summary(data, groups, table, s, out)
 
 
-def figure(groups: dict, table: dict, T: float, seeds: list, out: str) -> None:
+def figure(groups: dict, table: dict, T: float, seeds: list, out: str, what: str = PRESET,
+           target: float | None = None) -> None:
+    """The study's figure (``what``: the damper's name in the first title; ``target``: the
+    agreement sought, drawn as a band around 0 on the paired difference)."""
     fig, axs = scaffold.subplots(2, 3, (17, 9))
     axs = axs.ravel()
     rows = list(table.values())
@@ -435,6 +209,9 @@ def figure(groups: dict, table: dict, T: float, seeds: list, out: str) -> None:
         axs[1].errorbar(a + off, [r[key] / r["e_max"] for r in rows],
                         yerr=[r[se] / r["e_max"] for r in rows], fmt=mk, capsize=4, label=lab)
     axs[0].plot(a, [r["e_max"] for r in rows], "k^--", lw=0.8, ms=4, label="E_max = 4 m A² ω²")
+    if target is not None:
+        axs[2].axhspan(-target * 100, target * 100, color="C2", alpha=0.15,
+                       label=f"target: ±{target * 100:g} %")
     axs[2].axhline(0, color="k", lw=0.8)
     axs[2].errorbar(a, [r["rel"] * 100 for r in rows], yerr=[r["rel_hw"] * 100 for r in rows],
                     fmt="D", capsize=5, color="C3", label="mean ± 95 % (paired t over beds)")
@@ -464,7 +241,7 @@ def figure(groups: dict, table: dict, T: float, seeds: list, out: str) -> None:
         axs[5].bar(a + (i - 1.5) * w_, [r[key] for r in rows], w_, label=lab)
     for i, (ax, xlabel, ylabel, title) in enumerate((
             (axs[0], "A_d [cm]", "dissipated energy per period [J]",
-             f"{PRESET}: {rows[0]['R']} beds per amplitude (dots: each bed)"),
+             f"{what}: {rows[0]['R']} beds per amplitude (dots: each bed)"),
             (axs[1], "A_d [cm]", "E_d = E / E_max", "dissipation efficiency (mean ± SE over beds)"),
             (axs[2], "A_d [cm]", "LAMMPS − jaxdamp [% of jaxdamp's mean]",
              "paired difference per bed (dots) and over beds"),

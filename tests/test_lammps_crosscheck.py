@@ -1,9 +1,11 @@
 """The jaxdamp → LAMMPS contact mapping (:mod:`jaxdamp.peers.lammps`), checked with
 short LAMMPS runs (a few seconds): binary restitution, sphere–wall restitution and the static
-overlap on the walls (which catches the wall-modulus bug of the Debian LAMMPS 2021 build)."""
+overlap on the walls (which catches the wall-modulus bug of the Debian LAMMPS 2021 build); the
+cylinder's concave side (`zcylinder`) against jaxdamp's, and the cylinder study's quick mode."""
 
 import shutil
 
+import numpy as np
 import pytest
 
 from jaxdamp.peers import lammps
@@ -113,3 +115,127 @@ print "RESULT $(v_vx:%.17g) $(v_wy:%.17g)"
     vx, wy = lammps.printed(log, "RESULT")[-1]
     assert vx == pytest.approx(5 / 7 * v0, rel=0.01)
     assert R * wy == pytest.approx(vx, rel=0.01)
+
+
+# -- the cylinder: LAMMPS' `fix wall/gran ... zcylinder` against jaxdamp's concave side wall
+
+
+def _cylinder(preset: str, radius: float):
+    """``preset``'s grains in an upright cylinder of ``radius``, Lz = 8 cm."""
+    import dataclasses
+
+    from jaxdamp.cases import presets
+    from jaxdamp.config import Container
+
+    cfg = presets.get(preset)
+    wall = cfg.box.wall if cfg.box is not None else None
+    return dataclasses.replace(cfg, box=None,
+                               container=Container("cylinder", 0.08, (("radius", radius),),
+                                                   wall=wall))
+
+
+def test_cylinder_mapping_constants(mapping):
+    """The side wall's constants: κ = 1/(2 R_c), R* = R/(1 − R κ) equal to LAMMPS'
+    R R_w/(R + R_w) with R_w = −2 R_c (fix_wall_gran.cpp), k = (4/3) E* sqrt(R*); with the
+    paper's A its LAMMPS prefactor is the planes' (damping ∝ sqrt(R*) in both codes), with the
+    thesis' constant γ_n it is smaller by sqrt(R/R*); the box's sides are planes (R* = R)."""
+    assert mapping.curvature == 0.0 and mapping.R_side == mapping.R
+    assert mapping.eta_side == mapping.eta_pw and mapping.k_side == mapping.k_pw
+    Rc = 0.045135
+    mp = lammps.build_mapping(_cylinder("varela2023-reference", Rc))
+    R, R_w = mp.R, -2.0 * Rc
+    assert mp.curvature == pytest.approx(1.0 / (2.0 * Rc), rel=1e-14)
+    assert mp.R_side == pytest.approx(R * R_w / (R + R_w), rel=1e-14)
+    assert mp.k_side == pytest.approx(4 / 3 * mp.E_star_pw * mp.R_side**0.5, rel=1e-14)
+    assert mp.k_wall_lammps(mp.E_wall_lammps, mp.R_side) == pytest.approx(mp.k_side, rel=1e-12)
+    assert mp.eta_side == pytest.approx(mp.eta_pw, rel=1e-12)
+    th = lammps.build_mapping(_cylinder("sanchez2012-optimal", 0.020734))
+    assert th.gamma_side == pytest.approx(th.gamma_pw, rel=1e-14)  # γ_n does not scale
+    assert th.eta_side == pytest.approx(th.eta_pw * (th.R / th.R_side) ** 0.5, rel=1e-12)
+    assert th.xt_side == pytest.approx(th.xt_pw, rel=1e-12)
+    assert f"zcylinder {Rc!r}" in lammps.cavity(_cylinder("sanchez2012-optimal", Rc)).walls(th)
+
+
+def test_cylinder_frame_and_elastic_energy(tmp_path):
+    """LAMMPS' frame of the cylinder is jaxdamp's box frame shifted by (R_c, R_c, 0) (its
+    `zcylinder` axis is x = y = 0): the data file holds the shifted positions and bounds of
+    ±R_c; the elastic energy of a grain pressed ξ into the side is jaxdamp's Hertz
+    (2/5) k ξ^{5/2} at R*, and into the floor the plane's."""
+    Rc = 0.03
+    cfg = _cylinder("varela2023-reference", Rc)
+    mp = lammps.build_mapping(cfg)
+    cav = lammps.cavity(cfg)
+    assert cav.shape == "cylinder" and list(cav.origin) == [Rc, Rc, 0.0]
+    xi = 1e-6
+    r = np.array([[Rc + (Rc - mp.R + xi), Rc, 0.04], [Rc, Rc, mp.R - xi]])  # box frame
+    lammps.write_data(str(tmp_path / "bed.data"), r, np.zeros((2, 3)), mp, cfg)
+    text = (tmp_path / "bed.data").read_text()
+    assert f"{-Rc - 0.001!r} {Rc + 0.001!r} xlo xhi" in text
+    atoms = np.array([[float(x) for x in line.split()[4:7]]
+                      for line in text.split("Atoms # sphere")[1].split("Velocities")[0]
+                      .strip().splitlines()])
+    assert np.allclose(atoms, r - [Rc, Rc, 0.0], rtol=0, atol=1e-15)
+    snap = np.column_stack([np.arange(1, 3), atoms, np.zeros((2, 3))])
+    e = lammps.mechanical_energy(snap, mp, cav, 0.0)
+    assert e["elastic"] == pytest.approx(0.4 * (mp.k_side + mp.k_pw) * xi**2.5, rel=1e-6)
+    deck = lammps.box_deck(mp, cfg, 0.03, "bed.data")
+    assert f"zcylinder {Rc!r}" in deck and "zplane 0.0 0.08" in deck and "xplane" not in deck
+
+
+@needs_lmp
+def test_curved_wall_static_and_collision(tmp_path):
+    """LAMMPS' `zcylinder` wall is jaxdamp's concave wall (R* = R/(1 − R/(2 R_c))): in a narrow
+    cylinder (R_c = 5 R, where R* is 11 % above a plane's) a grain pressed on the side by a
+    lateral body force rests at jaxdamp's Hertz overlap at R* within 1e-4 (3.5 % below a
+    plane's), and a radial hit at 1 m/s has jaxdamp's restitution at R* within 0.05 % (0.5 %
+    below the plane's)."""
+    from jaxdamp.physics.restitution import collision
+
+    mp0 = lammps.build_mapping(_cylinder("varela2023-reference", 0.045))
+    Rc = 5 * mp0.R
+    mp = lammps.build_mapping(_cylinder("varela2023-reference", Rc))
+    st = lammps.static(mp, "side", str(tmp_path), Rc=Rc)
+    assert st["ratio"] == pytest.approx(1.0, abs=1e-4), st
+    assert st["ratio_plane"] < 0.97 and st["speed"] < 1e-6
+    hit = lammps.wall_collision(mp, 1.0, str(tmp_path), Rc=Rc)
+    A = 0.5 * (mp.A + mp.A_wall)
+    ref = collision(mp.mass, mp.R_side, mp.E_star_pw, 1.0, A=A)
+    plane = collision(mp.mass, mp.R, mp.E_star_pw, 1.0, A=A)
+    assert hit["restitution"] == pytest.approx(ref.restitution, rel=5e-4)
+    assert hit["restitution"] < plane.restitution * (1 - 3e-3)
+    assert abs(hit["duration"] - ref.duration) <= 2 * mp.dt
+
+
+@needs_lmp
+@pytest.mark.examples
+def test_lammps_cylinder_quick(tmp_path):
+    """The cylinder cross-check at test size (3 cm, 2 + 3 periods, 2 beds, ~35 s): the curved
+    wall's checks pass, two beds (own seeds) are run by both codes from one settled state, the
+    paired difference has a finite interval and the codes agree within 5 % over 3 periods; the
+    undamped bed's energy closes; data and figure are written and the summary is rewritten byte
+    for byte from data.h5."""
+    import h5py
+    from helpers import load_experiment
+
+    study = load_experiment("lammps_cylinder")
+    res = study.main(["--quick", "--out", str(tmp_path), "--no-progress"])
+    side = [r for r in res["checks"]["static"] if r["wall"] == "side"]
+    assert len(side) == 1 and side[0]["ratio"] == pytest.approx(1.0, abs=1e-4)
+    assert all(abs(r["restitution"] / r["ref_restitution"] - 1) < 1e-3
+               for r in res["checks"]["side"] + res["checks"]["wall"] + res["checks"]["pair"])
+    beds = res["cases"][0.03]["beds"]
+    assert [b["seed"] for b in beds] == [0, 1]
+    assert not np.array_equal(beds[0]["jd"]["bed_r"], beds[1]["jd"]["bed_r"])
+    assert beds[0]["jd"]["config"].container.shape == "cylinder"
+    r = res["table"][0.03]
+    assert r["R"] == 2 and r["n"] == 2 and np.isfinite(r["hw"]) and r["hw"] > 0
+    assert abs(r["rel"]) < 0.05
+    assert res["closure"]["relative"] < 5e-3
+    with h5py.File(tmp_path / "data.h5") as h:
+        assert h["A_3cm/difference_per_bed"].shape == (2,)
+        assert h["A_3cm/bed_1/lammps/dissipation_per_period"].shape == (5,)
+    first = (tmp_path / "summary.md").read_text()
+    assert "zcylinder" in first and "R = 2 independently poured beds" in first
+    assert (tmp_path / "figure.png").stat().st_size > 10_000
+    study.main(["--from-data", "--out", str(tmp_path)])
+    assert (tmp_path / "summary.md").read_text() == first
