@@ -251,3 +251,44 @@ def test_a_run_of_three_cells_closes_its_energy_balance(engine):
     assert (rec["n_floor_cell"][-1] > 0).all()  # every cell's bed rests on its floor
     for c in range(3):
         assert res.summary[f"mean_e_kinetic_cell{c}"] > 0
+
+
+def test_the_preset_is_its_documented_toml(tmp_path):
+    """``sanchez2012-cells`` is the TOML of docs/physics.md §5 over ``sanchez2012-optimal``:
+    four cells of 62 grains (248 in all) of the thesis' box section, ``Lz = 0.0932`` m."""
+    from jaxdamp.config import load_toml
+
+    f = tmp_path / "cells.toml"
+    f.write_text('cells = 4\n[box]\nLx = 0.03675\nLy = 0.03675\nLz = 0.0932\n[[grains]]\n'
+                 'count = 62\nradius = 0.003\nname = "steel"\n[grains.material]\nE = 2.03e11\n'
+                 'nu = 0.28\ndensity = 8030.0\nmu = 0.3\ngamma_n = 3660.0\ngamma_s = 10980.0\n')
+    preset = validate(presets.get("sanchez2012-cells"))
+    toml = load_toml(str(f), THESIS)
+    assert dataclasses.replace(toml, name=preset.name, notes=preset.notes) == preset
+    assert preset.n_grains == 248
+    # a mass ratio of 0.095 for the whole damper gives the same cells
+    ratio = validate(apply_overrides(presets.get("sanchez2012-cells"),
+                                     {"grains.0.count": None, "grains.0.mass_ratio": 0.095}))
+    assert ratio.grains[0].count == 62
+
+
+def test_figures_and_exports_see_every_cell():
+    """Each cell's outline is the container's at its corner; the bounding box of the damper
+    (figures' limits, the XYZ export's ``Lattice``) runs from the first cell's wall to the
+    last one's."""
+    from jaxdamp.physics.containers import container
+    from jaxdamp.physics.model import cell_outlines, damper_extent
+
+    cfg = validate(apply_overrides(THESIS, ["cells=3", "grains.0.count=40"]))
+    radii = grain_radii(cfg)
+    origins = cell_origins(cfg, radii)
+    one = container(cfg).outline(cfg, 0.01)
+    lines = cell_outlines(cfg, radii, 0.01)
+    assert len(lines) == 3 * len(one)
+    for c in range(3):
+        for a, b in zip(one, lines[c * len(one):(c + 1) * len(one)]):
+            np.testing.assert_array_equal(b, a + [origins[c, 0], origins[c, 1], 0.0])
+    x0, x1, y0, y1 = damper_extent(cfg, radii)
+    assert (x0, y0, y1) == (0.0, 0.0, cfg.box.Ly) and x1 == origins[2, 0] + cfg.box.Lx
+    assert damper_extent(dataclasses.replace(cfg, cells=1), radii[:40]) == (
+        0.0, cfg.box.Lx, 0.0, cfg.box.Ly)

@@ -312,7 +312,8 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                 (parts[0], parts[1], parts[2], parts[3], parts[4], parts[5], parts[6], parts[7],
                  parts[8], parts[9], parts[10],
                  far) = grain_walls(shape, law, tid, n, nt, r1, vp, rw, Rb, mb, ref, wk, wks, sec,
-                                    og, Fs, Ts, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
+                                    og, dims.cells > 1, Fs, Ts, ex, ey, ez, z1, zdp, Lz, grav,
+                                    drag, half_skin2)
                 if cuda.syncthreads_or(1 if far else 0) or first:
                     # the lists anew, from the predicted positions in the box frame
                     first = False

@@ -91,11 +91,12 @@ def _draw_3d(ax, r, radius, faces, config, z_box, zlim, zoom, fontsize):
     from mpl_toolkits.mplot3d import proj3d
 
     from jaxdamp.physics.containers import container  # the physics: on use
+    from jaxdamp.physics.model import cell_outlines, damper_extent
 
     vessel = container(config)
     Lz = vessel.height(config)
-    x0, x1, y0, y1 = vessel.extent(config)
-    for line in vessel.outline(config, z_box):
+    x0, x1, y0, y1 = damper_extent(config, radius)  # every cell (Config.cells)
+    for line in cell_outlines(config, radius, z_box):
         ax.plot(*(np.asarray(line).T * MM), color="0.35", lw=0.8)
     ax.set_xlim(x0 * MM, x1 * MM)
     ax.set_ylim(y0 * MM, y1 * MM)
@@ -123,15 +124,20 @@ def _draw_side(ax, r, radius, faces, config, z_box, fontsize):
     from matplotlib.patches import Circle, Rectangle
 
     from jaxdamp.physics.containers import container  # the physics: on use
+    from jaxdamp.physics.model import cell_origins
 
     vessel = container(config)
     Lz = vessel.height(config)
-    x0, x1, _, _ = vessel.extent(config)
+    c0, c1, _, _ = vessel.extent(config)
+    origins = cell_origins(config, radius)[:, 0]  # every cell (Config.cells)
+    x0, x1 = c0 + origins.min(), c1 + origins.max()
     order = np.argsort(-radius)  # small grains drawn last, on top
     circles = [Circle((r[k, 0] * MM, (r[k, 2] - z_box) * MM), radius[k] * MM) for k in order]
     ax.add_collection(PatchCollection(circles, facecolor=faces[order], edgecolor="none",
                                       alpha=0.8))
-    ax.add_patch(Rectangle((x0 * MM, 0), (x1 - x0) * MM, Lz * MM, fill=False, lw=1))
+    for ox in origins:
+        ax.add_patch(Rectangle(((c0 + ox) * MM, 0), (c1 - c0) * MM, Lz * MM, fill=False,
+                               lw=1))
     pad = 0.02 * max(x1 - x0, Lz) * MM
     ax.set_xlim(x0 * MM - pad, x1 * MM + pad)
     ax.set_ylim(-pad, Lz * MM + pad)

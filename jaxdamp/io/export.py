@@ -14,7 +14,8 @@ Conventions of the written files (SI units, lab frame, as in the run file):
       steel x y z radius qx qy qz qw
 
   ``Lattice`` and ``Origin`` are the container's bounding box at the snapshot's time (it
-  moves with the floor ``z_box``). ``orientation`` is written in OVITO's component order ``(x, y, z, w)``; the run
+  moves with the floor ``z_box``; a damper of several cells: the box around all of them,
+  :func:`jaxdamp.physics.model.damper_extent`). ``orientation`` is written in OVITO's component order ``(x, y, z, w)``; the run
   file stores ``(w, x, y, z)``.
 - **legacy VTK** (``<stem>_0000.vtk``, ... one per snapshot): ``DATASET POLYDATA`` with the
   grain centres as ``POINTS`` and ``VERTICES``, dataset field data ``TIME`` and ``z_box``, and
@@ -144,10 +145,11 @@ XYZ_PROPERTIES = "species:S:1:pos:R:3:radius:R:1:orientation:R:4"
 def write_xyz(s: Snapshots, out) -> str:
     """Write every frame of ``s`` to one extended-XYZ file; returns the path."""
     from jaxdamp.physics.containers import container  # the physics: on use
+    from jaxdamp.physics.model import damper_extent
 
     labels = _species_labels(s)
     vessel = container(s.config)
-    x0, x1, y0, y1 = vessel.extent(s.config)
+    x0, x1, y0, y1 = damper_extent(s.config, np.asarray(s.radius))  # every cell's
     Lx, Ly, Lz = x1 - x0, y1 - y0, vessel.height(s.config)
     n = len(s.radius)
     os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)

@@ -277,6 +277,23 @@ def cell_origins(config: Config, radii: np.ndarray) -> np.ndarray:
     return out
 
 
+def damper_extent(config: Config, radii: np.ndarray) -> tuple[float, float, float, float]:
+    """The bounding rectangle ``(x0, x1, y0, y1)`` [m] of every cell's section, box frame
+    (the container's ``extent`` for one cell; figures and export)."""
+    x0, x1, y0, y1 = container(config).extent(config)
+    origins = cell_origins(config, radii)
+    return (x0 + float(origins[:, 0].min()), x1 + float(origins[:, 0].max()),
+            y0 + float(origins[:, 1].min()), y1 + float(origins[:, 1].max()))
+
+
+def cell_outlines(config: Config, radii: np.ndarray, z0: float = 0.0) -> list[np.ndarray]:
+    """Every cell's edges as 3-D polylines [m] (the container's ``outline`` at each cell's
+    corner, :func:`cell_origins`; floor at ``z0``)."""
+    lines = container(config).outline(config, z0)
+    return [line + np.array([ox, oy, 0.0]) for ox, oy in cell_origins(config, radii)
+            for line in lines]
+
+
 def contact_law(config: Config) -> Law:
     """The configuration's contact law (:data:`jaxdamp.physics.contact.LAWS`)."""
     return LAWS[config.contact_law]
