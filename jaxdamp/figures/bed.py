@@ -164,8 +164,9 @@ def snapshot_figure(r, radius, species, config, z_box=0.0, *, color="species", s
         fig.colorbar(sc, cax=fig.add_axes((0.8, 0.3, 0.03, 0.4)),
                      label="height of the centre above the floor [mm]")
     head = f"t = {t:.5g} s, " if t is not None else ""
+    cells = f" × {config.cells} cells" if config.cells > 1 else ""
     fig.suptitle((title + "\n" if title else "") + f"{head}{len(radius)} grains; "
-                 f"{vessel.name}: {vessel.describe(config)}, height "
+                 f"{vessel.name}{cells}: {vessel.describe(config)}, height "
                  f"{vessel.height(config) * MM:g} mm", fontsize=9)
     return fig
 
