@@ -180,10 +180,15 @@ def test_identical_cells_move_alike_and_push_k_times_one_cell(engine):
     np.testing.assert_allclose(r3["e_kinetic_cell"].sum(axis=1), r3["e_kinetic"], rtol=1e-12)
 
 
-def _two_cells(n=(10, 15), copies=1):
+CYLINDER = ["container.shape=cylinder", "container.radius=0.012", "container.Lz=0.02"]
+
+
+def _two_cells(n=(10, 15), extras=()):
     """The two-species mixture of tests/test_native.py in two cells, each cell its own copy of
-    a fast, spinning bed of ``n`` grains (big ones with a 5 % radius spread: the cells differ)."""
-    cfg = dataclasses.replace(mixture("primary", "arithmetic", counts=n), cells=2)
+    a fast, spinning bed of ``n`` grains (big ones with a 5 % radius spread: the cells differ);
+    ``extras``: overrides (another container)."""
+    cfg = apply_overrides(dataclasses.replace(mixture("primary", "arithmetic", counts=n),
+                                              cells=2), list(extras))
     model, params = build(cfg)
     r, v, w = mixture_bed(sum(n), spacing=0.0042)
     big, small = np.arange(n[0]), np.arange(n[0], sum(n))
@@ -205,10 +210,12 @@ def _agree(got, ref, rtol=1e-9):
                                    err_msg=k)
 
 
-def test_native_equals_jax_on_two_cells():
-    """Two cells of the two-species mixture (friction, rotation, the primary): the native kernel
-    and the JAX engine agree to round-off after 300 steps, per-cell records included."""
-    _, (model, pb, st, nbrs) = _two_cells()
+@pytest.mark.parametrize("extras", [(), CYLINDER], ids=["box", "cylinder"])
+def test_native_equals_jax_on_two_cells(extras):
+    """Two cells of the two-species mixture (friction, rotation, the primary), in boxes and in
+    cylinders: the native kernel and the JAX engine agree to round-off after 300 steps,
+    per-cell records included."""
+    _, (model, pb, st, nbrs) = _two_cells(extras=extras)
     out = {e: chunk_fn(model, 3, 100, engine=e)(st, nbrs, pb) for e in ("jax", "native")}
     work = np.asarray(out["jax"][0].work[0])
     assert work[2] > 0 and work[4] > 0  # pair and wall contacts
