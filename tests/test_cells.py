@@ -142,7 +142,7 @@ def _driven(cells, n=12):
                   name="cells", cells=cells)
 
 
-@pytest.mark.parametrize("engine", ["jax", "native"])
+@pytest.mark.parametrize("engine", [pytest.param("jax", marks=pytest.mark.long), "native"])
 def test_identical_cells_move_alike_and_push_k_times_one_cell(engine):
     """Three identical cells started from one cell's bed copied into each: every cell moves as
     the one-cell damper does (to round-off: the cells' positions differ by their offsets) and the
@@ -210,7 +210,8 @@ def _agree(got, ref, rtol=1e-9):
                                    err_msg=k)
 
 
-@pytest.mark.parametrize("extras", [(), CYLINDER], ids=["box", "cylinder"])
+@pytest.mark.parametrize("extras", [(), pytest.param(CYLINDER, marks=pytest.mark.long)],
+                         ids=["box", "cylinder"])
 def test_native_equals_jax_on_two_cells(extras):
     """Two cells of the two-species mixture (friction, rotation, the primary), in boxes and in
     cylinders: the native kernel and the JAX engine agree to round-off after 300 steps,
