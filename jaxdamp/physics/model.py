@@ -265,10 +265,11 @@ def cell_origins(config: Config, radii: np.ndarray) -> np.ndarray:
     """The box-frame corners ``(k, 2)`` [m] of the ``k = Config.cells`` cells: side by side
     along the box frame's ``x`` axis at the pitch ``w + gap``, ``w`` the width of the
     container's section along ``x`` (its ``extent``) and ``gap = w + 2 cutoff``
-    (:func:`neighbour_cutoff`). The cells' walls are then more than ``2 cutoff`` apart: no
-    grain pair across cells comes within any engine's listing distance (at most ``2 R_max +``
-    twice the skin; the native kernel's widened skin is at most ``2 R_max`` more), so no
-    neighbour list holds one. The first cell is at the origin (a one-cell damper unchanged)."""
+    (:func:`neighbour_cutoff`). Facing walls of neighbouring cells are then ``w + 2 cutoff``
+    apart, farther than any engine lists a pair (centres closer than ``cutoff + 0.05 skin`` in
+    the JAX engine, than ``cutoff + 2 R_max`` in the native and device kernels at their widest
+    skin), so no neighbour list ever holds a pair across cells. The first cell is at the
+    origin (a one-cell damper unchanged)."""
     x0, x1, _, _ = container(config).extent(config)
     width = x1 - x0
     pitch = 2.0 * width + 2.0 * neighbour_cutoff(config, radii)
