@@ -404,6 +404,12 @@ class Config:
         with a speed-independent restitution; needs ``Material.linear_stiffness``).
       name: preset or user label.
       notes: free text, e.g. deviations from a source.
+      cells: the number ``k`` of identical cells of the damper on the same primary degree of
+        freedom (default 1): each cell its own container (``box`` or ``container``) and bed,
+        the sum of their wall forces acting on the primary (docs/physics.md, "Several cells").
+        The ``[[grains]]`` tables state the fill of *each* cell (a ``count`` and a
+        ``fill_fraction`` are per cell); a ``mass_ratio`` is the whole damper's (all cells),
+        each cell getting ``μ/k``. One degree of freedom only (no ``structure``).
     """
 
     system: str
@@ -425,15 +431,17 @@ class Config:
     name: str = "custom"
     notes: str = ""
     container: Container | None = None
+    cells: int = 1
 
     # -- convenience -------------------------------------------------------------------------
     @property
     def n_grains(self) -> int:
+        """Grains of the whole damper: every cell's (``cells ×`` the counts of a cell)."""
         if any(s.count is None for s in self.grains):
             raise ConfigError("the grain counts are stated as mass_ratio or fill_fraction: "
                               "validate the configuration first (jaxdamp.validation.validate "
                               "turns them into counts)")
-        return sum(s.count for s in self.grains)
+        return self.cells * sum(s.count for s in self.grains)
 
     @property
     def omega(self) -> float:

@@ -203,6 +203,22 @@ def _structure(s) -> None:
         raise ConfigError(f"structure.force = {s.force!r}: must be a finite number [N]")
 
 
+def _cells(config: Config) -> None:
+    """Checks of ``Config.cells``: an integer ≥ 1; several cells act on one degree of freedom
+    (the 1-DOF primary or a driven box), not on a multi-DOF structure's (a later step), and
+    the single-particle model (S3) has one cavity."""
+    k = config.cells
+    if not _integer(k) or k < 1:
+        raise ConfigError(f"cells = {k!r}: must be an integer ≥ 1 (the number of identical "
+                          "cells of the damper)")
+    if k > 1 and config.structure is not None:
+        raise ConfigError(f"cells = {k}: several cells act on one degree of freedom; with a "
+                          "multi-DOF [structure] only cells = 1 is supported for now")
+    if k > 1 and config.system == "impact":
+        raise ConfigError(f"cells = {k}: the single-particle model (system 'impact', S3) has "
+                          "one cavity; only cells = 1")
+
+
 def periodic(config: Config) -> bool:
     """Whether ``config`` is driven at ``frequency`` (a harmonic base motion of the primary, or
     a driven box), so that its per-cycle quantities and amplitudes mean something."""
@@ -321,6 +337,7 @@ def validate(config: Config) -> Config:
     _positive(config.frequency, "frequency")
     _positive(config.gravity, "gravity", allow_zero=True)
     _container(config)
+    _cells(config)
     if config.system == "impact":
         return _validate_impact(config)
 

@@ -58,7 +58,7 @@ def test_the_scalar_and_jax_forms_of_every_container_agree(name):
     touching = 0
     for i in range(n):
         one = dataclasses.replace(model, n=1, species=())
-        pi = dataclasses.replace(p, radius=p.radius[:1], mass=p.mass[:1])
+        pi = dataclasses.replace(p, radius=p.radius[:1], mass=p.mass[:1], origin=p.origin[:1])
         f = wall_forces(jnp.asarray(r[i:i + 1]), jnp.asarray(v[i:i + 1]), jnp.asarray(w[i:i + 1]),
                         0.0, 0.0, pi, one)
         acc = containers.side_contacts_scalar(

@@ -420,6 +420,11 @@ def steady_state_summary(config: Config, records: dict, final: State, t_window: 
       steady state).
     * ``balance_error``: the largest |energy-balance residual| over the run divided by the
       final ``|input| + losses`` [-].
+    * a damper of ``k > 1`` cells (``Config.cells``), for every cell ``c``:
+      ``mean_vz_bed_cell{c}``, the mean vertical velocity of its bed's centre of mass [m/s],
+      and ``mean_e_kinetic_cell{c}``, the mean translational kinetic energy of its grains [J]
+      (from the records ``vz_cm_cell``, ``e_kinetic_cell``); the amplitude, the work and the
+      losses are the whole damper's.
     """
     from jaxdamp.physics.energy import granular_loss
     from jaxdamp.physics.model import CH, CHANNELS, LOSSES
@@ -451,6 +456,13 @@ def steady_state_summary(config: Config, records: dict, final: State, t_window: 
     units["phase"] = "rad"
     summary["mean_vz_bed"] = float(np.mean(records["vz_cm"][i0:]))
     units["mean_vz_bed"] = "m/s"
+    if getattr(config, "cells", 1) > 1 and "vz_cm_cell" in records:
+        for c in range(config.cells):
+            summary[f"mean_vz_bed_cell{c}"] = float(np.mean(records["vz_cm_cell"][i0:, c]))
+            units[f"mean_vz_bed_cell{c}"] = "m/s"
+            summary[f"mean_e_kinetic_cell{c}"] = float(
+                np.mean(records["e_kinetic_cell"][i0:, c]))
+            units[f"mean_e_kinetic_cell{c}"] = "J"
     scale = abs(work[-1, CH["input"]]) + work[-1, LOSSES].sum()
     resid = np.max(np.abs(records["balance_residual"]))
     summary["balance_error"] = float(resid / scale) if scale > 0 else float(resid)

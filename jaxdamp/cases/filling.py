@@ -2,11 +2,12 @@
 
 A species of ``[[grains]]`` gives exactly one of
 
-* ``count``: the number of grains;
+* ``count``: the number of grains (of one cell, :attr:`jaxdamp.config.Config.cells`);
 * ``mass_ratio`` ``μ = m_grains / M``: the species' mass over the primary's mass ``M``
-  (``[primary] M``), so ``N = round(μ M / m̄)`` with ``m̄ = ρ v̄`` the mean grain mass;
+  (``[primary] M``), so ``N = round(μ M / m̄)`` with ``m̄ = ρ v̄`` the mean grain mass; a
+  damper of ``k`` cells (``Config.cells``) splits it, ``N = round(μ M / (k m̄))`` per cell;
 * ``fill_fraction`` ``f``: the volume of the species' bed at random packing over the cavity's
-  volume, ``f = N v̄ / (φ V)``, so ``N = round(f φ V / v̄)``;
+  volume (one cell's), ``f = N v̄ / (φ V)``, so ``N = round(f φ V / v̄)``;
 
 where ``v̄ = (4/3) π R³ (1 + s²)`` is the mean volume of a grain whose radius is uniform in
 ``R [1 − s, 1 + s]`` (``radius_spread = s``), ``V`` the cavity's volume (base area × ``Lz``) and
@@ -119,7 +120,8 @@ def _count(config: Config, i: int, sp: Species) -> int:
             raise ConfigError(f"{name}.mass_ratio: a mass ratio is the grains' mass over the "
                               f"primary's mass M ([primary] M), and system = {config.system!r} "
                               "has no primary; give count or fill_fraction")
-        n = round(mu * config.primary.M / (sp.material.density * mean_grain_volume(sp)))
+        n = round(mu * config.primary.M
+                  / (config.cells * sp.material.density * mean_grain_volume(sp)))
         what = f"{name}.mass_ratio = {mu:g}"
     elif sp.fill_fraction is not None:
         f = sp.fill_fraction
@@ -141,7 +143,7 @@ def _largest(config: Config, i: int, sp: Species, room: float) -> str:
     if sp.mass_ratio is not None:
         V, _, _ = cavity(config)
         n = room * packing_fraction(config, sp) * V / mean_grain_volume(sp)
-        mu = n * sp.material.density * mean_grain_volume(sp) / config.primary.M
+        mu = config.cells * n * sp.material.density * mean_grain_volume(sp) / config.primary.M
         return f"grains.{i}.mass_ratio ≤ {mu:.4g}"
     return f"grains.{i}.fill_fraction ≤ {room:.4g}"
 

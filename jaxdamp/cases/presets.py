@@ -70,6 +70,30 @@ def sanchez2012_cylinder() -> Config:
     )
 
 
+def sanchez2012_cells() -> Config:
+    """The thesis' optimal damper split into four box cells on the same primary
+    (``Config.cells``): the same grains in all, each cell the thesis' box section and the
+    thesis' free height above its bed."""
+    base = sanchez2012_optimal()
+    cells = 4
+    per_cell = round(base.grains[0].count / cells)  # 62.5 -> 62 (half to even): 248 grains
+    h_bed = 0.1225 - 0.0835  # the thesis' bed under its optimal gap (sanchez2012-impact)
+    Lz = round(0.0835 + h_bed * per_cell / base.grains[0].count, 4)
+    return dataclasses.replace(
+        base, name="sanchez2012-cells", cells=cells,
+        grains=(dataclasses.replace(base.grains[0], count=per_cell),),
+        box=Box(Lx=base.box.Lx, Ly=base.box.Ly, Lz=Lz),
+        notes=(f"The thesis' optimal damper split into {cells} box cells on the same primary "
+               f"(cells = {cells}): {per_cell} grains of 3 mm steel in each ({cells * per_cell} "
+               f"in all: 250/{cells} = 62.5 rounds to {per_cell}, 0.8 % less grain mass than "
+               "the thesis' 250, μ = 0.0950 instead of 0.0958), each cell the thesis' box "
+               f"section {base.box.Lx} × {base.box.Ly} m and its free height 0.0835 m above "
+               f"the bed (the thesis' bed of 0.039 m scaled to {per_cell} grains, 0.0097 m: "
+               f"Lz = {Lz} m). Beyond the thesis: its numerics and modulus are those of "
+               "sanchez2012-optimal."),
+    )
+
+
 def sanchez2012_random() -> Config:
     """The thesis damper under band-limited random base motion (``jaxdamp random``)."""
     return dataclasses.replace(
@@ -182,6 +206,7 @@ def varela2023_class(klass: str, sigma: float = 0.5) -> Config:
 PRESETS = {
     "sanchez2012-optimal": sanchez2012_optimal,
     "sanchez2012-cylinder": sanchez2012_cylinder,
+    "sanchez2012-cells": sanchez2012_cells,
     "sanchez2012-random": sanchez2012_random,
     "sanchez2012-chain": sanchez2012_chain,
     "sanchez2012-sec31": lambda: sanchez2012_sec31(250),

@@ -223,6 +223,7 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
         wtab = prow[po.wall_table:po.wall_table + S * F].reshape((S, F))
         Lz, grav = prow[po.Lz], prow[po.gravity]
         section = prow[po.section:po.section + n_section]
+        og = prow[po.origin:po.origin + 2 * n].reshape((n, 2))  # the grains' cells' corners
         dt = prow[po.dt]
         drag, t_win = prow[po.drag], prow[po.t_window]
         ex, ey, ez = prow[po.ex], prow[po.ey], prow[po.ez]
@@ -311,7 +312,8 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                 (parts[0], parts[1], parts[2], parts[3], parts[4], parts[5], parts[6], parts[7],
                  parts[8], parts[9], parts[10],
                  far) = grain_walls(shape, law, tid, n, nt, r1, vp, rw, Rb, mb, ref, wk, wks, sec,
-                                    Fs, Ts, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
+                                    og, dims.cells > 1, Fs, Ts, ex, ey, ez, z1, zdp, Lz, grav,
+                                    drag, half_skin2)
                 if cuda.syncthreads_or(1 if far else 0) or first:
                     # the lists anew, from the predicted positions in the box frame
                     first = False

@@ -49,7 +49,7 @@ from jaxdamp.physics.containers import (
     side_curvature_scalar,
 )
 from jaxdamp.physics.containers._scalar import add_wall_scalar
-from jaxdamp.physics.energy import record_row
+from jaxdamp.physics.energy import cell_bounds, record_row
 from jaxdamp.physics.excitation import base_motion_scalar, drive_motion_scalar
 from jaxdamp.physics.integrate import body_force_scalar, rotate_scalar, rotate_series_scalar
 from jaxdamp.physics.model import CH, N_CHANNELS, Params, State
@@ -89,10 +89,10 @@ StateOffsets = namedtuple("StateOffsets", STATE_FIELDS)
 ParamOffsets = namedtuple("ParamOffsets", PARAM_FIELDS)
 #: The integers that select the kernel's code paths and size its views: the mount
 #: (:data:`jaxdamp.physics.mounts.MOUNTS`), the contact law and the container (their ``id``), the contact tables'
-#: species and columns, the random base motion's lines, the structure's degrees of freedom
-#: and the container's section numbers.
+#: species and columns, the random base motion's lines, the structure's degrees of freedom,
+#: the container's section numbers and the damper's cells (``Model.cells``).
 Dims = namedtuple("Dims", ("mount", "law", "shape", "n_species", "n_cols", "n_lines", "ndof",
-                           "n_section"))
+                           "n_section", "cells"))
 
 #: The scalar forms the kernels inline (with the forms they call, from the same modules): a
 #: change to their source files must recompile the cached kernels (numba's cache only watches
@@ -315,19 +315,23 @@ if AVAILABLE:
         return wk
 
     @_kernel(inline="always")
-    def grain_walls(shape, law, lo, n, step, r1, vp, rw, Rb, mb, ref, wk, wks, sec, F, T, ex,
-                     ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
+    def grain_walls(shape, law, lo, n, step, r1, vp, rw, Rb, mb, ref, wk, wks, sec, og, shifted,
+                    F, T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
         """Pass 1 over the grains ``lo, lo + step, … < n`` (all of them on the CPU; a thread's
         own on the device, :mod:`jaxdamp.engine.fused`: the one definition of a grain's walls
         for both kernels): body force, the floor, the lid and the container's sides
         (number ``shape``, :mod:`jaxdamp.physics.containers`; ``sec``: its section numbers in
-        registers, :func:`~jaxdamp.physics.containers.section_scalar`) into ``F``, ``T``;
-        returns the
+        registers, :func:`~jaxdamp.physics.containers.section_scalar`; ``og``: the corner of
+        every grain's cell in the box frame, ``Params.origin`` ``(N, 2)``, taken off the
+        grain's position where ``shifted``: several cells) into ``F``, ``T``; returns the
         sums ``(elastic energy, normal loss, friction loss, box_z, floor + lid force, grains on
         the floor, on the lid, wall contacts (all walls), the floor's loss, the lid's loss,
         Σ m v², whether a grain moved more than skin/2 since the list was built)``. Inlined
-        where ``shape`` is a constant, the container's branch folds away:
-        :func:`_advance_one` keeps a copy for the box."""
+        where ``shape`` and ``shifted`` are constants, their branches fold away:
+        :func:`_advance_one` keeps a copy for the one-cell box, one for another one-cell
+        container and one for several cells (the one-cell copies are the kernel's code before
+        cells existed, to the bit: a change of the loop's code moved the compiler's fast-math
+        reassociation of the energy sums by an ulp)."""
         e_el = 0.0
         pw_n = 0.0
         pw_f = 0.0
@@ -379,8 +383,13 @@ if AVAILABLE:
                 floor_lid -= gz
                 n_lid += 1.0
                 l_lid += loss
+            cx = bx
+            cy = by
+            if shifted:  # the sides of the grain's own cell (its corner at og[i], box frame)
+                cx = bx - og[i, 0]
+                cy = by - og[i, 1]
             fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z, n_wall = side_contacts_scalar(
-                shape, law, bx, by, sec, Ri, wks, i, wx, wy, wz, sx, sy, sz, ex, ey, ez, acc)
+                shape, law, cx, cy, sec, Ri, wks, i, wx, wy, wz, sx, sy, sz, ex, ey, ez, acc)
             F[i, 0], F[i, 1], F[i, 2] = fx, fy, fz
             T[i, 0], T[i, 1], T[i, 2] = tx, ty, tz
         return (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
@@ -473,7 +482,8 @@ if AVAILABLE:
     def _advance_one(b, n_records, record_every, dims, skin, st, pm, so, po, sid, bounds, rec):
         """Advance system ``b`` of the packed batch by ``n_records × record_every`` steps in
         place, writing a sample after every ``record_every`` steps into ``rec[b]``
-        (:func:`jaxdamp.physics.energy.record_row`; ``bounds``: the species' index ranges): row
+        (:func:`jaxdamp.physics.energy.record_row`; ``bounds``: the species' and cells' index
+        ranges, :func:`~jaxdamp.physics.energy.cell_bounds`): row
         ``st[b]`` holds its state (the field NAME of ``State`` at ``so.NAME``), row ``pm[b]``
         its parameters (of ``Params`` at ``po.NAME``); ``dims`` (:data:`Dims`) selects the
         mount, the law and the container and sizes the views; ``sid`` the grains' species.
@@ -512,6 +522,8 @@ if AVAILABLE:
         wtab = prow[po.wall_table:po.wall_table + S * F].reshape((S, F))
         Lz, grav = prow[po.Lz], prow[po.gravity]
         section = prow[po.section:po.section + n_section]  # the container's (containers)
+        og = prow[po.origin:po.origin + 2 * n].reshape((n, 2))  # the grains' cells' corners
+        one_cell = dims.cells == 1
         dt = prow[po.dt]
         drag, t_win = prow[po.drag], prow[po.t_window]
         ex, ey, ez = prow[po.ex], prow[po.ey], prow[po.ez]  # the excitation axis
@@ -600,16 +612,21 @@ if AVAILABLE:
                     vpf[j] = vf[j] + dt * af[j]
                 for j in range(3 * n):
                     rwf[j] = R3[j] * (wf[j] + dt * alf[j])
-                if shape == _BOX:  # the common container: a copy with its branch folded
+                if shape == _BOX and one_cell:  # the common damper: its branches folded
                     (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
                      pdrag, far) = grain_walls(_BOX, law, 0, n, 1, r1, vp, rw, Rb, mb, ref, wk,
-                                               wks, sec, F, T, ex, ey, ez, z1, zdp, Lz, grav,
-                                               drag, half_skin2)
-                else:
+                                               wks, sec, og, False, F, T, ex, ey, ez, z1, zdp,
+                                               Lz, grav, drag, half_skin2)
+                elif one_cell:
                     (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
                      pdrag, far) = grain_walls(shape, law, 0, n, 1, r1, vp, rw, Rb, mb, ref, wk,
-                                               wks, sec, F, T, ex, ey, ez, z1, zdp, Lz, grav,
-                                               drag, half_skin2)
+                                               wks, sec, og, False, F, T, ex, ey, ez, z1, zdp,
+                                               Lz, grav, drag, half_skin2)
+                else:  # several cells: each grain's walls are its own cell's
+                    (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
+                     pdrag, far) = grain_walls(shape, law, 0, n, 1, r1, vp, rw, Rb, mb, ref, wk,
+                                               wks, sec, og, True, F, T, ex, ey, ez, z1, zdp,
+                                               Lz, grav, drag, half_skin2)
                 n_side = n_wall - n_floor - n_lid
                 if n > 1 and far:  # a grain moved more than skin/2: list the pairs anew
                     npairs, pi, pj, pc = _pairs(r1, ex * z1, ey * z1, ez * z1, cutoff, pi, pj,
@@ -723,18 +740,19 @@ def offsets(lay, names) -> np.ndarray:
 def kernel_args(model, state_layout, param_layout):
     """What both kernels take beside the packed rows (this one and the device's,
     :mod:`jaxdamp.engine.fused`): ``(dims, state offsets, param offsets, species index,
-    species bounds, sample width)``."""
+    species' and cells' bounds, sample width)``."""
     from jaxdamp.physics.contact import LAWS
     from jaxdamp.physics.energy import record_layout
 
     shapes = dict((name, shape) for name, shape, _ in param_layout)
     table = shapes["pair_table"]
     width = sum(int(np.prod(shape, dtype=np.int64)) for _, shape in record_layout(model))
-    bounds = np.array([sl.start for sl in model.species_slices()] + [model.n], np.int64)
+    bounds = cell_bounds(model)
     dims = Dims(mount=mount_of(model).id, law=LAWS[model.law].id,
                 shape=CONTAINERS[model.container].id, n_species=int(table[0]),
                 n_cols=int(table[2]), n_lines=int(shapes["lines"][0]),
-                ndof=int(shapes["s_r"][0]), n_section=int(shapes["section"][0]))
+                ndof=int(shapes["s_r"][0]), n_section=int(shapes["section"][0]),
+                cells=int(model.cells))
     return (dims, StateOffsets(*offsets(state_layout, STATE_FIELDS)),
             ParamOffsets(*offsets(param_layout, PARAM_FIELDS)),
             model.species_index().astype(np.int64), bounds, width)

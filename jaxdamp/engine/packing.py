@@ -5,7 +5,9 @@ Settling pours the grains into the box with its lid lifted out of the way (as a 
 filled before it is closed), with the box at rest at its starting height and a viscous drag
 on the grains that speeds up the settling. It stops once every grain is slower than
 ``numerics.settle_speed`` (or after ``numerics.settle_time``). Only the bed's geometry matters
-here, so one settled bed serves every ``Lz`` above its height and every frequency.
+here, so one settled bed serves every ``Lz`` above its height and every frequency. A damper
+of several cells (``Config.cells``) is poured cell by cell, each cell's lattice the one-cell
+pour at its own corner (:func:`poured`), and settles as one system.
 """
 
 from __future__ import annotations
@@ -120,6 +122,26 @@ def random_column(radii: np.ndarray, config: Config, seed: int) -> np.ndarray:
 POURS = {"lattice": fcc_lattice, "random": random_column}
 
 
+def poured(params: Params, model: Model, config: Config, seed: int) -> np.ndarray:
+    """Box-frame positions ``(N, 3)`` [m] of every cell's grains before they settle
+    (``Model.cells``): the one-cell pour of ``numerics.pour`` (:data:`POURS`, the same seed) of
+    each cell's grains, shifted to its cell's corner ``Params.origin``; one cell: the pour
+    itself."""
+    radii = np.asarray(params.radius)
+    pour = POURS[config.numerics.pour]
+    if model.cells == 1:
+        return pour(radii, config, seed)
+    cell = model.cell_index()
+    origin = np.asarray(params.origin)
+    out = np.empty((len(radii), 3))
+    for c in range(model.cells):
+        sel = cell == c
+        r = pour(radii[sel], config, seed)
+        r[:, :2] += origin[sel]
+        out[sel] = r
+    return out
+
+
 class SettledBed(NamedTuple):
     """A bed at rest. ``r``, ``v``, ``w``: ``(N, 3)``; ``q``: ``(N, 4)``; box-frame positions
     (floor at ``z = 0``). ``height`` [m] top of the highest grain above the floor;
@@ -175,7 +197,7 @@ def settle_many(configs: list[Config], model: Model, params: list[Params],
     settle_model = dataclasses.replace(model, system="driven")
     r0, ps = [], []
     for config, prm in zip(configs, params):
-        r = POURS[config.numerics.pour](np.asarray(prm.radius), config, config.numerics.seed)
+        r = poured(prm, model, config, config.numerics.seed)
         top = float((r[:, 2] + np.asarray(prm.radius)).max())
         r0.append(r)
         ps.append(dataclasses.replace(

@@ -125,11 +125,12 @@ def _draw_3d(ax, r, radius, faces, config, offset, zlim, zoom, fontsize):
     from mpl_toolkits.mplot3d import proj3d
 
     from jaxdamp.physics.containers import container  # the physics: on use
+    from jaxdamp.physics.model import cell_outlines, damper_extent
 
     vessel = container(config)
     Lz = vessel.height(config)
-    x0, x1, y0, y1 = vessel.extent(config)
-    for line in vessel.outline(config, 0.0):
+    x0, x1, y0, y1 = damper_extent(config, radius)  # every cell (Config.cells)
+    for line in cell_outlines(config, radius, 0.0):
         ax.plot(*((np.asarray(line) + offset).T * MM), color="0.35", lw=0.8)
     x0, x1, y0, y1 = x0 + offset[0], x1 + offset[0], y0 + offset[1], y1 + offset[1]
     z_box = offset[2]  # the floor's height in the lab frame
@@ -160,15 +161,20 @@ def _draw_side(ax, rb, radius, faces, config, fontsize):
     from matplotlib.patches import Circle, Rectangle
 
     from jaxdamp.physics.containers import container  # the physics: on use
+    from jaxdamp.physics.model import cell_origins
 
     vessel = container(config)
     Lz = vessel.height(config)
-    x0, x1, _, _ = vessel.extent(config)
+    c0, c1, _, _ = vessel.extent(config)
+    origins = cell_origins(config, radius)[:, 0]  # every cell (Config.cells)
+    x0, x1 = c0 + origins.min(), c1 + origins.max()
     order = np.argsort(-radius)  # small grains drawn last, on top
     circles = [Circle((rb[k, 0] * MM, rb[k, 2] * MM), radius[k] * MM) for k in order]
     ax.add_collection(PatchCollection(circles, facecolor=faces[order], edgecolor="none",
                                       alpha=0.8))
-    ax.add_patch(Rectangle((x0 * MM, 0), (x1 - x0) * MM, Lz * MM, fill=False, lw=1))
+    for ox in origins:
+        ax.add_patch(Rectangle(((c0 + ox) * MM, 0), (c1 - c0) * MM, Lz * MM, fill=False,
+                               lw=1))
     pad = 0.02 * max(x1 - x0, Lz) * MM
     ax.set_xlim(x0 * MM - pad, x1 * MM + pad)
     ax.set_ylim(-pad, Lz * MM + pad)
@@ -180,22 +186,21 @@ def _draw_side(ax, rb, radius, faces, config, fontsize):
 
 def _draw_top(ax, rb, radius, faces, config, fontsize):
     """The x–y view from above; ``rb``: the grain centres in the box frame [m]. The section's
-    outline is the container's ``outline`` (3-D edges) projected on the x–y plane: the edges
+    outline is every cell's ``outline`` (3-D edges) projected on the x–y plane: the edges
     that project to a point (vertical ones) are left out, and the lid's edges, which repeat
     the floor's, drawn once."""
     from matplotlib.collections import PatchCollection
     from matplotlib.patches import Circle
 
-    from jaxdamp.physics.containers import container  # the physics: on use
+    from jaxdamp.physics.model import cell_outlines, damper_extent  # the physics: on use
 
-    vessel = container(config)
-    x0, x1, y0, y1 = vessel.extent(config)
+    x0, x1, y0, y1 = damper_extent(config, radius)  # every cell (Config.cells)
     order = np.argsort(rb[:, 2], kind="stable")  # the highest grains drawn last, on top
     circles = [Circle((rb[k, 0] * MM, rb[k, 1] * MM), radius[k] * MM) for k in order]
     ax.add_collection(PatchCollection(circles, facecolor=faces[order], edgecolor="k",
                                       linewidths=0.2))
     seen = set()
-    for line in vessel.outline(config, 0.0):
+    for line in cell_outlines(config, radius, 0.0):
         xy = np.asarray(line)[:, :2] * MM
         key = np.round(xy, 9).tobytes()
         if np.ptp(xy, axis=0).max() == 0.0 or key in seen:
@@ -248,8 +253,9 @@ def snapshot_figure(r, radius, species, config, z_box=0.0, *, view="3d", color="
         fig.colorbar(sc, cax=fig.add_axes((0.8, 0.3, 0.03, 0.4)),
                      label="height of the centre above the floor [mm]")
     head = f"t = {t:.5g} s, " if t is not None else ""
+    cells = f" × {config.cells} cells" if config.cells > 1 else ""
     fig.suptitle((title + "\n" if title else "") + f"{head}{len(radius)} grains; "
-                 f"{vessel.name}: {vessel.describe(config)}, height "
+                 f"{vessel.name}{cells}: {vessel.describe(config)}, height "
                  f"{vessel.height(config) * MM:g} mm", fontsize=9)
     return fig
 

@@ -19,10 +19,12 @@ says otherwise; ``z_box`` the box's position along it, from ``/series/z_box``):
 
   ``Lattice`` and ``Origin`` are the container's bounding box at the snapshot's time: its
   section's bounding rectangle ``extent`` (for a cylinder of radius ``R_c`` the square
-  ``[0, 2 R_c]²`` around it: a cell is a parallelepiped, so a curved wall cannot be one) by
-  its height ``Lz``, its corner at ``(x0, y0, 0) + e z_box``; ``container`` names the
-  container (OVITO keeps it as a global attribute). ``orientation`` is written in OVITO's
-  component order ``(x, y, z, w)``; the run file stores ``(w, x, y, z)``.
+  ``[0, 2 R_c]²`` around it: a cell is a parallelepiped, so a curved wall cannot be one; a
+  damper of several cells: the rectangle around all of them,
+  :func:`jaxdamp.physics.model.damper_extent`) by its height ``Lz``, its corner at
+  ``(x0, y0, 0) + e z_box``; ``container`` names the container (OVITO keeps it as a global
+  attribute). ``orientation`` is written in OVITO's component order ``(x, y, z, w)``; the run
+  file stores ``(w, x, y, z)``.
 - **legacy VTK** (``<stem>_0000.vtk``, ... one per snapshot): ``DATASET POLYDATA`` with the
   grain centres as ``POINTS`` and ``VERTICES``, dataset field data ``TIME`` and ``z_box``, and
   point data ``radius`` [m] (the active scalars, for glyph scaling), ``species`` (index) and
@@ -165,10 +167,11 @@ def box_offset(config: Config, z_box) -> np.ndarray:
 def write_xyz(s: Snapshots, out) -> str:
     """Write every frame of ``s`` to one extended-XYZ file; returns the path."""
     from jaxdamp.physics.containers import container  # the physics: on use
+    from jaxdamp.physics.model import damper_extent
 
     labels = _species_labels(s)
     vessel = container(s.config)
-    x0, x1, y0, y1 = vessel.extent(s.config)
+    x0, x1, y0, y1 = damper_extent(s.config, np.asarray(s.radius))  # every cell's
     Lx, Ly, Lz = x1 - x0, y1 - y0, vessel.height(s.config)
     corners = np.array([x0, y0, 0.0]) + box_offset(s.config, s.z_box)
     n = len(s.radius)
@@ -242,13 +245,14 @@ def write_vtk(s: Snapshots, pvd) -> tuple[str, list[str]]:
     ParaView collection ``pvd`` indexing them by time (parts 0 and 1), ``<stem>.vtk.series``
     and ``<stem>_container.vtk.series``. Returns ``(pvd path, [vtk paths])``: the grains'
     frames, then the container's."""
-    from jaxdamp.physics.containers import container  # the physics: on use
+    from jaxdamp.physics.model import cell_outlines  # the physics: on use
 
     pvd = os.fspath(pvd)
     folder = os.path.dirname(os.path.abspath(pvd))
     os.makedirs(folder, exist_ok=True)
     grains, walls = _frame_names(pvd, len(s.t))
-    edges = [np.asarray(e, dtype=np.float64) for e in container(s.config).outline(s.config, 0.0)]
+    edges = [np.asarray(e, dtype=np.float64)  # every cell's (Config.cells)
+             for e in cell_outlines(s.config, np.asarray(s.radius), 0.0)]
     offsets = box_offset(s.config, s.z_box)
     for k in range(len(s.t)):
         with open(os.path.join(folder, grains[k]), "w") as f:

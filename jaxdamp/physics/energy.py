@@ -15,6 +15,7 @@ also reported by wall group (``pw_floor``, ``pw_lid``, ``pw_side``), a breakdown
 from __future__ import annotations
 
 import jax.numpy as jnp
+import numpy as np
 
 from jaxdamp.physics.contact import scalar_form
 from jaxdamp.physics.model import CH, LOSSES, N_CHANNELS, Model, Params, State
@@ -72,6 +73,11 @@ RECORD_UNITS = {
     "vz_cm_species": "m/s",
     "n_floor_species": "1",
     "n_lid_species": "1",
+    "z_cm_cell": "m",
+    "vz_cm_cell": "m/s",
+    "n_floor_cell": "1",
+    "n_lid_cell": "1",
+    "e_kinetic_cell": "J",
     "e_kinetic": "J",
     "e_rotational": "J",
     "e_gravitational": "J",
@@ -90,7 +96,11 @@ def record(st: State, p: Params, model: Model, mean_forces) -> dict:
     ``z_lowest``/``z_highest`` are the lowest and highest grain centres; ``work`` the
     cumulative channels ``(N_CHANNELS,)``. ``*_species`` are shaped ``(S,)``, one entry per
     species (:meth:`Model.species_slices`): centre of mass height and vertical velocity, and
-    the grains touching floor / lid at this instant (overlap > 0).
+    the grains touching floor / lid at this instant (overlap > 0). ``*_cell`` are shaped
+    ``(k,)``, one entry per cell of the damper (:meth:`Model.cell_index`, ``k = Model.cells``):
+    the same three and the cell's translational kinetic energy ``Σ ½ m v²`` (they sum to
+    ``e_kinetic``); the forces, contact counts on the side walls, energies and work channels
+    are the whole damper's.
     """
     kin, rot, grav = grain_energies(st, p)
     m_tot = jnp.maximum(p.mass.sum(), 1e-300)
@@ -111,6 +121,7 @@ def record(st: State, p: Params, model: Model, mean_forces) -> dict:
         n_lid=st.n_lid.astype(jnp.int32),
         n_side=st.n_side.astype(jnp.int32),
         **_species_records(st, p, model),
+        **_cell_records(st, p, model),
         e_kinetic=kin,
         e_rotational=rot,
         e_gravitational=grav,
@@ -122,15 +133,20 @@ def record(st: State, p: Params, model: Model, mean_forces) -> dict:
 
 
 #: Integer-valued records (stored as int32).
-INT_RECORDS = ("n_floor", "n_lid", "n_side", "n_floor_species", "n_lid_species")
+INT_RECORDS = ("n_floor", "n_lid", "n_side", "n_floor_species", "n_lid_species",
+               "n_floor_cell", "n_lid_cell")
 
 
 def record_layout(model: Model) -> list[tuple[str, tuple]]:
     """``[(name, shape)]`` of one sample of :func:`record`, in its order: the flat row of
-    :func:`record_row` (scalars ``()``, per-species ``(S,)``, ``work`` ``(N_CHANNELS,)``)."""
+    :func:`record_row` (scalars ``()``, per-species ``(S,)``, per-cell ``(k,)``, ``work``
+    ``(N_CHANNELS,)``)."""
     S = (len(model.species_slices()),)
+    k = (model.cells,)
     shapes = {"z_cm_species": S, "vz_cm_species": S, "n_floor_species": S,
-              "n_lid_species": S, "work": (N_CHANNELS,), "y_dofs": (model.dofs - 1,)}
+              "n_lid_species": S, "work": (N_CHANNELS,), "y_dofs": (model.dofs - 1,),
+              "z_cm_cell": k, "vz_cm_cell": k, "n_floor_cell": k, "n_lid_cell": k,
+              "e_kinetic_cell": k}
     return [(name, shapes.get(name, ())) for name in RECORD_UNITS]
 
 
@@ -141,9 +157,12 @@ def record_row(out, t, z, zd, y, e_prim, r, v, w, mass, inertia, radius, gravity
     the flat row ``out`` in the order of :func:`record_layout`. ``y``: the structure's other
     degrees of freedom, ``e_prim``: the primary's energy at ``t`` (:func:`primary_energy`),
     ``ez``: the vertical component of the excitation axis (the floor is at height ``ez z``);
-    ``bounds``: the species' first grain and the end, ``(S + 1,)``."""
+    ``bounds`` ``(S, k + 1)``: the grains of species ``s`` in cell ``c`` are
+    ``bounds[s, c] … bounds[s, c + 1] − 1`` (:func:`cell_bounds`), so species ``s`` is
+    ``bounds[s, 0] … bounds[s, k] − 1``."""
     n = r.shape[0]
-    S = bounds.shape[0] - 1
+    S = bounds.shape[0]
+    K = bounds.shape[1] - 1
     m_tot = 0.0
     mz = 0.0
     mv = 0.0
@@ -178,7 +197,7 @@ def record_row(out, t, z, zd, y, e_prim, r, v, w, mass, inertia, radius, gravity
         msv = 0.0
         nf = 0.0
         nl = 0.0
-        for i in range(bounds[s], bounds[s + 1]):
+        for i in range(bounds[s, 0], bounds[s, K]):
             ms += mass[i]
             msz += mass[i] * r[i, 2]
             msv += mass[i] * v[i, 2]
@@ -191,6 +210,29 @@ def record_row(out, t, z, zd, y, e_prim, r, v, w, mass, inertia, radius, gravity
         out[k + 2 * S + s] = nf
         out[k + 3 * S + s] = nl
     k += 4 * S
+    for c in range(K):  # per cell: its grains of every species
+        ms = 0.0
+        msz = 0.0
+        msv = 0.0
+        nf = 0.0
+        nl = 0.0
+        kc = 0.0
+        for s in range(S):
+            for i in range(bounds[s, c], bounds[s, c + 1]):
+                ms += mass[i]
+                msz += mass[i] * r[i, 2]
+                msv += mass[i] * v[i, 2]
+                kc += mass[i] * (v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1] + v[i, 2] * v[i, 2])
+                h = r[i, 2] - ez * z
+                nf += 1.0 if h < radius[i] else 0.0
+                nl += 1.0 if Lz - h < radius[i] else 0.0
+        ms = max(ms, 1e-300)
+        out[k + c] = msz / ms
+        out[k + K + c] = msv / ms
+        out[k + 2 * K + c] = nf
+        out[k + 3 * K + c] = nl
+        out[k + 4 * K + c] = 0.5 * kc
+    k += 5 * K
     out[k], out[k + 1], out[k + 2], out[k + 3], out[k + 4] = kin, rot, grav, e_elastic, e_prim
     k += 5
     losses = 0.0
@@ -215,3 +257,30 @@ def _species_records(st: State, p: Params, model: Model) -> dict:
         out["n_floor_species"].append(on_floor[sl].sum().astype(jnp.int32))
         out["n_lid_species"].append(on_lid[sl].sum().astype(jnp.int32))
     return {k: jnp.stack(v) for k, v in out.items()}
+
+
+def _cell_records(st: State, p: Params, model: Model) -> dict:
+    """The per-cell records of :func:`record`, ``(k,)`` each."""
+    k = model.cells
+    cell = jnp.asarray(model.cell_index())
+    one_hot = (cell[None, :] == jnp.arange(k)[:, None]).astype(p.mass.dtype)  # (k, N)
+    floor = st.r[:, 2] - p.ez * st.z
+    m_cell = jnp.maximum(one_hot @ p.mass, 1e-300)
+    count = lambda b: (one_hot @ b.astype(p.mass.dtype)).astype(jnp.int32)  # noqa: E731
+    return dict(
+        z_cm_cell=one_hot @ (p.mass * st.r[:, 2]) / m_cell,
+        vz_cm_cell=one_hot @ (p.mass * st.v[:, 2]) / m_cell,
+        n_floor_cell=count(floor < p.radius),
+        n_lid_cell=count(p.Lz - floor < p.radius),
+        e_kinetic_cell=0.5 * (one_hot @ (p.mass * jnp.sum(st.v * st.v, axis=-1))),
+    )
+
+
+def cell_bounds(model: Model) -> np.ndarray:
+    """``(S, k + 1)`` int64: grain ``bounds[s, c]`` is the first of species ``s`` in cell
+    ``c`` and ``bounds[s, k]`` the end of the species (grains stored species after species
+    and, within a species, cell after cell; :func:`record_row`)."""
+    k = model.cells
+    rows = [[sl.start + c * ((sl.stop - sl.start) // k) for c in range(k)] + [sl.stop]
+            for sl in model.species_slices()]
+    return np.array(rows, np.int64)

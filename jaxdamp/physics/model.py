@@ -76,6 +76,8 @@ class Model:
       precision: ``numerics.precision``, the floating-point type of the JAX engine's contact
         laws (:data:`jaxdamp.physics.contact.PRECISIONS`): ``"float64"`` or ``"float32"``.
       container: the container's name (:data:`jaxdamp.physics.containers.CONTAINERS`).
+      cells: the damper's identical cells (``Config.cells``); within each species the grains
+        are stored cell after cell (:meth:`cell_index`), ``species`` counting all cells'.
     """
 
     n: int
@@ -87,6 +89,7 @@ class Model:
     dofs: int = 1
     precision: str = "float64"
     container: str = "box"
+    cells: int = 1
 
     def species_slices(self) -> tuple[slice, ...]:
         """Index range of every species in the grain arrays (at least one, possibly empty)."""
@@ -98,6 +101,19 @@ class Model:
         """Species of every grain, ``(N,)`` int32 (the row of the contact tables)."""
         counts = self.species or (self.n,)
         return np.repeat(np.arange(len(counts), dtype=np.int32), counts)
+
+    def cell_index(self) -> np.ndarray:
+        """Cell of every grain, ``(N,)`` int32 (:func:`cell_of`)."""
+        return cell_of(self.species or (self.n,), self.cells)
+
+
+def cell_of(counts, cells: int) -> np.ndarray:
+    """Cell of every grain, ``(N,)`` int32, of species of ``counts`` grains each (all cells'
+    together, a multiple of ``cells``) stored species after species and, within a species, cell
+    after cell: ``0 … 0 1 … 1 … k−1`` in every species."""
+    return np.concatenate(
+        [np.repeat(np.arange(cells, dtype=np.int32), int(c) // cells) for c in counts]
+        or [np.zeros(0, np.int32)])
 
 
 @pytree_dataclass
@@ -119,7 +135,9 @@ class Params:
     one zero line and ``shock_T = 0`` when absent); ``s_M``, ``s_Minv``, ``s_K``, ``s_C``
     ``(n, n)``, ``s_r``, ``s_b`` ``(n,)`` the primary structure in the engines' order, the box's
     degree of freedom first (:func:`jaxdamp.physics.structure.internal`; ``n = 1`` for the
-    1-DOF primary, whose equation uses ``M, K, C``).
+    1-DOF primary, whose equation uses ``M, K, C``). ``origin`` ``(N, 2)`` [m]: the box-frame
+    ``(x, y)`` of the corner of every grain's cell (:func:`cell_origins`; zeros for one cell):
+    the walls see a grain at its box-frame position less its cell's origin.
     """
 
     radius: jnp.ndarray
@@ -153,6 +171,7 @@ class Params:
     s_C: jnp.ndarray
     s_r: jnp.ndarray
     s_b: jnp.ndarray
+    origin: jnp.ndarray
 
 
 @pytree_dataclass
@@ -207,23 +226,73 @@ class State:
 
 
 def grain_radii(config: Config) -> np.ndarray:
-    """Radii of all grains [m], shape ``(N,)``, species after species; spreads drawn with the seed."""
+    """Radii of all grains [m], shape ``(N,)``, species after species and, within a species,
+    cell after cell (``Config.cells``); spreads drawn with the seed, in that order (one cell:
+    the draws of a one-cell damper)."""
     rng = np.random.default_rng(config.numerics.seed)
     out = []
     for sp in config.grains:
-        r = np.full(sp.count, sp.radius, dtype=np.float64)
+        n = config.cells * sp.count
+        r = np.full(n, sp.radius, dtype=np.float64)
         if sp.radius_spread > 0:
-            r = sp.radius * (1.0 + sp.radius_spread * rng.uniform(-1.0, 1.0, sp.count))
+            r = sp.radius * (1.0 + sp.radius_spread * rng.uniform(-1.0, 1.0, n))
         out.append(r)
     return np.concatenate(out) if out else np.zeros(0)
 
 
 def grain_species(config: Config) -> np.ndarray:
-    """Species index of every grain, shape ``(N,)``."""
+    """Species index of every grain, shape ``(N,)`` (every cell's grains)."""
     return np.concatenate(
-        [np.full(sp.count, i, dtype=np.int32) for i, sp in enumerate(config.grains)]
+        [np.full(config.cells * sp.count, i, dtype=np.int32)
+         for i, sp in enumerate(config.grains)]
         or [np.zeros(0, np.int32)]
     )
+
+
+def grain_cell(config: Config) -> np.ndarray:
+    """Cell index of every grain, shape ``(N,)`` int32 (:func:`cell_of`: within each species,
+    cell after cell)."""
+    return cell_of([config.cells * sp.count for sp in config.grains], config.cells)
+
+
+def neighbour_cutoff(config: Config, radii: np.ndarray) -> float:
+    """``Model.cutoff`` [m]: ``2 R_max + skin``, ``skin = numerics.skin R_max``."""
+    r_max = float(radii.max()) if len(radii) else 0.0
+    return 2.0 * r_max + config.numerics.skin * r_max
+
+
+def cell_origins(config: Config, radii: np.ndarray) -> np.ndarray:
+    """The box-frame corners ``(k, 2)`` [m] of the ``k = Config.cells`` cells: side by side
+    along the box frame's ``x`` axis at the pitch ``w + gap``, ``w`` the width of the
+    container's section along ``x`` (its ``extent``) and ``gap = w + 2 cutoff``
+    (:func:`neighbour_cutoff`). Facing walls of neighbouring cells are then ``w + 2 cutoff``
+    apart, farther than any engine lists a pair (centres closer than ``cutoff + 0.05 skin`` in
+    the JAX engine, than ``cutoff + 2 R_max`` in the native and device kernels at their widest
+    skin), so no neighbour list ever holds a pair across cells. The first cell is at the
+    origin (a one-cell damper unchanged)."""
+    x0, x1, _, _ = container(config).extent(config)
+    width = x1 - x0
+    pitch = 2.0 * width + 2.0 * neighbour_cutoff(config, radii)
+    out = np.zeros((config.cells, 2))
+    out[:, 0] = pitch * np.arange(config.cells)
+    return out
+
+
+def damper_extent(config: Config, radii: np.ndarray) -> tuple[float, float, float, float]:
+    """The bounding rectangle ``(x0, x1, y0, y1)`` [m] of every cell's section, box frame
+    (the container's ``extent`` for one cell; figures and export)."""
+    x0, x1, y0, y1 = container(config).extent(config)
+    origins = cell_origins(config, radii)
+    return (x0 + float(origins[:, 0].min()), x1 + float(origins[:, 0].max()),
+            y0 + float(origins[:, 1].min()), y1 + float(origins[:, 1].max()))
+
+
+def cell_outlines(config: Config, radii: np.ndarray, z0: float = 0.0) -> list[np.ndarray]:
+    """Every cell's edges as 3-D polylines [m] (the container's ``outline`` at each cell's
+    corner, :func:`cell_origins`; floor at ``z0``)."""
+    lines = container(config).outline(config, z0)
+    return [line + np.array([ox, oy, 0.0]) for ox, oy in cell_origins(config, radii)
+            for line in lines]
 
 
 def contact_law(config: Config) -> Law:
@@ -274,13 +343,14 @@ def build(config: Config, radii: np.ndarray | None = None) -> tuple[Model, Param
 
     r_max = float(radii.max()) if n else 0.0
     skin = config.numerics.skin * r_max
+    cutoff = neighbour_cutoff(config, radii)
     structure = internal(config) if config.system == "primary" else None
     vessel = container(config)
     model = Model(
-        n=n, system=config.system, law=config.contact_law, cutoff=2.0 * r_max + skin, skin=skin,
-        species=tuple(int(sp.count) for sp in config.grains),
+        n=n, system=config.system, law=config.contact_law, cutoff=cutoff, skin=skin,
+        species=tuple(int(config.cells * sp.count) for sp in config.grains),
         dofs=len(structure["s_r"]) if structure else 1,
-        precision=config.numerics.precision, container=vessel.name,
+        precision=config.numerics.precision, container=vessel.name, cells=config.cells,
     )
     prim = config.primary
     shock = config.shock if config.system == "primary" else None
@@ -310,6 +380,7 @@ def build(config: Config, radii: np.ndarray | None = None) -> tuple[Model, Param
         shock_t0=f64(shock.start if shock else 0.0),
         shock_T=f64(shock.duration if shock else 0.0),
         **{k: f64(v) for k, v in (structure or _no_structure()).items()},
+        origin=f64(cell_origins(config, radii)[model.cell_index()]),
     )
     return model, params
 
@@ -383,8 +454,9 @@ def primary_frequency(config: Config) -> float | None:
 
 
 def grain_mass(config: Config) -> float:
-    """Total mass of the granulate [kg] (mean radii; exact masses are in ``Params.mass``)."""
-    return sum(
+    """Total mass of the granulate [kg], all cells' (mean radii; exact masses are in
+    ``Params.mass``)."""
+    return config.cells * sum(
         sp.count * sp.material.density * 4.0 / 3.0 * math.pi * sp.radius**3 for sp in config.grains
     )
 

@@ -4,11 +4,13 @@ law is mapped over a grain's walls.
 The container (:mod:`jaxdamp.physics.containers`, ``model.container``) is a prism: the floor at
 height 0, the lid at ``Lz`` and the side walls of its section, in its frame, shifted by
 ``e z_box``: it moves rigidly along the excitation axis ``e = (ex, ey, ez)`` (``Params``;
-vertical by default), with velocity ``e zd_box``. Walls use the same contact law as grain pairs
-with ``m* = m_i``, ``R* = R_i`` for a plane (the container's effective radius for a curved
-wall) and the constants of the grain's species against the wall material (a row of
-``Params.wall_table``, mixed when the model was built). The walls are taken in the order
-floor, lid, then the container's sides.
+vertical by default), with velocity ``e zd_box``. A damper of several cells (``Model.cells``)
+is one such container per cell, side by side in the box frame: a grain sees the walls of its
+own cell, whose corner is at ``Params.origin`` (box frame; zeros for one cell). Walls use
+the same contact law as grain pairs with ``m* = m_i``, ``R* = R_i`` for a plane (the
+container's effective radius for a curved wall) and the constants of the grain's species
+against the wall material (a row of ``Params.wall_table``, mixed when the model was built).
+The walls are taken in the order floor, lid, then the container's sides.
 """
 
 from __future__ import annotations
@@ -62,8 +64,11 @@ def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
       p: :class:`jaxdamp.physics.model.Params`.
       model: :class:`jaxdamp.physics.model.Model` (the law, the container, the species).
     """
-    # Signed distance of each centre to each wall, (N, 2 + W): floor, lid, the sides.
-    x, y, floor = r[:, 0] - p.ex * z_box, r[:, 1] - p.ey * z_box, r[:, 2] - p.ez * z_box
+    # Signed distance of each centre to each wall, (N, 2 + W): floor, lid, the sides; (x, y)
+    # in the frame of the grain's own cell (its corner at p.origin in the box frame)
+    x = r[:, 0] - p.ex * z_box - p.origin[:, 0]
+    y = r[:, 1] - p.ey * z_box - p.origin[:, 1]
+    floor = r[:, 2] - p.ez * z_box
     vessel = CONTAINERS[model.container]
     gaps, (snx, sny), curvature = vessel.sides_jax(x, y, p.section)
     dist = jnp.stack((floor, p.Lz - floor) + tuple(gaps), axis=-1)
