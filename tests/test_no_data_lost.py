@@ -202,6 +202,12 @@ def test_resume_refuses_a_checkpoint_of_an_older_version_in_one_line(tmp_path):
         h["checkpoint/state/work"] = work[..., :7]
     with pytest.raises(ConfigError, match=r"it has 7 work channels, this version 10"):
         run(cfg, out=str(out), resume=True, progress=False, echo=None)
+    out = tmp_path / "before_cells.h5"  # its series lack a record: they would end short of t
+    run(cfg, out=str(out), progress=False, echo=None, max_chunks=1)
+    with h5py.File(out, "a") as h:
+        del h["series/z_cm_cell"]
+    with pytest.raises(ConfigError, match=r"older jaxdamp \(its series lack z_cm_cell\)"):
+        run(cfg, out=str(out), resume=True, progress=False, echo=None)
 
 
 def _tmpfs(path, size):

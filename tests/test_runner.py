@@ -11,6 +11,7 @@ from jaxdamp import cli
 from jaxdamp.cases import presets
 from jaxdamp.config import from_json
 from jaxdamp.physics.energy import RECORD_UNITS
+from jaxdamp.physics.model import N_CHANNELS
 from jaxdamp.studies.runner import SimulationDiverged, run
 
 SMALL = SMALL_RUN
@@ -34,7 +35,7 @@ def test_run_file_holds_config_series_snapshots_summary(finished):
         for name, unit in RECORD_UNITS.items():
             assert h[f"series/{name}"].shape[0] == n
             assert h[f"series/{name}"].attrs["units"] == unit
-        assert h["series/work"].shape == (n, 7)
+        assert h["series/work"].shape == (n, N_CHANNELS)
         assert json.loads(h["series/work"].attrs["channels"])[0] == "input"
         assert h["snapshots/r"].shape == (4, 30, 3)
         assert h["snapshots/q"].shape == (4, 30, 4)

@@ -176,23 +176,28 @@ def damaged_checkpoint(arrays: dict) -> str | None:
     return None
 
 
-def outdated_checkpoint(arrays: dict, path) -> str | None:
+def outdated_checkpoint(arrays: dict, path, series=()) -> str | None:
     """The one-line refusal to continue a file whose checkpoint an older jaxdamp wrote (a
-    state field it did not have yet, or fewer work channels), or ``None``. Such a state
-    cannot go on bit-identically: the fields it lacks have no history to restore."""
+    state field it did not have yet, or fewer work channels), or whose time series (the
+    names in ``series``, once samples were written) lack a record this version writes; or
+    ``None``. Such a file cannot go on bit-identically: what it lacks has no history."""
     import dataclasses
 
-    from jaxdamp.physics.model import N_CHANNELS, State  # the physics: on use
+    from jaxdamp.physics.energy import RECORD_UNITS  # the physics: on use
+    from jaxdamp.physics.model import N_CHANNELS, State
 
     optional = {"y", "yd", "ydd"}  # before multi-DOF structures: one DOF, nothing to restore
     missing = [f.name for f in dataclasses.fields(State)
                if f.name not in optional and f"state/{f.name}" not in arrays]
     work = arrays.get("state/work")
     channels = np.shape(work)[-1] if work is not None else N_CHANNELS
-    if not missing and channels == N_CHANNELS:
+    series = set(series)
+    unrecorded = [k for k in RECORD_UNITS if series and k not in series]
+    if not missing and channels == N_CHANNELS and not unrecorded:
         return None
     what = (f"its state lacks {', '.join(missing)}" if missing else
-            f"it has {channels} work channels, this version {N_CHANNELS}")
+            f"it has {channels} work channels, this version {N_CHANNELS}"
+            if channels != N_CHANNELS else f"its series lack {', '.join(unrecorded)}")
     return (f"--resume: {path} was written by an older jaxdamp ({what}); it cannot be "
             "continued — start it again with --overwrite")
 

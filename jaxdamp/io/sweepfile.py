@@ -192,9 +192,10 @@ class SweepFile:
             arrays = {}
             g.visititems(lambda n, o: arrays.__setitem__(n, o[()])
                          if isinstance(o, h5py.Dataset) else None)
+            series = list(h5["records"].keys()) if "records" in h5 else []
         if (why := damaged_checkpoint(arrays)) is not None:
             raise ConfigError(damaged_message(path, why))
-        if (refusal := outdated_checkpoint(arrays, path)) is not None:
+        if (refusal := outdated_checkpoint(arrays, path, series)) is not None:
             raise ConfigError(refusal)
         return arrays, chunk, wall
 

@@ -240,7 +240,7 @@ def run(
         if why is not None:
             rf.close()
             raise ConfigError(damaged_message(out, why))
-        if (refusal := outdated_checkpoint(arrays, out)) is not None:
+        if (refusal := outdated_checkpoint(arrays, out, series.keys())) is not None:
             rf.close()
             raise ConfigError(refusal)
         engine = dict(engine=choice.engine, multiplier=config.numerics.capacity_multiplier)
