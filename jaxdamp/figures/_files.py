@@ -19,7 +19,7 @@ def open_file(h5_or_path):
 
 def run_title(h5, cfg) -> str:
     """``"<name>: <file>, N = <n> grains"`` of a run file with configuration dict ``cfg``."""
-    n = sum(s["count"] for s in cfg["grains"])
+    n = cfg.get("cells", 1) * sum(s["count"] for s in cfg["grains"])  # every cell's
     return f"{cfg.get('name', '')}: {os.path.basename(h5.filename)}, N = {n} grains"
 
 

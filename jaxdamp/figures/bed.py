@@ -226,7 +226,8 @@ def snapshot_figure(r, radius, species, config, z_box=0.0, *, view="3d", color="
 
     The figure is :data:`FIGSIZE` ``["snapshot"]`` for one or two views, widened by half for
     three; the plain panels keep fixed margins in inches for their labels, their data at equal
-    scales in x and y (or z)."""
+    scales in x and y (or z). The plain views of a damper of several cells (a row along x)
+    stand one above another, the full width each."""
     from jaxdamp.physics.containers import container  # the physics: on use
 
     views = parse_views(view)
@@ -234,6 +235,9 @@ def snapshot_figure(r, radius, species, config, z_box=0.0, *, view="3d", color="
     vessel = container(config)
     w, h = FIGSIZE["snapshot"]
     w *= max(1.0, len(views) / 2)
+    rows = config.cells > 1 and "3d" not in views  # a row of cells: the views one above another
+    if rows:
+        w, h = 1.5 * FIGSIZE["snapshot"][0], 0.5 * FIGSIZE["snapshot"][1] * len(views)
     fig = figure((w, h))
     right = 0.8 if color == "height" else 0.97  # room for the colour bar
     cell = right / len(views)
@@ -242,6 +246,10 @@ def snapshot_figure(r, radius, species, config, z_box=0.0, *, view="3d", color="
     for i, v in enumerate(views):
         if v == "3d":
             ax = fig.add_axes((i * cell, 0.02, cell, 0.9), projection="3d")
+        elif rows:
+            band = (1 - top) / len(views)
+            ax = fig.add_axes((left, 1 - top - (i + 1) * band + bottom, right - left - gap,
+                               band - bottom - 0.1 / h))
         else:
             ax = fig.add_axes((i * cell + left, bottom, cell - left - gap, 1 - bottom - top))
         sc = draw_snapshot(ax, r, radius, species, config, z_box, view=v, color=color,
