@@ -3,6 +3,7 @@ and drawn by it), optimisers that did not converge or failed (one rule, printed 
 and stored), refused empty options, and the FRF plot of a replicated sweep."""
 
 import json
+import re
 import warnings
 
 import h5py
@@ -105,7 +106,10 @@ def test_failed_fit_is_stored_and_not_drawn(tmp_path):
                      presets.get("sanchez2012-optimal").primary, 0.2, [None], failures=[why])
     labels = [line.get_label() for line in fig.axes[0].get_lines()]
     assert not any(lab.startswith("fit: M_ef") for lab in labels)
-    assert any(lab.startswith("fit failed (not a result): C_ef = 2.3 ± 1.3e+02") for lab in labels)
+    # the fitted value's last digits move with the libraries (2.3 in earlier environments,
+    # 2.299 with scipy 1.17.1 and numpy 2.4.6): the label names it and its error
+    assert any(re.match(r"fit failed \(not a result\): C_ef = 2\.3\d* ± 1\.3e\+02", lab)
+               for lab in labels), labels
 
 
 def test_frf_cli_prints_a_fit_without_degrees_of_freedom_as_failed(tmp_path, capsys):
