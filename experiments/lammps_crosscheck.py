@@ -259,6 +259,15 @@ def figure(groups: dict, table: dict, T: float, seeds: list, out: str, what: str
     scaffold.save_figure(fig, out, dpi=110)
 
 
+def collision_table(rows) -> list[str]:
+    """The table of a mapping check's collisions (LAMMPS against the reference)."""
+    return scaffold.table(("v [m/s]", "ε LAMMPS", "ε reference", "rel. diff",
+                           "overlap time LAMMPS [µs]", "reference [µs]"), [
+        (f"{r['v']:g}", f"{r['restitution']:.5f}", f"{r['ref_restitution']:.5f}",
+         f"{(r['restitution'] / r['ref_restitution'] - 1) * 100:+.3f} %",
+         f"{r['duration'] * 1e6:.2f}", f"{r['ref_duration'] * 1e6:.2f}") for r in rows])
+
+
 def summary(data, groups: dict, table: dict, s: dict, out: str) -> None:
     a, pm = data.attrs, scaffold.pm
     checks, closure, mp0, seeds = a["checks"], a["closure"], a["mapping"], list(a["seeds"])
@@ -305,12 +314,7 @@ def summary(data, groups: dict, table: dict, s: dict, out: str) -> None:
                        ("wall", "\nSphere–floor collisions (reference: grain–wall pair, m* = m, "
                         "R* = R):\n")):
         w(what)
-        L += scaffold.table(("v [m/s]", "ε LAMMPS", "ε reference", "rel. diff",
-                             "overlap time LAMMPS [µs]", "reference [µs]"), [
-            (f"{r['v']:g}", f"{r['restitution']:.5f}", f"{r['ref_restitution']:.5f}",
-             f"{(r['restitution'] / r['ref_restitution'] - 1) * 100:+.3f} %",
-             f"{r['duration'] * 1e6:.2f}", f"{r['ref_duration'] * 1e6:.2f}")
-            for r in checks[kind]])
+        L += collision_table(checks[kind])
     w("\nStatic test: one sphere pressed on a wall by g = 9.8 m/s², damped to rest (0.1 s); "
       "equilibrium overlap vs Hertz (m g / k_n)^{2/3} = "
       f"{checks['static'][0]['hertz']:.6g} m:\n")

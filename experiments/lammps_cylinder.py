@@ -106,10 +106,10 @@ def report(data, out) -> None:
 
 def summary(data, table: dict, s: dict, out: str) -> None:
     a, pm = data.attrs, scaffold.pm
-    checks, closure, mp0, box = a["checks"], a["closure"], a["mapping"], a["container"]
+    checks, closure, mp0, cyl = a["checks"], a["closure"], a["mapping"], a["container"]
     beds = [x for r in table.values() for x in r["beds"]]
     g0 = data[f"A_{next(iter(table)) * 100:g}cm"]
-    Rc, R, n = box["radius"], mp0["R"], round(g0.attrs["granulate_mass"] / mp0["mass"])
+    Rc, R, n = cyl["radius"], mp0["R"], round(g0.attrs["granulate_mass"] / mp0["mass"])
     L = scaffold.head("LAMMPS cross-check of the cylindrical cavity (issue 35)", a)
     L[2] += (f" LAMMPS serial (one MPI rank, `OMP_NUM_THREADS=1`), jaxdamp on the same machine; "
              f"{sum(x['reused'] for x in beds)} of {len(beds)} beds read back from `raw/beds` "
@@ -121,7 +121,7 @@ def summary(data, table: dict, s: dict, out: str) -> None:
       f"spheres R = {R * 1e3:g} mm (m = {mp0['mass']:.6g} kg), E = {mp0['E']:.3g} Pa, "
       f"ν = {mp0['nu']:g}, ε = 0.75 at 1 m/s (A = {mp0['A']:.6g} s), f = 70 Hz, "
       f"z = A_d cos(2π f t) — in an upright cylinder of the 8 cm cube's volume: R_c = "
-      f"{Rc * 1e3:g} mm, Lz = {box['Lz'] * 1e2:g} cm (D/d = {Rc / R:.1f}). "
+      f"{Rc * 1e3:g} mm, Lz = {cyl['Lz'] * 1e2:g} cm (D/d = {Rc / R:.1f}). "
       f"{s['transient'] + s['periods']} periods per run, the first {s['transient']} always "
       "discarded. Why these grains and not `sanchez2012-cylinder`'s: that preset is the thesis' "
       "S1 system (the box on a 1-DOF primary the grains drive back), which a LAMMPS deck with "
@@ -161,12 +161,7 @@ def summary(data, table: dict, s: dict, out: str) -> None:
                        ("side", "\nSphere–side collisions, radially outward (m* = m, jaxdamp's "
                         "R* = R/(1 − R κ)):\n")):
         w(what)
-        L += scaffold.table(("v [m/s]", "ε LAMMPS", "ε reference", "rel. diff",
-                             "overlap time LAMMPS [µs]", "reference [µs]"), [
-            (f"{r['v']:g}", f"{r['restitution']:.5f}", f"{r['ref_restitution']:.5f}",
-             f"{(r['restitution'] / r['ref_restitution'] - 1) * 100:+.3f} %",
-             f"{r['duration'] * 1e6:.2f}", f"{r['ref_duration'] * 1e6:.2f}")
-            for r in checks[kind]])
+        L += box.collision_table(checks[kind])
     side, plane = checks["side"], checks["wall"]
     w(f"\nThe overlap time is counted in whole steps (±1 step = ±{mp0['dt'] * 1e6:.2f} µs). "
       "At the plane's R* = R the side would give ε = "
