@@ -259,6 +259,16 @@ def figure(groups: dict, table: dict, T: float, seeds: list, out: str, what: str
     scaffold.save_figure(fig, out, dpi=110)
 
 
+def unsettled_note(beds, attrs, w) -> None:
+    """Say (``w``) how many beds did not settle, and why that does not matter here."""
+    unsettled = sum(not x["bed_settled"] for x in beds)
+    if unsettled:
+        lo, hi = attrs["bed_max_speed_range"]
+        w(f"\n{unsettled} of {len(beds)} beds did not meet jaxdamp's settling criterion "
+          f"within the settle time (fastest grain at its end {lo:.2g}–{hi:.2g} m/s); both codes "
+          "start from that same state, so the comparison is unaffected.")
+
+
 def collision_table(rows) -> list[str]:
     """The table of a mapping check's collisions (LAMMPS against the reference)."""
     return scaffold.table(("v [m/s]", "ε LAMMPS", "ε reference", "rel. diff",
@@ -398,12 +408,7 @@ def summary(data, groups: dict, table: dict, s: dict, out: str) -> None:
             f"{x['jaxdamp_residual_per_period']:+.3g} "
             f"({x['jaxdamp_residual_per_period'] / x['mj'] * 100:+.2g} % of its dissipation)"]
          for A, r in table.items() for x in r["beds"]])
-    unsettled = sum(not x["bed_settled"] for x in beds)
-    if unsettled:
-        lo, hi = a["bed_max_speed_range"]
-        w(f"\n{unsettled} of {len(beds)} beds did not meet jaxdamp's settling criterion "
-          f"within the settle time (fastest grain at its end {lo:.2g}–{hi:.2g} m/s); both codes "
-          "start from that same state, so the comparison is unaffected.")
+    unsettled_note(beds, a, w)
     w("\n## Verdict\n")
     good = (all(abs(r["restitution"] / r["ref_restitution"] - 1) < 1e-3
                 for r in checks["pair"] + checks["wall"])

@@ -207,12 +207,7 @@ def summary(data, table: dict, s: dict, out: str) -> None:
           f"{x['dt']:.5g}", f"{x['lammps_wall_time']:.1f}", f"{x['jaxdamp_wall_time']:.1f}",
           f"{x['jaxdamp_balance_error']:.2g}")
          for A, r in table.items() for x in r["beds"]])
-    unsettled = sum(not x["bed_settled"] for x in beds)
-    if unsettled:
-        lo, hi = a["bed_max_speed_range"]
-        w(f"\n{unsettled} of {len(beds)} beds did not meet jaxdamp's settling criterion "
-          f"within the settle time (fastest grain at its end {lo:.2g}–{hi:.2g} m/s); both codes "
-          "start from that same state, so the comparison is unaffected.")
+    box.unsettled_note(beds, a, w)
     w("\n## Verdict\n")
     ok_static = all(abs(r["ratio"] - 1) < 1e-3 for r in checks["static"])
     ok_coll = all(abs(r["restitution"] / r["ref_restitution"] - 1) < 1e-3
