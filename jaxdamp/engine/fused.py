@@ -516,12 +516,12 @@ def compile_ptx(model, states, params, cc: tuple[int, int] = (9, 0)) -> str:
 
     if simulated():
         raise RuntimeError("compile_ptx needs numba-cuda's compiler: unset NUMBA_ENABLE_CUDASIM")
-    dims, so, po, _, _, _ = native.kernel_args(model, native.layout(states),
-                                               native.layout(params))
+    dims, so, po, sid, bounds, _ = native.kernel_args(model, native.layout(states),
+                                                      native.layout(params))
     sc, _ = scratch_layout(model.n, dims.ndof)
     f2 = numba.float64[:, ::1]
     sig = (numba.int64, numba.int64, numba.typeof(dims), numba.float64, f2, f2,
-           numba.typeof(so), numba.typeof(po), numba.int64[::1], numba.int64[::1],
+           numba.typeof(so), numba.typeof(po), numba.typeof(sid), numba.typeof(bounds),
            numba.float64[:, :, ::1], f2, numba.typeof(sc), numba.int32[:, :, ::1],
            numba.int32[:, ::1], numba.int64[::1])
     kernel = _kernel(dims.mount, dims.law, dims.shape)
