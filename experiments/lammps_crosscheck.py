@@ -178,14 +178,20 @@ def record(run: dict, out: str, prov: dict, **attrs) -> None:
             lammps.write_case(h, A, cases[A], table[A], seeds)
 
 
-def report(data, out) -> None:
+def stored(data):
+    """``(settings, groups by amplitude, analysis table, period T)`` read back from a stored
+    ``data.h5`` of :func:`record`."""
     a = data.attrs
     s = dict(transient=a["transient_periods"], periods=a["periods"], replicates=a["replicates"])
     amps = [float(x) for x in data["amplitude"]]
     groups = {A: data[f"A_{A * 100:g}cm"] for A in amps}
     T = float(groups[amps[0]]["bed_0"]["jaxdamp"]["boundary_time"][1])  # boundaries at nT
-    table = {A: analyse_group(A, g, s, T) for A, g in groups.items()}
-    figure(groups, table, T, list(a["seeds"]), out)
+    return s, groups, {A: analyse_group(A, g, s, T) for A, g in groups.items()}, T
+
+
+def report(data, out) -> None:
+    s, groups, table, T = stored(data)
+    figure(groups, table, T, list(data.attrs["seeds"]), out)
     summary(data, groups, table, s, out)
 
 

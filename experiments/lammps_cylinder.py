@@ -38,7 +38,6 @@ import math
 
 import numpy as np
 
-from jaxdamp.peers import lammps
 from jaxdamp.studies import scaffold
 
 try:  # imported as experiments.lammps_cylinder (the tests), or run as a script from experiments/
@@ -93,14 +92,9 @@ def verdict(r: dict) -> str:
 
 
 def report(data, out) -> None:
-    a = data.attrs
-    s = dict(transient=a["transient_periods"], periods=a["periods"], replicates=a["replicates"])
-    amps = [float(x) for x in data["amplitude"]]
-    groups = {A: data[f"A_{A * 100:g}cm"] for A in amps}
-    T = float(groups[amps[0]]["bed_0"]["jaxdamp"]["boundary_time"][1])  # boundaries at nT
-    table = {A: lammps.analyse_group(A, g, s, T) for A, g in groups.items()}
-    box.figure(groups, table, T, list(a["seeds"]), out, what="reference grains in a cylinder",
-               target=TARGET)
+    s, groups, table, T = box.stored(data)
+    box.figure(groups, table, T, list(data.attrs["seeds"]), out,
+               what="reference grains in a cylinder", target=TARGET)
     summary(data, table, s, out)
 
 
