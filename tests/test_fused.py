@@ -88,6 +88,35 @@ def test_fused_equals_native_on_a_mixture(system, mixing, law, extras):
     _agree(sb, sa, rb, ra)
 
 
+def test_threads_arriving_together_share_the_blocks_arrays(monkeypatch):
+    """numba-cuda's simulator looks up a block's shared array and stores a new one without a
+    lock; with the lookup made slow (as on a loaded machine) every thread would get its own
+    array and the block's sums would read memory no thread wrote (a CI run went non-finite
+    so). With the lookup under the lock :mod:`jaxdamp.engine.fused` installs, the kernel
+    still equals the native one."""
+    import time
+
+    from numba.cuda.simulator import kernelapi
+
+    class Slow(dict):
+        def get(self, key, default=None):
+            found = dict.get(self, key, default)
+            time.sleep(0.002)  # hands the interpreter to the block's other threads
+            return found
+
+    made = kernelapi.FakeCUDAShared.__init__
+
+    def slow_init(self, *args, **kwargs):
+        made(self, *args, **kwargs)
+        self._allocations = Slow()
+
+    monkeypatch.setattr(kernelapi.FakeCUDAShared, "__init__", slow_init)
+    model, pb, st, nbrs = _bed(n=6, copies=1)
+    out = {e: chunk_fn(model, 2, 20, engine=e)(st, nbrs, pb) for e in ("native", "fused")}
+    (sa, _, ra), (sb, _, rb) = out["native"], out["fused"]
+    _agree(sb, sa, rb, ra)
+
+
 @pytest.mark.long
 def test_fused_equals_jax_on_fifty_grains():
     """The 50-grain bed of tests/test_native.py: the fused step against the JAX engine (the

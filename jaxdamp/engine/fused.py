@@ -48,6 +48,8 @@ from __future__ import annotations
 import functools
 import math
 import os
+import sys
+import threading
 from collections import namedtuple
 
 import numpy as np
@@ -99,6 +101,41 @@ def simulated() -> bool:
     """Whether numba-cuda runs kernels in its CUDA simulator (``NUMBA_ENABLE_CUDASIM=1``, read
     when ``numba.cuda`` is first imported): the CPU tests' mode."""
     return os.environ.get("NUMBA_ENABLE_CUDASIM", "0") not in ("", "0")
+
+
+def _simulator_shared_arrays_locked() -> None:
+    """Make the CUDA simulator hand every thread of a block the same shared array.
+
+    numba-cuda's simulator (``FakeCUDAShared.array``, numba-cuda 0.30.4) keys a block's shared
+    arrays by the line that asks for them, and looks the key up and stores a new array
+    without a lock: two threads that reach the line together get two arrays, and the block's
+    sums then read memory no thread wrote. A loaded machine makes it likely (a CI run of the
+    long suite went non-finite at the first sample of a chunk so). This replaces the method,
+    once per process, with the same lookup under a lock; the key is the caller's frame
+    (file, line), as before."""
+    from numba.cuda.simulator import kernelapi
+
+    cls = kernelapi.FakeCUDAShared
+    if getattr(cls.array, "locked", False):
+        return
+    unlocked = cls.array
+    lock = threading.Lock()
+
+    def array(self, shape, dtype, alignment=None):
+        if shape == 0 or alignment is not None:  # dynamic shared memory: one buffer, no key
+            return unlocked(self, shape, dtype, alignment)
+        frame = sys._getframe(1)
+        key = (frame.f_code.co_filename, frame.f_lineno)
+        with lock:
+            res = self._allocations.get(key)
+            if res is None:
+                if isinstance(dtype, kernelapi.types.Type):
+                    dtype = kernelapi.numpy_support.as_dtype(dtype)
+                res = self._allocations[key] = np.empty(shape, dtype)
+        return res
+
+    array.locked = True
+    cls.array = array
 
 
 def available() -> tuple[bool, str]:
@@ -166,6 +203,8 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
     rebuild_steps = native.REBUILD_STEPS
 
     if simulated():
+        _simulator_shared_arrays_locked()
+
         def plain(a):  # the simulator wraps arrays; the scalar forms take numpy arrays
             return getattr(a, "_ary", a)
     else:
@@ -464,7 +503,6 @@ def advance_packed(model, state_packed, params_packed, state_layout, param_layou
     simulator (the CPU tests) the threads hand over the interpreter every 0.1 ms instead of
     every 5 ms, or its barriers cost milliseconds each."""
     import contextlib
-    import sys
 
     if simulated():
         old = sys.getswitchinterval()
