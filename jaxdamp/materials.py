@@ -124,14 +124,21 @@ _WYPYCH = ("G. Wypych, Handbook of Surface Improvement and Modification (ChemTec
            "(digilib.universitaspertamina.ac.id/ebook/Handbook of Surface Improvement and "
            "Modification, page 172)")
 _NO_E = ("no measured restitution against steel was found in the texts we could retrieve "
-         "(measurements exist inside papers we could not read, docs/materials.md)")
+         "(measurements exist inside papers we could not read; searched a second time in "
+         "stored web pages, documentation and code: of Kharaz & Gorham 2000, Gorham & "
+         "Kharaz 2000 (Powder Technol. 112:193), Kharaz, Gorham & Salman 2001, Sondergaard "
+         "et al. 1990, Foerster et al. 1994, Gondret et al. 2002 and the survey of Güttler "
+         "et al. 2012 (arXiv:1204.0001) only titles, abstracts or first pages could be read, "
+         "none with a value, and of Mok & Duffy 1964 nothing; docs/materials.md)")
 _HARD = (f"{_NO_E}; a hard, nearly elastic pair at 1 m/s (no yield of the ball, "
-         "small plastic and vibration losses), the same 0.9 for every hard entry")
+         "small plastic and vibration losses), the same 0.9 for every hard entry without a "
+         "substitute")
 _DUCTILE = (f"{_NO_E}; a ductile metal that yields at a tenth of hardened steel's "
             "yield strength loses more in plastic indentation than a hard pair: 0.8")
 _NO_MU = ("no kinetic friction coefficient against steel was found in the texts we "
-          "could retrieve; steel on steel's 0.23 of the same table (Wypych 2018, Table 11.1: "
-          "its dynamic values of metals on steel lie at 0.21-0.25), for a hard pair")
+          "could retrieve (searched a second time; what was found is named here); steel on "
+          "steel's 0.23 of the same table (Wypych 2018, Table 11.1: its dynamic values of "
+          "metals on steel lie at 0.21-0.25), for a hard pair")
 _52100 = ("AISI 52100 datasheet (AZoM data as reproduced at www.stindia.com/article/"
           "difference-between/difference-between-52100-e52100-steel.html)")
 
@@ -146,7 +153,9 @@ TABLE: dict[str, Entry] = {e.name: e for e in (
                 f"within the 190-210 GPa of the {_52100}"),
         nu=Datum(0.28, CHECKED, f"{_52100}: 0.27-0.30; 0.28 is also the thesis' steel "
                  "(Sánchez 2012, §3.2)"),
-        restitution=Datum(0.9, ESTIMATE, _HARD),
+        restitution=Datum(0.9, ESTIMATE, f"{_HARD}; a small steel ball on a heavy polished "
+                          "steel plate 'bounces dozens of times' (demoweb.physics.ucla.edu/"
+                          "content/20-coefficient-restitution): qualitative, no value"),
         v_ref=1.0,
         mu=Datum(0.23, CHECKED, f"{_WYPYCH}: steel-steel 0.31 static, 0.23 dynamic; the same "
                  "as J. R. Davis, Concise Metals Data Handbook (ASM, 1995), Table 14.1, 0.23 "
@@ -163,7 +172,9 @@ TABLE: dict[str, Entry] = {e.name: e for e in (
         restitution=Datum(0.8, ESTIMATE, f"{_DUCTILE} (its yield strength 215 MPa, the same "
                           "datasheet, against 2030 MPa of the 52100 ball datasheet)"),
         v_ref=1.0,
-        mu=Datum(0.23, ESTIMATE, _NO_MU),
+        mu=Datum(0.23, ESTIMATE, f"{_NO_MU}; the nearest pair found is copper on 304 "
+                 "stainless, dry, 0.23 static, 0.21 sliding (www-eng.lbl.gov/~ajdemell/"
+                 "coefficients_of_friction.html): another material on stainless, not used"),
     ),
     Entry(
         name="tungsten-carbide",
@@ -173,9 +184,24 @@ TABLE: dict[str, Entry] = {e.name: e for e in (
         E=Datum(6.3e11, CHECKED, "the same page: elastic modulus 630 GPa (Wikipedia, "
                 "'Tungsten carbide': 530-700 GPa)"),
         nu=Datum(0.24, CHECKED, "the same page: Poisson's ratio 0.24"),
-        restitution=Datum(0.9, ESTIMATE, _HARD),
-        v_ref=1.0,
-        mu=Datum(0.23, ESTIMATE, _NO_MU),
+        restitution=Datum(0.89, SUBSTITUTE, "Leeb rebound hardness test, impact device D: "
+                          "HL = 1000 v_rebound/v_impact, and the hardest sample device D "
+                          "measures gives 890 HLD (~68 HRC, ~955 HV) (Proceq, Equotip 3 "
+                          "operating instructions, 2012, §2.1 and §2.3, as reproduced at "
+                          "manualshive.com/ru/manual/proceq/equotip-3/1608675?page=5); device "
+                          "D's impact body: 5.5 g, 3 mm tungsten-carbide ball tip, 11 mJ "
+                          "(calspec.com.au/product/the-impact-device-of-hardness-tester), so "
+                          "v_impact = sqrt(2 x 0.011 J / 0.0055 kg) = 2.0 m/s: e = 0.89 of a "
+                          "WC-tipped impact body against 68-HRC steel at 2.0 m/s. A substitute: "
+                          "the impactor is a tipped rod, not a free sphere, and softer steel "
+                          "gives a lower HL (Wikipedia, 'Coefficient of restitution', copy at "
+                          "wiki.bitter.house, 2024-01: the HL is a COR valid for the test "
+                          "only, not for the material tested)"),
+        v_ref=2.0,
+        mu=Datum(0.23, ESTIMATE, f"{_NO_MU}; found only tungsten carbide on steel under "
+                 "grease (M. D. Marko, Lubricants 7(2):14, 2019, four-ball test) and an "
+                 "abstract without values (eutectoid steel on WC-8%Co, dry: scholarcommons."
+                 "sc.edu/emec_facpub/133)"),
     ),
     Entry(
         name="lead",
@@ -194,8 +220,9 @@ TABLE: dict[str, Entry] = {e.name: e for e in (
                           "demoweb.physics.ucla.edu/content/20-coefficient-restitution)"),
         v_ref=1.0,
         mu=Datum(0.43, SUBSTITUTE, "lead on cast iron, dry, sliding: 0.43 (the handbook table "
-                 "reproduced at www.piping-designer.com, 'Friction Coefficient'); no value for "
-                 "lead on steel was found"),
+                 "reproduced at www.piping-designer.com, 'Friction Coefficient'); no kinetic "
+                 "value for lead on steel was found (steel on lead, dry, 0.50 is a static "
+                 "one: pickedshares.com, 'Static and sliding friction values')"),
     ),
     Entry(
         name="aluminium",
@@ -224,7 +251,11 @@ TABLE: dict[str, Entry] = {e.name: e for e in (
                 "GPa)"),
         nu=Datum(0.22, CHECKED, "Sci. Rep. 2022, doi:10.1038/s41598-021-04045-6, Table 1: "
                  "0.222 ± 0.003"),
-        restitution=Datum(0.9, ESTIMATE, _HARD),
+        restitution=Datum(0.9, ESTIMATE, f"{_HARD}; marbles (toy balls, their material "
+                          "not stated in what we read) on a floor of unstated material, "
+                          "0.92-0.93 (J. Pebralia, Int. J. Appl. Sci. Smart Technol. 4(1):35, "
+                          "2022, www.scribd.com/document/583196360): not against steel, not "
+                          "used"),
         v_ref=1.0,
         mu=Datum(0.12, CHECKED, f"{_WYPYCH}: glass-steel 0.13 static, 0.12 dynamic (the table "
                  "at schneider-company.com/coefficient-of-friction-reference-chart gives "
@@ -241,7 +272,11 @@ TABLE: dict[str, Entry] = {e.name: e for e in (
                  "ratio 0.22-0.24"),
         restitution=Datum(0.9, ESTIMATE, _HARD),
         v_ref=1.0,
-        mu=Datum(0.23, ESTIMATE, _NO_MU),
+        mu=Datum(0.23, ESTIMATE, f"{_NO_MU}; the nearest found is sapphire (single-crystal "
+                 "alumina) on steel, non-lubricated, 0.15 (SIU Center for Advanced Friction "
+                 "Studies, frictioncenter.siu.edu/databaseSearch.html), where the copy we "
+                 "read does not show whether it is the static or the kinetic column: not "
+                 "used"),
     ),
     Entry(
         name="abs",
