@@ -19,6 +19,7 @@ from jaxdamp.config import Box, Config, ConfigError, Drive, Numerics, Species, a
 from jaxdamp.engine import native, neighbors
 from jaxdamp.engine.packing import fcc_lattice, poured
 from jaxdamp.engine.simulate import chunk_fn
+from jaxdamp.physics.energy import granular_loss
 from jaxdamp.physics.model import build, cell_origins, grain_cell, grain_radii
 from jaxdamp.validation import validate
 
@@ -145,8 +146,10 @@ def _driven(cells, n=12):
 @pytest.mark.parametrize("engine", [pytest.param("jax", marks=pytest.mark.long), "native"])
 def test_identical_cells_move_alike_and_push_k_times_one_cell(engine):
     """Three identical cells started from one cell's bed copied into each: every cell moves as
-    the one-cell damper does (to round-off: the cells' positions differ by their offsets) and the
-    force on the driven box, its input work and every loss are three times one cell's."""
+    the one-cell damper does (to round-off: the cells' positions differ by their offsets), each
+    cell dissipates what the one-cell damper does (its ``loss_cell``, the granular channels of
+    the one-cell run), and the force on the driven box, its input work and every loss are three
+    times one cell's."""
     r, v, w = mixture_bed(12, spacing=0.0045)
     r[:, 2] += 0.004
     out = {}
@@ -169,7 +172,7 @@ def test_identical_cells_move_alike_and_push_k_times_one_cell(engine):
         np.testing.assert_allclose(b[cell == c], a, rtol=0, atol=1e-12)
         np.testing.assert_allclose(np.asarray(s3.v)[0][cell == c], np.asarray(s1.v)[0],
                                    rtol=1e-9, atol=1e-10)
-        for key in ("z_cm_cell", "vz_cm_cell", "e_kinetic_cell"):
+        for key in ("z_cm_cell", "vz_cm_cell", "e_kinetic_cell", "loss_cell"):
             np.testing.assert_allclose(r3[key][:, c], r1[key][:, 0], rtol=1e-9, atol=1e-12,
                                        err_msg=key)
         for key in ("n_floor_cell", "n_lid_cell"):
@@ -178,6 +181,9 @@ def test_identical_cells_move_alike_and_push_k_times_one_cell(engine):
     np.testing.assert_allclose(r3["work"], 3 * r1["work"], rtol=1e-9, atol=1e-15)
     np.testing.assert_array_equal(r3["n_floor"], 3 * r1["n_floor"])
     np.testing.assert_allclose(r3["e_kinetic_cell"].sum(axis=1), r3["e_kinetic"], rtol=1e-12)
+    np.testing.assert_allclose(r1["loss_cell"][:, 0], granular_loss(r1["work"]), rtol=1e-12,
+                               atol=1e-18)
+    assert r1["loss_cell"][-1, 0] > 0
 
 
 CYLINDER = ["container.shape=cylinder", "container.radius=0.012", "container.Lz=0.02"]
@@ -199,7 +205,8 @@ def _two_cells(n=(10, 15), extras=()):
 
 def _agree(got, ref, rtol=1e-9):
     (sa, _, ra), (sb, _, rb) = ref, got
-    for f in ("r", "v", "w", "q", "z", "zd", "work", "e_elastic", "f_box", "n_floor", "n_side"):
+    for f in ("r", "v", "w", "q", "z", "zd", "work", "work_cell", "e_elastic", "f_box",
+              "n_floor", "n_side"):
         a, b = np.asarray(getattr(sa, f)), np.asarray(getattr(sb, f))
         np.testing.assert_allclose(b, a, rtol=rtol,
                                    atol=1e-12 * max(1.0, np.abs(a).max(initial=0.0)), err_msg=f)
@@ -215,13 +222,18 @@ def _agree(got, ref, rtol=1e-9):
 def test_native_equals_jax_on_two_cells(extras):
     """Two cells of the two-species mixture (friction, rotation, the primary), in boxes and in
     cylinders: the native kernel and the JAX engine agree to round-off after 300 steps,
-    per-cell records included."""
+    per-cell records included; each engine's cells' losses sum to its damper's."""
     _, (model, pb, st, nbrs) = _two_cells(extras=extras)
     out = {e: chunk_fn(model, 3, 100, engine=e)(st, nbrs, pb) for e in ("jax", "native")}
     work = np.asarray(out["jax"][0].work[0])
     assert work[2] > 0 and work[4] > 0  # pair and wall contacts
     ke = np.asarray(out["jax"][2]["e_kinetic_cell"])[0]
     assert np.all(ke[:, 0] != ke[:, 1])  # the cells differ (their radii)
+    for e, (_, _, rec) in out.items():
+        loss = np.asarray(rec["loss_cell"])[0]
+        np.testing.assert_allclose(loss.sum(axis=-1), granular_loss(np.asarray(rec["work"])[0]),
+                                   rtol=1e-12, err_msg=e)
+        assert np.all(loss[-1] > 0) and loss[-1, 0] != loss[-1, 1], e
     _agree(out["native"], out["jax"])
 
 
@@ -257,8 +269,14 @@ def test_a_run_of_three_cells_closes_its_energy_balance(engine):
     np.testing.assert_allclose(rec["z_cm_cell"].mean(axis=-1), rec["z_cm"], rtol=1e-10)
     assert (rec["n_floor_cell"].sum(axis=-1) == rec["n_floor"]).all()
     assert (rec["n_floor_cell"].max(axis=0) > 0).all()  # every cell's bed hits its floor
+    np.testing.assert_allclose(rec["loss_cell"].sum(axis=-1), granular_loss(rec["work"]),
+                               rtol=1e-10)
+    assert (rec["loss_cell"][-1] > 0).all()
     for c in range(3):
         assert res.summary[f"mean_e_kinetic_cell{c}"] > 0
+        assert res.summary[f"granular_loss_per_cycle_cell{c}"] > 0
+    assert sum(res.summary[f"granular_loss_per_cycle_cell{c}"] for c in range(3)) == (
+        pytest.approx(res.summary["granular_loss_per_cycle"], rel=1e-10))
 
 
 def test_the_preset_is_its_documented_toml(tmp_path):

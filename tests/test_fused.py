@@ -25,8 +25,8 @@ pytestmark = pytest.mark.skipif(not fused.available()[0] or not native.AVAILABLE
                                 reason="numba-cuda (the cuda extra) or numba not installed")
 
 FIELDS = ("r", "v", "w", "q", "a", "alpha", "z", "zd", "zdd", "y", "yd", "ydd", "work",
-          "e_elastic", "f_box", "f_floor_lid", "n_floor", "n_lid", "n_side", "step", "z_max",
-          "z_min")
+          "work_cell", "power_cell", "e_elastic", "f_box", "f_floor_lid", "n_floor", "n_lid",
+          "n_side", "step", "z_max", "z_min")
 
 
 def _bed(system="primary", mixing="arithmetic", law="hertz", extras=None, n=12, copies=2):

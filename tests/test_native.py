@@ -32,7 +32,8 @@ def test_native_equals_jax_on_a_mixture(system, mixing, law, extras):
     (sa, _, ra), (sb, _, rb) = out["jax"], out["native"]
     work = np.asarray(sa.work[0])
     assert work[2] > 0 and work[3] > 0 and work[4] > 0 and work[5] > 0  # pp and pw contacts
-    for f in ("r", "v", "w", "q", "z", "zd", "y", "yd", "ydd", "work", "e_elastic", "f_box"):
+    for f in ("r", "v", "w", "q", "z", "zd", "y", "yd", "ydd", "work", "work_cell", "e_elastic",
+              "f_box"):
         a, b = np.asarray(getattr(sa, f)), np.asarray(getattr(sb, f))
         np.testing.assert_allclose(b, a, rtol=1e-9, atol=1e-12 * max(1.0, np.abs(a).max(initial=0.0)),
                                    err_msg=f)

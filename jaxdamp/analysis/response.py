@@ -423,8 +423,10 @@ def steady_state_summary(config: Config, records: dict, final: State, t_window: 
     * a damper of ``k > 1`` cells (``Config.cells``), for every cell ``c``:
       ``mean_vz_bed_cell{c}``, the mean vertical velocity of its bed's centre of mass [m/s],
       and ``mean_e_kinetic_cell{c}``, the mean translational kinetic energy of its grains [J]
-      (from the records ``vz_cm_cell``, ``e_kinetic_cell``); the amplitude, the work and the
-      losses are the whole damper's.
+      (from the records ``vz_cm_cell``, ``e_kinetic_cell``), and
+      ``granular_loss_per_cycle_cell{c}``, the energy its grains dissipate per period [J]
+      (``loss_cell``; the cells' sum is ``granular_loss_per_cycle``); the amplitude, the work
+      and the other losses are the whole damper's.
     """
     from jaxdamp.physics.energy import granular_loss
     from jaxdamp.physics.model import CH, CHANNELS, LOSSES
@@ -463,6 +465,11 @@ def steady_state_summary(config: Config, records: dict, final: State, t_window: 
             summary[f"mean_e_kinetic_cell{c}"] = float(
                 np.mean(records["e_kinetic_cell"][i0:, c]))
             units[f"mean_e_kinetic_cell{c}"] = "J"
+            if "loss_cell" in records:
+                loss = records["loss_cell"][:, c]
+                summary[f"granular_loss_per_cycle_cell{c}"] = float((loss[-1] - loss[i0])
+                                                                    / cycles)
+                units[f"granular_loss_per_cycle_cell{c}"] = "J"
     scale = abs(work[-1, CH["input"]]) + work[-1, LOSSES].sum()
     resid = np.max(np.abs(records["balance_residual"]))
     summary["balance_error"] = float(resid / scale) if scale > 0 else float(resid)

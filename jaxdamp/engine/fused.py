@@ -91,9 +91,10 @@ _IN, _PRIM, _PPN, _PPF, _PWN, _PWF, _DRAG, _PW_FLOOR, _PW_LID, _PW_SIDE = (
     CH[k] for k in ("input", "primary_damping", "pp_normal", "pp_friction", "pw_normal",
                     "pw_friction", "drag", "pw_floor", "pw_lid", "pw_side"))
 #: Per-system scratch in device memory: per-grain rows ``(n, 3)`` / ``(n, 4)`` (the CPU
-#: kernel's layout: its grain pass runs on them) and the structure's vectors.
+#: kernel's layout: its grain pass runs on them), the structure's vectors, and for several
+#: cells each grain's and each cell's loss power (``gl`` ``(n,)``, ``pwc`` ``(cells,)``).
 _SCRATCH = ("r1", "vp", "rw", "ref", "F", "T", "wk", "wks", "y1", "ydp", "xs", "xds", "acc",
-            "tmp")
+            "tmp", "gl", "pwc")
 Scratch = namedtuple("Scratch", _SCRATCH)
 
 
@@ -154,12 +155,12 @@ def available() -> tuple[bool, str]:
     return False, "numba-cuda finds no CUDA device (the fused engine runs on NVIDIA GPUs)"
 
 
-def scratch_layout(n: int, ndof: int) -> tuple[Scratch, int]:
+def scratch_layout(n: int, ndof: int, cells: int) -> tuple[Scratch, int]:
     """Offsets of :data:`_SCRATCH` in a system's scratch row and the row's length."""
     sizes = {"r1": 3 * n, "vp": 3 * n, "rw": 3 * n, "ref": 3 * n, "F": 3 * n, "T": 3 * n,
              "wk": 4 * n, "wks": 4 * n,
              "y1": ndof - 1, "ydp": ndof - 1, "xs": ndof, "xds": ndof, "acc": ndof,
-             "tmp": ndof}
+             "tmp": ndof, "gl": n, "pwc": cells}
     off, k = {}, 0
     for name in _SCRATCH:
         off[name] = k
@@ -200,6 +201,7 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
     pair_constants = native.pair_constants
     pair_contact = native.pair_contact
     wall_constants = native.wall_constants
+    cell_sums = native.cell_sums
     rebuild_steps = native.REBUILD_STEPS
 
     if simulated():
@@ -255,6 +257,10 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
         alb = row[so.alpha:so.alpha + 3 * n].reshape((n, 3))
         work = row[so.work:so.work + N_CHANNELS]
         power = row[so.power:so.power + N_CHANNELS]
+        K = dims.cells
+        cells = K > 1
+        work_cell = row[so.work_cell:so.work_cell + K]
+        power_cell = row[so.power_cell:so.power_cell + K]
         Rb = prow[po.radius:po.radius + n]
         mb = prow[po.mass:po.mass + n]
         Ib = prow[po.inertia:po.inertia + n]
@@ -284,6 +290,8 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
         xds = s[sc.xds:sc.xds + ndof]
         acc = s[sc.acc:sc.acc + ndof]
         tmp = s[sc.tmp:sc.tmp + ndof]
+        gl = s[sc.gl:sc.gl + n]
+        pwc = s[sc.pwc:sc.pwc + K]
         red = cuda.shared.array((N_SUMS, THREADS), float64)
         sh = cuda.shared.array(4, float64)  # t1, z1, z'1 of the step; 1 once it blew up
         pw = cuda.local.array(N_CHANNELS, float64)
@@ -351,7 +359,7 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                 (parts[0], parts[1], parts[2], parts[3], parts[4], parts[5], parts[6], parts[7],
                  parts[8], parts[9], parts[10],
                  far) = grain_walls(shape, law, tid, n, nt, r1, vp, rw, Rb, mb, ref, wk, wks, sec,
-                                    og, dims.cells > 1, Fs, Ts, ex, ey, ez, z1, zdp, Lz, grav,
+                                    og, cells, gl, Fs, Ts, ex, ey, ez, z1, zdp, Lz, grav,
                                     drag, half_skin2)
                 if cuda.syncthreads_or(1 if far else 0) or first:
                     # the lists anew, from the predicted positions in the box frame
@@ -406,6 +414,8 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                             parts[11] += e
                             parts[12] += ln
                             parts[13] += lf
+                            if cells:  # each grain of the pair lists it: half each
+                                gl[i] += 0.5 * (ln + lf)
                     # the velocity-Verlet corrector and the rotation by the mid-step spin
                     im = 1.0 / mb[i]
                     iI = 1.0 / Ib[i]
@@ -433,6 +443,9 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                 for k in range(N_SUMS):
                     red[k, tid] = parts[k]
                 block_sum(red, tid, nt, N_SUMS, False)
+                if cells:  # each cell's loss, a thread per cell
+                    cell_sums(gl, bounds, pwc, tid, nt)
+                    cuda.syncthreads()
                 if tid == 0:  # the mount's response, the energy channels, the finite check
                     t1 = sh[0]
                     e_el = red[0, 0] + 0.5 * red[11, 0]
@@ -448,6 +461,8 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                     pw[_DRAG] = drag * red[10, 0]
                     pw[_PW_FLOOR], pw[_PW_LID] = red[8, 0], red[9, 0]
                     pw[_PW_SIDE] = pw_n + pw_f - red[8, 0] - red[9, 0]
+                    if not cells:
+                        pwc[0] = pp_n + pp_f + pw_n + pw_f
                     health = box_z + e_el + pp_n + pp_f + pw_n + pw_f + z1 + zdp + zdd1
                     health += red[14, 0]
                     if not math.isfinite(health):
@@ -457,6 +472,9 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                         for c in range(N_CHANNELS):
                             work[c] = work[c] + 0.5 * dt * (power[c] + pw[c])
                             power[c] = pw[c]
+                        for c in range(K):
+                            work_cell[c] = work_cell[c] + 0.5 * dt * (power_cell[c] + pwc[c])
+                            power_cell[c] = pwc[c]
                         for j in range(ny):
                             ydv[j] = ydv[j] + 0.5 * dt * (yddv[j] + acc[j + 1])
                             yddv[j] = acc[j + 1]
@@ -481,7 +499,7 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                 e_prim = energy_scalar(mount, t, z, zd, yv, ydv, prow, po, n_lines, xs, xds)
                 record_row(rec[b, k_rec], t, z, zd, yv, e_prim, rb, vb, wb, mb, Ib, Rb, grav, Lz,
                            ez, e_el, e_start, imp0 / record_every, imp1 / record_every, n_floor,
-                           n_lid, n_side, work, bounds)
+                           n_lid, n_side, work, work_cell, bounds)
             cuda.syncthreads()
         if tid == 0:
             row[so.z], row[so.zd], row[so.zdd], row[so.t] = z, zd, zdd, t
@@ -526,7 +544,7 @@ def _advance_packed(model, state_packed, params_packed, state_layout, param_layo
     pm = np.ascontiguousarray(params_packed, dtype=np.float64)
     dims, so, po, sid, bounds, width = native.kernel_args(model, state_layout, param_layout)
     n, batch = model.n, st.shape[0]
-    sc, size = scratch_layout(n, dims.ndof)
+    sc, size = scratch_layout(n, dims.ndof, dims.cells)
     kernel = _kernel(dims.mount, dims.law, dims.shape, MAX_REGISTERS)
     cap = NEIGHBOURS
     while True:
@@ -556,7 +574,7 @@ def compile_ptx(model, states, params, cc: tuple[int, int] = (9, 0)) -> str:
         raise RuntimeError("compile_ptx needs numba-cuda's compiler: unset NUMBA_ENABLE_CUDASIM")
     dims, so, po, sid, bounds, _ = native.kernel_args(model, native.layout(states),
                                                       native.layout(params))
-    sc, _ = scratch_layout(model.n, dims.ndof)
+    sc, _ = scratch_layout(model.n, dims.ndof, dims.cells)
     f2 = numba.float64[:, ::1]
     sig = (numba.int64, numba.int64, numba.typeof(dims), numba.float64, f2, f2,
            numba.typeof(so), numba.typeof(po), numba.typeof(sid), numba.typeof(bounds),

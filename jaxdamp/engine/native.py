@@ -316,14 +316,15 @@ if AVAILABLE:
 
     @_kernel(inline="always")
     def grain_walls(shape, law, lo, n, step, r1, vp, rw, Rb, mb, ref, wk, wks, sec, og, shifted,
-                    F, T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
+                    gl, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
         """Pass 1 over the grains ``lo, lo + step, … < n`` (all of them on the CPU; a thread's
         own on the device, :mod:`jaxdamp.engine.fused`: the one definition of a grain's walls
         for both kernels): body force, the floor, the lid and the container's sides
         (number ``shape``, :mod:`jaxdamp.physics.containers`; ``sec``: its section numbers in
         registers, :func:`~jaxdamp.physics.containers.section_scalar`; ``og``: the corner of
         every grain's cell in the box frame, ``Params.origin`` ``(N, 2)``, taken off the
-        grain's position where ``shifted``: several cells) into ``F``, ``T``; returns the
+        grain's position where ``shifted``: several cells; then ``gl[i]`` is set to the loss
+        power of grain ``i``'s wall contacts, for the cells' losses) into ``F``, ``T``; returns the
         sums ``(elastic energy, normal loss, friction loss, box_z, floor + lid force, grains on
         the floor, on the lid, wall contacts (all walls), the floor's loss, the lid's loss,
         Σ m v², whether a grain moved more than skin/2 since the list was built)``. Inlined
@@ -369,6 +370,7 @@ if AVAILABLE:
             # most grains touch none, so the common path is a compare per wall; box_z
             # sums the force on the box along the axis e
             acc = (fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z, n_wall)
+            lost = pw_n + pw_f  # the losses before this grain's walls (several cells)
             if floor < Ri:
                 acc, gz, loss = add_wall_scalar(law, Ri - floor, 0.0, 0.0, 1.0, wx, wy, wz, sx,
                                                 sy, sz, Ri, wk[i, 0], wk[i, 1], wk[i, 2],
@@ -392,14 +394,29 @@ if AVAILABLE:
                 shape, law, cx, cy, sec, Ri, wks, i, wx, wy, wz, sx, sy, sz, ex, ey, ez, acc)
             F[i, 0], F[i, 1], F[i, 2] = fx, fy, fz
             T[i, 0], T[i, 1], T[i, 2] = tx, ty, tz
+            if shifted:
+                gl[i] = pw_n + pw_f - lost
         return (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
                 pdrag, far)
 
+    @_kernel(inline="always")
+    def cell_sums(gl, bounds, out, lo, step):
+        """``out[c]`` = the sum of ``gl`` over the grains of cell ``c`` (``bounds``
+        ``(S, k + 1)``: :func:`~jaxdamp.physics.energy.cell_bounds`) for the cells ``lo, lo +
+        step, …`` (all on the CPU; a thread's own on the device)."""
+        for c in range(lo, bounds.shape[1] - 1, step):
+            total = 0.0
+            for sp in range(bounds.shape[0]):
+                for i in range(bounds[sp, c], bounds[sp, c + 1]):
+                    total += gl[i]
+            out[c] = total
+
     @_kernel()
-    def _pair_forces(law, r, v, rw, R, pi, pj, pc, npairs, F, T):
+    def _pair_forces(law, r, v, rw, R, pi, pj, pc, npairs, F, T, gl, by_grain):
         """Adds the grain pairs' forces and torques to ``F``, ``T`` (half list: Newton's third
         law); ``rw[i] = R_i ω_i``. Returns ``(elastic energy, normal loss, friction loss)``,
-        summed in registers."""
+        summed in registers; ``by_grain``: also adds each pair's loss to ``gl`` of its first
+        grain (several cells: a pair's grains share a cell)."""
         e_sum = 0.0
         ln_sum = 0.0
         lf_sum = 0.0
@@ -433,6 +450,8 @@ if AVAILABLE:
             e_sum += e
             ln_sum += ln
             lf_sum += lf
+            if by_grain:
+                gl[i] += ln + lf
         return e_sum, ln_sum, lf_sum
 
     @_kernel()
@@ -515,6 +534,9 @@ if AVAILABLE:
         alb = row[so.alpha:so.alpha + 3 * n].reshape((n, 3))
         work = row[so.work:so.work + N_CHANNELS]
         power = row[so.power:so.power + N_CHANNELS]
+        K = dims.cells
+        work_cell = row[so.work_cell:so.work_cell + K]
+        power_cell = row[so.power_cell:so.power_cell + K]
         Rb = prow[po.radius:po.radius + n]
         mb = prow[po.mass:po.mass + n]
         Ib = prow[po.inertia:po.inertia + n]
@@ -584,6 +606,8 @@ if AVAILABLE:
         for j in range(3 * n):
             R3[j], im3[j], iI3[j] = Rb[j // 3], inv_m[j // 3], inv_I[j // 3]
         pw = np.empty(N_CHANNELS)
+        gl = np.zeros(n)  # several cells: each grain's loss power, then each cell's in pwc
+        pwc = np.empty(K)
         # the quaternions by component (double-buffered) and the rotation's angular velocities
         qs = np.empty((4, n))
         qn = np.empty((4, n))
@@ -615,25 +639,30 @@ if AVAILABLE:
                 if shape == _BOX and one_cell:  # the common damper: its branches folded
                     (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
                      pdrag, far) = grain_walls(_BOX, law, 0, n, 1, r1, vp, rw, Rb, mb, ref, wk,
-                                               wks, sec, og, False, F, T, ex, ey, ez, z1, zdp,
+                                               wks, sec, og, False, gl, F, T, ex, ey, ez, z1, zdp,
                                                Lz, grav, drag, half_skin2)
                 elif one_cell:
                     (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
                      pdrag, far) = grain_walls(shape, law, 0, n, 1, r1, vp, rw, Rb, mb, ref, wk,
-                                               wks, sec, og, False, F, T, ex, ey, ez, z1, zdp,
+                                               wks, sec, og, False, gl, F, T, ex, ey, ez, z1, zdp,
                                                Lz, grav, drag, half_skin2)
                 else:  # several cells: each grain's walls are its own cell's
                     (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
                      pdrag, far) = grain_walls(shape, law, 0, n, 1, r1, vp, rw, Rb, mb, ref, wk,
-                                               wks, sec, og, True, F, T, ex, ey, ez, z1, zdp,
+                                               wks, sec, og, True, gl, F, T, ex, ey, ez, z1, zdp,
                                                Lz, grav, drag, half_skin2)
                 n_side = n_wall - n_floor - n_lid
                 if n > 1 and far:  # a grain moved more than skin/2: list the pairs anew
                     npairs, pi, pj, pc = _pairs(r1, ex * z1, ey * z1, ez * z1, cutoff, pi, pj,
                                                 pc, ref, Rb, mb, sid, tab, law)
                 # pass 2: the grain pairs
-                pp_e, pp_n, pp_f = _pair_forces(law, r1, vp, rw, Rb, pi, pj, pc, npairs, F, T)
+                pp_e, pp_n, pp_f = _pair_forces(law, r1, vp, rw, Rb, pi, pj, pc, npairs, F, T,
+                                                gl, not one_cell)
                 e_el += pp_e
+                if one_cell:
+                    pwc[0] = pp_n + pp_f + pw_n + pw_f
+                else:
+                    cell_sums(gl, bounds, pwc, 0, 1)
                 # pass 3: the mount, then the corrector and the rotation (_correct)
                 zdd1, pw[_IN], pw[_PRIM] = respond_scalar(mount, t1, z1, zdp, y1, ydp, box_z,
                                                           prow, po, n_lines, xs, xds, acc, tmp)
@@ -657,6 +686,9 @@ if AVAILABLE:
                 for c in range(N_CHANNELS):
                     work[c] = work[c] + 0.5 * dt * (power[c] + pw[c])
                     power[c] = pw[c]
+                for c in range(K):
+                    work_cell[c] = work_cell[c] + 0.5 * dt * (power_cell[c] + pwc[c])
+                    power_cell[c] = pwc[c]
                 for j in range(ny):
                     ydv[j] = ydv[j] + 0.5 * dt * (yddv[j] + acc[j + 1])
                     yddv[j] = acc[j + 1]
@@ -671,7 +703,7 @@ if AVAILABLE:
             e_prim = energy_scalar(mount, t, z, zd, yv, ydv, prow, po, n_lines, xs, xds)
             record_row(rec[b, k_rec], t, z, zd, yv, e_prim, rb, vb, wb, mb, Ib, Rb, grav, Lz, ez,
                        e_el, e_start, imp0 / record_every, imp1 / record_every, n_floor, n_lid,
-                       n_side, work, bounds)
+                       n_side, work, work_cell, bounds)
         for i in range(n):
             for k in range(4):
                 qb[i, k] = qs[k, i]

@@ -78,6 +78,7 @@ RECORD_UNITS = {
     "n_floor_cell": "1",
     "n_lid_cell": "1",
     "e_kinetic_cell": "J",
+    "loss_cell": "J",
     "e_kinetic": "J",
     "e_rotational": "J",
     "e_gravitational": "J",
@@ -98,9 +99,11 @@ def record(st: State, p: Params, model: Model, mean_forces) -> dict:
     species (:meth:`Model.species_slices`): centre of mass height and vertical velocity, and
     the grains touching floor / lid at this instant (overlap > 0). ``*_cell`` are shaped
     ``(k,)``, one entry per cell of the damper (:meth:`Model.cell_index`, ``k = Model.cells``):
-    the same three and the cell's translational kinetic energy ``Σ ½ m v²`` (they sum to
-    ``e_kinetic``); the forces, contact counts on the side walls, energies and work channels
-    are the whole damper's.
+    the same three, the cell's translational kinetic energy ``Σ ½ m v²`` (they sum to
+    ``e_kinetic``) and ``loss_cell``, the granular loss of the cell's contacts since the run
+    started [J] (``State.work_cell``: they sum to the damper's ``pp_normal + pp_friction +
+    pw_normal + pw_friction``); the forces, contact counts on the side walls, the other
+    energies and the work channels are the whole damper's.
     """
     kin, rot, grav = grain_energies(st, p)
     m_tot = jnp.maximum(p.mass.sum(), 1e-300)
@@ -146,18 +149,19 @@ def record_layout(model: Model) -> list[tuple[str, tuple]]:
     shapes = {"z_cm_species": S, "vz_cm_species": S, "n_floor_species": S,
               "n_lid_species": S, "work": (N_CHANNELS,), "y_dofs": (model.dofs - 1,),
               "z_cm_cell": k, "vz_cm_cell": k, "n_floor_cell": k, "n_lid_cell": k,
-              "e_kinetic_cell": k}
+              "e_kinetic_cell": k, "loss_cell": k}
     return [(name, shapes.get(name, ())) for name in RECORD_UNITS]
 
 
 @scalar_form
 def record_row(out, t, z, zd, y, e_prim, r, v, w, mass, inertia, radius, gravity, Lz, ez,
-               e_elastic, e_start, f_floor_lid, f_box, n_floor, n_lid, n_side, work, bounds):
+               e_elastic, e_start, f_floor_lid, f_box, n_floor, n_lid, n_side, work, work_cell,
+               bounds):
     """Scalar form of :func:`record` (the native engine's samples): one sample written into
     the flat row ``out`` in the order of :func:`record_layout`. ``y``: the structure's other
     degrees of freedom, ``e_prim``: the primary's energy at ``t`` (:func:`primary_energy`),
     ``ez``: the vertical component of the excitation axis (the floor is at height ``ez z``);
-    ``bounds`` ``(S, k + 1)``: the grains of species ``s`` in cell ``c`` are
+    ``work``, ``work_cell``: ``State.work``, ``State.work_cell``; ``bounds`` ``(S, k + 1)``: the grains of species ``s`` in cell ``c`` are
     ``bounds[s, c] … bounds[s, c + 1] − 1`` (:func:`cell_bounds`), so species ``s`` is
     ``bounds[s, 0] … bounds[s, k] − 1``."""
     n = r.shape[0]
@@ -232,7 +236,8 @@ def record_row(out, t, z, zd, y, e_prim, r, v, w, mass, inertia, radius, gravity
         out[k + 2 * K + c] = nf
         out[k + 3 * K + c] = nl
         out[k + 4 * K + c] = 0.5 * kc
-    k += 5 * K
+        out[k + 5 * K + c] = work_cell[c]
+    k += 6 * K
     out[k], out[k + 1], out[k + 2], out[k + 3], out[k + 4] = kin, rot, grav, e_elastic, e_prim
     k += 5
     losses = 0.0
@@ -273,6 +278,7 @@ def _cell_records(st: State, p: Params, model: Model) -> dict:
         n_floor_cell=count(floor < p.radius),
         n_lid_cell=count(p.Lz - floor < p.radius),
         e_kinetic_cell=0.5 * (one_hot @ (p.mass * jnp.sum(st.v * st.v, axis=-1))),
+        loss_cell=st.work_cell,
     )
 
 

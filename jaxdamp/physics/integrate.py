@@ -27,6 +27,7 @@ import dataclasses
 import math
 from typing import NamedTuple
 
+import jax
 import jax.numpy as jnp
 
 from jaxdamp.physics.contact import safe_norm, scalar_form
@@ -50,12 +51,14 @@ class Forces(NamedTuple):
     elastic_energy: jnp.ndarray  # [J]
     losses: jnp.ndarray  # (4,) pp_normal, pp_friction, pw_normal, pw_friction powers [W]
     wall_groups: jnp.ndarray  # (3,) pw_floor, pw_lid, pw_side powers [W]
+    cell_losses: jnp.ndarray  # (cells,) each cell's granular loss power [W]
 
 
 def forces(r, v, w, z_box, zd_box, idx, p: Params, model: Model) -> Forces:
     """All forces on the grains of one system for the given (predicted) kinematics."""
     pf = pair_forces(r, v, w, idx, p, model)
     wf = wall_forces(r, v, w, z_box, zd_box, p, model)
+    losses = jnp.stack([pf.normal_loss, pf.friction_loss, wf.normal_loss, wf.friction_loss])
     fx, fy, fz = body_force(p.mass, v[:, 0], v[:, 1], v[:, 2], p.gravity, p.drag)
     f = pf.force + wf.force + jnp.stack([fx, fy, fz], axis=-1)
     return Forces(
@@ -67,9 +70,20 @@ def forces(r, v, w, z_box, zd_box, idx, p: Params, model: Model) -> Forces:
         n_lid=wf.n_lid,
         n_side=wf.n_side,
         elastic_energy=pf.elastic_energy + wf.elastic_energy,
-        losses=jnp.stack([pf.normal_loss, pf.friction_loss, wf.normal_loss, wf.friction_loss]),
+        losses=losses,
         wall_groups=wf.group_loss,
+        cell_losses=cell_losses(losses, pf.grain_loss + wf.grain_loss, model),
     )
+
+
+def cell_losses(losses, grain_loss, model: Model):
+    """Each cell's granular loss power ``(cells,)`` [W]: the sum of ``grain_loss`` ``(N,)``
+    over the cell's grains (:meth:`Model.cell_index`); for one cell, the sum of the damper's
+    ``losses`` (the four granular channels)."""
+    if model.cells == 1:
+        return losses.sum()[None]
+    return jax.ops.segment_sum(grain_loss, jnp.asarray(model.cell_index()),
+                               num_segments=model.cells)
 
 
 def body_force(m, vx, vy, vz, gravity, drag):
@@ -184,6 +198,7 @@ def _finish(state_fields: dict, fo: Forces, power, p: Params) -> State:
     return State(
         **state_fields,
         power=power,
+        power_cell=fo.cell_losses,
         e_elastic=fo.elastic_energy,
         f_floor_lid=fo.floor_lid_z,
         f_box=fo.box_z,
@@ -221,7 +236,8 @@ def initial_state(r, v, w, q, z, zd, t, idx, p: Params, model: Model, e_start=No
         dict(
             r=r, v=v, w=w, q=jnp.asarray(q), a=fo.force / p.mass[:, None],
             alpha=fo.torque / p.inertia[:, None], z=z, zd=zd, zdd=zdd, y=y, yd=yd, ydd=ydd, t=t,
-            step=jnp.zeros((), jnp.int64), work=jnp.zeros(N_CHANNELS), e_start=jnp.zeros(()),
+            step=jnp.zeros((), jnp.int64), work=jnp.zeros(N_CHANNELS),
+            work_cell=jnp.zeros(model.cells), e_start=jnp.zeros(()),
             z_max=jnp.asarray(-jnp.inf), z_min=jnp.asarray(jnp.inf),
         ),
         fo,
@@ -269,6 +285,7 @@ def step(st: State, idx, p: Params, model: Model) -> State:
             t=t1,
             step=st.step + 1,
             work=st.work + 0.5 * dt * (st.power + power),
+            work_cell=st.work_cell + 0.5 * dt * (st.power_cell + fo.cell_losses),
             e_start=st.e_start,
             z_max=jnp.where(in_window, jnp.maximum(st.z_max, z1), st.z_max),
             z_min=jnp.where(in_window, jnp.minimum(st.z_min, z1), st.z_min),

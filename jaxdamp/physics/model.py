@@ -186,6 +186,10 @@ class State:
     ``(dofs - 1,)`` the primary structure's other degrees of freedom (empty for one).
     ``power`` [W] and ``work`` [J], shape ``(N_CHANNELS,)``: the channel powers at ``t`` and
     their time integrals (trapezoid rule) since the run started (see :data:`CHANNELS`).
+    ``power_cell`` [W] and ``work_cell`` [J], shape ``(cells,)``: the granular loss
+    (``pp_normal + pp_friction + pw_normal + pw_friction``) of each cell of the damper and its
+    integral, the same rule (no pair spans two cells, so the cells' losses sum to the
+    damper's).
     ``e_elastic`` [J] elastic contact energy at ``t``; ``e_start`` [J] total mechanical energy
     when accounting started; ``f_floor_lid``, ``f_box`` [N] vertical force of the grains on
     floor + lid and on the whole box along ``e`` at ``t``; ``n_floor``, ``n_lid`` grains
@@ -210,6 +214,8 @@ class State:
     step: jnp.ndarray
     power: jnp.ndarray
     work: jnp.ndarray
+    power_cell: jnp.ndarray
+    work_cell: jnp.ndarray
     e_elastic: jnp.ndarray
     e_start: jnp.ndarray
     f_floor_lid: jnp.ndarray

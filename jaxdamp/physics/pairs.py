@@ -24,14 +24,16 @@ _GHOST = 1.0e6
 
 
 class PairForces(NamedTuple):
-    """Grain–grain forces. ``force``, ``torque``: ``(N, 3)`` [N], [N m]; the rest are totals:
-    ``elastic_energy`` [J], ``normal_loss``, ``friction_loss`` [W]."""
+    """Grain–grain forces. ``force``, ``torque``: ``(N, 3)`` [N], [N m]; totals
+    ``elastic_energy`` [J], ``normal_loss``, ``friction_loss`` [W]; ``grain_loss`` ``(N,)``
+    [W]: each grain's half of the loss (normal + friction) of its contacts."""
 
     force: jnp.ndarray
     torque: jnp.ndarray
     elastic_energy: jnp.ndarray
     normal_loss: jnp.ndarray
     friction_loss: jnp.ndarray
+    grain_loss: jnp.ndarray
 
 
 def pair_forces(r, v, w, idx, p, model) -> PairForces:
@@ -46,7 +48,8 @@ def pair_forces(r, v, w, idx, p, model) -> PairForces:
     n = r.shape[0]
     if n < 2 or idx.shape[1] == 0:
         zero = jnp.zeros_like(r)
-        return PairForces(zero, zero, jnp.zeros(()), jnp.zeros(()), jnp.zeros(()))
+        return PairForces(zero, zero, jnp.zeros(()), jnp.zeros(()), jnp.zeros(()),
+                          jnp.zeros(n, r.dtype))
 
     lo = force_dtype(model)
 
@@ -90,6 +93,7 @@ def pair_forces(r, v, w, idx, p, model) -> PairForces:
         elastic_energy=0.5 * c.elastic_energy.astype(hi).sum(),
         normal_loss=0.5 * c.normal_loss.astype(hi).sum(),
         friction_loss=0.5 * c.friction_loss.astype(hi).sum(),
+        grain_loss=0.5 * (c.normal_loss + c.friction_loss).astype(hi).sum(axis=1),
     )
 
 

@@ -40,6 +40,8 @@ class WallForces(NamedTuple):
       elastic_energy: [J]; normal_loss, friction_loss: dissipated power [W] (all walls);
       group_loss: ``(3,)`` the dissipated power (normal + friction) at the floor, the lid and
         the side walls [W] (:data:`jaxdamp.physics.model.WALL_GROUPS`).
+      grain_loss: ``(N,)`` the dissipated power (normal + friction) of each grain's wall
+        contacts [W].
     """
 
     force: jnp.ndarray
@@ -53,6 +55,7 @@ class WallForces(NamedTuple):
     normal_loss: jnp.ndarray
     friction_loss: jnp.ndarray
     group_loss: jnp.ndarray
+    grain_loss: jnp.ndarray
 
 
 def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
@@ -96,7 +99,8 @@ def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
                       row[..., MU])
 
     f = Vec(*(x.astype(hi) for x in c.force))  # (N, 2 + W): force of wall on grain
-    loss = (c.normal_loss + c.friction_loss).astype(hi).sum(axis=0)  # (2 + W,) per wall
+    per_contact = (c.normal_loss + c.friction_loss).astype(hi)  # (N, 2 + W)
+    loss = per_contact.sum(axis=0)  # per wall
     return WallForces(
         force=f.sum(axis=1).stack(),
         torque=c.torque.sum(axis=1).stack().astype(hi),
@@ -109,6 +113,7 @@ def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
         normal_loss=c.normal_loss.astype(hi).sum(),
         friction_loss=c.friction_loss.astype(hi).sum(),
         group_loss=jnp.stack([loss[FLOOR], loss[LID], loss[LID + 1:].sum()]),
+        grain_loss=per_contact.sum(axis=1),
     )
 
 
