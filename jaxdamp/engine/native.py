@@ -412,11 +412,12 @@ if AVAILABLE:
             out[c] = total
 
     @_kernel()
-    def _pair_forces(law, r, v, rw, R, pi, pj, pc, npairs, F, T, gl, by_grain):
+    def _pair_forces(law, r, v, rw, R, pi, pj, pc, npairs, F, T, gl):
         """Adds the grain pairs' forces and torques to ``F``, ``T`` (half list: Newton's third
         law); ``rw[i] = R_i ω_i``. Returns ``(elastic energy, normal loss, friction loss)``,
-        summed in registers; ``by_grain``: also adds each pair's loss to ``gl`` of its first
-        grain (several cells: a pair's grains share a cell)."""
+        summed in registers. ``gl``: ``None``, or (several cells: a pair's grains share a cell)
+        an array to which each pair's loss is added at its first grain; numba compiles the two
+        apart, the branch folded away in the first."""
         e_sum = 0.0
         ln_sum = 0.0
         lf_sum = 0.0
@@ -450,7 +451,7 @@ if AVAILABLE:
             e_sum += e
             ln_sum += ln
             lf_sum += lf
-            if by_grain:
+            if gl is not None:
                 gl[i] += ln + lf
         return e_sum, ln_sum, lf_sum
 
@@ -656,13 +657,15 @@ if AVAILABLE:
                     npairs, pi, pj, pc = _pairs(r1, ex * z1, ey * z1, ez * z1, cutoff, pi, pj,
                                                 pc, ref, Rb, mb, sid, tab, law)
                 # pass 2: the grain pairs
-                pp_e, pp_n, pp_f = _pair_forces(law, r1, vp, rw, Rb, pi, pj, pc, npairs, F, T,
-                                                gl, not one_cell)
-                e_el += pp_e
                 if one_cell:
+                    pp_e, pp_n, pp_f = _pair_forces(law, r1, vp, rw, Rb, pi, pj, pc, npairs, F,
+                                                    T, None)
                     pwc[0] = pp_n + pp_f + pw_n + pw_f
                 else:
+                    pp_e, pp_n, pp_f = _pair_forces(law, r1, vp, rw, Rb, pi, pj, pc, npairs, F,
+                                                    T, gl)
                     cell_sums(gl, bounds, pwc, 0, 1)
+                e_el += pp_e
                 # pass 3: the mount, then the corrector and the rotation (_correct)
                 zdd1, pw[_IN], pw[_PRIM] = respond_scalar(mount, t1, z1, zdp, y1, ydp, box_z,
                                                           prow, po, n_lines, xs, xds, acc, tmp)
