@@ -657,10 +657,9 @@ if AVAILABLE:
                     npairs, pi, pj, pc = _pairs(r1, ex * z1, ey * z1, ez * z1, cutoff, pi, pj,
                                                 pc, ref, Rb, mb, sid, tab, law)
                 # pass 2: the grain pairs
-                if one_cell:
+                if one_cell:  # its loss is the damper's: formed from the channels at the sample
                     pp_e, pp_n, pp_f = _pair_forces(law, r1, vp, rw, Rb, pi, pj, pc, npairs, F,
                                                     T, None)
-                    pwc[0] = pp_n + pp_f + pw_n + pw_f
                 else:
                     pp_e, pp_n, pp_f = _pair_forces(law, r1, vp, rw, Rb, pi, pj, pc, npairs, F,
                                                     T, gl)
@@ -689,9 +688,10 @@ if AVAILABLE:
                 for c in range(N_CHANNELS):
                     work[c] = work[c] + 0.5 * dt * (power[c] + pw[c])
                     power[c] = pw[c]
-                for c in range(K):
-                    work_cell[c] = work_cell[c] + 0.5 * dt * (power_cell[c] + pwc[c])
-                    power_cell[c] = pwc[c]
+                if not one_cell:
+                    for c in range(K):
+                        work_cell[c] = work_cell[c] + 0.5 * dt * (power_cell[c] + pwc[c])
+                        power_cell[c] = pwc[c]
                 for j in range(ny):
                     ydv[j] = ydv[j] + 0.5 * dt * (yddv[j] + acc[j + 1])
                     yddv[j] = acc[j + 1]
@@ -703,6 +703,9 @@ if AVAILABLE:
                 step += 1
                 imp0 += floor_lid
                 imp1 += box_z
+            if one_cell:
+                work_cell[0] = work[_PPN] + work[_PPF] + work[_PWN] + work[_PWF]
+                power_cell[0] = power[_PPN] + power[_PPF] + power[_PWN] + power[_PWF]
             e_prim = energy_scalar(mount, t, z, zd, yv, ydv, prow, po, n_lines, xs, xds)
             record_row(rec[b, k_rec], t, z, zd, yv, e_prim, rb, vb, wb, mb, Ib, Rb, grav, Lz, ez,
                        e_el, e_start, imp0 / record_every, imp1 / record_every, n_floor, n_lid,
