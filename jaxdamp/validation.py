@@ -148,10 +148,11 @@ def _vector(value, name: str, n: int, positive: bool = False, allow_zero: bool =
     return a
 
 
-def _structure(s) -> None:
-    """Checks of ``Config.structure`` (:class:`jaxdamp.config.Structure`): matrices symmetric,
-    ``M`` positive definite, ``K`` and ``C`` positive semi-definite; modal data positive and
-    the shapes invertible; indices in range."""
+def _structure(s, cells: int = 1) -> None:
+    """Checks of ``Config.structure`` (:class:`jaxdamp.config.Structure`) of a damper of
+    ``cells`` cells: matrices symmetric, ``M`` positive definite, ``K`` and ``C`` positive
+    semi-definite; modal data positive and the shapes invertible; indices in range (``attach``
+    one, or one per cell)."""
     import numpy as np
 
     if (s.M is None) == (s.frequencies is None):
@@ -193,10 +194,19 @@ def _structure(s) -> None:
             _vector(s.damping, "structure.damping", n, positive=True, allow_zero=True)
         if s.modal_masses is not None:
             _vector(s.modal_masses, "structure.modal_masses", n, positive=True)
-    for name in ("attach", "force_dof"):
-        v = getattr(s, name)
-        if not (_integer(v) and 0 <= v < n):
-            raise ConfigError(f"structure.{name} = {v!r}: must be a degree of freedom 0..{n - 1}")
+    if isinstance(s.attach, (tuple, list)):  # one degree of freedom per cell
+        if len(s.attach) != cells or not all(_integer(a) and 0 <= a < n
+                                                    for a in s.attach):
+            raise ConfigError(
+                f"structure.attach = {list(s.attach)!r}: a list gives the degree of freedom "
+                f"(0..{n - 1}) of each of the {cells} cell(s) (cells = {cells}); "
+                "a number puts every cell on one")
+    elif not (_integer(s.attach) and 0 <= s.attach < n):
+        raise ConfigError(f"structure.attach = {s.attach!r}: must be a degree of freedom "
+                          f"0..{n - 1} (or a list of one per cell)")
+    if not (_integer(s.force_dof) and 0 <= s.force_dof < n):
+        raise ConfigError(f"structure.force_dof = {s.force_dof!r}: must be a degree of freedom "
+                          f"0..{n - 1}")
     if s.influence is not None:
         _vector(s.influence, "structure.influence", n)
     if not (_number(s.force) and math.isfinite(s.force)):
@@ -204,16 +214,13 @@ def _structure(s) -> None:
 
 
 def _cells(config: Config) -> None:
-    """Checks of ``Config.cells``: an integer ≥ 1; several cells act on one degree of freedom
-    (the 1-DOF primary or a driven box), not on a multi-DOF structure's (a later step), and
-    the single-particle model (S3) has one cavity."""
+    """Checks of ``Config.cells``: an integer ≥ 1 (on a multi-DOF structure each cell on the
+    degree of freedom ``structure.attach`` gives it, checked with the structure); the
+    single-particle model (S3) has one cavity."""
     k = config.cells
     if not _integer(k) or k < 1:
         raise ConfigError(f"cells = {k!r}: must be an integer ≥ 1 (the number of identical "
                           "cells of the damper)")
-    if k > 1 and config.structure is not None:
-        raise ConfigError(f"cells = {k}: several cells act on one degree of freedom; with a "
-                          "multi-DOF [structure] only cells = 1 is supported for now")
     if k > 1 and config.system == "impact":
         raise ConfigError(f"cells = {k}: the single-particle model (system 'impact', S3) has "
                           "one cavity; only cells = 1")
@@ -366,7 +373,7 @@ def validate(config: Config) -> Config:
         if config.random is not None:
             _random(config.random)
         if config.structure is not None:
-            _structure(config.structure)
+            _structure(config.structure, config.cells)
         if config.shock is not None:
             sh = config.shock
             if not (_number(sh.peak) and math.isfinite(sh.peak)):

@@ -49,8 +49,9 @@ def start(cfg: Config, r, v, w=None, z=0.0, zd=0.0, dt=None, **param_changes):
     q = np.zeros((n, 4))
     q[:, 0] = 1.0
     pb = driver.batched(params)
-    b = driver.start(model, pb, r[None], v[None], w[None], q[None], np.full(1, z), np.full(1, zd),
-                     engine="jax", multiplier=cfg.numerics.capacity_multiplier)
+    x0 = [np.full(1, x) if np.ndim(x) == 0 else np.asarray(x, float)[None] for x in (z, zd)]
+    b = driver.start(model, pb, r[None], v[None], w[None], q[None], *x0, engine="jax",
+                     multiplier=cfg.numerics.capacity_multiplier)
     return model, pb, b.states, b.nbrs
 
 

@@ -237,7 +237,8 @@ def test_structure_jax_equals_scalar():
     p = structure_params(M, K, C, r=rng.normal(size=3), b=rng.normal(size=3))
     for _ in range(10):
         x, xd = rng.normal(0, 1e-3, 3), rng.normal(0, 1e-2, 3)
-        u, ud, fz, c = rng.normal(0, 1e-3), rng.normal(0, 1e-2), rng.normal(), rng.uniform(-1, 1)
+        u, ud, c = rng.normal(0, 1e-3), rng.normal(0, 1e-2), rng.uniform(-1, 1)
+        fz = rng.normal(size=3)  # the grains' forces on the three degrees of freedom
         out, tmp = np.empty(3), np.empty(3)
         structure.acceleration_scalar(out, x, xd, u, ud, fz, c, np.linalg.inv(M), K, C,
                                       p.s_r, p.s_b, tmp)

@@ -39,14 +39,16 @@ def test_the_jax_and_scalar_forms_of_every_mount_agree(name):
     xs, xds, acc, tmp = np.empty(n), np.empty(n), np.zeros(n), np.empty(n)
     for _ in range(20):
         t, dt = rng.uniform(0, 2), 1e-5
-        z, zd, zdd, box_z = rng.normal(0, [1e-3, 0.1, 10.0, 5.0])
+        z, zd, zdd = rng.normal(0, [1e-3, 0.1, 10.0])
         y, yd = rng.normal(0, 1e-3, n - 1), rng.normal(0, 0.1, n - 1)
+        f = rng.normal(0, 5.0, n)  # the grains' forces on every degree of freedom
         pj = mount.predict(z, zd, zdd, t + dt, dt, p)
         ps = mounts.predict_scalar(mount.id, t + dt, dt, z, zd, zdd, row, po)
         np.testing.assert_allclose(ps, [float(v) for v in pj], rtol=1e-13, atol=1e-15)
-        a_j, ay_j = mount.accelerate(z, zd, jnp.asarray(y), jnp.asarray(yd), t, box_z, p)
-        pin_j, pc_j = mount.powers(box_z, z, zd, jnp.asarray(y), jnp.asarray(yd), t, p)
-        a_s, pin_s, pc_s = mounts.respond_scalar(mount.id, t, z, zd, y, yd, box_z, row, po,
+        a_j, ay_j = mount.accelerate(z, zd, jnp.asarray(y), jnp.asarray(yd), t, jnp.asarray(f),
+                                     p)
+        pin_j, pc_j = mount.powers(jnp.asarray(f), z, zd, jnp.asarray(y), jnp.asarray(yd), t, p)
+        a_s, pin_s, pc_s = mounts.respond_scalar(mount.id, t, z, zd, y, yd, f, row, po,
                                                  n_lines, xs, xds, acc, tmp)
         np.testing.assert_allclose([a_s, pin_s, pc_s], [float(a_j), float(pin_j), float(pc_j)],
                                    rtol=1e-12, atol=1e-12)
@@ -71,9 +73,9 @@ def test_the_primary_mount_is_the_thesis_equation():
     M, K, C = cfg.primary.M, cfg.primary.K, cfg.primary.C
     mount = mounts.mount_of(model)
     z, zd, F = 2e-3, -0.05, 7.0
-    a, _ = mount.accelerate(z, zd, jnp.zeros(0), jnp.zeros(0), 0.1, F, p)
+    a, _ = mount.accelerate(z, zd, jnp.zeros(0), jnp.zeros(0), 0.1, jnp.asarray([F]), p)
     assert float(a) == pytest.approx((-C * zd - K * z + F) / M, rel=1e-14)
     e = mount.energy(z, zd, jnp.zeros(0), jnp.zeros(0), 0.1, p)
     assert float(e) == pytest.approx(0.5 * M * zd**2 + 0.5 * K * z**2, rel=1e-14)
-    p_in, p_c = mount.powers(F, z, zd, jnp.zeros(0), jnp.zeros(0), 0.1, p)
+    p_in, p_c = mount.powers(jnp.asarray([F]), z, zd, jnp.zeros(0), jnp.zeros(0), 0.1, p)
     assert float(p_in) == 0.0 and float(p_c) == pytest.approx(C * zd**2, rel=1e-14)

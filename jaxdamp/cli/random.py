@@ -62,12 +62,13 @@ def cmd_random(args) -> int:
               f"{given.primary.U:g} -> 0)")
 
     from jaxdamp.figures import random_figure, save
+    from jaxdamp.physics.structure import attachments
 
     res = rnd.measure(cfg, scales, duration=args.duration, replicates=R, out=args.out,
                       resume=args.resume, progress=not args.no_progress, dof=args.dof)
     seed = "numerics.seed of each bed" if cfg.random.seed is None else cfg.random.seed
     where = ("" if cfg.structure is None
-             else f" at degree of freedom {res.dof} (the box is on {cfg.structure.attach})")
+             else f" at degree of freedom {res.dof} (the box is on {attachments(cfg)[0]})")
     print(f"random-phase multisine, period {res.period:g} s, phases from {seed}; H1 = z/u"
           f"{where} pooled over R = {R} realisation(s)")
     for s, lev in zip(res.scales, res.levels):
@@ -139,7 +140,7 @@ def register(sub) -> None:
     p.add_argument("--dof", type=int, metavar="I",
                    help="with a [structure]: the degree of freedom (0-based, the structure's "
                         "numbering) whose response z is analysed; default the box's "
-                        "(structure.attach). Every degree of freedom is in the records "
+                        "(structure.attach; cell 0's). Every degree of freedom is in the records "
                         "(z_box, y_dofs)")
     p.add_argument("--out", metavar="FILE.h5",
                    help="sweep file with the /random analysis (default: none)")

@@ -171,7 +171,7 @@ class DEMProblem:
             burn = self.warm_burn_in  # the warm state continues under the new lid
         else:
             x0, xd0 = initial_structure(self.config, self.m_grains)
-            r0 = np.broadcast_to(bed_with_box(self.config, self.bed.r, x0[0]),
+            r0 = np.broadcast_to(bed_with_box(self.config, self.bed.r, x0),
                                  (F,) + self.bed.r.shape)
             rep = lambda a: np.broadcast_to(a, (F,) + a.shape)  # noqa: E731
             states = driver.start(self.model, params, r0, rep(self.bed.v), rep(self.bed.w),

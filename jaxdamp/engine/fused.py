@@ -92,9 +92,11 @@ _IN, _PRIM, _PPN, _PPF, _PWN, _PWF, _DRAG, _PW_FLOOR, _PW_LID, _PW_SIDE = (
                     "pw_friction", "drag", "pw_floor", "pw_lid", "pw_side"))
 #: Per-system scratch in device memory: per-grain rows ``(n, 3)`` / ``(n, 4)`` (the CPU
 #: kernel's layout: its grain pass runs on them), the structure's vectors, and for several
-#: cells each grain's and each cell's loss power (``gl`` ``(n,)``, ``pwc`` ``(cells,)``).
+#: cells each grain's loss power and force on its container (``grain`` ``(n, 2)``), each cell's
+#: (``pwc``, ``bzc`` ``(cells,)``), the cells' containers' positions and velocities
+#: (``frames`` ``(cells, 2)``) and the grains' forces on the degrees of freedom (``fdof``).
 _SCRATCH = ("r1", "vp", "rw", "ref", "F", "T", "wk", "wks", "y1", "ydp", "xs", "xds", "acc",
-            "tmp", "gl", "pwc")
+            "tmp", "grain", "pwc", "bzc", "frames", "fdof")
 Scratch = namedtuple("Scratch", _SCRATCH)
 
 
@@ -160,7 +162,8 @@ def scratch_layout(n: int, ndof: int, cells: int) -> tuple[Scratch, int]:
     sizes = {"r1": 3 * n, "vp": 3 * n, "rw": 3 * n, "ref": 3 * n, "F": 3 * n, "T": 3 * n,
              "wk": 4 * n, "wks": 4 * n,
              "y1": ndof - 1, "ydp": ndof - 1, "xs": ndof, "xds": ndof, "acc": ndof,
-             "tmp": ndof, "gl": n, "pwc": cells}
+             "tmp": ndof, "grain": 2 * n, "pwc": cells, "bzc": cells, "frames": 2 * cells,
+             "fdof": ndof}
     off, k = {}, 0
     for name in _SCRATCH:
         off[name] = k
@@ -202,6 +205,7 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
     pair_contact = native.pair_contact
     wall_constants = native.wall_constants
     cell_sums = native.cell_sums
+    cell_frames = native.cell_frames
     rebuild_steps = native.REBUILD_STEPS
 
     if simulated():
@@ -232,9 +236,10 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
 
     @cuda.jit(**({} if simulated() or max_registers is None else
                   {"max_registers": max_registers}))
-    def advance(n_records, record_every, dims, skin0, st, pm, so, po, sid, bounds, rec, scr, sc,
-                nbr, cnt, status):
+    def advance(n_records, record_every, dims, skin0, st, pm, so, po, sid, bounds, cg, cdof, rec,
+                scr, sc, nbr, cnt, status):
         st, pm, sid, bounds, rec = plain(st), plain(pm), plain(sid), plain(bounds), plain(rec)
+        cg, cdof = plain(cg), plain(cdof)
         scr, nbr, cnt, status = plain(scr), plain(nbr), plain(cnt), plain(status)
         b = cuda.blockIdx.x
         tid = cuda.threadIdx.x
@@ -290,8 +295,14 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
         xds = s[sc.xds:sc.xds + ndof]
         acc = s[sc.acc:sc.acc + ndof]
         tmp = s[sc.tmp:sc.tmp + ndof]
-        gl = s[sc.gl:sc.gl + n]
+        grain = s[sc.grain:sc.grain + 2 * n].reshape((n, 2))
         pwc = s[sc.pwc:sc.pwc + K]
+        bzc = s[sc.bzc:sc.bzc + K]
+        frames = s[sc.frames:sc.frames + 2 * K].reshape((K, 2))
+        fdof = s[sc.fdof:sc.fdof + ndof]
+        spread = False  # cells on several degrees of freedom (else all on the box's)
+        for c in range(K):
+            spread = spread | (cdof[c] != 0)
         red = cuda.shared.array((N_SUMS, THREADS), float64)
         sh = cuda.shared.array(4, float64)  # t1, z1, z'1 of the step; 1 once it blew up
         pw = cuda.local.array(N_CHANNELS, float64)
@@ -345,6 +356,8 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                     for j in range(ny):
                         y1[j] = yv[j] + dt * ydv[j] + hdt2 * yddv[j]
                         ydp[j] = ydv[j] + dt * yddv[j]
+                    if cells:
+                        cell_frames(cdof, z1, zdp, y1, ydp, frames)
                     sh[0], sh[1], sh[2] = t1, z1, zdp
                 cuda.syncthreads()
                 z1, zdp = sh[1], sh[2]
@@ -359,8 +372,8 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                 (parts[0], parts[1], parts[2], parts[3], parts[4], parts[5], parts[6], parts[7],
                  parts[8], parts[9], parts[10],
                  far) = grain_walls(shape, law, tid, n, nt, r1, vp, rw, Rb, mb, ref, wk, wks, sec,
-                                    og, cells, gl, Fs, Ts, ex, ey, ez, z1, zdp, Lz, grav,
-                                    drag, half_skin2)
+                                    og, cells, grain, cg, frames, Fs, Ts, ex, ey, ez, z1, zdp,
+                                    Lz, grav, drag, half_skin2)
                 if cuda.syncthreads_or(1 if far else 0) or first:
                     # the lists anew, from the predicted positions in the box frame
                     first = False
@@ -415,7 +428,7 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                             parts[12] += ln
                             parts[13] += lf
                             if cells:  # each grain of the pair lists it: half each
-                                gl[i] += 0.5 * (ln + lf)
+                                grain[i, 0] += 0.5 * (ln + lf)
                     # the velocity-Verlet corrector and the rotation by the mid-step spin
                     im = 1.0 / mb[i]
                     iI = 1.0 / Ib[i]
@@ -443,8 +456,10 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                 for k in range(N_SUMS):
                     red[k, tid] = parts[k]
                 block_sum(red, tid, nt, N_SUMS, False)
-                if cells:  # each cell's loss, a thread per cell
-                    cell_sums(gl, bounds, pwc, tid, nt)
+                if cells:  # each cell's loss and force, a thread per cell
+                    cell_sums(grain[:, 0], bounds, pwc, tid, nt)
+                    if spread:
+                        cell_sums(grain[:, 1], bounds, bzc, tid, nt)
                     cuda.syncthreads()
                 if tid == 0:  # the mount's response, the energy channels, the finite check
                     t1 = sh[0]
@@ -453,8 +468,15 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                     n_floor, n_lid = red[5, 0], red[6, 0]
                     n_side = red[7, 0] - n_floor - n_lid
                     pp_n, pp_f = 0.5 * red[12, 0], 0.5 * red[13, 0]
+                    if spread:  # each cell's force on its own degree of freedom
+                        for j in range(ndof):
+                            fdof[j] = 0.0
+                        for c in range(K):
+                            fdof[cdof[c]] += bzc[c]
+                    else:
+                        fdof[0] = box_z
                     zdd1, pw[_IN], pw[_PRIM] = respond_scalar(mount, t1, z1, zdp, y1, ydp,
-                                                              box_z, prow, po, n_lines, xs,
+                                                              fdof, prow, po, n_lines, xs,
                                                               xds, acc, tmp)
                     zd1 = zdp if prescribed else zd + 0.5 * dt * (zdd + zdd1)
                     pw[_PPN], pw[_PPF], pw[_PWN], pw[_PWF] = pp_n, pp_f, pw_n, pw_f
@@ -499,7 +521,8 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                 e_prim = energy_scalar(mount, t, z, zd, yv, ydv, prow, po, n_lines, xs, xds)
                 record_row(rec[b, k_rec], t, z, zd, yv, e_prim, rb, vb, wb, mb, Ib, Rb, grav, Lz,
                            ez, e_el, e_start, imp0 / record_every, imp1 / record_every, n_floor,
-                           n_lid, n_side, work, work_cell, bounds)
+                           n_lid, n_side, work, work_cell, bounds,
+                           cell_frames(cdof, z, zd, yv, ydv, frames))
             cuda.syncthreads()
         if tid == 0:
             row[so.z], row[so.zd], row[so.zdd], row[so.t] = z, zd, zdd, t
@@ -542,7 +565,8 @@ def _advance_packed(model, state_packed, params_packed, state_layout, param_layo
         raise RuntimeError(f"numerics.engine = 'fused': {why}")
     st = np.array(state_packed, dtype=np.float64, order="C", copy=True)
     pm = np.ascontiguousarray(params_packed, dtype=np.float64)
-    dims, so, po, sid, bounds, width = native.kernel_args(model, state_layout, param_layout)
+    dims, so, po, sid, bounds, cg, cdof, width = native.kernel_args(model, state_layout,
+                                                                    param_layout)
     n, batch = model.n, st.shape[0]
     sc, size = scratch_layout(n, dims.ndof, dims.cells)
     kernel = _kernel(dims.mount, dims.law, dims.shape, MAX_REGISTERS)
@@ -553,7 +577,8 @@ def _advance_packed(model, state_packed, params_packed, state_layout, param_layo
         status = cuda.to_device(np.zeros(batch, np.int64))
         kernel[batch, threads_per_block(n)](
             int(n_records), int(record_every), dims, float(model.skin), d_st, cuda.to_device(pm),
-            so, po, cuda.to_device(sid), cuda.to_device(bounds), d_rec,
+            so, po, cuda.to_device(sid), cuda.to_device(bounds), cuda.to_device(cg),
+            cuda.to_device(cdof), d_rec,
             cuda.device_array((batch, size)), sc, cuda.device_array((batch, cap, n), np.int32),
             cuda.device_array((batch, n), np.int32), status)
         need = int(status.copy_to_host().max())
@@ -572,14 +597,14 @@ def compile_ptx(model, states, params, cc: tuple[int, int] = (9, 0)) -> str:
 
     if simulated():
         raise RuntimeError("compile_ptx needs numba-cuda's compiler: unset NUMBA_ENABLE_CUDASIM")
-    dims, so, po, sid, bounds, _ = native.kernel_args(model, native.layout(states),
+    dims, so, po, sid, bounds, cg, cdof, _ = native.kernel_args(model, native.layout(states),
                                                       native.layout(params))
     sc, _ = scratch_layout(model.n, dims.ndof, dims.cells)
     f2 = numba.float64[:, ::1]
     sig = (numba.int64, numba.int64, numba.typeof(dims), numba.float64, f2, f2,
            numba.typeof(so), numba.typeof(po), numba.typeof(sid), numba.typeof(bounds),
-           numba.float64[:, :, ::1], f2, numba.typeof(sc), numba.int32[:, :, ::1],
-           numba.int32[:, ::1], numba.int64[::1])
+           numba.typeof(cg), numba.typeof(cdof), numba.float64[:, :, ::1], f2,
+           numba.typeof(sc), numba.int32[:, :, ::1], numba.int32[:, ::1], numba.int64[::1])
     kernel = _kernel(dims.mount, dims.law, dims.shape)
     ptx, _ = cuda.compile_ptx(kernel.py_func, sig, cc=cc)
     return ptx

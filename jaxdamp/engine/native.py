@@ -316,15 +316,19 @@ if AVAILABLE:
 
     @_kernel(inline="always")
     def grain_walls(shape, law, lo, n, step, r1, vp, rw, Rb, mb, ref, wk, wks, sec, og, shifted,
-                    gl, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
+                    gs, cg, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
         """Pass 1 over the grains ``lo, lo + step, … < n`` (all of them on the CPU; a thread's
         own on the device, :mod:`jaxdamp.engine.fused`: the one definition of a grain's walls
         for both kernels): body force, the floor, the lid and the container's sides
         (number ``shape``, :mod:`jaxdamp.physics.containers`; ``sec``: its section numbers in
         registers, :func:`~jaxdamp.physics.containers.section_scalar`; ``og``: the corner of
         every grain's cell in the box frame, ``Params.origin`` ``(N, 2)``, taken off the
-        grain's position where ``shifted``: several cells; then ``gl[i]`` is set to the loss
-        power of grain ``i``'s wall contacts, for the cells' losses) into ``F``, ``T``; returns the
+        grain's position where ``shifted``: several cells; then the walls of grain ``i``'s
+        cell ``c = cg[i]`` are at ``e frames[c, 0]`` moving at ``e frames[c, 1]`` (each cell on
+        its degree of freedom), and ``gs[i, 0]``, ``gs[i, 1]`` are set to the loss power of its
+        wall contacts and its force on its container along ``e``, for the cells' sums; the
+        lists' frame stays the box's, ``e z1``. At most 30 arguments: numba inlines no more)
+        into ``F``, ``T``; returns the
         sums ``(elastic energy, normal loss, friction loss, box_z, floor + lid force, grains on
         the floor, on the lid, wall contacts (all walls), the floor's loss, the lid's loss,
         Σ m v², whether a grain moved more than skin/2 since the list was built)``. Inlined
@@ -354,13 +358,20 @@ if AVAILABLE:
             bx = x - ex * z1
             by = y - ey * z1
             floor = zz - ez * z1
-            wx = ux - ex * zdp
-            wy = uy - ey * zdp
-            wz = uz - ez * zdp
             ddx = bx - ref[i, 0]
             ddy = by - ref[i, 1]
             ddz = floor - ref[i, 2]
             far = far | (ddx * ddx + ddy * ddy + ddz * ddz > half_skin2)
+            vi = zdp
+            if shifted:  # the frame of the grain's cell, on its own degree of freedom
+                zi = frames[cg[i], 0]
+                vi = frames[cg[i], 1]
+                bx = x - ex * zi
+                by = y - ey * zi
+                floor = zz - ez * zi
+            wx = ux - ex * vi
+            wy = uy - ey * vi
+            wz = uz - ez * vi
             pdrag += mb[i] * (ux * ux + uy * uy + uz * uz)
             fx, fy, fz = body_force_scalar(mb[i], ux, uy, uz, grav, drag)
             tx = 0.0
@@ -370,7 +381,8 @@ if AVAILABLE:
             # most grains touch none, so the common path is a compare per wall; box_z
             # sums the force on the box along the axis e
             acc = (fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z, n_wall)
-            lost = pw_n + pw_f  # the losses before this grain's walls (several cells)
+            lost = pw_n + pw_f  # the losses and the force before this grain's walls
+            pushed = box_z
             if floor < Ri:
                 acc, gz, loss = add_wall_scalar(law, Ri - floor, 0.0, 0.0, 1.0, wx, wy, wz, sx,
                                                 sy, sz, Ri, wk[i, 0], wk[i, 1], wk[i, 2],
@@ -395,9 +407,21 @@ if AVAILABLE:
             F[i, 0], F[i, 1], F[i, 2] = fx, fy, fz
             T[i, 0], T[i, 1], T[i, 2] = tx, ty, tz
             if shifted:
-                gl[i] = pw_n + pw_f - lost
+                gs[i, 0] = pw_n + pw_f - lost
+                gs[i, 1] = box_z - pushed
         return (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
                 pdrag, far)
+
+    @_kernel(inline="always")
+    def cell_frames(cdof, z, zd, y, yd, frames):
+        """Each cell's container's position ``frames[c, 0]`` and velocity ``frames[c, 1]``
+        along ``e``: its degree of freedom ``cdof[c]`` of ``(z, y)``, ``(z', y')``; returns
+        the positions."""
+        for c in range(cdof.shape[0]):
+            d = cdof[c]
+            frames[c, 0] = z if d == 0 else y[d - 1]
+            frames[c, 1] = zd if d == 0 else yd[d - 1]
+        return frames[:, 0]
 
     @_kernel(inline="always")
     def cell_sums(gl, bounds, out, lo, step):
@@ -499,11 +523,13 @@ if AVAILABLE:
         return h
 
     @_kernel()
-    def _advance_one(b, n_records, record_every, dims, skin, st, pm, so, po, sid, bounds, rec):
+    def _advance_one(b, n_records, record_every, dims, skin, st, pm, so, po, sid, bounds, cg,
+                     cdof, rec):
         """Advance system ``b`` of the packed batch by ``n_records × record_every`` steps in
         place, writing a sample after every ``record_every`` steps into ``rec[b]``
         (:func:`jaxdamp.physics.energy.record_row`; ``bounds``: the species' and cells' index
-        ranges, :func:`~jaxdamp.physics.energy.cell_bounds`): row
+        ranges, :func:`~jaxdamp.physics.energy.cell_bounds`; ``cg``: each grain's cell,
+        ``cdof``: each cell's degree of freedom in the engines' order, ``Model.cell_dofs``): row
         ``st[b]`` holds its state (the field NAME of ``State`` at ``so.NAME``), row ``pm[b]``
         its parameters (of ``Params`` at ``po.NAME``); ``dims`` (:data:`Dims`) selects the
         mount, the law and the container and sizes the views; ``sid`` the grains' species.
@@ -607,8 +633,16 @@ if AVAILABLE:
         for j in range(3 * n):
             R3[j], im3[j], iI3[j] = Rb[j // 3], inv_m[j // 3], inv_I[j // 3]
         pw = np.empty(N_CHANNELS)
-        gl = np.zeros(n)  # several cells: each grain's loss power, then each cell's in pwc
+        # several cells: each grain's loss power and force on its container, then each
+        # cell's (pwc, bzc), and each cell's container's position and velocity along e
+        gs = np.zeros((n, 2))
         pwc = np.empty(K)
+        bzc = np.empty(K)
+        frames = np.zeros((K, 2))
+        spread = False  # cells on several degrees of freedom (else all on the box's)
+        for c in range(K):
+            spread = spread | (cdof[c] != 0)
+        fdof = np.zeros(ndof)  # the grains' forces on the degrees of freedom
         # the quaternions by component (double-buffered) and the rotation's angular velocities
         qs = np.empty((4, n))
         qn = np.empty((4, n))
@@ -631,6 +665,8 @@ if AVAILABLE:
                 for j in range(ny):
                     y1[j] = yv[j] + dt * ydv[j] + hdt2 * yddv[j]
                     ydp[j] = ydv[j] + dt * yddv[j]
+                if not one_cell:
+                    cell_frames(cdof, z1, zdp, y1, ydp, frames)
                 # pass 1: predictor, body force, walls, drag power, displacement since the build
                 for j in range(3 * n):  # the predicted positions, velocities and R ω
                     r1f[j] = rf[j] + dt * vf[j] + hdt2 * af[j]
@@ -640,18 +676,18 @@ if AVAILABLE:
                 if shape == _BOX and one_cell:  # the common damper: its branches folded
                     (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
                      pdrag, far) = grain_walls(_BOX, law, 0, n, 1, r1, vp, rw, Rb, mb, ref, wk,
-                                               wks, sec, og, False, gl, F, T, ex, ey, ez, z1, zdp,
-                                               Lz, grav, drag, half_skin2)
+                                               wks, sec, og, False, gs, cg, frames, F, T,
+                                               ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
                 elif one_cell:
                     (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
                      pdrag, far) = grain_walls(shape, law, 0, n, 1, r1, vp, rw, Rb, mb, ref, wk,
-                                               wks, sec, og, False, gl, F, T, ex, ey, ez, z1, zdp,
-                                               Lz, grav, drag, half_skin2)
+                                               wks, sec, og, False, gs, cg, frames, F, T,
+                                               ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
                 else:  # several cells: each grain's walls are its own cell's
                     (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
                      pdrag, far) = grain_walls(shape, law, 0, n, 1, r1, vp, rw, Rb, mb, ref, wk,
-                                               wks, sec, og, True, gl, F, T, ex, ey, ez, z1, zdp,
-                                               Lz, grav, drag, half_skin2)
+                                               wks, sec, og, True, gs, cg, frames, F, T,
+                                               ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
                 n_side = n_wall - n_floor - n_lid
                 if n > 1 and far:  # a grain moved more than skin/2: list the pairs anew
                     npairs, pi, pj, pc = _pairs(r1, ex * z1, ey * z1, ez * z1, cutoff, pi, pj,
@@ -662,11 +698,19 @@ if AVAILABLE:
                                                     T, None)
                 else:
                     pp_e, pp_n, pp_f = _pair_forces(law, r1, vp, rw, Rb, pi, pj, pc, npairs, F,
-                                                    T, gl)
-                    cell_sums(gl, bounds, pwc, 0, 1)
+                                                    T, gs[:, 0])
+                    cell_sums(gs[:, 0], bounds, pwc, 0, 1)
                 e_el += pp_e
                 # pass 3: the mount, then the corrector and the rotation (_correct)
-                zdd1, pw[_IN], pw[_PRIM] = respond_scalar(mount, t1, z1, zdp, y1, ydp, box_z,
+                if spread:  # each cell's force on its own degree of freedom
+                    cell_sums(gs[:, 1], bounds, bzc, 0, 1)
+                    for j in range(ndof):
+                        fdof[j] = 0.0
+                    for c in range(K):
+                        fdof[cdof[c]] += bzc[c]
+                else:
+                    fdof[0] = box_z
+                zdd1, pw[_IN], pw[_PRIM] = respond_scalar(mount, t1, z1, zdp, y1, ydp, fdof,
                                                           prow, po, n_lines, xs, xds, acc, tmp)
                 zd1 = zdp if prescribed else zd + 0.5 * dt * (zdd + zdd1)
                 pw[_PPN], pw[_PPF], pw[_PWN], pw[_PWF] = pp_n, pp_f, pw_n, pw_f
@@ -709,7 +753,8 @@ if AVAILABLE:
             e_prim = energy_scalar(mount, t, z, zd, yv, ydv, prow, po, n_lines, xs, xds)
             record_row(rec[b, k_rec], t, z, zd, yv, e_prim, rb, vb, wb, mb, Ib, Rb, grav, Lz, ez,
                        e_el, e_start, imp0 / record_every, imp1 / record_every, n_floor, n_lid,
-                       n_side, work, work_cell, bounds)
+                       n_side, work, work_cell, bounds,
+                       cell_frames(cdof, z, zd, yv, ydv, frames))
         for i in range(n):
             for k in range(4):
                 qb[i, k] = qs[k, i]
@@ -719,19 +764,20 @@ if AVAILABLE:
         row[so.n_floor], row[so.n_lid], row[so.n_side] = n_floor, n_lid, n_side
 
     @_kernel(parallel=True)
-    def _advance(n_records, record_every, dims, skin, st, pm, so, po, sid, bounds, rec):
+    def _advance(n_records, record_every, dims, skin, st, pm, so, po, sid, bounds, cg, cdof, rec):
         """The batch over the cores (OpenMP threads, one system per thread at a time)."""
         for b in prange(st.shape[0]):
-            _advance_one(b, n_records, record_every, dims, skin, st, pm, so, po, sid, bounds,
-                         rec)
+            _advance_one(b, n_records, record_every, dims, skin, st, pm, so, po, sid, bounds, cg,
+                         cdof, rec)
 
     @_kernel(nogil=True)
-    def _advance_serial(n_records, record_every, dims, skin, st, pm, so, po, sid, bounds, rec):
+    def _advance_serial(n_records, record_every, dims, skin, st, pm, so, po, sid, bounds, cg, cdof,
+                        rec):
         """The batch in the calling thread, without the GIL: for sharded chunks, whose host
         threads (one per local shard) call the kernel side by side."""
         for b in range(st.shape[0]):
-            _advance_one(b, n_records, record_every, dims, skin, st, pm, so, po, sid, bounds,
-                         rec)
+            _advance_one(b, n_records, record_every, dims, skin, st, pm, so, po, sid, bounds, cg,
+                         cdof, rec)
 
 
 # -- packing of pytrees (one float64 array per call across the JAX/Python boundary) ---------
@@ -778,7 +824,7 @@ def offsets(lay, names) -> np.ndarray:
 def kernel_args(model, state_layout, param_layout):
     """What both kernels take beside the packed rows (this one and the device's,
     :mod:`jaxdamp.engine.fused`): ``(dims, state offsets, param offsets, species index,
-    species' and cells' bounds, sample width)``."""
+    species' and cells' bounds, cell index, cells' degrees of freedom, sample width)``."""
     from jaxdamp.physics.contact import LAWS
     from jaxdamp.physics.energy import record_layout
 
@@ -793,7 +839,8 @@ def kernel_args(model, state_layout, param_layout):
                 cells=int(model.cells))
     return (dims, StateOffsets(*offsets(state_layout, STATE_FIELDS)),
             ParamOffsets(*offsets(param_layout, PARAM_FIELDS)),
-            model.species_index().astype(np.int64), bounds, width)
+            model.species_index().astype(np.int64), bounds,
+            model.cell_index().astype(np.int64), model.dofs_of_cells(), width)
 
 
 def advance_packed(model, state_packed, params_packed, state_layout, param_layout,
@@ -810,11 +857,11 @@ def advance_packed(model, state_packed, params_packed, state_layout, param_layou
     of :func:`jaxdamp.engine.fused.advance_packed` (the same signature); unused here."""
     st = np.array(state_packed, dtype=np.float64, order="C", copy=True)
     pm = np.ascontiguousarray(params_packed, dtype=np.float64)
-    dims, so, po, sid, bounds, width = kernel_args(model, state_layout, param_layout)
+    dims, so, po, sid, bounds, cg, cdof, width = kernel_args(model, state_layout, param_layout)
     rec = np.empty((st.shape[0], int(n_records), width))
     kernel = _advance if threads else _advance_serial
-    kernel(int(n_records), int(record_every), dims, model.skin, st, pm, so, po, sid, bounds,
-           rec)
+    kernel(int(n_records), int(record_every), dims, model.skin, st, pm, so, po, sid, bounds, cg,
+           cdof, rec)
     return st, rec
 
 

@@ -18,7 +18,15 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxdamp.physics.contact import scalar_form
-from jaxdamp.physics.model import CH, LOSSES, N_CHANNELS, Model, Params, State
+from jaxdamp.physics.model import (
+    CH,
+    LOSSES,
+    N_CHANNELS,
+    Model,
+    Params,
+    State,
+    grain_positions_of_boxes,
+)
 from jaxdamp.physics.mounts import mount_of
 
 
@@ -156,14 +164,16 @@ def record_layout(model: Model) -> list[tuple[str, tuple]]:
 @scalar_form
 def record_row(out, t, z, zd, y, e_prim, r, v, w, mass, inertia, radius, gravity, Lz, ez,
                e_elastic, e_start, f_floor_lid, f_box, n_floor, n_lid, n_side, work, work_cell,
-               bounds):
+               bounds, zc):
     """Scalar form of :func:`record` (the native engine's samples): one sample written into
     the flat row ``out`` in the order of :func:`record_layout`. ``y``: the structure's other
     degrees of freedom, ``e_prim``: the primary's energy at ``t`` (:func:`primary_energy`),
     ``ez``: the vertical component of the excitation axis (the floor is at height ``ez z``);
-    ``work``, ``work_cell``: ``State.work``, ``State.work_cell``; ``bounds`` ``(S, k + 1)``: the grains of species ``s`` in cell ``c`` are
-    ``bounds[s, c] … bounds[s, c + 1] − 1`` (:func:`cell_bounds`), so species ``s`` is
-    ``bounds[s, 0] … bounds[s, k] − 1``."""
+    ``work``, ``work_cell``: ``State.work``, ``State.work_cell``; ``zc`` ``(k,)``: each
+    cell's container's position along the axis [m] (``z`` for every cell on the box's degree
+    of freedom, :func:`jaxdamp.physics.model.cell_positions`); ``bounds`` ``(S, k + 1)``:
+    the grains of species ``s`` in cell ``c`` are ``bounds[s, c] … bounds[s, c + 1] − 1``
+    (:func:`cell_bounds`), so species ``s`` is ``bounds[s, 0] … bounds[s, k] − 1``."""
     n = r.shape[0]
     S = bounds.shape[0]
     K = bounds.shape[1] - 1
@@ -201,13 +211,14 @@ def record_row(out, t, z, zd, y, e_prim, r, v, w, mass, inertia, radius, gravity
         msv = 0.0
         nf = 0.0
         nl = 0.0
-        for i in range(bounds[s, 0], bounds[s, K]):
-            ms += mass[i]
-            msz += mass[i] * r[i, 2]
-            msv += mass[i] * v[i, 2]
-            h = r[i, 2] - ez * z
-            nf += 1.0 if h < radius[i] else 0.0
-            nl += 1.0 if Lz - h < radius[i] else 0.0
+        for c in range(K):
+            for i in range(bounds[s, c], bounds[s, c + 1]):
+                ms += mass[i]
+                msz += mass[i] * r[i, 2]
+                msv += mass[i] * v[i, 2]
+                h = r[i, 2] - ez * zc[c]
+                nf += 1.0 if h < radius[i] else 0.0
+                nl += 1.0 if Lz - h < radius[i] else 0.0
         ms = max(ms, 1e-300)
         out[k + s] = msz / ms
         out[k + S + s] = msv / ms
@@ -227,7 +238,7 @@ def record_row(out, t, z, zd, y, e_prim, r, v, w, mass, inertia, radius, gravity
                 msz += mass[i] * r[i, 2]
                 msv += mass[i] * v[i, 2]
                 kc += mass[i] * (v[i, 0] * v[i, 0] + v[i, 1] * v[i, 1] + v[i, 2] * v[i, 2])
-                h = r[i, 2] - ez * z
+                h = r[i, 2] - ez * zc[c]
                 nf += 1.0 if h < radius[i] else 0.0
                 nl += 1.0 if Lz - h < radius[i] else 0.0
         ms = max(ms, 1e-300)
@@ -250,7 +261,7 @@ def record_row(out, t, z, zd, y, e_prim, r, v, w, mass, inertia, radius, gravity
 
 
 def _species_records(st: State, p: Params, model: Model) -> dict:
-    floor = st.r[:, 2] - p.ez * st.z  # centre height above the floor
+    floor = st.r[:, 2] - p.ez * grain_positions_of_boxes(st.z, st.y, model)  # above the floor
     on_floor = floor < p.radius
     on_lid = p.Lz - floor < p.radius
     out = {k: [] for k in ("z_cm_species", "vz_cm_species", "n_floor_species", "n_lid_species")}
@@ -269,7 +280,7 @@ def _cell_records(st: State, p: Params, model: Model) -> dict:
     k = model.cells
     cell = jnp.asarray(model.cell_index())
     one_hot = (cell[None, :] == jnp.arange(k)[:, None]).astype(p.mass.dtype)  # (k, N)
-    floor = st.r[:, 2] - p.ez * st.z
+    floor = st.r[:, 2] - p.ez * grain_positions_of_boxes(st.z, st.y, model)
     m_cell = jnp.maximum(one_hot @ p.mass, 1e-300)
     count = lambda b: (one_hot @ b.astype(p.mass.dtype)).astype(jnp.int32)  # noqa: E731
     return dict(

@@ -32,7 +32,7 @@ import jax.numpy as jnp
 
 from jaxdamp.physics.contact import safe_norm, scalar_form
 from jaxdamp.physics.energy import mechanical_energy
-from jaxdamp.physics.model import N_CHANNELS, Model, Params, State
+from jaxdamp.physics.model import N_CHANNELS, Model, Params, State, grain_positions_of_boxes
 from jaxdamp.physics.mounts import mount_of
 from jaxdamp.physics.pairs import pair_forces
 from jaxdamp.physics.walls import wall_forces
@@ -52,12 +52,16 @@ class Forces(NamedTuple):
     losses: jnp.ndarray  # (4,) pp_normal, pp_friction, pw_normal, pw_friction powers [W]
     wall_groups: jnp.ndarray  # (3,) pw_floor, pw_lid, pw_side powers [W]
     cell_losses: jnp.ndarray  # (cells,) each cell's granular loss power [W]
+    dof_forces: jnp.ndarray  # (dofs,) the grains' forces on the degrees of freedom along e [N]
 
 
-def forces(r, v, w, z_box, zd_box, idx, p: Params, model: Model) -> Forces:
-    """All forces on the grains of one system for the given (predicted) kinematics."""
+def forces(r, v, w, z_box, zd_box, y, yd, idx, p: Params, model: Model) -> Forces:
+    """All forces on the grains of one system for the given (predicted) kinematics: the box
+    at ``z_box`` moving at ``zd_box``, the structure's other degrees of freedom at ``y``,
+    ``yd`` (cells may sit on them, :attr:`Model.cell_dofs`)."""
     pf = pair_forces(r, v, w, idx, p, model)
-    wf = wall_forces(r, v, w, z_box, zd_box, p, model)
+    wf = wall_forces(r, v, w, grain_positions_of_boxes(z_box, y, model),
+                     grain_positions_of_boxes(zd_box, yd, model), p, model)
     losses = jnp.stack([pf.normal_loss, pf.friction_loss, wf.normal_loss, wf.friction_loss])
     fx, fy, fz = body_force(p.mass, v[:, 0], v[:, 1], v[:, 2], p.gravity, p.drag)
     f = pf.force + wf.force + jnp.stack([fx, fy, fz], axis=-1)
@@ -73,7 +77,19 @@ def forces(r, v, w, z_box, zd_box, idx, p: Params, model: Model) -> Forces:
         losses=losses,
         wall_groups=wf.group_loss,
         cell_losses=cell_losses(losses, pf.grain_loss + wf.grain_loss, model),
+        dof_forces=dof_forces(wf, model),
     )
+
+
+def dof_forces(wf, model: Model):
+    """The grains' forces on the degrees of freedom along ``e`` ``(dofs,)`` [N]: the box's
+    ``box_z`` on the first, or each cell's on its own (:attr:`Model.cell_dofs`)."""
+    if not model.cell_dofs:
+        return jnp.zeros(model.dofs, wf.box_z.dtype).at[0].set(wf.box_z)
+    per_cell = jax.ops.segment_sum(wf.grain_box_z, jnp.asarray(model.cell_index()),
+                                   num_segments=model.cells)
+    return jax.ops.segment_sum(per_cell, jnp.asarray(model.dofs_of_cells()),
+                               num_segments=model.dofs)
 
 
 def cell_losses(losses, grain_loss, model: Model):
@@ -100,7 +116,7 @@ def _powers(fo: Forces, mount, z, zd, y, yd, t, v_pred, p: Params):
     """Channel powers [W] at one force evaluation (see :data:`jaxdamp.physics.model.CHANNELS`):
     the mount's input and damping, the granular losses, the settling drag and the grain–wall
     losses by wall group."""
-    p_in, p_c = mount.powers(fo.box_z, z, zd, y, yd, t, p)
+    p_in, p_c = mount.powers(fo.dof_forces, z, zd, y, yd, t, p)
     p_drag = p.drag * jnp.sum(p.mass * jnp.sum(v_pred * v_pred, axis=-1))
     return jnp.concatenate([jnp.stack([p_in, p_c]), fo.losses, p_drag[None], fo.wall_groups])
 
@@ -229,8 +245,8 @@ def initial_state(r, v, w, q, z, zd, t, idx, p: Params, model: Model, e_start=No
         z, zd = mount.predict(x[0], xd[0], 0.0, t, 0.0, p)
     else:
         z, zd = x[0], xd[0]
-    fo = forces(r, v, w, z, zd, idx, p, model)
-    zdd, ydd = mount.accelerate(z, zd, y, yd, t, fo.box_z, p)
+    fo = forces(r, v, w, z, zd, y, yd, idx, p, model)
+    zdd, ydd = mount.accelerate(z, zd, y, yd, t, fo.dof_forces, p)
     power = _powers(fo, mount, z, zd, y, yd, t, v, p)
     st = _finish(
         dict(
@@ -260,10 +276,10 @@ def step(st: State, idx, p: Params, model: Model) -> State:
     y1 = st.y + dt * st.yd + 0.5 * dt * dt * st.ydd
     yd_pred = st.yd + dt * st.ydd
 
-    fo = forces(r1, v_pred, w_pred, z1, zd_pred, idx, p, model)
+    fo = forces(r1, v_pred, w_pred, z1, zd_pred, y1, yd_pred, idx, p, model)
     a1 = fo.force / p.mass[:, None]
     alpha1 = fo.torque / p.inertia[:, None]
-    zdd1, ydd1 = mount.accelerate(z1, zd_pred, y1, yd_pred, t1, fo.box_z, p)
+    zdd1, ydd1 = mount.accelerate(z1, zd_pred, y1, yd_pred, t1, fo.dof_forces, p)
     zd1 = zd_pred if mount.prescribed else st.zd + 0.5 * dt * (st.zdd + zdd1)
 
     power = _powers(fo, mount, z1, zd_pred, y1, yd_pred, t1, v_pred, p)

@@ -28,6 +28,7 @@ from jaxdamp.config import Config
 from jaxdamp.physics.contact import LAWS, Law, calibrate_wall_row
 from jaxdamp.physics.containers import container, effective_radius
 from jaxdamp.physics.excitation import base_motion, random_lines
+from jaxdamp.physics.structure import cell_dofs as structure_cell_dofs
 from jaxdamp.physics.structure import internal
 
 #: Names of the cumulative work channels, in order (all in J).
@@ -78,6 +79,9 @@ class Model:
       container: the container's name (:data:`jaxdamp.physics.containers.CONTAINERS`).
       cells: the damper's identical cells (``Config.cells``); within each species the grains
         are stored cell after cell (:meth:`cell_index`), ``species`` counting all cells'.
+      cell_dofs: where each cell's degree of freedom sits in the engines' order
+        (:func:`jaxdamp.physics.structure.cell_dofs`: 0 the box, ``p`` ``State.y[p - 1]``);
+        empty: every cell on the box's (:meth:`dofs_of_cells`).
     """
 
     n: int
@@ -90,6 +94,7 @@ class Model:
     precision: str = "float64"
     container: str = "box"
     cells: int = 1
+    cell_dofs: tuple[int, ...] = ()
 
     def species_slices(self) -> tuple[slice, ...]:
         """Index range of every species in the grain arrays (at least one, possibly empty)."""
@@ -105,6 +110,28 @@ class Model:
     def cell_index(self) -> np.ndarray:
         """Cell of every grain, ``(N,)`` int32 (:func:`cell_of`)."""
         return cell_of(self.species or (self.n,), self.cells)
+
+    def dofs_of_cells(self) -> np.ndarray:
+        """Each cell's degree of freedom in the engines' order, ``(cells,)`` int64
+        (:attr:`cell_dofs`, zeros where it is empty)."""
+        return np.array(self.cell_dofs or (0,) * self.cells, np.int64)
+
+
+def cell_positions(z, y, model: Model):
+    """Where each cell's container is along the axis ``e`` [m] (or how fast it moves, from the
+    velocities): ``(cells,)`` from the box's ``z`` and the structure's other degrees of freedom
+    ``y`` (:attr:`Model.cell_dofs`); ``z`` itself where every cell is on the box's."""
+    if not model.cell_dofs:
+        return z
+    return jnp.concatenate([jnp.reshape(z, (1,)), y])[jnp.asarray(model.dofs_of_cells())]
+
+
+def grain_positions_of_boxes(z, y, model: Model):
+    """:func:`cell_positions` of every grain's cell, ``(N,)`` (``z`` where every cell is on
+    the box's degree of freedom)."""
+    if not model.cell_dofs:
+        return z
+    return cell_positions(z, y, model)[jnp.asarray(model.cell_index())]
 
 
 def cell_of(counts, cells: int) -> np.ndarray:
@@ -357,6 +384,7 @@ def build(config: Config, radii: np.ndarray | None = None) -> tuple[Model, Param
         species=tuple(int(config.cells * sp.count) for sp in config.grains),
         dofs=len(structure["s_r"]) if structure else 1,
         precision=config.numerics.precision, container=vessel.name, cells=config.cells,
+        cell_dofs=_cell_dofs(config) if structure else (),
     )
     prim = config.primary
     shock = config.shock if config.system == "primary" else None
@@ -389,6 +417,12 @@ def build(config: Config, radii: np.ndarray | None = None) -> tuple[Model, Param
         origin=f64(cell_origins(config, radii)[model.cell_index()]),
     )
     return model, params
+
+
+def _cell_dofs(config: Config) -> tuple[int, ...]:
+    """:attr:`Model.cell_dofs`: empty where every cell is on the box's degree of freedom."""
+    dofs = tuple(int(d) for d in structure_cell_dofs(config))
+    return dofs if any(dofs) else ()
 
 
 def _no_structure() -> dict:

@@ -17,7 +17,9 @@ scalar form (the compiled kernel, parameters read by name from the packed row: `
 
 * ``predict`` — the box's position and velocity at ``t + dt`` before the forces
   (velocity Verlet's predictor for the integrated mounts, the drive for a prescribed one);
-* ``accelerate`` — ``(z'', y'')`` from the grains' force on the box;
+* ``accelerate`` — ``(z'', y'')`` from the grains' forces ``f`` ``(dofs,)`` [N] on the
+  degrees of freedom along ``e`` (``f[0]`` on the box; a structure's cells may load others,
+  :func:`jaxdamp.physics.structure.cell_dofs`);
 * ``powers`` — the power into the system from outside (``input``) and the loss in the mount's
   own damping (``primary_damping``) [W] (:data:`jaxdamp.physics.model.CHANNELS`);
 * ``energy`` — the mount's mechanical energy [J] (0 for a prescribed motion).
@@ -83,12 +85,12 @@ def _dofs(z, y):
     return jnp.concatenate([jnp.reshape(z, (1,)), y])
 
 
-def _primary_accelerate(z, zd, y, yd, t, box_z, p):
+def _primary_accelerate(z, zd, y, yd, t, f, p):
     u, ud = base_motion(t, p)
-    return primary_acceleration(z, zd, u, ud, box_z, p.M, p.K, p.C), jnp.zeros_like(y)
+    return primary_acceleration(z, zd, u, ud, f[0], p.M, p.K, p.C), jnp.zeros_like(y)
 
 
-def _primary_powers(box_z, z, zd, y, yd, t, p):
+def _primary_powers(f, z, zd, y, yd, t, p):
     u, ud = base_motion(t, p)
     return primary_powers(z, zd, u, ud, p.K, p.C)
 
@@ -98,14 +100,14 @@ def _primary_energy(z, zd, y, yd, t, p):
     return 0.5 * p.M * zd**2 + 0.5 * p.K * (z - u) ** 2
 
 
-def _structure_accelerate(z, zd, y, yd, t, box_z, p):
+def _structure_accelerate(z, zd, y, yd, t, f, p):
     u, ud = base_motion(t, p)
-    a = structure.acceleration(_dofs(z, y), _dofs(zd, yd), u, ud, box_z,
+    a = structure.acceleration(_dofs(z, y), _dofs(zd, yd), u, ud, f,
                                jnp.cos(p.omega * t), p)
     return a[0], a[1:]
 
 
-def _structure_powers(box_z, z, zd, y, yd, t, p):
+def _structure_powers(f, z, zd, y, yd, t, p):
     u, ud = base_motion(t, p)
     return structure.powers(_dofs(z, y), _dofs(zd, yd), u, ud, jnp.cos(p.omega * t), p)
 
@@ -120,12 +122,12 @@ def _driven_predict(z, zd, zdd, t1, dt, p):
     return z1, zd1
 
 
-def _driven_accelerate(z, zd, y, yd, t, box_z, p):
+def _driven_accelerate(z, zd, y, yd, t, f, p):
     return drive_motion(t, p)[2], jnp.zeros_like(y)
 
 
-def _driven_powers(box_z, z, zd, y, yd, t, p):
-    p_in = -box_z * zd  # the work of the moving walls on the grains
+def _driven_powers(f, z, zd, y, yd, t, p):
+    p_in = -f[0] * zd  # the work of the moving walls on the grains
     return p_in, jnp.zeros_like(p_in)
 
 
@@ -188,13 +190,14 @@ def predict_scalar(mount, t1, dt, z, zd, zdd, prow, po):
 
 
 @scalar_form
-def respond_scalar(mount, t, z, zd, y, yd, box_z, prow, po, n_lines, xs, xds, acc, tmp):
-    """Scalar forms of ``accelerate`` and ``powers`` at one force evaluation: returns
-    ``(z'', p_input, p_damping)`` and writes ``y''`` into ``acc[1:]`` (a structure; ``xs``,
-    ``xds``, ``tmp``: scratch of its size)."""
+def respond_scalar(mount, t, z, zd, y, yd, f, prow, po, n_lines, xs, xds, acc, tmp):
+    """Scalar forms of ``accelerate`` and ``powers`` at one force evaluation (``f``: the
+    grains' forces on the degrees of freedom): returns ``(z'', p_input, p_damping)`` and
+    writes ``y''`` into ``acc[1:]`` (a structure; ``xs``, ``xds``, ``tmp``: scratch of its
+    size)."""
     if mount == _DRIVEN:
         a = drive_motion_scalar(t, prow[po.z_offset], prow[po.amplitude], prow[po.omega])[2]
-        return a, -box_z * zd, 0.0
+        return a, -f[0] * zd, 0.0
     u, ud = _base_scalar(t, prow, po, n_lines)
     if mount == _STRUCTURE:
         n = xs.shape[0]
@@ -210,11 +213,11 @@ def respond_scalar(mount, t, z, zd, y, yd, box_z, prow, po, n_lines, xs, xds, ac
         for j in range(n - 1):
             xs[j + 1] = y[j]
             xds[j + 1] = yd[j]
-        structure.acceleration_scalar(acc, xs, xds, u, ud, box_z, cos_t, Minv, K, C, r, b, tmp)
+        structure.acceleration_scalar(acc, xs, xds, u, ud, f, cos_t, Minv, K, C, r, b, tmp)
         p_in, p_c = structure.powers_scalar(xs, xds, u, ud, cos_t, K, C, r, b)
         return acc[0], p_in, p_c
     M, K, C = prow[po.M], prow[po.K], prow[po.C]
-    a = primary_acceleration_scalar(z, zd, u, ud, box_z, M, K, C)
+    a = primary_acceleration_scalar(z, zd, u, ud, f[0], M, K, C)
     p_in, p_c = primary_powers_scalar(z, zd, u, ud, K, C)
     return a, p_in, p_c
 

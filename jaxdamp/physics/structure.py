@@ -20,9 +20,13 @@ shapes ``Φ`` (rows: degrees of freedom, columns: modes; square and invertible) 
 (classical damping; :func:`matrices`). Inside the engines the degrees of freedom are reordered
 so that the box's comes first: ``x = (z, y)`` with ``z`` the box (``State.z``) and ``y`` the
 others (``State.y``, ``(n - 1,)``), and ``Params`` holds the reordered ``M``, ``M⁻¹``, ``K``,
-``C``, ``r``, ``b`` (:func:`internal`). Energy of the structure ``½ x'ᵀ M x' + ½ (x - r u)ᵀ K
-(x - r u)``; the base's power ``-u' rᵀ [K (x - r u) + C (x' - r u')]`` plus the force's
-``cos Ωt bᵀ x'``; the loss in ``C``: ``(x' - r u')ᵀ C (x' - r u')``.
+``C``, ``r``, ``b`` (:func:`internal`). A damper of several cells may put each cell on a
+degree of freedom of its own (``structure.attach`` a list, one per cell: :func:`attachments`);
+"the box" is then cell 0's, and the grains' forces of each cell act on its own degree of
+freedom (``f`` in :func:`acceleration`, :func:`cell_dofs`). Energy of the structure
+``½ x'ᵀ M x' + ½ (x - r u)ᵀ K (x - r u)``; the base's power
+``-u' rᵀ [K (x - r u) + C (x' - r u')]`` plus the force's ``cos Ωt bᵀ x'``; the loss in ``C``:
+``(x' - r u')ᵀ C (x' - r u')``.
 
 Each function in its JAX form and, for the native kernel, its numba scalar form.
 
@@ -78,14 +82,36 @@ def matrices(config) -> tuple[np.ndarray, ...]:
     return M, K, C, r, b
 
 
+def attachments(config) -> tuple[int, ...]:
+    """The degree of freedom (user numbering) that carries each cell of the damper
+    (``Config.cells``): ``structure.attach`` for every cell, or its entries where it is a
+    list (one per cell); all 0 without a structure."""
+    cells = getattr(config, "cells", 1)
+    s = getattr(config, "structure", None)
+    if s is None:
+        return (0,) * cells
+    if isinstance(s.attach, (tuple, list)):
+        return tuple(int(a) for a in s.attach)
+    return (int(s.attach),) * cells
+
+
 def order(config) -> np.ndarray:
-    """The engines' order of the degrees of freedom: the box's (``structure.attach``) first,
-    then the others in the user's order."""
+    """The engines' order of the degrees of freedom: the box's (cell 0's,
+    :func:`attachments`) first, then the others in the user's order."""
     s = getattr(config, "structure", None)
     if s is None:
         return np.zeros(1, np.int64)
     n = len(matrices(config)[0])
-    return np.array([s.attach] + [i for i in range(n) if i != s.attach], np.int64)
+    box = attachments(config)[0]
+    return np.array([box] + [i for i in range(n) if i != box], np.int64)
+
+
+def cell_dofs(config) -> np.ndarray:
+    """Where each cell's degree of freedom sits in the engines' order (:func:`order`),
+    ``(cells,)`` int64: 0 (the box, ``State.z``) for cell 0 and for every cell on its degree of
+    freedom, ``p > 0`` for ``State.y[p - 1]``."""
+    o = order(config)
+    return np.array([int(np.flatnonzero(o == a)[0]) for a in attachments(config)], np.int64)
 
 
 def position(config, dof: int | None) -> int:
@@ -123,12 +149,15 @@ def internal(config) -> dict:
 
 
 def static_offset(config, box_force: float) -> np.ndarray:
-    """Static displacements ``K⁻¹ e_a F`` [m] (user order) under a constant force ``F`` [N] on
-    the box's degree of freedom (e.g. the bed's weight along the axis); zeros where ``K`` is
-    singular (a free structure has no static equilibrium)."""
+    """Static displacements ``K⁻¹ f`` [m] (user order) under a constant force ``F`` [N] on the
+    damper (e.g. the bed's weight along the axis), shared equally by its cells (identical
+    beds) on their degrees of freedom (:func:`attachments`); zeros where ``K`` is singular (a
+    free structure has no static equilibrium)."""
     M, K, C, r, b = matrices(config)
     f = np.zeros(len(K))
-    f[config.structure.attach if getattr(config, "structure", None) else 0] = box_force
+    cells = attachments(config)
+    for a in cells:
+        f[a] += box_force / len(cells)
     try:
         return np.linalg.solve(K, f)
     except np.linalg.LinAlgError:
@@ -138,10 +167,11 @@ def static_offset(config, box_force: float) -> np.ndarray:
 # -- JAX forms (one system; x = (z, y), the box first) -------------------------------------
 
 
-def acceleration(x, xd, u, ud, box_z, cos_t, p):
-    """``x'' = M⁻¹ [-C (x' - r u') - K (x - r u) + e_0 F_gz + b cos Ωt]`` [m/s²], ``(n,)``."""
-    rhs = -p.s_C @ (xd - p.s_r * ud) - p.s_K @ (x - p.s_r * u) + p.s_b * cos_t
-    rhs = rhs.at[0].add(box_z)
+def acceleration(x, xd, u, ud, f, cos_t, p):
+    """``x'' = M⁻¹ [-C (x' - r u') - K (x - r u) + f + b cos Ωt]`` [m/s²], ``(n,)``, with
+    ``f`` ``(n,)`` [N] the grains' forces on each degree of freedom along the axis (the
+    cells' on theirs; ``e_0 F_gz`` for one)."""
+    rhs = -p.s_C @ (xd - p.s_r * ud) - p.s_K @ (x - p.s_r * u) + p.s_b * cos_t + f
     return p.s_Minv @ rhs
 
 
@@ -162,15 +192,14 @@ def powers(x, xd, u, ud, cos_t, p):
 
 
 @scalar_form
-def acceleration_scalar(out, x, xd, u, ud, box_z, cos_t, Minv, K, C, r, b, tmp):
+def acceleration_scalar(out, x, xd, u, ud, f, cos_t, Minv, K, C, r, b, tmp):
     """Scalar form of :func:`acceleration`, written into ``out`` (``tmp``: scratch ``(n,)``)."""
     n = x.shape[0]
     for i in range(n):
-        s = b[i] * cos_t
+        s = b[i] * cos_t + f[i]
         for j in range(n):
             s -= C[i, j] * (xd[j] - r[j] * ud) + K[i, j] * (x[j] - r[j] * u)
         tmp[i] = s
-    tmp[0] += box_z
     for i in range(n):
         s = 0.0
         for j in range(n):

@@ -42,6 +42,8 @@ class WallForces(NamedTuple):
         the side walls [W] (:data:`jaxdamp.physics.model.WALL_GROUPS`).
       grain_loss: ``(N,)`` the dissipated power (normal + friction) of each grain's wall
         contacts [W].
+      grain_box_z: ``(N,)`` each grain's force on its container along ``e`` [N] (``box_z``
+        per grain: the cells' forces on their degrees of freedom).
     """
 
     force: jnp.ndarray
@@ -56,6 +58,7 @@ class WallForces(NamedTuple):
     friction_loss: jnp.ndarray
     group_loss: jnp.ndarray
     grain_loss: jnp.ndarray
+    grain_box_z: jnp.ndarray
 
 
 def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
@@ -63,7 +66,9 @@ def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
 
     Args:
       r, v, w: positions [m], velocities [m/s], angular velocities [rad/s], ``(N, 3)``.
-      z_box, zd_box: box position [m] and velocity [m/s] along the axis ``e`` (scalars).
+      z_box, zd_box: box position [m] and velocity [m/s] along the axis ``e``: scalars, or
+        ``(N,)`` each grain's container's (cells on several degrees of freedom,
+        :func:`jaxdamp.physics.model.grain_positions_of_boxes`).
       p: :class:`jaxdamp.physics.model.Params`.
       model: :class:`jaxdamp.physics.model.Model` (the law, the container, the species).
     """
@@ -91,7 +96,8 @@ def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
     stiffness, damping = law.pair_jax(row, R_contact, p.mass[:, None].astype(lo))
     normals = Vec(*_normals(snx, sny, lo))  # (2 + W,) each, or (N, 2 + W) for curved sides
     # the walls move with e zd_box
-    v_rel = Vec(*((v[:, k:k + 1] - e * zd_box).astype(lo)
+    zd_col = jnp.reshape(zd_box, (-1, 1)) if jnp.ndim(zd_box) else zd_box
+    v_rel = Vec(*((v[:, k:k + 1] - e * zd_col).astype(lo)
                   for k, e in enumerate((p.ex, p.ey, p.ez))))
     Rw = R * w.astype(lo)
     spin = Vec(Rw[:, 0:1], Rw[:, 1:2], Rw[:, 2:3])
@@ -101,6 +107,7 @@ def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
     f = Vec(*(x.astype(hi) for x in c.force))  # (N, 2 + W): force of wall on grain
     per_contact = (c.normal_loss + c.friction_loss).astype(hi)  # (N, 2 + W)
     loss = per_contact.sum(axis=0)  # per wall
+    along = -(p.ex * f.x.sum(axis=1) + p.ey * f.y.sum(axis=1) + p.ez * f.z.sum(axis=1))
     return WallForces(
         force=f.sum(axis=1).stack(),
         torque=c.torque.sum(axis=1).stack().astype(hi),
@@ -114,6 +121,7 @@ def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
         friction_loss=c.friction_loss.astype(hi).sum(),
         group_loss=jnp.stack([loss[FLOOR], loss[LID], loss[LID + 1:].sum()]),
         grain_loss=per_contact.sum(axis=1),
+        grain_box_z=along,
     )
 
 

@@ -171,6 +171,8 @@ def analyse(res, scales, replicates: int, dof: int | None = None) -> RandomResul
                    z_rms=np.array(z_rms), start=np.array(starts), stationary=np.array(flags))
         levels.append(lev)
     if dof is None:
-        dof = cfg.structure.attach if cfg.structure is not None else 0
+        from jaxdamp.physics.structure import attachments
+
+        dof = attachments(cfg)[0]  # the box's (cell 0's); 0 without a structure
     return RandomResult(scales=scales, levels=levels, period=period, replicates=R, sweep=res,
                         dof=int(dof))

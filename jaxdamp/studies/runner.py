@@ -104,11 +104,11 @@ def initial_structure(config: Config, grain_mass: float) -> tuple[np.ndarray, np
         K = config.primary.K
         return (np.array([(-weight / K if K > 0 else 0.0) + config.primary.z0 + xs[0]]),
                 np.array([config.primary.v0 + vs[0]]))
-    from jaxdamp.physics.structure import order, static_offset
+    from jaxdamp.physics.structure import attachments, order, static_offset
 
     x = static_offset(config, -weight) + xs
     v = vs.copy()
-    a = config.structure.attach
+    a = attachments(config)[0]  # the box's (cell 0's)
     x[a] += config.primary.z0
     v[a] += config.primary.v0
     o = order(config)
@@ -127,12 +127,22 @@ def initial_box_velocity(config: Config) -> float:
     return float(initial_structure(config, 0.0)[1][0])
 
 
-def bed_with_box(config: Config, r, box_position: float) -> np.ndarray:
+def bed_with_box(config: Config, r, box_position) -> np.ndarray:
     """Grain positions ``r`` of a bed settled in the box at rest, moved with the box to its
-    starting position: by ``e z0`` along the excitation axis ``e``."""
-    from jaxdamp.physics.model import excitation_axis
+    starting position: by ``e z0`` along the excitation axis ``e``. ``box_position``: the box's
+    ``z0`` [m], or the structure's degrees of freedom in the engines' order
+    (:func:`initial_structure`), each cell's grains moving with their cell's
+    (:func:`jaxdamp.physics.structure.cell_dofs`)."""
+    from jaxdamp.physics.model import cell_of, excitation_axis
+    from jaxdamp.physics.structure import cell_dofs
 
-    return np.asarray(r) + excitation_axis(config) * box_position
+    x = np.atleast_1d(np.asarray(box_position, np.float64))
+    r = np.asarray(r)
+    dofs = cell_dofs(config)
+    if not dofs.any():  # every cell on the box's degree of freedom
+        return r + excitation_axis(config) * x[0]
+    shift = x[dofs][cell_of([config.cells * sp.count for sp in config.grains], config.cells)]
+    return r + excitation_axis(config) * shift[:, None]
 
 
 def batch_budget(config: Config, sched: Schedule, systems: int = 1, out: str | None = None,
@@ -274,7 +284,7 @@ def run(
                 f"{bed.height:.5g} m high and does not fit under the lid"
             )
         x0, xd0 = initial_structure(config, m_grains)
-        r0 = bed_with_box(config, bed.r, x0[0])
+        r0 = bed_with_box(config, bed.r, x0)
         batch = driver.start(model, pb, r0[None], bed.v[None], bed.w[None], bed.q[None],
                              x0[None], xd0[None], **engine)
         if out is not None:

@@ -399,7 +399,7 @@ class _Sweep:
                                   f"({bed.height:.5g} m) "
                                   "does not fit")
             x, xd = initial_structure(c, float(np.asarray(p.mass).sum()))
-            r0.append(bed_with_box(c, bed.r, x[0]))
+            r0.append(bed_with_box(c, bed.r, x))
             v0.append(bed.v), w0.append(bed.w), q0.append(bed.q), z0.append(x), zd0.append(xd)
         batch = driver.start(model, pb, np.stack(r0), np.stack(v0), np.stack(w0), np.stack(q0),
                              np.stack(z0), np.stack(zd0), **drive).replace(params=pb_s)
