@@ -206,6 +206,7 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
     wall_constants = native.wall_constants
     cell_sums = native.cell_sums
     cell_frames = native.cell_frames
+    dof_loads = native.dof_loads
     rebuild_steps = native.REBUILD_STEPS
 
     if simulated():
@@ -345,6 +346,8 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
         first = True
         if tid == 0:
             sh[3] = 0.0  # set once the state blows up (read by all after a barrier)
+            for j in range(ndof):  # scratch comes uninitialised; the box's entry is set per step
+                fdof[j] = 0.0
         cuda.syncthreads()
         for k_rec in range(n_records):
             imp0 = 0.0
@@ -468,16 +471,9 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                     n_floor, n_lid = red[5, 0], red[6, 0]
                     n_side = red[7, 0] - n_floor - n_lid
                     pp_n, pp_f = 0.5 * red[12, 0], 0.5 * red[13, 0]
-                    if spread:  # each cell's force on its own degree of freedom
-                        for j in range(ndof):
-                            fdof[j] = 0.0
-                        for c in range(K):
-                            fdof[cdof[c]] += bzc[c]
-                    else:
-                        fdof[0] = box_z
-                    zdd1, pw[_IN], pw[_PRIM] = respond_scalar(mount, t1, z1, zdp, y1, ydp,
-                                                              fdof, prow, po, n_lines, xs,
-                                                              xds, acc, tmp)
+                    zdd1, pw[_IN], pw[_PRIM] = respond_scalar(
+                        mount, t1, z1, zdp, y1, ydp, dof_loads(spread, cdof, bzc, box_z, fdof),
+                        prow, po, n_lines, xs, xds, acc, tmp)
                     zd1 = zdp if prescribed else zd + 0.5 * dt * (zdd + zdd1)
                     pw[_PPN], pw[_PPF], pw[_PWN], pw[_PWF] = pp_n, pp_f, pw_n, pw_f
                     pw[_DRAG] = drag * red[10, 0]

@@ -424,6 +424,20 @@ if AVAILABLE:
         return frames[:, 0]
 
     @_kernel(inline="always")
+    def dof_loads(spread, cdof, bzc, box_z, fdof):
+        """The grains' forces on the degrees of freedom, into ``fdof`` (returned): ``box_z`` on
+        the box's (the others stay as they are: zero), or where ``spread`` (cells on several)
+        each cell's ``bzc[c]`` on its own ``cdof[c]``."""
+        if spread:
+            for j in range(fdof.shape[0]):
+                fdof[j] = 0.0
+            for c in range(cdof.shape[0]):
+                fdof[cdof[c]] += bzc[c]
+        else:
+            fdof[0] = box_z
+        return fdof
+
+    @_kernel(inline="always")
     def cell_sums(gl, bounds, out, lo, step):
         """``out[c]`` = the sum of ``gl`` over the grains of cell ``c`` (``bounds``
         ``(S, k + 1)``: :func:`~jaxdamp.physics.energy.cell_bounds`) for the cells ``lo, lo +
@@ -704,14 +718,9 @@ if AVAILABLE:
                 # pass 3: the mount, then the corrector and the rotation (_correct)
                 if spread:  # each cell's force on its own degree of freedom
                     cell_sums(gs[:, 1], bounds, bzc, 0, 1)
-                    for j in range(ndof):
-                        fdof[j] = 0.0
-                    for c in range(K):
-                        fdof[cdof[c]] += bzc[c]
-                else:
-                    fdof[0] = box_z
-                zdd1, pw[_IN], pw[_PRIM] = respond_scalar(mount, t1, z1, zdp, y1, ydp, fdof,
-                                                          prow, po, n_lines, xs, xds, acc, tmp)
+                zdd1, pw[_IN], pw[_PRIM] = respond_scalar(
+                    mount, t1, z1, zdp, y1, ydp, dof_loads(spread, cdof, bzc, box_z, fdof), prow,
+                    po, n_lines, xs, xds, acc, tmp)
                 zd1 = zdp if prescribed else zd + 0.5 * dt * (zdd + zdd1)
                 pw[_PPN], pw[_PPF], pw[_PWN], pw[_PWF] = pp_n, pp_f, pw_n, pw_f
                 pw[_DRAG] = drag * pdrag
