@@ -50,6 +50,7 @@ def test_energy_conserved_without_damping(engine):
     assert np.abs(rec["e_rotational"] - rec["e_rotational"][0]).max() < 1e-12 * e0  # no friction
 
 
+@pytest.mark.long  # 36 s on 2 cores
 def test_collision_energy_error_converges_at_order_two_and_a_half():
     """Energy error of one elastic head-on collision vs dt: ~(dt/t_c)^2.5, 5e-5 at t_c/50."""
     R = 2.5e-3
@@ -99,7 +100,9 @@ def test_sliding_sphere_ends_rolling_at_five_sevenths(engine):
     assert loss == pytest.approx(0.5 * m * v0**2 * 2 / 7, rel=0.02)
 
 
-@pytest.mark.parametrize("engine", ENGINES_UNSIMULATED)
+@pytest.mark.parametrize("engine", [  # float32: 37 s each on 2 cores, in CI's second step
+    pytest.param(e, marks=pytest.mark.long) if e == "float32" else e
+    for e in ENGINES_UNSIMULATED])
 @pytest.mark.parametrize("system", ["primary", "driven"])
 def test_energy_balance_closes_in_driven_damper(system, engine):
     """input work = Δ(mechanical energy) + all losses, to better than 1e-3 relative, for a
