@@ -499,3 +499,48 @@ def test_gap_minimum_quick(tmp_path):
     text = (tmp_path / "summary.md").read_text()
     assert "Minimum of Z over Lz per bed" in text and "Verdict:" in text
     assert (tmp_path / "figure.png").stat().st_size > 10_000 and (tmp_path / "data.h5").exists()
+
+
+def test_systematics_quick(tmp_path):
+    """The budget reads its protocols from the first seconds (periods) of long runs: a run of
+    the protocol's own length gives the same per-bed values, to round-off, at both points; and
+    every measured term has a finite shift, interval and standard uncertainty."""
+    mod = _load("systematics")
+    out = mod.main(["--quick", "--out", str(tmp_path), "--no-progress"])
+    s = mod.settings(True)
+    from jaxdamp.cases import presets
+    from jaxdamp.studies import efficiency as ef
+    from jaxdamp.studies.sweep import sweep
+
+    short = sweep(mod.thesis_config(s, s["short"]), {"frequency": list(s["freqs"])},
+                  progress=False, echo=None, replicates=s["R"])
+    np.testing.assert_allclose(mod._protocol_values(short, s["freqs"], "amplitude"),
+                               out["thesis"]["base_short"]["Z"], rtol=1e-12)
+    paper = ef.measure(presets.get(mod.PAPER), [s["amplitude"]], periods=s["paper_periods"],
+                       transient=s["paper_transient"], progress=False, echo=None,
+                       replicates=s["paper_R"])
+    np.testing.assert_allclose(paper.replicate_summary["E_d_mean"][0],
+                               out["paper"]["protocol"]["E_d"], rtol=1e-12)
+    from jaxdamp.io.study import load
+
+    b = mod.budget(load(str(tmp_path / "data.h5")))
+    for point in b.values():
+        measured = [t for t in point["terms"].values() if isinstance(t, dict)]
+        assert measured and all(np.isfinite([t["delta"], t["ci95"], t["u"]]).all()
+                                for t in measured)
+        assert point["total"] == pytest.approx(np.sqrt(sum(t["u"] ** 2 for t in measured)))
+    assert "| **total** |" in (tmp_path / "summary.md").read_text()
+
+
+def test_friction_coefficient_quick(tmp_path):
+    """Two friction coefficients × 2 frequencies × 2 beds: the walls are of the grains'
+    material (so μ is both), and the report compares with μ = 0.3."""
+    from jaxdamp.cases import presets
+
+    cfg = presets.get("sanchez2012-optimal")
+    assert cfg.box.wall is None and cfg.wall_material is cfg.grains[0].material
+    out = _load("friction_coefficient").main(["--quick", "--out", str(tmp_path),
+                                              "--no-progress"])
+    assert out["Z"].shape == (2, 2, 2) and np.all(np.isfinite(out["Z_peak"]))
+    text = (tmp_path / "summary.md").read_text()
+    assert "| 0.3 |" in text and "reference" in text and "90 %" in text
