@@ -544,3 +544,19 @@ def test_friction_coefficient_quick(tmp_path):
     assert out["Z"].shape == (2, 2, 2) and np.all(np.isfinite(out["Z_peak"]))
     text = (tmp_path / "summary.md").read_text()
     assert "| 0.3 |" in text and "reference" in text and "90 %" in text
+
+
+def test_bed_dynamics_details_quick(tmp_path):
+    """7.5, 8 and 14.5 Hz × 2 short beds: every measure is finite per bed, the 8 Hz line share
+    is a fraction, and the impact episodes are counted per period on lid and floor."""
+    out = _load("bed_dynamics_details").main(["--quick", "--out", str(tmp_path),
+                                              "--no-progress"])
+    assert set(out) == {7.5, 8.0, 14.5}
+    for f, v in out.items():
+        assert len(v["rows"]) == 2
+        assert all(np.isfinite(r["Z_over_U"]) and r["a_over_g"] > 0 for r in v["rows"])
+    assert all(0 < r["three_line_share"] <= 1 + 1e-12 for r in out[8.0]["rows"])
+    row = out[14.5]["rows"][0]
+    assert 0.5 < row["lid_episodes"] < 3 and 0.5 < row["floor_episodes"] < 3
+    assert 0 <= row["lid_floor_separation"] < 360
+    assert "14.5 Hz impacts" in (tmp_path / "summary.md").read_text()
