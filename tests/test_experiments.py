@@ -560,3 +560,14 @@ def test_bed_dynamics_details_quick(tmp_path):
     assert 0.5 < row["lid_episodes"] < 3 and 0.5 < row["floor_episodes"] < 3
     assert 0 <= row["lid_floor_separation"] < 360
     assert "14.5 Hz impacts" in (tmp_path / "summary.md").read_text()
+
+
+def test_few_grains_friction_quick(tmp_path):
+    """Two grain numbers × γ_s off and on × 2 beds: equal total mass (radius ∝ N^(-1/3)), a
+    finite Z_res per bed and case, and a change with an interval in the summary."""
+    rows = _load("few_grains_friction").main(["--quick", "--out", str(tmp_path),
+                                              "--no-progress"])
+    assert [r["N"] for r in rows] == [25, 50]
+    assert rows[0]["radius"] ** 3 * 25 == pytest.approx(rows[1]["radius"] ** 3 * 50)
+    assert all(np.all(np.isfinite(r["off"])) and np.all(np.isfinite(r["on"])) for r in rows)
+    assert "change (95 %)" in (tmp_path / "summary.md").read_text()
