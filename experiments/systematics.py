@@ -267,7 +267,8 @@ def shift(x, ref, paired: bool) -> dict:
         va, vb = x.var(ddof=1) / len(x), ref.var(ddof=1) / len(ref)
         delta = float(x.mean() / m - 1.0)
         se = float(math.sqrt(va + vb) / m)
-        dof = (va + vb) ** 2 / max(va ** 2 / (len(x) - 1) + vb ** 2 / (len(ref) - 1), 1e-300)
+        dof = ((va + vb) ** 2 / (va ** 2 / (len(x) - 1) + vb ** 2 / (len(ref) - 1))
+               if va + vb > 0 else len(x) + len(ref) - 2)  # no spread: the pooled dof
     return dict(delta=delta, se=se, dof=float(dof), u=math.hypot(delta, se),
                 ci95=t_quantile(0.975, dof) * se)
 

@@ -524,11 +524,17 @@ def test_systematics_quick(tmp_path):
     from jaxdamp.io.study import load
 
     b = mod.budget(load(str(tmp_path / "data.h5")))
+    assert {p: set(q) for p, q in b.items()} == {p: set(q) for p, q in mod.QUANTITIES.items()}
     for point in b.values():
-        measured = [t for t in point["terms"].values() if isinstance(t, dict)]
-        assert measured and all(np.isfinite([t["delta"], t["ci95"], t["u"]]).all()
-                                for t in measured)
-        assert point["total"] == pytest.approx(np.sqrt(sum(t["u"] ** 2 for t in measured)))
+        for q in point.values():
+            measured = [t for t in q["terms"].values() if isinstance(t, dict)]
+            assert measured and all(np.isfinite([t["delta"], t["ci95"], t["u"]]).all()
+                                    for t in measured)
+            assert q["total"] == pytest.approx(np.sqrt(sum(t["u"] ** 2 for t in measured)))
+    assert mod.relative_uncertainty(b, "thesis_optimum", "M_ef") == pytest.approx(
+        2 * b["thesis_optimum"]["f_res"]["total"])
+    assert mod.relative_uncertainty(b, "far") == pytest.approx(max(
+        b["thesis_optimum"]["Z"]["total"], b["paper_reference"]["E_d"]["total"]))
     assert "| **total** |" in (tmp_path / "summary.md").read_text()
 
 
