@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from jaxdamp.analysis.stats import t_quantile, welch
+from jaxdamp.analysis.stats import t_quantile, welch, welch_terms
 from jaxdamp.figures.response import draw_replicates
 from jaxdamp.io.common import put
 from jaxdamp.studies import scaffold
@@ -81,9 +81,8 @@ def differences(x, ref) -> dict:
     95 % half-width, the equivalence test's 90 % half-width (t₀.₉₅ at the same
     Welch–Satterthwaite degrees of freedom ``dof``) and the standard error ``se``."""
     d, h95 = welch(x, ref)
-    va, vb = np.var(x, ddof=1) / len(x), np.var(ref, ddof=1) / len(ref)
-    dof = (va + vb) ** 2 / (va ** 2 / (len(x) - 1) + vb ** 2 / (len(ref) - 1))
-    se, m = float(np.sqrt(va + vb)), float(np.mean(ref))
+    se, dof = welch_terms(x, ref)
+    m = float(np.mean(ref))
     return dict(d=d / m, h95=h95 / m, h90=t_quantile(0.95, dof) * se / m, se=se / m, dof=dof)
 
 

@@ -51,7 +51,7 @@ import os
 import h5py
 import numpy as np
 
-from jaxdamp.analysis.stats import detect, per_period, replicate_extrema, t_quantile
+from jaxdamp.analysis.stats import detect, per_period, replicate_extrema, t_quantile, welch_terms
 from jaxdamp.analysis.uncertainty import standard_error
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
@@ -264,11 +264,8 @@ def shift(x, ref, paired: bool) -> dict:
         delta, se, dof = float(d.mean()), float(standard_error(d)), len(d) - 1
     else:
         m = ref.mean()
-        va, vb = x.var(ddof=1) / len(x), ref.var(ddof=1) / len(ref)
-        delta = float(x.mean() / m - 1.0)
-        se = float(math.sqrt(va + vb) / m)
-        dof = ((va + vb) ** 2 / (va ** 2 / (len(x) - 1) + vb ** 2 / (len(ref) - 1))
-               if va + vb > 0 else len(x) + len(ref) - 2)  # no spread: the pooled dof
+        se, dof = welch_terms(x, ref)
+        delta, se = float(x.mean() / m - 1.0), float(se / m)
     return dict(delta=delta, se=se, dof=float(dof), u=math.hypot(delta, se),
                 ci95=t_quantile(0.975, dof) * se)
 

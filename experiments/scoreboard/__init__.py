@@ -77,7 +77,6 @@ def load_sections(folder: str = FOLDER, only=None) -> dict:
 def load_budget(path: str = os.path.join(HERE, "systematics", "data.h5")) -> dict:
     """The systematics study's budget (:func:`experiments.systematics.budget`) read from its data
     file: ``{"table": budget, "u": relative_uncertainty(point, quantity)}``."""
-    sys.path.insert(0, os.path.dirname(HERE))
     from experiments import systematics
     from jaxdamp.io.study import load
 

@@ -148,9 +148,25 @@ def welch(x, y) -> tuple[float, float]:
     x, y = x[np.isfinite(x)], y[np.isfinite(y)]
     if min(len(x), len(y)) < 2:
         return (float(x.mean() - y.mean()) if len(x) and len(y) else math.nan), math.nan
+    se, dof = welch_terms(x, y)
+    return float(x.mean() - y.mean()), t_quantile(0.975, dof) * se
+
+
+def welch_terms(x, y) -> tuple[float, float]:
+    """Standard error of ``x̄ − ȳ``, ``sqrt(s_x²/n_x + s_y²/n_y)``, and its Welch–Satterthwaite
+    degrees of freedom (two independent samples of ≥ 2 finite values each); where neither
+    sample varies, the pooled ``n_x + n_y − 2``.
+
+    >>> se, dof = welch_terms([1.0, 1.2, 1.1], [0.5, 0.6, 0.7])
+    >>> round(dof, 6)
+    4.0
+    """
+    x, y = np.asarray(x, float), np.asarray(y, float)
     va, vb = x.var(ddof=1) / len(x), y.var(ddof=1) / len(y)
-    dof = (va + vb) ** 2 / max(va ** 2 / (len(x) - 1) + vb ** 2 / (len(y) - 1), 1e-300)
-    return float(x.mean() - y.mean()), t_quantile(0.975, dof) * math.sqrt(va + vb)
+    if va + vb == 0:
+        return 0.0, float(len(x) + len(y) - 2)
+    dof = (va + vb) ** 2 / (va ** 2 / (len(x) - 1) + vb ** 2 / (len(y) - 1))
+    return math.sqrt(va + vb), float(dof)
 
 
 @dataclass(frozen=True)
