@@ -63,6 +63,7 @@ def test_gradients_finite_for_every_parameter():
         assert np.all(np.isfinite(np.asarray(g))), name
 
 
+@pytest.mark.long  # ~30 s: runs in CI's second step (examples or long)
 def test_float32_contact_laws_give_the_float64_gradient():
     """With ``numerics.precision = 'float32'`` (contact laws in float32, geometry, state and
     sums in float64) the reverse-mode gradient of the dissipation with respect to the lid

@@ -137,6 +137,7 @@ def test_reuse_or_run_reads_back_resumes_or_replaces(tmp_path):
     assert holds(path, cfg, other) and not holds(path, cfg, axes)
 
 
+@pytest.mark.long  # ~30 s: runs in CI's second step (examples or long)
 def test_sweep_in_waves_equals_one_batch_and_resumes(tmp_path, monkeypatch):
     """A sweep too large for memory runs in waves by itself (here: the memory this process may
     use cut to hold two systems): 2 frequencies × 2 replicates in 2 waves give the samples,
