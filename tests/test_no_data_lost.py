@@ -460,3 +460,22 @@ def test_the_fused_kernel_is_announced_before_its_first_launch():
     assert "compiling the fused CUDA kernel" in driver.compile_note("fused")
     fused._kernel(0, 0, 0)  # what the first launch creates
     assert driver.compile_note("fused") is None
+
+
+def test_large_beds_are_estimated_linearly_in_their_grains():
+    """The JAX engine's neighbour rebuild is a cell list from neighbors.CELLS_FROM grains on:
+    a million grains need a few GB there, not the 8 TB of an all-pairs block; a single large
+    bed in the native kernel runs at the large-bed factor (its blocks over the cores)."""
+    from jaxdamp.engine import budget, native, neighbors
+
+    big = budget.estimate(systems=1, grains=10**6, steps=1, samples=100, sample_bytes=232,
+                          engine="jax")
+    assert big.memory < 10e9
+    small = budget.estimate(systems=1, grains=neighbors.CELLS_FROM - 1, steps=1, samples=100,
+                            sample_bytes=232, engine="jax")
+    assert small.memory - budget.BASE_MEMORY > (neighbors.CELLS_FROM - 1) ** 2 * budget.PAIR_BYTES
+    n = native.LARGE
+    rate = [budget.estimate(systems=1, grains=g, steps=1000, samples=1, sample_bytes=8).seconds
+            / g for g in (n - 1, n)]
+    if (os.cpu_count() or 1) > 1:
+        assert rate[1] == pytest.approx(rate[0] * budget.LARGE_BED_FACTOR)

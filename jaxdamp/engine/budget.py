@@ -10,10 +10,12 @@ printed first, so a long job says so from its first second.
 
 The model (bytes, per system of ``N`` grains, ``S`` samples, ``steps`` steps)::
 
-    memory = BASE_MEMORY + systems × (RECORD_COPIES × S × sample_bytes
-                                      + N × GRAIN_BYTES + [JAX engine] N² × PAIR_BYTES)
+    memory = BASE_MEMORY + systems × (RECORD_COPIES × S × sample_bytes + N × GRAIN_BYTES
+                                      + [JAX engine] N² × PAIR_BYTES, or N × CELL_BYTES
+                                        from neighbors.CELLS_FROM grains on)
     file   = FILE_OVERHEAD × (S × sample_bytes + snapshots × N × 56 + 2 × N × CHECKPOINT_BYTES)
     time   = systems × N × steps × SECONDS_PER_GRAIN_STEP[engine]
+             (native, fewer systems than cores of native.LARGE grains or more: × LARGE_BED_FACTOR)
 
 Constants measured on the 2-core reference machine (see each one); the time is a rough guide
 (within a factor of a few), the memory and file estimates err on the large side. The S3
@@ -52,10 +54,20 @@ CHECKPOINT_BYTES = 240
 #: The JAX engine's all-pairs block per pair and system [B] (about 25 fused kernels over it;
 #: 0.25–0.5 MB per system of 250 grains measured on the H200).
 PAIR_BYTES = 8
+#: The JAX engine's in-loop cell-list rebuild per grain [B], from
+#: :data:`jaxdamp.engine.neighbors.CELLS_FROM` grains on (XLA's compiled memory analysis of
+#: one rebuild: 55.8 MB scratch at 16 000 grains, 174 MB at 50 000, about 3.5 kB per grain).
+CELL_BYTES = 4000
 #: Wall seconds per grain-step on one of the reference machine's 2 cores: native kernel 5.9 µs
 #: per step for 250 grains (24 ns per grain-step); JAX engine on the CPU 130–170 µs per
 #: system-step at batch 32 (0.6 µs per grain-step); benchmarks/RESULTS.md.
 SECONDS_PER_GRAIN_STEP = {"native": 24e-9, "jax": 600e-9}
+#: A large bed in the native kernel (:data:`jaxdamp.engine.native.LARGE` grains or more, fewer
+#: systems than cores: its blocks over the cores) costs this many times the small bed's
+#: grain-step on the reference machine's 2 cores (memory-bound: 37.5 ns per grain-step at
+#: 50 000 grains against :data:`SECONDS_PER_GRAIN_STEP`'s 24; benchmarks/RESULTS.md, "Large
+#: beds on the CPU").
+LARGE_BED_FACTOR = 1.6
 #: HDF5 chunking and metadata over the raw bytes of a run file (measured 1.2).
 FILE_OVERHEAD = 1.3
 #: Refuse a batch above this fraction of the memory this process may use.
@@ -100,14 +112,31 @@ def estimate(*, systems: int, grains: int, steps: int, samples: int, sample_byte
     where the grain-step rate does not apply (the S3 model); ``record_copies``: copies of the
     samples held at once where :data:`RECORD_COPIES` does not apply."""
     per_system = (record_copies * samples * sample_bytes + grains * GRAIN_BYTES
-                  + (grains * grains * PAIR_BYTES if engine == "jax" else 0))
+                  + (_jax_lists(grains) if engine == "jax" else 0))
     memory = BASE_MEMORY + systems * per_system
     file = (FILE_OVERHEAD * systems * (samples * sample_bytes + snapshots * grains * 56
                                       + 2 * grains * CHECKPOINT_BYTES) if out else 0.0)
     rate = SECONDS_PER_GRAIN_STEP.get(engine, SECONDS_PER_GRAIN_STEP["native"]) * max(grains, 1)
+    if engine == "native" and _large(grains) and systems < (os.cpu_count() or 1):
+        rate *= LARGE_BED_FACTOR
     seconds = systems * steps * (rate if seconds_per_step is None else seconds_per_step)
     return Budget(int(systems), int(grains), int(steps), int(samples), float(memory),
                   float(file), float(seconds))
+
+
+def _jax_lists(grains: int) -> float:
+    """The JAX engine's neighbour rebuild per system [B]: all pairs, or a cell list for a bed
+    of :data:`jaxdamp.engine.neighbors.CELLS_FROM` grains or more."""
+    from jaxdamp.engine.neighbors import CELLS_FROM
+
+    return grains * CELL_BYTES if grains >= CELLS_FROM else grains * grains * PAIR_BYTES
+
+
+def _large(grains: int) -> bool:
+    """Whether the native kernel runs a bed of ``grains`` on its large-bed path."""
+    from jaxdamp.engine.native import LARGE
+
+    return grains >= LARGE
 
 
 def available_memory() -> float:

@@ -130,8 +130,13 @@ def take(tree, i):
 
 
 def _allocate(model, states, params, multiplier, at_least=0):
+    """Lists for the states' box-frame positions; a large bed's cell grid (the JAX engine's
+    in-loop builder) reaches from the floor to the lid, so that a bed thrown up stays on it."""
+    lz = np.asarray(to_host(params.Lz), np.float64)
+    extent = np.zeros(lz.shape + (2, 3))
+    extent[..., 1, 2] = lz
     return nb.allocate(model, to_host(box_frame(states, params)), multiplier, at_least=at_least,
-                       radius=to_host(params.radius))
+                       radius=to_host(params.radius), extent=extent)
 
 
 def to_host(tree):

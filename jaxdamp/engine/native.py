@@ -22,7 +22,16 @@ state in place (:func:`advance_packed`).
   skin is the model's or wider for fast grains (:data:`REBUILD_STEPS`), and the list is
   rebuilt at the start of every call,
   so a call's result is a pure function of its inputs (resume stays bit-identical);
-* the batch of independent systems is spread over the CPU cores (``prange``).
+* the batch of independent systems is spread over the CPU cores (``prange``);
+* a large bed (:data:`LARGE` grains or more) keeps its grains in cell order inside a call
+  (:func:`_reorder` at the start and at every list rebuild: neighbours near in memory, as
+  LAMMPS' atom sorting; records and the returned state keep the user's numbering), lists its
+  pairs per block of whole cell layers (a half list in CSR form, the pair constants formed
+  where a pair touches) and runs each pass block by block, the previous step's corrector
+  fused with the next predictor while a block is in the cache; with fewer systems than cores
+  the blocks of one system run over the cores, the even blocks at once then the odd ones (a
+  block's pairs reach only into the next block), and its sums are added block after block,
+  so its numbers depend neither on the cores nor on the batch.
 
 It is called from JAX through :func:`jax.pure_callback` once per chunk and writes the samples
 itself with the scalar form of the record (:func:`jaxdamp.physics.energy.record_row`, next to
@@ -62,6 +71,7 @@ from jaxdamp.physics.structure import acceleration_scalar as structure_accelerat
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 try:
+    import numba
     from numba import njit, prange
 
     AVAILABLE = True
@@ -72,6 +82,20 @@ except ImportError:  # pragma: no cover - numba is a dependency; keep the JAX en
 #: for fast grains (``_advance_one``); measured on the 2023 reference box at 3 cm, it cut the
 #: rebuilds from 7 to ~2 per 100 steps (benchmarks/RESULTS.md).
 REBUILD_STEPS = 40
+
+#: Beds of at least this many grains take the large-bed path of the kernel: grains kept in
+#: cell order (re-sorted at every list rebuild, invisible outside the kernel), pairs listed per
+#: block of whole cell layers, and a single system's blocks spread over the cores. Measured on
+#: the 2-core reference machine, one driven thesis-like bed, ns per particle-step, small path /
+#: large path on 2 cores / large path on 1 core: 34.0 / 34.6 / 35.2 at 4 000 grains, 48.5 /
+#: 46.5 / 59.8 at 16 000, 60.7 / 37.5 / 62.8 at 50 000 (benchmarks/RESULTS.md, "Large beds on
+#: the CPU"): below ~16 000 grains the small path is as fast for one system and faster in a
+#: batch (where each system runs on one core).
+LARGE = 20000
+#: Grains per block of the large-bed path (the blocks are whole layers of cells, so about).
+BLOCK_GRAINS = 1024
+#: At most this many blocks (enough for the cores of one machine).
+MAX_BLOCKS = 512
 
 #: Fields of ``Params`` and ``State`` in the kernel's packed rows (all of them), read by name.
 PARAM_FIELDS = tuple(f.name for f in dataclasses.fields(Params))
@@ -90,9 +114,11 @@ ParamOffsets = namedtuple("ParamOffsets", PARAM_FIELDS)
 #: The integers that select the kernel's code paths and size its views: the mount
 #: (:data:`jaxdamp.physics.mounts.MOUNTS`), the contact law and the container (their ``id``), the contact tables'
 #: species and columns, the random base motion's lines, the structure's degrees of freedom,
-#: the container's section numbers and the damper's cells (``Model.cells``).
+#: the container's section numbers, the damper's cells (``Model.cells``) and, for a bed that
+#: takes the large-bed path (at least :data:`LARGE` grains), its grains per block
+#: (:data:`BLOCK_GRAINS`; 0: the small-bed path; both read when the call is made).
 Dims = namedtuple("Dims", ("mount", "law", "shape", "n_species", "n_cols", "n_lines", "ndof",
-                           "n_section", "cells"))
+                           "n_section", "cells", "large"))
 
 #: The scalar forms the kernels inline (with the forms they call, from the same modules): a
 #: change to their source files must recompile the cached kernels (numba's cache only watches
@@ -197,6 +223,24 @@ if AVAILABLE:
                                                            sy, sz, k, g, gamma_s, mu)
         return (fx, fy, fz, ny * tz - nz * ty, nz * tx - nx * tz, nx * ty - ny * tx, e, ln, lf)
 
+    @_kernel(inline="always")
+    def half_stencil(o):
+        """The offset ``(ox, oy, oz)`` of cell ``o`` (0–13) of the half stencil of a cell grid:
+        the cell itself (``o = 0``: partners after the grain only) and the 13 cells ahead of it
+        in (x, y, z) order, ``ox ∈ {0, 1}``, so that each pair of cells is visited once and no
+        pair twice (x being the slowest axis of the cells' order)."""
+        ox = 0 if o < 5 else 1
+        q = o if o < 5 else o - 5
+        if o == 0:
+            oy, oz = 0, 0
+        elif o == 1:
+            oy, oz = 0, 1
+        elif ox == 0:
+            oy, oz = 1, q - 3
+        else:
+            oy, oz = q // 3 - 1, q % 3 - 1
+        return ox, oy, oz
+
     @_kernel()
     def _build_pairs(r, bx, by, bz, cutoff, pi, pj, pc, ref, R, m, sid, table, law):
         """Half list of the pairs whose surfaces are closer than the skin, ``|r_i - r_j| < R_i +
@@ -258,16 +302,7 @@ if AVAILABLE:
             cy = (c // dims[2]) % dims[1]
             cx = c // (dims[1] * dims[2])
             for o in range(14):
-                ox = 0 if o < 5 else 1
-                q = o if o < 5 else o - 5
-                if o == 0:
-                    oy, oz = 0, 0
-                elif o == 1:
-                    oy, oz = 0, 1
-                elif ox == 0:
-                    oy, oz = 1, q - 3
-                else:
-                    oy, oz = q // 3 - 1, q % 3 - 1
+                ox, oy, oz = half_stencil(o)
                 ax, ay, az = cx + ox, cy + oy, cz + oz
                 if ay < 0 or ay >= dims[1] or az < 0 or az >= dims[2] or ax >= dims[0]:
                     continue
@@ -536,9 +571,476 @@ if AVAILABLE:
                         wm[2, i], dt)
         return h
 
+    # -- large beds: grains in cell order, in blocks, the blocks over the cores ---------------
+
+    @_kernel()
+    def _spatial_order(p, bx, by, bz, cutoff, cgw, K):
+        """The grains ``p`` ``(n, 3)`` (box frame: minus ``(bx, by, bz)``) in the order of a
+        cell grid of side at least ``cutoff``: by damper cell ``cgw`` (of ``K``), then along
+        the grid's longest axis (the slowest: its layers become the blocks), then the other two.
+        Returns ``(ok, order, key, start, dims)``: ``order[s]`` the grain at place ``s``,
+        ``key[s]`` its cell's number ``((c K_0 + a_0) D_1 + a_1) D_2 + a_2`` (cell coordinates
+        ``a`` along the axes of ``dims`` = ``(D_0, D_1, D_2)``, the longest first), ``start``
+        where each cell's grains begin (``K D_0 D_1 D_2 + 1``); ``ok`` false (and no order) for
+        a non-finite or exploded state, which the runner stops on."""
+        n = p.shape[0]
+        order = np.arange(n)
+        key = np.zeros(n, np.int64)
+        dims = np.ones(3, np.int64)
+        start = np.zeros(2, np.int64)
+        q = np.empty((n, 3))
+        lo = np.full(3, np.inf)
+        hi = np.full(3, -np.inf)
+        for i in range(n):
+            q[i, 0] = p[i, 0] - bx
+            q[i, 1] = p[i, 1] - by
+            q[i, 2] = p[i, 2] - bz
+            for k in range(3):
+                if not math.isfinite(q[i, k]):
+                    return False, order, key, start, dims
+                lo[k] = min(lo[k], q[i, k])
+                hi[k] = max(hi[k], q[i, k])
+        for k in range(3):
+            if not (hi[k] - lo[k] < 1e3):
+                return False, order, key, start, dims
+        side = cutoff
+        d = np.empty(3, np.int64)
+        while True:  # at most ~4 cells per grain (tall, sparse boxes), as _build_pairs
+            for k in range(3):
+                d[k] = int((hi[k] - lo[k]) / side) + 1
+            if float(d[0]) * float(d[1]) * float(d[2]) <= 4 * n + 64:
+                break
+            side *= 1.5
+        a0 = 0
+        for k in range(1, 3):
+            if d[k] > d[a0]:
+                a0 = k
+        a1 = 1 if a0 == 0 else 0
+        a2 = 3 - a0 - a1
+        dims[0], dims[1], dims[2] = d[a0], d[a1], d[a2]
+        ncell = dims[0] * dims[1] * dims[2]
+        start = np.zeros(K * ncell + 1, np.int64)
+        cell = np.empty(n, np.int64)
+        for i in range(n):
+            c0 = int((q[i, a0] - lo[a0]) / side)
+            c1 = int((q[i, a1] - lo[a1]) / side)
+            c2 = int((q[i, a2] - lo[a2]) / side)
+            cell[i] = ((cgw[i] * dims[0] + c0) * dims[1] + c1) * dims[2] + c2
+            start[cell[i] + 1] += 1
+        for c in range(K * ncell):
+            start[c + 1] += start[c]
+        fill = start[:-1].copy()
+        for i in range(n):  # a stable counting sort: within a cell, the previous order
+            order[fill[cell[i]]] = i
+            fill[cell[i]] += 1
+        for s in range(n):
+            key[s] = cell[order[s]]
+        return True, order, key, start, dims
+
+    @_kernel()
+    def _blocks(start, K, dims, n, target):
+        """Block bounds ``bb`` (``nb + 1``) of grains in cell order: about ``target`` blocks of
+        equal size, each made of whole layers (a damper cell's cells of one coordinate along
+        the slowest axis). A listed pair spans at most one layer, so the pairs of block ``k``
+        reach into blocks ``k`` and ``k + 1`` only: the even blocks can run at once, then the
+        odd ones, each writing its pairs' forces with no other thread writing the same grains."""
+        plane = dims[1] * dims[2]
+        groups = K * dims[0]
+        want = max(1, min(target, groups))
+        bb = np.empty(want + 1, np.int64)
+        bb[0] = 0
+        nb = 0
+        for g in range(groups):
+            end = start[(g + 1) * plane]
+            if end > bb[nb] and end * want >= (nb + 1) * n:
+                nb += 1
+                bb[nb] = end
+        if bb[nb] < n:  # pragma: no cover - the last layer ends at n
+            nb += 1
+            bb[nb] = n
+        return bb[:nb + 1]
+
+    @_kernel()
+    def _list_block(g0, g1, ref, R, extra, key, start, dims, ps, pe, pj, base, cap):
+        """The half list of grains ``g0 … g1 − 1`` (in cell order, :func:`_spatial_order`) into
+        ``pj[base:base + cap]``: grain ``i``'s partners are ``pj[ps[i]:pe[i]]``, the grains of
+        its own cell after it and of the 13 cells ahead (:func:`half_stencil`) whose surfaces
+        are closer than ``extra`` (``|r_i − r_j| < R_i + R_j + extra``, box frame ``ref``).
+        Returns the number of pairs (more than ``cap``: the list did not fit)."""
+        plane = dims[1] * dims[2]
+        cells = dims[0] * plane
+        k = base
+        end = base + cap
+        for i in range(g0, g1):
+            c = key[i]
+            own = c % cells
+            damper = c - own
+            c2 = own % dims[2]
+            c1 = (own // dims[2]) % dims[1]
+            c0 = own // plane
+            ps[i] = k
+            for o in range(14):
+                o0, o1, o2 = half_stencil(o)
+                b0, b1, b2 = c0 + o0, c1 + o1, c2 + o2
+                if b1 < 0 or b1 >= dims[1] or b2 < 0 or b2 >= dims[2] or b0 >= dims[0]:
+                    continue
+                cc = damper + (b0 * dims[1] + b1) * dims[2] + b2
+                for j in range(start[cc], start[cc + 1]):
+                    if o == 0 and j <= i:
+                        continue
+                    dx = ref[i, 0] - ref[j, 0]
+                    dy = ref[i, 1] - ref[j, 1]
+                    dz = ref[i, 2] - ref[j, 2]
+                    lim = R[i] + R[j] + extra
+                    if dx * dx + dy * dy + dz * dz < lim * lim:
+                        if k < end:
+                            pj[k] = j
+                        k += 1
+            pe[i] = min(k, end)
+        return k - base
+
+    @_kernel(parallel=True)
+    def _lists_par(bb, per, counts, ref, R, extra, key, start, dims, ps, pe, pj):
+        """:func:`_list_block` of every block, over the cores."""
+        for k in prange(bb.shape[0] - 1):
+            counts[k] = _list_block(bb[k], bb[k + 1], ref, R, extra, key, start, dims, ps, pe,
+                                    pj, bb[k] * per, (bb[k + 1] - bb[k]) * per)
+
+    @_kernel()
+    def _lists_ser(bb, per, counts, ref, R, extra, key, start, dims, ps, pe, pj):
+        """:func:`_list_block` of every block, in the calling thread."""
+        for k in range(bb.shape[0] - 1):
+            counts[k] = _list_block(bb[k], bb[k + 1], ref, R, extra, key, start, dims, ps, pe,
+                                    pj, bb[k] * per, (bb[k + 1] - bb[k]) * per)
+
+    @_kernel()
+    def _permute(order, x, tmp):
+        """Rows of ``x`` ``(n, c)`` into the order ``order`` (place ``s`` takes row
+        ``order[s]``), through the scratch ``tmp`` (``n c``, of ``x``'s type)."""
+        n, c = x.shape
+        for s in range(n):
+            for k in range(c):
+                tmp[s * c + k] = x[order[s], k]
+        for s in range(n):
+            for k in range(c):
+                x[s, k] = tmp[s * c + k]
+
+    @_kernel()
+    def _unsort(perm, src, dst):
+        """``dst[perm[s]] = src[s]``: rows in cell order back to the user's grain numbers."""
+        for s in range(src.shape[0]):
+            for k in range(src.shape[1]):
+                dst[perm[s], k] = src[s, k]
+
+    @_kernel()
+    def _walls_block(k, bb, out, correct, hout, w2, al2, wm, Ff, Tf, im3, iI3, qs, qn, dt, hdt2,
+                     rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law, r1, vp, rw, Rw, mw, ref,
+                     wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz,
+                     grav, drag, half_skin2):
+        """Pass 1 of block ``k`` (grains ``bb[k] … bb[k + 1] − 1``): where ``correct``, first
+        the previous step's pass 3 of the block (:func:`_correct_block`, its check sum into
+        ``hout[k]``: the two passes share the block's data while it is in the cache), then the
+        predictor and :func:`grain_walls`; its sums into ``out[k]`` (the last: whether a grain
+        moved more than skin/2)."""
+        if correct:
+            _correct_block(k, bb, hout, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf,
+                           r1f, qs, qn)
+        g0, g1 = bb[k], bb[k + 1]
+        for j in range(3 * g0, 3 * g1):
+            r1f[j] = rf[j] + dt * vf[j] + hdt2 * af[j]
+            vpf[j] = vf[j] + dt * af[j]
+        for j in range(3 * g0, 3 * g1):
+            rwf[j] = R3[j] * (wf[j] + dt * alf[j])
+        # three copies, as in _advance_one: the container and the cells as constants fold the
+        # branches of the common damper away (its walls pass: 34 -> NN ns per grain, 50 000)
+        if shape == _BOX and not shifted:
+            s = grain_walls(_BOX, law, g0, g1, 1, r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
+                            False, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
+                            half_skin2)
+        elif not shifted:
+            s = grain_walls(shape, law, g0, g1, 1, r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
+                            False, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
+                            half_skin2)
+        else:
+            s = grain_walls(shape, law, g0, g1, 1, r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
+                            True, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
+                            half_skin2)
+        (out[k, 0], out[k, 1], out[k, 2], out[k, 3], out[k, 4], out[k, 5], out[k, 6], out[k, 7],
+         out[k, 8], out[k, 9], out[k, 10], far) = s
+        out[k, 11] = 1.0 if far else 0.0
+
+    @_kernel(parallel=True)
+    def _walls_par(bb, out, correct, hout, w2, al2, wm, Ff, Tf, im3, iI3, qs, qn, dt, hdt2, rf, vf,
+                   af, wf, alf, R3, r1f, vpf, rwf, shape, law, r1, vp, rw, Rw, mw, ref, wk, wks,
+                   sec, ogw, shifted, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
+                   half_skin2):
+        """:func:`_walls_block` of every block, over the cores."""
+        for k in prange(bb.shape[0] - 1):
+            _walls_block(k, bb, out, correct, hout, w2, al2, wm, Ff, Tf, im3, iI3, qs, qn, dt,
+                         hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law, r1, vp, rw, Rw,
+                         mw, ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex, ey, ez,
+                         z1, zdp, Lz, grav, drag, half_skin2)
+
+    @_kernel()
+    def _walls_ser(bb, out, correct, hout, w2, al2, wm, Ff, Tf, im3, iI3, qs, qn, dt, hdt2, rf, vf,
+                   af, wf, alf, R3, r1f, vpf, rwf, shape, law, r1, vp, rw, Rw, mw, ref, wk, wks,
+                   sec, ogw, shifted, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
+                   half_skin2):
+        """:func:`_walls_block` of every block, in the calling thread."""
+        for k in range(bb.shape[0] - 1):
+            _walls_block(k, bb, out, correct, hout, w2, al2, wm, Ff, Tf, im3, iI3, qs, qn, dt,
+                         hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law, r1, vp, rw, Rw,
+                         mw, ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex, ey, ez,
+                         z1, zdp, Lz, grav, drag, half_skin2)
+
+    @_kernel()
+    def _pair_block(k, bb, out, law, r, v, rw, R, m, sid, table, ps, pe, pj, F, T, gl):
+        """Pass 2 of block ``k``: the forces and torques of its grains' listed pairs (half
+        list in cell order, :func:`_list_block`; Newton's third law), added to ``F``, ``T``;
+        the pair's constants formed where it touches (:func:`pair_constants`, as the device
+        kernel does: a large bed's per-pair table would be streamed from memory every step).
+        ``out[k]``: ``(elastic energy, normal loss, friction loss)``; ``gl`` as in
+        :func:`_pair_forces`."""
+        e_sum = 0.0
+        ln_sum = 0.0
+        lf_sum = 0.0
+        for i in range(bb[k], bb[k + 1]):
+            xi, yi, zi = r[i, 0], r[i, 1], r[i, 2]
+            Ri = R[i]
+            fxi = 0.0
+            fyi = 0.0
+            fzi = 0.0
+            cxi = 0.0
+            cyi = 0.0
+            czi = 0.0
+            li = 0.0
+            for p in range(ps[i], pe[i]):
+                j = pj[p]
+                dx = xi - r[j, 0]
+                dy = yi - r[j, 1]
+                dz = zi - r[j, 2]
+                d2 = dx * dx + dy * dy + dz * dz
+                rs = Ri + R[j]
+                if d2 >= rs * rs:
+                    continue
+                rs, kk, g, gamma_s, mu = pair_constants(law, table, sid[i], sid[j], Ri, R[j],
+                                                        m[i], m[j])
+                fx, fy, fz, cx, cy, cz, e, ln, lf = pair_contact(
+                    law, dx, dy, dz, d2, rs, v[i, 0] - v[j, 0], v[i, 1] - v[j, 1],
+                    v[i, 2] - v[j, 2], rw[i, 0] + rw[j, 0], rw[i, 1] + rw[j, 1],
+                    rw[i, 2] + rw[j, 2], kk, g, gamma_s, mu)
+                fxi += fx
+                fyi += fy
+                fzi += fz
+                F[j, 0] -= fx
+                F[j, 1] -= fy
+                F[j, 2] -= fz
+                cxi += cx
+                cyi += cy
+                czi += cz
+                T[j, 0] -= R[j] * cx
+                T[j, 1] -= R[j] * cy
+                T[j, 2] -= R[j] * cz
+                e_sum += e
+                ln_sum += ln
+                lf_sum += lf
+                li += ln + lf
+            F[i, 0] += fxi
+            F[i, 1] += fyi
+            F[i, 2] += fzi
+            T[i, 0] -= Ri * cxi
+            T[i, 1] -= Ri * cyi
+            T[i, 2] -= Ri * czi
+            if gl is not None:
+                gl[i] += li
+        out[k, 0], out[k, 1], out[k, 2] = e_sum, ln_sum, lf_sum
+
+    @_kernel(parallel=True)
+    def _pairs_par(parity, bb, out, law, r, v, rw, R, m, sid, table, ps, pe, pj, F, T, gl):
+        """:func:`_pair_block` of the blocks ``parity, parity + 2, …``, over the cores."""
+        for t in prange((bb.shape[0] - parity) // 2):
+            _pair_block(2 * t + parity, bb, out, law, r, v, rw, R, m, sid, table, ps, pe, pj,
+                        F, T, gl)
+
+    @_kernel()
+    def _pairs_ser(parity, bb, out, law, r, v, rw, R, m, sid, table, ps, pe, pj, F, T, gl):
+        """:func:`_pair_block` of the blocks ``parity, parity + 2, …``, in the calling
+        thread."""
+        for t in range((bb.shape[0] - parity) // 2):
+            _pair_block(2 * t + parity, bb, out, law, r, v, rw, R, m, sid, table, ps, pe, pj,
+                        F, T, gl)
+
+    @_kernel()
+    def _correct_block(k, bb, out, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f,
+                       qs, qn):
+        """Pass 3 (:func:`_correct`) of block ``k``'s grains; its finite-check sum into
+        ``out[k]``."""
+        a, b = bb[k], bb[k + 1]
+        out[k] = _correct(b - a, dt, w2[a:b], al2[a:b], wm[:, a:b], Ff[3 * a:3 * b],
+                          Tf[3 * a:3 * b], im3[3 * a:3 * b], iI3[3 * a:3 * b], vf[3 * a:3 * b],
+                          af[3 * a:3 * b], wf[3 * a:3 * b], alf[3 * a:3 * b], rf[3 * a:3 * b],
+                          r1f[3 * a:3 * b], qs[:, a:b], qn[:, a:b])
+
+    @_kernel(parallel=True)
+    def _correct_par(bb, out, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f, qs,
+                     qn):
+        """:func:`_correct_block` of every block, over the cores."""
+        for k in prange(bb.shape[0] - 1):
+            _correct_block(k, bb, out, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf,
+                           r1f, qs, qn)
+
+    @_kernel()
+    def _correct_ser(bb, out, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f, qs,
+                     qn):
+        """:func:`_correct_block` of every block, in the calling thread."""
+        for k in range(bb.shape[0] - 1):
+            _correct_block(k, bb, out, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf,
+                           r1f, qs, qn)
+
+    @_kernel()
+    def _cell_sums_by_grain(x, cg, out):
+        """``out[c]`` = the sum of ``x`` over the grains of damper cell ``c`` (``cg``: each
+        grain's cell; the large-bed path, whose grains are not stored cell after cell)."""
+        for c in range(out.shape[0]):
+            out[c] = 0.0
+        for i in range(x.shape[0]):
+            out[cg[i]] += x[i]
+
+    @_kernel()
+    def _walls_all(inner, bb, out, correct, hout, w2, al2, wm, Ff, Tf, im3, iI3, qs, qn, dt,
+                   hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law, r1, vp, rw, Rw, mw,
+                   ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp,
+                   Lz, grav, drag, half_skin2):
+        """Pass 1 of a large bed (:func:`_walls_block`, after the previous step's pass 3 where
+        ``correct``), the blocks over the cores where ``inner``; returns :func:`grain_walls`'
+        sums, added block after block (the same numbers on any number of cores), and the
+        pass 3 check sum (0 where not ``correct``)."""
+        if inner:
+            _walls_par(bb, out, correct, hout, w2, al2, wm, Ff, Tf, im3, iI3, qs, qn, dt, hdt2,
+                       rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law, r1, vp, rw, Rw, mw,
+                       ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex, ey, ez, z1,
+                       zdp, Lz, grav, drag, half_skin2)
+        else:
+            _walls_ser(bb, out, correct, hout, w2, al2, wm, Ff, Tf, im3, iI3, qs, qn, dt, hdt2,
+                       rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law, r1, vp, rw, Rw, mw,
+                       ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex, ey, ez, z1,
+                       zdp, Lz, grav, drag, half_skin2)
+        s = np.zeros(12)
+        h = 0.0
+        for k in range(bb.shape[0] - 1):
+            for c in range(12):
+                s[c] += out[k, c]
+            if correct:
+                h += hout[k]
+        return (s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7], s[8], s[9], s[10],
+                s[11] > 0.0, h)
+
+    @_kernel()
+    def _pairs_all(inner, bb, out, law, r, v, rw, R, m, sid, table, ps, pe, pj, F, T, gl):
+        """Pass 2 of a large bed (:func:`_pair_block`): the even blocks, then the odd ones,
+        over the cores where ``inner``; returns the pairs' sums, added block after block."""
+        for parity in range(2):
+            if inner:
+                _pairs_par(parity, bb, out, law, r, v, rw, R, m, sid, table, ps, pe, pj, F, T,
+                           gl)
+            else:
+                _pairs_ser(parity, bb, out, law, r, v, rw, R, m, sid, table, ps, pe, pj, F, T,
+                           gl)
+        e = 0.0
+        ln = 0.0
+        lf = 0.0
+        for k in range(bb.shape[0] - 1):
+            e += out[k, 0]
+            ln += out[k, 1]
+            lf += out[k, 2]
+        return e, ln, lf
+
+    @_kernel()
+    def _correct_all(inner, bb, out, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf,
+                     r1f, qs, qn):
+        """Pass 3 of a large bed (:func:`_correct_block`), over the cores where ``inner``;
+        returns the finite-check sum."""
+        if inner:
+            _correct_par(bb, out, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f,
+                         qs, qn)
+        else:
+            _correct_ser(bb, out, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f,
+                         qs, qn)
+        h = 0.0
+        for k in range(bb.shape[0] - 1):
+            h += out[k]
+        return h
+
+    @_kernel()
+    def _reorder(p, bx, by, bz, cutoff, K, curved, r1f, rf, vf, wf, af, alf, qs, R3, im3, iI3,
+                 Rw, mw, wk, wks, ogw, sidw, cgw, perm):
+        """Put a large bed's grains in cell order (:func:`_spatial_order` of the positions
+        ``p``, box frame minus ``(bx, by, bz)``): every per-grain array of the kernel's
+        working state is permuted alike (``perm``: the user's number of the grain at each
+        place; ``wks`` only where the sides are ``curved``, else it is ``wk``). Returns
+        ``(ok, key, start, dims)`` of :func:`_spatial_order` (not ``ok``: left as it was)."""
+        n = perm.shape[0]
+        ok, order, key, start, dims = _spatial_order(p, bx, by, bz, cutoff, cgw, K)
+        if not ok:
+            return ok, key, start, dims
+        tmp = np.empty(4 * n)
+        for x in (r1f, rf, vf, wf, af, alf, R3, im3, iI3):
+            _permute(order, x.reshape((n, 3)), tmp)
+        _permute(order, qs.T, tmp)
+        _permute(order, Rw.reshape((n, 1)), tmp)
+        _permute(order, mw.reshape((n, 1)), tmp)
+        _permute(order, wk, tmp)
+        if curved:
+            _permute(order, wks, tmp)
+        _permute(order, ogw, tmp)
+        itmp = np.empty(n, np.int64)
+        _permute(order, sidw.reshape((n, 1)), itmp)
+        _permute(order, cgw.reshape((n, 1)), itmp)
+        _permute(order, perm.reshape((n, 1)), itmp)
+        return ok, key, start, dims
+
+    @_kernel()
+    def _relist(ok, p, bx, by, bz, extra, key, start, dims, K, R, ref, ps, pe, pj, per, inner,
+                block):
+        """The half lists of a large bed in cell order (after :func:`_reorder`), block by block
+        (:func:`_blocks` of about ``block`` grains, :func:`_list_block`, over the cores where
+        ``inner``), growing ``pj``
+        (``per`` pairs per grain) until every block's fit; the reference positions ``ref`` =
+        ``p`` in the box frame. Returns ``(block bounds, per, pj)``; no pairs where not
+        ``ok``."""
+        n = p.shape[0]
+        for i in range(n):
+            ref[i, 0] = p[i, 0] - bx
+            ref[i, 1] = p[i, 1] - by
+            ref[i, 2] = p[i, 2] - bz
+        if not ok:
+            bb = np.zeros(2, np.int64)
+            bb[1] = n
+            for i in range(n):
+                ps[i] = 0
+                pe[i] = 0
+            return bb, per, pj
+        bb = _blocks(start, K, dims, n, min(MAX_BLOCKS, max(1, n // block)))
+        nb = bb.shape[0] - 1
+        counts = np.empty(nb, np.int64)
+        while True:
+            if pj.shape[0] < n * per:
+                pj = np.empty(n * per, np.int32)
+            if inner:
+                _lists_par(bb, per, counts, ref, R, extra, key, start, dims, ps, pe, pj)
+            else:
+                _lists_ser(bb, per, counts, ref, R, extra, key, start, dims, ps, pe, pj)
+            need = 0
+            for k in range(nb):
+                size = bb[k + 1] - bb[k]
+                need = max(need, (counts[k] + size - 1) // size)
+            if need <= per:
+                return bb, per, pj
+            per = need + need // 4 + 1
+
     @_kernel()
     def _advance_one(b, n_records, record_every, dims, skin, st, pm, so, po, sid, bounds, cg,
-                     cdof, rec):
+                     cdof, rec, inner):
         """Advance system ``b`` of the packed batch by ``n_records × record_every`` steps in
         place, writing a sample after every ``record_every`` steps into ``rec[b]``
         (:func:`jaxdamp.physics.energy.record_row`; ``bounds``: the species' and cells' index
@@ -560,7 +1062,14 @@ if AVAILABLE:
         without branches runs in loops that compile to SIMD code: the predictor and the
         corrector elementwise over the flat ``(3n,)`` views of the per-grain arrays, and the
         rotation (:func:`rotate_series_scalar`) over the quaternions held by component during
-        the call (``qs``); the walls, the pairs and the sums stay grain by grain."""
+        the call (``qs``); the walls, the pairs and the sums stay grain by grain.
+
+        A bed of :data:`LARGE` grains or more keeps its grains in cell order inside the call
+        (:func:`_reorder` at the start and at every rebuild; records and the returned state in
+        the user's numbering), its passes in blocks of whole cell layers (:func:`_walls_all`,
+        :func:`_pairs_all`, :func:`_correct_all`) and, where ``inner``, the blocks over the
+        cores; its sums are added block after block, so its numbers do not depend on the cores
+        nor on the batch it runs in."""
         n = sid.shape[0]
         row = st[b]  # so.NAME, po.NAME: where the field NAME starts in the rows
         prow = pm[b]
@@ -573,6 +1082,7 @@ if AVAILABLE:
         wb = row[so.w:so.w + 3 * n].reshape((n, 3))
         qb = row[so.q:so.q + 4 * n].reshape((n, 4))
         alb = row[so.alpha:so.alpha + 3 * n].reshape((n, 3))
+        ab = row[so.a:so.a + 3 * n].reshape((n, 3))
         work = row[so.work:so.work + N_CHANNELS]
         power = row[so.power:so.power + N_CHANNELS]
         K = dims.cells
@@ -624,8 +1134,9 @@ if AVAILABLE:
         r_max = Rb.max() if n > 0 else 0.0
         skin = max(skin, min(2.0 * REBUILD_STEPS * math.sqrt(v2) * dt, 2.0 * r_max))
         cutoff = 2.0 * r_max + skin
+        large = dims.large > 0
         npairs = 0
-        if n > 1:
+        if n > 1 and not large:
             npairs, pi, pj, pc = _pairs(rb, ex * z, ey * z, ez * z, cutoff, pi, pj, pc, ref, Rb,
                                         mb, sid, tab, law)
         half_skin2 = 0.25 * skin * skin
@@ -664,6 +1175,33 @@ if AVAILABLE:
         for i in range(n):
             for k in range(4):
                 qs[k, i] = qb[i, k]
+        # the large-bed path (large): the working state in cell order, place s holding the
+        # user's grain perm[s]; the parameters' per-grain rows copied (the inputs stay as they
+        # are, read-only). A small bed works on the state's rows themselves and the parameters'
+        # (perm the identity).
+        perm = np.arange(n)
+        Rw, mw, sidw, cgw, ogw = Rb.copy(), mb.copy(), sid.copy(), cg.copy(), og.copy()
+        bb = np.zeros(2, np.int64)
+        bb[1] = n
+        per = 8
+        ps = np.zeros(n, np.int64)
+        pe = np.zeros(n, np.int64)
+        pl = np.empty(0, np.int32)
+        wout = np.empty((MAX_BLOCKS + 1, 12))
+        pout = np.empty((MAX_BLOCKS + 1, 3))
+        hout = np.empty(MAX_BLOCKS + 1)
+        pending = False  # a large bed's pass 3 of the last step, done with the next pass 1
+        h_late = 0.0
+        if large:
+            rf, vf, wf, af, alf = rf.copy(), vf.copy(), wf.copy(), af.copy(), alf.copy()
+            ok, key, start, gdims = _reorder(rf.reshape((n, 3)), ex * z, ey * z, ez * z, cutoff,
+                                             K, kappa != 0.0, r1f, rf, vf, wf, af, alf, qs, R3,
+                                             im3, iI3, Rw, mw, wk, wks, ogw, sidw, cgw, perm)
+            bb, per, pl = _relist(ok, rf.reshape((n, 3)), ex * z, ey * z, ez * z,
+                                  cutoff - 2.0 * r_max, key, start, gdims, K, Rw, ref, ps, pe,
+                                  pl, per, inner, dims.large)
+        r2, v2 = rf.reshape((n, 3)), vf.reshape((n, 3))
+        w2, al2 = wf.reshape((n, 3)), alf.reshape((n, 3))
         e_el = 0.0
         floor_lid = 0.0
         box_z = 0.0
@@ -673,7 +1211,7 @@ if AVAILABLE:
         for k_rec in range(n_records):
             imp0 = 0.0
             imp1 = 0.0
-            for _ in range(record_every):
+            for it in range(record_every):
                 t1 = t + dt
                 z1, zdp = predict_scalar(mount, t1, dt, z, zd, zdd, prow, po)
                 for j in range(ny):
@@ -682,32 +1220,63 @@ if AVAILABLE:
                 if not one_cell:
                     cell_frames(cdof, z1, zdp, y1, ydp, frames)
                 # pass 1: predictor, body force, walls, drag power, displacement since the build
-                for j in range(3 * n):  # the predicted positions, velocities and R ω
-                    r1f[j] = rf[j] + dt * vf[j] + hdt2 * af[j]
-                    vpf[j] = vf[j] + dt * af[j]
-                for j in range(3 * n):
-                    rwf[j] = R3[j] * (wf[j] + dt * alf[j])
-                if shape == _BOX and one_cell:  # the common damper: its branches folded
-                    (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
-                     pdrag, far) = grain_walls(_BOX, law, 0, n, 1, r1, vp, rw, Rb, mb, ref, wk,
-                                               wks, sec, og, False, gs, cg, frames, F, T,
-                                               ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
-                elif one_cell:
-                    (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
-                     pdrag, far) = grain_walls(shape, law, 0, n, 1, r1, vp, rw, Rb, mb, ref, wk,
-                                               wks, sec, og, False, gs, cg, frames, F, T,
-                                               ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
-                else:  # several cells: each grain's walls are its own cell's
-                    (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
-                     pdrag, far) = grain_walls(shape, law, 0, n, 1, r1, vp, rw, Rb, mb, ref, wk,
-                                               wks, sec, og, True, gs, cg, frames, F, T,
-                                               ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
+                if large:  # in blocks, after the previous step's pass 3 where it is pending;
+                    # a rebuild re-sorts the grains and redoes the pass
+                    h_late = 0.0
+                    for attempt in range(2):
+                        (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor,
+                         l_lid, pdrag, far, h_pass) = _walls_all(
+                            inner, bb, wout, pending, hout, w2, al2, wm, Ff, Tf, im3, iI3, qs, qn,
+                            dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law, r1, vp,
+                            rw, Rw, mw, ref, wk, wks, sec, ogw, not one_cell, gs, cgw, frames, F,
+                            T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
+                        h_late += h_pass
+                        if pending:  # the previous step's rotation is done
+                            qs, qn = qn, qs
+                            pending = False
+                        if attempt == 1 or not far or n < 2:
+                            break
+                        ok, key, start, gdims = _reorder(
+                            r1, ex * z1, ey * z1, ez * z1, cutoff, K, kappa != 0.0, r1f, rf, vf,
+                            wf, af, alf, qs, R3, im3, iI3, Rw, mw, wk, wks, ogw, sidw, cgw, perm)
+                        bb, per, pl = _relist(ok, r1, ex * z1, ey * z1, ez * z1,
+                                              cutoff - 2.0 * r_max, key, start, gdims, K, Rw,
+                                              ref, ps, pe, pl, per, inner, dims.large)
+                    far = False
+                else:
+                    for j in range(3 * n):  # the predicted positions, velocities and R ω
+                        r1f[j] = rf[j] + dt * vf[j] + hdt2 * af[j]
+                        vpf[j] = vf[j] + dt * af[j]
+                    for j in range(3 * n):
+                        rwf[j] = R3[j] * (wf[j] + dt * alf[j])
+                    if shape == _BOX and one_cell:  # the common damper: its branches folded
+                        (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
+                         pdrag, far) = grain_walls(_BOX, law, 0, n, 1, r1, vp, rw, Rb, mb, ref, wk,
+                                                   wks, sec, og, False, gs, cg, frames, F, T,
+                                                   ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
+                    elif one_cell:
+                        (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
+                         pdrag, far) = grain_walls(shape, law, 0, n, 1, r1, vp, rw, Rb, mb, ref, wk,
+                                                   wks, sec, og, False, gs, cg, frames, F, T,
+                                                   ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
+                    else:  # several cells: each grain's walls are its own cell's
+                        (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
+                         pdrag, far) = grain_walls(shape, law, 0, n, 1, r1, vp, rw, Rb, mb, ref, wk,
+                                                   wks, sec, og, True, gs, cg, frames, F, T,
+                                                   ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
                 n_side = n_wall - n_floor - n_lid
                 if n > 1 and far:  # a grain moved more than skin/2: list the pairs anew
                     npairs, pi, pj, pc = _pairs(r1, ex * z1, ey * z1, ez * z1, cutoff, pi, pj,
                                                 pc, ref, Rb, mb, sid, tab, law)
                 # pass 2: the grain pairs
-                if one_cell:  # its loss is the damper's: formed from the channels at the sample
+                if large and one_cell:
+                    pp_e, pp_n, pp_f = _pairs_all(inner, bb, pout, law, r1, vp, rw, Rw, mw, sidw,
+                                                  tab, ps, pe, pl, F, T, None)
+                elif large:
+                    pp_e, pp_n, pp_f = _pairs_all(inner, bb, pout, law, r1, vp, rw, Rw, mw, sidw,
+                                                  tab, ps, pe, pl, F, T, gs[:, 0])
+                    _cell_sums_by_grain(gs[:, 0], cgw, pwc)
+                elif one_cell:  # its loss is the damper's: formed from the channels at the sample
                     pp_e, pp_n, pp_f = _pair_forces(law, r1, vp, rw, Rb, pi, pj, pc, npairs, F,
                                                     T, None)
                 else:
@@ -716,7 +1285,9 @@ if AVAILABLE:
                     cell_sums(gs[:, 0], bounds, pwc, 0, 1)
                 e_el += pp_e
                 # pass 3: the mount, then the corrector and the rotation (_correct)
-                if spread:  # each cell's force on its own degree of freedom
+                if spread and large:  # each cell's force on its own degree of freedom
+                    _cell_sums_by_grain(gs[:, 1], cgw, bzc)
+                elif spread:
                     cell_sums(gs[:, 1], bounds, bzc, 0, 1)
                 zdd1, pw[_IN], pw[_PRIM] = respond_scalar(
                     mount, t1, z1, zdp, y1, ydp, dof_loads(spread, cdof, bzc, box_z, fdof), prow,
@@ -727,15 +1298,22 @@ if AVAILABLE:
                 pw[_PW_FLOOR], pw[_PW_LID] = l_floor, l_lid
                 pw[_PW_SIDE] = pw_n + pw_f - l_floor - l_lid
                 health = box_z + e_el + pp_n + pp_f + pw_n + pw_f + z1 + zdp + zdd1
-                health += _correct(n, dt, wb, alb, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f,
-                                   qs, qn)
-                qs, qn = qn, qs
+                if large and it < record_every - 1:  # pass 3 with the next step's pass 1
+                    health += h_late
+                    pending = True
+                elif large:  # the sample needs the state of this step
+                    health += h_late + _correct_all(inner, bb, hout, dt, w2, al2, wm, Ff, Tf,
+                                                    im3, iI3, vf, af, wf, alf, rf, r1f, qs, qn)
+                    qs, qn = qn, qs
+                else:
+                    health += _correct(n, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf,
+                                       r1f, qs, qn)
+                    qs, qn = qn, qs
                 if not math.isfinite(health):
                     # the state blew up: mark it non-finite and stop; the runner reports it
-                    for i in range(n):
-                        for k in range(3):
-                            rb[i, k] = np.nan
-                            vb[i, k] = np.nan
+                    for j in range(3 * n):
+                        rf[j] = np.nan
+                        vf[j] = np.nan
                     zd = np.nan
                     break
                 for c in range(N_CHANNELS):
@@ -760,13 +1338,20 @@ if AVAILABLE:
                 work_cell[0] = work[_PPN] + work[_PPF] + work[_PWN] + work[_PWF]
                 power_cell[0] = power[_PPN] + power[_PPF] + power[_PWN] + power[_PWF]
             e_prim = energy_scalar(mount, t, z, zd, yv, ydv, prow, po, n_lines, xs, xds)
+            if large:  # the sample reads the grains in the user's numbering
+                _unsort(perm, r2, rb)
+                _unsort(perm, v2, vb)
+                _unsort(perm, w2, wb)
             record_row(rec[b, k_rec], t, z, zd, yv, e_prim, rb, vb, wb, mb, Ib, Rb, grav, Lz, ez,
                        e_el, e_start, imp0 / record_every, imp1 / record_every, n_floor, n_lid,
                        n_side, work, work_cell, bounds,
                        cell_frames(cdof, z, zd, yv, ydv, frames))
         for i in range(n):
             for k in range(4):
-                qb[i, k] = qs[k, i]
+                qb[perm[i], k] = qs[k, i]
+        if large:
+            for src, dst in ((r2, rb), (v2, vb), (w2, wb), (af.reshape((n, 3)), ab), (al2, alb)):
+                _unsort(perm, src, dst)
         row[so.z], row[so.zd], row[so.zdd], row[so.t] = z, zd, zdd, t
         row[so.z_max], row[so.z_min], row[so.step] = zmax, zmin, step
         row[so.e_elastic], row[so.f_floor_lid], row[so.f_box] = e_el, floor_lid, box_z
@@ -777,16 +1362,17 @@ if AVAILABLE:
         """The batch over the cores (OpenMP threads, one system per thread at a time)."""
         for b in prange(st.shape[0]):
             _advance_one(b, n_records, record_every, dims, skin, st, pm, so, po, sid, bounds, cg,
-                         cdof, rec)
+                         cdof, rec, False)
 
     @_kernel(nogil=True)
     def _advance_serial(n_records, record_every, dims, skin, st, pm, so, po, sid, bounds, cg, cdof,
-                        rec):
-        """The batch in the calling thread, without the GIL: for sharded chunks, whose host
-        threads (one per local shard) call the kernel side by side."""
+                        rec, inner):
+        """The batch in the calling thread, without the GIL, one system after the other: for
+        sharded chunks, whose host threads (one per local shard) call the kernel side by side,
+        and (``inner``) for fewer large beds than cores, each spread over the cores itself."""
         for b in range(st.shape[0]):
             _advance_one(b, n_records, record_every, dims, skin, st, pm, so, po, sid, bounds, cg,
-                         cdof, rec)
+                         cdof, rec, inner)
 
 
 # -- packing of pytrees (one float64 array per call across the JAX/Python boundary) ---------
@@ -845,11 +1431,26 @@ def kernel_args(model, state_layout, param_layout):
                 shape=CONTAINERS[model.container].id, n_species=int(table[0]),
                 n_cols=int(table[2]), n_lines=int(shapes["lines"][0]),
                 ndof=int(shapes["s_r"][0]), n_section=int(shapes["section"][0]),
-                cells=int(model.cells))
+                cells=int(model.cells),
+                large=int(BLOCK_GRAINS) if model.n >= max(LARGE, 2) else 0)
     return (dims, StateOffsets(*offsets(state_layout, STATE_FIELDS)),
             ParamOffsets(*offsets(param_layout, PARAM_FIELDS)),
             model.species_index().astype(np.int64), bounds,
             model.cell_index().astype(np.int64), model.dofs_of_cells(), width)
+
+
+def _threads_up() -> bool:
+    """Launch numba's threads (once per process) and say whether they run. A large bed alone
+    starts its parallel regions from inside the serial :func:`_advance_serial`, which does not
+    launch them itself (a parallel kernel called from Python does); a region started before
+    they run calls a null pointer (found in this project; the shape of numba issue #8578).
+    ``False`` (the blocks then run in the calling thread) if numba's internals moved."""
+    try:
+        from numba.np.ufunc.parallel import _launch_threads
+    except ImportError:  # pragma: no cover - numba internals changed
+        return False
+    _launch_threads()
+    return True
 
 
 def advance_packed(model, state_packed, params_packed, state_layout, param_layout,
@@ -868,9 +1469,12 @@ def advance_packed(model, state_packed, params_packed, state_layout, param_layou
     pm = np.ascontiguousarray(params_packed, dtype=np.float64)
     dims, so, po, sid, bounds, cg, cdof, width = kernel_args(model, state_layout, param_layout)
     rec = np.empty((st.shape[0], int(n_records), width))
-    kernel = _advance if threads else _advance_serial
-    kernel(int(n_records), int(record_every), dims, model.skin, st, pm, so, po, sid, bounds, cg,
-           cdof, rec)
+    args = (int(n_records), int(record_every), dims, model.skin, st, pm, so, po, sid, bounds, cg,
+            cdof, rec)
+    if threads and (not dims.large or st.shape[0] >= numba.get_num_threads()):
+        _advance(*args)  # the systems over the cores
+    else:  # one after the other; large beds each over the cores (threads), or in this thread
+        _advance_serial(*args, bool(threads and dims.large) and _threads_up())
     return st, rec
 
 

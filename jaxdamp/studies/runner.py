@@ -212,8 +212,14 @@ def run(
     if (note := schedule_note(config, sched)) is not None:
         say(note)
     if not resume:
-        budget.check(batch_budget(config, sched, 1, out, sched.n_chunks if snapshots else 0),
-                     out, say)
+        cost = batch_budget(config, sched, 1, out, sched.n_chunks if snapshots else 0)
+        budget.check(cost, out, say)
+        settling = int(config.numerics.settle_time / sched.dt) / max(cost.steps, 1)
+        if cost.seconds > budget.ANNOUNCE_SECONDS and settling > 0.05:
+            say(f"  of it settling up to {budget.duration(settling * cost.seconds)} "
+                f"(numerics.settle_time = {config.numerics.settle_time:g} s simulated; it ends "
+                f"sooner once every grain is slower than numerics.settle_speed = "
+                f"{config.numerics.settle_speed:g} m/s)")
     interrupt.check()
     t_window = analysis_start(config, sched.duration)
     params = dataclasses.replace(params, t_window=jnp.asarray(t_window))
