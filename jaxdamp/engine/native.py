@@ -157,12 +157,16 @@ def _cache_on_sources(dispatcher):
 
     numba invalidates a cached kernel only when its own file changes; the scalar forms it
     inlines live in other modules, so editing a law would silently keep the old compiled law.
-    The index key gets the hash of all of them (:func:`_source_files`). Uses numba's cache class (internal API);
-    falls back to no on-disk cache if that changes."""
+    The index key gets the hash of all of them (:func:`_source_files`), marked for a parallel
+    dispatcher (:func:`_over_cores` compiles one function both ways, and numba's own key does
+    not tell them apart). Uses numba's cache class (internal API); falls back to no on-disk
+    cache if that changes."""
     try:
         from numba.core.caching import FunctionCache
 
         digest = _source_hash()
+        if dispatcher.targetoptions.get("parallel"):
+            digest += ":parallel"
 
         class _SourcesCache(FunctionCache):
             def _index_key(self, sig, codegen):
@@ -182,6 +186,14 @@ def _kernel(**flags):
         return _cache_on_sources(njit(cache=True, error_model="numpy", fastmath=FASTMATH,
                                       **flags)(fn))
     return wrap
+
+
+def _over_cores(fn):
+    """``(over the cores, in the calling thread)``: ``fn`` compiled with ``parallel=True`` (its
+    ``prange`` loops parallel regions) and without (``prange`` then runs as ``range``). The
+    large-bed path calls the first for one system alone and the second inside the batch's own
+    parallel loop, where numba would nest a region (which its ``workqueue`` layer refuses)."""
+    return _kernel(parallel=True)(fn), _kernel()(fn)
 
 
 if AVAILABLE:
@@ -699,19 +711,13 @@ if AVAILABLE:
             pe[i] = min(k, end)
         return k - base
 
-    @_kernel(parallel=True)
-    def _lists_par(bb, per, counts, ref, R, extra, key, start, dims, ps, pe, pj):
-        """:func:`_list_block` of every block, over the cores."""
+    def _lists_each(bb, per, counts, ref, R, extra, key, start, dims, ps, pe, pj):
+        """:func:`_list_block` of every block (:func:`_over_cores`)."""
         for k in prange(bb.shape[0] - 1):
             counts[k] = _list_block(bb[k], bb[k + 1], ref, R, extra, key, start, dims, ps, pe,
                                     pj, bb[k] * per, (bb[k + 1] - bb[k]) * per)
 
-    @_kernel()
-    def _lists_ser(bb, per, counts, ref, R, extra, key, start, dims, ps, pe, pj):
-        """:func:`_list_block` of every block, in the calling thread."""
-        for k in range(bb.shape[0] - 1):
-            counts[k] = _list_block(bb[k], bb[k + 1], ref, R, extra, key, start, dims, ps, pe,
-                                    pj, bb[k] * per, (bb[k + 1] - bb[k]) * per)
+    _lists_par, _lists_ser = _over_cores(_lists_each)
 
     @_kernel()
     def _permute(order, x, tmp):
@@ -769,29 +775,18 @@ if AVAILABLE:
          out[k, 8], out[k, 9], out[k, 10], far) = s
         out[k, 11] = 1.0 if far else 0.0
 
-    @_kernel(parallel=True)
-    def _walls_par(bb, out, correct, hout, w2, al2, wm, Ff, Tf, im3, iI3, qs, qn, dt, hdt2, rf, vf,
-                   af, wf, alf, R3, r1f, vpf, rwf, shape, law, r1, vp, rw, Rw, mw, ref, wk, wks,
-                   sec, ogw, shifted, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
-                   half_skin2):
-        """:func:`_walls_block` of every block, over the cores."""
+    def _walls_each(bb, out, correct, hout, w2, al2, wm, Ff, Tf, im3, iI3, qs, qn, dt, hdt2,
+                    rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law, r1, vp, rw, Rw, mw, ref,
+                    wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz,
+                    grav, drag, half_skin2):
+        """:func:`_walls_block` of every block (:func:`_over_cores`)."""
         for k in prange(bb.shape[0] - 1):
             _walls_block(k, bb, out, correct, hout, w2, al2, wm, Ff, Tf, im3, iI3, qs, qn, dt,
                          hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law, r1, vp, rw, Rw,
                          mw, ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex, ey, ez,
                          z1, zdp, Lz, grav, drag, half_skin2)
 
-    @_kernel()
-    def _walls_ser(bb, out, correct, hout, w2, al2, wm, Ff, Tf, im3, iI3, qs, qn, dt, hdt2, rf, vf,
-                   af, wf, alf, R3, r1f, vpf, rwf, shape, law, r1, vp, rw, Rw, mw, ref, wk, wks,
-                   sec, ogw, shifted, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
-                   half_skin2):
-        """:func:`_walls_block` of every block, in the calling thread."""
-        for k in range(bb.shape[0] - 1):
-            _walls_block(k, bb, out, correct, hout, w2, al2, wm, Ff, Tf, im3, iI3, qs, qn, dt,
-                         hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law, r1, vp, rw, Rw,
-                         mw, ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex, ey, ez,
-                         z1, zdp, Lz, grav, drag, half_skin2)
+    _walls_par, _walls_ser = _over_cores(_walls_each)
 
     @_kernel()
     def _pair_block(k, bb, out, law, r, v, rw, R, m, sid, table, ps, pe, pj, F, T, gl):
@@ -855,20 +850,13 @@ if AVAILABLE:
                 gl[i] += li
         out[k, 0], out[k, 1], out[k, 2] = e_sum, ln_sum, lf_sum
 
-    @_kernel(parallel=True)
-    def _pairs_par(parity, bb, out, law, r, v, rw, R, m, sid, table, ps, pe, pj, F, T, gl):
-        """:func:`_pair_block` of the blocks ``parity, parity + 2, …``, over the cores."""
+    def _pairs_each(parity, bb, out, law, r, v, rw, R, m, sid, table, ps, pe, pj, F, T, gl):
+        """:func:`_pair_block` of the blocks ``parity, parity + 2, …`` (:func:`_over_cores`)."""
         for t in prange((bb.shape[0] - parity) // 2):
             _pair_block(2 * t + parity, bb, out, law, r, v, rw, R, m, sid, table, ps, pe, pj,
                         F, T, gl)
 
-    @_kernel()
-    def _pairs_ser(parity, bb, out, law, r, v, rw, R, m, sid, table, ps, pe, pj, F, T, gl):
-        """:func:`_pair_block` of the blocks ``parity, parity + 2, …``, in the calling
-        thread."""
-        for t in range((bb.shape[0] - parity) // 2):
-            _pair_block(2 * t + parity, bb, out, law, r, v, rw, R, m, sid, table, ps, pe, pj,
-                        F, T, gl)
+    _pairs_par, _pairs_ser = _over_cores(_pairs_each)
 
     @_kernel()
     def _correct_block(k, bb, out, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f,
@@ -881,21 +869,14 @@ if AVAILABLE:
                           af[3 * a:3 * b], wf[3 * a:3 * b], alf[3 * a:3 * b], rf[3 * a:3 * b],
                           r1f[3 * a:3 * b], qs[:, a:b], qn[:, a:b])
 
-    @_kernel(parallel=True)
-    def _correct_par(bb, out, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f, qs,
+    def _correct_each(bb, out, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f, qs,
                      qn):
-        """:func:`_correct_block` of every block, over the cores."""
+        """:func:`_correct_block` of every block (:func:`_over_cores`)."""
         for k in prange(bb.shape[0] - 1):
             _correct_block(k, bb, out, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf,
                            r1f, qs, qn)
 
-    @_kernel()
-    def _correct_ser(bb, out, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f, qs,
-                     qn):
-        """:func:`_correct_block` of every block, in the calling thread."""
-        for k in range(bb.shape[0] - 1):
-            _correct_block(k, bb, out, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf,
-                           r1f, qs, qn)
+    _correct_par, _correct_ser = _over_cores(_correct_each)
 
     @_kernel()
     def _cell_sums_by_grain(x, cg, out):
