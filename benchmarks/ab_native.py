@@ -12,6 +12,12 @@ round, to time one chunk: seconds apart, each revision meets the same host. The 
 chunk of the native engine, 100 steps per sample) at batch 1 (20 000 steps) and batch 8
 (5 000 steps). Prints µs per system-step per revision and batch, minimum and median over the
 rounds, and the ratio to the first revision. Do not run while other jobs use the cores.
+
+    python benchmarks/ab_native.py 435c3ca HEAD --n 50000 --rounds 5   # one large bed
+
+``--n N``: instead, one system of ``bench_large.py``'s bed of N grains (the thesis damper
+scaled in base area, driven, from its cached warm state: the same state for every revision),
+``--steps`` steps per timed chunk (default 1000), also in ns per particle-step.
 """
 
 from __future__ import annotations
@@ -29,7 +35,7 @@ ROOT = os.path.dirname(HERE)
 WORK = [(1, 20000), (8, 5000)]  # (batch, steps) per timed chunk
 
 WORKER = r'''
-import dataclasses, sys, time
+import dataclasses, os, sys, time
 import numpy as np
 sys.path.insert(0, {bench!r})  # bench_lammps's moving bed, from the tree that runs this
 import jax, jax.numpy as jnp
@@ -39,7 +45,7 @@ from jaxdamp.engine.simulate import chunk_fn
 from jaxdamp.physics.integrate import box_frame
 from jaxdamp.physics.model import State
 
-cfg, model, params, st = bench_lammps.moving_bed("thesis")
+{bed}
 ready = {{}}
 def prep(B, steps):
     states = State(**{{f.name: jnp.asarray(np.repeat(np.asarray(getattr(st, f.name))[None], B, 0))
@@ -61,6 +67,20 @@ for line in sys.stdin:
 '''
 
 
+def bed_code(n: int | None) -> str:
+    """The worker's lines that make ``(cfg, model, params, st)``: the moving thesis bed of
+    ``bench_lammps.py``, or (``n``) the warm large bed of ``bench_large.py``."""
+    if n is None:
+        return 'cfg, model, params, st = bench_lammps.moving_bed("thesis")'
+    return ("import bench_large\n"
+            "from jaxdamp.physics.model import build\n"
+            f"st, _ = bench_large.warm_state(bench_large.bed_config({n}, 0.03), 0.04, 100,\n"
+            "                                os.path.expanduser(bench_large.DEFAULT_CACHE),\n"
+            "                                log=lambda *a: None)\n"
+            f"cfg = bench_large.bed_config({n}, 0.03, 'native')\n"
+            "model, params = build(cfg)")
+
+
 def worktree(rev: str, base: str) -> str:
     """A detached worktree of ``rev`` under ``base`` (made once, reused)."""
     sha = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", rev], check=True,
@@ -79,9 +99,12 @@ def main(argv=None):
     ap.add_argument("--rounds", type=int, default=30)
     ap.add_argument("--base", default="/tmp/jaxdamp-ab", help="where the worktrees go")
     ap.add_argument("--json", help="write the times here")
+    ap.add_argument("--n", type=int, help="one system of bench_large.py's bed of N grains")
+    ap.add_argument("--steps", type=int, default=1000, help="steps per chunk with --n")
     a = ap.parse_args(argv)
     os.makedirs(a.base, exist_ok=True)
-    code = WORKER.format(bench=HERE)
+    code = WORKER.format(bench=HERE, bed=bed_code(a.n))
+    work = WORK if a.n is None else [(1, a.steps)]
     procs = {}
     for rev in a.revs:
         tree = worktree(rev, a.base)
@@ -98,14 +121,14 @@ def main(argv=None):
         return float(procs[rev].stdout.readline())
 
     for rev in a.revs:  # each chunk function compiled before the timed rounds
-        for B, steps in WORK:
+        for B, steps in work:
             once(rev, B, steps)
-    times = {rev: {B: [] for B, _ in WORK} for rev in a.revs}
+    times = {rev: {B: [] for B, _ in work} for rev in a.revs}
     for r in range(a.rounds):
         order = list(a.revs)
         random.shuffle(order)
         for rev in order:
-            for B, steps in WORK:
+            for B, steps in work:
                 times[rev][B].append(once(rev, B, steps))
         print(f"round {r + 1}/{a.rounds}", flush=True)
     for p in procs.values():
@@ -116,10 +139,13 @@ def main(argv=None):
     for rev in a.revs:
         print(f"  {rev:>12}: " + "   ".join(
             f"batch {B}: {min(x):.3f} / {statistics.median(x):.3f} "
-            f"({min(x) / min(times[first][B]):.3f}×)" for B, x in times[rev].items()))
+            f"({min(x) / min(times[first][B]):.3f}×)" for B, x in times[rev].items())
+              + (f"   = {min(times[rev][1]) * 1e3 / a.n:.2f} ns per particle-step (min)"
+                 if a.n else ""))
     if a.json:
         with open(a.json, "w") as fh:
-            json.dump({"revs": a.revs, "rounds": a.rounds, "work": WORK, "times": times}, fh)
+            json.dump({"revs": a.revs, "rounds": a.rounds, "work": work, "n": a.n,
+                       "times": times}, fh)
 
 
 if __name__ == "__main__":

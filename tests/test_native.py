@@ -94,14 +94,14 @@ def test_kernel_caches_are_keyed_on_the_physics_sources():
 
     digest = native._source_hash()
     kernels = [native._build_pairs, native._pairs, native._wall_constants, native.grain_walls,
-               native._pair_forces, native._advance_one, native._advance, native._pairs_par,
-               native._pairs_ser]
+               native._pair_forces, native._advance_one, native._advance, native._sweep_par,
+               native._sweep_ser]
     for k in kernels:
         key = k._cache._index_key((), k.targetctx.codegen())
         assert key[-1].startswith(digest), k.py_func.__name__
     # one function compiled over the cores and in the calling thread: two cache entries
-    par = native._pairs_par._cache._index_key((), native._pairs_par.targetctx.codegen())
-    ser = native._pairs_ser._cache._index_key((), native._pairs_ser.targetctx.codegen())
+    par = native._sweep_par._cache._index_key((), native._sweep_par.targetctx.codegen())
+    ser = native._sweep_ser._cache._index_key((), native._sweep_ser.targetctx.codegen())
     assert par[-1] == digest + ":parallel" and ser[-1] == digest
     files = set(native._source_files())
     for mod in (contact, excitation, integrate, mounts, box, cylinder, _scalar, native):

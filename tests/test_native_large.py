@@ -15,21 +15,23 @@ FIELDS = ("r", "v", "w", "q", "a", "alpha", "z", "zd", "y", "yd", "work", "work_
           "e_elastic", "f_box", "n_floor", "n_lid", "n_side")
 
 
-def _chunk(cfg, r, v, w, large: int, block: int = 8, batch: int = 1, n_records=6, every=100):
+def _chunk(cfg, r, v, w, large: int, block: int = 8, batch: int = 1, n_records=6, every=100,
+           chunk: int = 2):
     """States and samples after ``n_records × every`` steps of the native kernel, with the
-    large-bed path from ``large`` grains on (blocks of ``block`` grains)."""
+    large-bed path from ``large`` grains on (blocks of ``block`` grains, the sweep's chunks of
+    ``chunk`` blocks: 2, the fewest, puts the most blocks where two chunks meet)."""
     import jax
 
     model, pb, st, nbrs = start(cfg, r, v, w)
     if batch > 1:
         tile = lambda x: jax.numpy.concatenate([x] * batch)  # noqa: E731
         st, nbrs, pb = (jax.tree_util.tree_map(tile, t) for t in (st, nbrs, pb))
-    old = native.LARGE, native.BLOCK_GRAINS
-    native.LARGE, native.BLOCK_GRAINS = large, block
+    old = native.LARGE, native.BLOCK_GRAINS, native.CHUNK_BLOCKS
+    native.LARGE, native.BLOCK_GRAINS, native.CHUNK_BLOCKS = large, block, chunk
     try:
         s, _, rec = chunk_fn(model, n_records, every, engine="native")(st, nbrs, pb)
     finally:
-        native.LARGE, native.BLOCK_GRAINS = old
+        native.LARGE, native.BLOCK_GRAINS, native.CHUNK_BLOCKS = old
     return ({f: np.asarray(getattr(s, f)) for f in FIELDS},
             {k: np.asarray(x) for k, x in rec.items()})
 
@@ -41,7 +43,8 @@ def _chunk(cfg, r, v, w, large: int, block: int = 8, batch: int = 1, n_records=6
 def test_large_path_equals_small_path(system, extras):
     """A two-species bed (friction, fast spins, walls) through both paths of the kernel over
     600 steps, the large one in blocks of 8 grains (so that the blocks' pairs cross into the
-    next block): states and samples agree to round-off (the paths add the forces in another
+    next block) swept in chunks of 2 blocks (so that most blocks are done where two chunks
+    meet): states and samples agree to round-off (the paths add the forces in another
     order), in the user's numbering of the grains; also with several damper cells, a 3-DOF
     structure and curved sides."""
     cells = extras.get("cells", 1)
@@ -68,17 +71,49 @@ def test_large_path_equals_small_path(system, extras):
                                    err_msg=k)
 
 
-def test_large_path_is_the_same_on_any_core_count_and_batch():
-    """One system alone (its blocks over the cores) and the same system twice in a batch (the
-    systems over the cores, each one's blocks in turn) give the same bits: the blocks' sums are
-    added in a fixed order."""
+@pytest.mark.parametrize("chunk", [2, 3, 100])
+def test_large_path_is_the_same_on_any_core_count_and_batch(chunk):
+    """One system alone (its chunks of blocks over the cores) and the same system twice in a
+    batch (the systems over the cores, each one's chunks in turn) give the same bits: the
+    chunks depend on the bed alone and the blocks' sums are added in a fixed order (chunks of
+    2 and 3 blocks, and one chunk of them all)."""
     cfg = mixture("driven", "harmonic")
     r, v, w = mixture_bed(50)
-    one, _ = _chunk(cfg, r, v, w, 2, block=6)
-    two, _ = _chunk(cfg, r, v, w, 2, block=6, batch=2)
+    one, _ = _chunk(cfg, r, v, w, 2, block=6, chunk=chunk)
+    two, _ = _chunk(cfg, r, v, w, 2, block=6, batch=2, chunk=chunk)
     for f in FIELDS:
         np.testing.assert_array_equal(two[f][0], one[f][0], err_msg=f)
         np.testing.assert_array_equal(two[f][1], one[f][0], err_msg=f)
+
+
+def _long_bed(n_cols: int = 18, seed: int = 3):
+    """The two-species bed of :func:`helpers.mixture` in a long box (9 cm × 9 mm × 2 cm), its
+    ``4 n_cols`` grains on a jittered lattice of 4.5 mm, fast and spinning: its cell layers
+    along x make many blocks, so that the sweep has many chunks."""
+    cfg = apply_overrides(mixture("driven", "harmonic", counts=(2 * n_cols, 2 * n_cols)),
+                          {"box.Lx": 0.09, "box.Ly": 0.009})
+    rng = np.random.default_rng(seed)
+    grid = np.stack(np.meshgrid(np.arange(n_cols), np.arange(2), np.arange(2), indexing="ij"),
+                    -1).reshape(-1, 3)
+    r = (grid + 0.5) * 0.0045 + rng.uniform(-3e-4, 3e-4, grid.shape)
+    r[:, 2] += 0.001
+    return cfg, r, rng.normal(0, 0.5, r.shape), rng.normal(0, 100.0, r.shape)
+
+
+def test_many_chunks_long_bed():
+    """A long bed (about 16 cell layers) in blocks of 4 grains and chunks of 2 blocks: seven
+    places where two chunks meet, each done after the chunks; the large path equals the small
+    one to round-off, and alone equals itself in a batch bit for bit."""
+    cfg, r, v, w = _long_bed()
+    (sa, _), (sb, _) = (_chunk(cfg, r, v, w, large, block=4) for large in (10**9, 2))
+    assert sa["work"][0][2] > 0  # grain pairs touched
+    for f in FIELDS:
+        np.testing.assert_allclose(sb[f], sa[f], rtol=1e-9,
+                                   atol=1e-12 * max(1.0, np.abs(sa[f]).max(initial=0)), err_msg=f)
+    two, _ = _chunk(cfg, r, v, w, 2, block=4, batch=2)
+    for f in FIELDS:
+        np.testing.assert_array_equal(two[f][0], sb[f][0], err_msg=f)
+        np.testing.assert_array_equal(two[f][1], sb[f][0], err_msg=f)
 
 
 def test_a_large_bed_alone_starts_the_threads_itself():

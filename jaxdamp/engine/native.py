@@ -27,11 +27,12 @@ state in place (:func:`advance_packed`).
   (:func:`_reorder` at the start and at every list rebuild: neighbours near in memory, as
   LAMMPS' atom sorting; records and the returned state keep the user's numbering), lists its
   pairs per block of whole cell layers (a half list in CSR form, the pair constants formed
-  where a pair touches) and runs each pass block by block, the previous step's corrector
-  fused with the next predictor while a block is in the cache; with fewer systems than cores
-  the blocks of one system run over the cores, the even blocks at once then the odd ones (a
-  block's pairs reach only into the next block), and its sums are added block after block,
-  so its numbers depend neither on the cores nor on the batch.
+  where a pair touches) and runs a step as one sweep over the blocks: a block's pairs, then
+  (its forces whole: a block's pairs reach only into the next block) its corrector and the
+  next step's predictor and walls, while its data is in the cache; with fewer systems than
+  cores the sweep's chunks of consecutive blocks run over the cores, then the blocks where
+  two chunks meet, and its sums are added block after block, so its numbers depend neither on
+  the cores nor on the batch.
 
 It is called from JAX through :func:`jax.pure_callback` once per chunk and writes the samples
 itself with the scalar form of the record (:func:`jaxdamp.physics.energy.record_row`, next to
@@ -93,9 +94,15 @@ REBUILD_STEPS = 40
 #: batch (where each system runs on one core).
 LARGE = 20000
 #: Grains per block of the large-bed path (the blocks are whole layers of cells, so about).
-BLOCK_GRAINS = 1024
+BLOCK_GRAINS = 512
 #: At most this many blocks (enough for the cores of one machine).
 MAX_BLOCKS = 512
+#: Blocks per chunk of the large-bed path's sweep (at least 2): a step is one sweep over the
+#: blocks in order (a block's pairs, then its corrector, then the next step's predictor and
+#: walls, while its data is in the cache), the chunks of consecutive blocks over the cores,
+#: then the blocks where two chunks meet. The chunks depend on the bed alone (not on the
+#: cores), so the numbers do not depend on the cores either.
+CHUNK_BLOCKS = 12
 
 #: Fields of ``Params`` and ``State`` in the kernel's packed rows (all of them), read by name.
 PARAM_FIELDS = tuple(f.name for f in dataclasses.fields(Params))
@@ -116,9 +123,10 @@ ParamOffsets = namedtuple("ParamOffsets", PARAM_FIELDS)
 #: species and columns, the random base motion's lines, the structure's degrees of freedom,
 #: the container's section numbers, the damper's cells (``Model.cells``) and, for a bed that
 #: takes the large-bed path (at least :data:`LARGE` grains), its grains per block
-#: (:data:`BLOCK_GRAINS`; 0: the small-bed path; both read when the call is made).
+#: (:data:`BLOCK_GRAINS`; 0: the small-bed path) and blocks per chunk (:data:`CHUNK_BLOCKS`),
+#: all read when the call is made.
 Dims = namedtuple("Dims", ("mount", "law", "shape", "n_species", "n_cols", "n_lines", "ndof",
-                           "n_section", "cells", "large"))
+                           "n_section", "cells", "large", "chunk"))
 
 #: The scalar forms the kernels inline (with the forms they call, from the same modules): a
 #: change to their source files must recompile the cached kernels (numba's cache only watches
@@ -654,8 +662,7 @@ if AVAILABLE:
         """Block bounds ``bb`` (``nb + 1``) of grains in cell order: about ``target`` blocks of
         equal size, each made of whole layers (a damper cell's cells of one coordinate along
         the slowest axis). A listed pair spans at most one layer, so the pairs of block ``k``
-        reach into blocks ``k`` and ``k + 1`` only: the even blocks can run at once, then the
-        odd ones, each writing its pairs' forces with no other thread writing the same grains."""
+        reach into blocks ``k`` and ``k + 1`` only (:func:`_sweep_each` builds on it)."""
         plane = dims[1] * dims[2]
         groups = K * dims[0]
         want = max(1, min(target, groups))
@@ -739,18 +746,12 @@ if AVAILABLE:
                 dst[perm[s], k] = src[s, k]
 
     @_kernel()
-    def _walls_block(k, bb, out, correct, hout, w2, al2, wm, Ff, Tf, im3, iI3, qs, qn, dt, hdt2,
-                     rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law, r1, vp, rw, Rw, mw, ref,
-                     wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz,
-                     grav, drag, half_skin2):
-        """Pass 1 of block ``k`` (grains ``bb[k] … bb[k + 1] − 1``): where ``correct``, first
-        the previous step's pass 3 of the block (:func:`_correct_block`, its check sum into
-        ``hout[k]``: the two passes share the block's data while it is in the cache), then the
-        predictor and :func:`grain_walls`; its sums into ``out[k]`` (the last: whether a grain
-        moved more than skin/2)."""
-        if correct:
-            _correct_block(k, bb, hout, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf,
-                           r1f, qs, qn)
+    def _walls_block(k, bb, out, dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law,
+                     r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T,
+                     ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
+        """Pass 1 of block ``k`` (grains ``bb[k] … bb[k + 1] − 1``): the predictor and
+        :func:`grain_walls` (``F``, ``T`` set to the walls' forces); its sums into ``out[k]``
+        (the last: whether a grain moved more than skin/2)."""
         g0, g1 = bb[k], bb[k + 1]
         for j in range(3 * g0, 3 * g1):
             r1f[j] = rf[j] + dt * vf[j] + hdt2 * af[j]
@@ -775,27 +776,53 @@ if AVAILABLE:
          out[k, 8], out[k, 9], out[k, 10], far) = s
         out[k, 11] = 1.0 if far else 0.0
 
-    def _walls_each(bb, out, correct, hout, w2, al2, wm, Ff, Tf, im3, iI3, qs, qn, dt, hdt2,
-                    rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law, r1, vp, rw, Rw, mw, ref,
-                    wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz,
-                    grav, drag, half_skin2):
+    def _walls_each(bb, out, dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law, r1,
+                    vp, rw, Rw, mw, ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex,
+                    ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
         """:func:`_walls_block` of every block (:func:`_over_cores`)."""
         for k in prange(bb.shape[0] - 1):
-            _walls_block(k, bb, out, correct, hout, w2, al2, wm, Ff, Tf, im3, iI3, qs, qn, dt,
-                         hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law, r1, vp, rw, Rw,
-                         mw, ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex, ey, ez,
-                         z1, zdp, Lz, grav, drag, half_skin2)
+            _walls_block(k, bb, out, dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape,
+                         law, r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, shifted, gs, cgw,
+                         frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
 
     _walls_par, _walls_ser = _over_cores(_walls_each)
 
     @_kernel()
-    def _pair_block(k, bb, out, law, r, v, rw, R, m, sid, table, ps, pe, pj, F, T, gl):
+    def _walls_sums(nb, out):
+        """The sums of pass 1 (:func:`grain_walls`' order) over blocks ``0 … nb − 1`` of
+        ``out``, added block after block (the same numbers on any number of cores)."""
+        s = np.zeros(12)
+        for k in range(nb):
+            for c in range(12):
+                s[c] += out[k, c]
+        return (s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7], s[8], s[9], s[10],
+                s[11] > 0.0)
+
+    @_kernel()
+    def _walls_all(inner, bb, out, dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law,
+                   r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex,
+                   ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
+        """Pass 1 of a large bed alone (:func:`_walls_block`; at the start of a call and after
+        a rebuild: otherwise it runs in the previous step's sweep, :func:`_sweep_all`), the
+        blocks over the cores where ``inner``; returns :func:`grain_walls`' sums."""
+        if inner:
+            _walls_par(bb, out, dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law,
+                       r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T,
+                       ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
+        else:
+            _walls_ser(bb, out, dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law,
+                       r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T,
+                       ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
+        return _walls_sums(bb.shape[0] - 1, out)
+
+    @_kernel()
+    def _pair_block(k, bb, out, law, r, v, rw, R, m, sid, table, ps, pe, pj, F, T, gl, lossy):
         """Pass 2 of block ``k``: the forces and torques of its grains' listed pairs (half
         list in cell order, :func:`_list_block`; Newton's third law), added to ``F``, ``T``;
         the pair's constants formed where it touches (:func:`pair_constants`, as the device
         kernel does: a large bed's per-pair table would be streamed from memory every step).
-        ``out[k]``: ``(elastic energy, normal loss, friction loss)``; ``gl`` as in
-        :func:`_pair_forces`."""
+        ``out[k]``: ``(elastic energy, normal loss, friction loss)``; where ``lossy`` (several
+        damper cells), each grain's pairs' loss added to ``gl`` (as in :func:`_pair_forces`)."""
         e_sum = 0.0
         ln_sum = 0.0
         lf_sum = 0.0
@@ -846,17 +873,9 @@ if AVAILABLE:
             T[i, 0] -= Ri * cxi
             T[i, 1] -= Ri * cyi
             T[i, 2] -= Ri * czi
-            if gl is not None:
+            if lossy:
                 gl[i] += li
         out[k, 0], out[k, 1], out[k, 2] = e_sum, ln_sum, lf_sum
-
-    def _pairs_each(parity, bb, out, law, r, v, rw, R, m, sid, table, ps, pe, pj, F, T, gl):
-        """:func:`_pair_block` of the blocks ``parity, parity + 2, …`` (:func:`_over_cores`)."""
-        for t in prange((bb.shape[0] - parity) // 2):
-            _pair_block(2 * t + parity, bb, out, law, r, v, rw, R, m, sid, table, ps, pe, pj,
-                        F, T, gl)
-
-    _pairs_par, _pairs_ser = _over_cores(_pairs_each)
 
     @_kernel()
     def _correct_block(k, bb, out, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f,
@@ -869,14 +888,99 @@ if AVAILABLE:
                           af[3 * a:3 * b], wf[3 * a:3 * b], alf[3 * a:3 * b], rf[3 * a:3 * b],
                           r1f[3 * a:3 * b], qs[:, a:b], qn[:, a:b])
 
-    def _correct_each(bb, out, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f, qs,
-                     qn):
-        """:func:`_correct_block` of every block (:func:`_over_cores`)."""
-        for k in prange(bb.shape[0] - 1):
-            _correct_block(k, bb, out, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf,
-                           r1f, qs, qn)
+    @_kernel()
+    def _chunks(nb, per):
+        """Bounds (``c + 1``) of the sweep's chunks of about ``per`` (at least 2) consecutive
+        blocks of ``nb``: a function of the blocks alone."""
+        c = max(1, min(MAX_BLOCKS // 2, nb // per))
+        cb = np.empty(c + 1, np.int64)
+        for i in range(c + 1):
+            cb[i] = (i * nb) // c
+        return cb
 
-    _correct_par, _correct_ser = _over_cores(_correct_each)
+    def _sweep_each(phase, cb, bb, nxt, pout, hout, wout, law, r1, vp, rw, Rw, mw, sid, table,
+                    ps, pe, pj, F, T, gl, dt, hdt2, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf,
+                    alf, rf, r1f, qs, qn, R3, vpf, rwf, shape, ref, wk, wks, sec, ogw, shifted,
+                    gs, cgw, frames, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
+        """One phase of a step's sweep (:func:`_sweep_all`; :func:`_over_cores`). A block is
+        *done* by its corrector (:func:`_correct_block`) and, where ``nxt``, the next step's
+        pass 1 (:func:`_walls_block`), once its forces are whole: after its own pairs and
+        those of the block before it (:func:`_pair_block`; a block's pairs reach into the
+        next block only). Phase 0, each chunk ``cb[c] … cb[c + 1] − 1`` on its own: block after
+        block, its pairs, then the block done — but not a chunk's first block (the block
+        before it is another chunk's) nor the pairs of its last (they reach into the next
+        chunk). Phase 1, each place where two chunks meet: the pairs left out, then both
+        blocks done. The places are two blocks apart at least, so no two threads write one
+        grain."""
+        nc = cb.shape[0] - 1
+        if phase == 0:
+            for c in prange(nc):
+                s, e = cb[c], cb[c + 1]
+                for k in range(s, e):
+                    if k == e - 1 and c < nc - 1:
+                        break
+                    _pair_block(k, bb, pout, law, r1, vp, rw, Rw, mw, sid, table, ps, pe, pj, F,
+                                T, gl, shifted)
+                    if k > s or c == 0:
+                        _correct_block(k, bb, hout, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af,
+                                       wf, alf, rf, r1f, qs, qn)
+                        if nxt:
+                            _walls_block(k, bb, wout, dt, hdt2, rf, vf, af, wf, alf, R3, r1f,
+                                         vpf, rwf, shape, law, r1, vp, rw, Rw, mw, ref, wk, wks,
+                                         sec, ogw, shifted, gs, cgw, frames, F, T, ex, ey, ez,
+                                         z1, zdp, Lz, grav, drag, half_skin2)
+        else:
+            for c in prange(nc - 1):
+                b = cb[c + 1]
+                _pair_block(b - 1, bb, pout, law, r1, vp, rw, Rw, mw, sid, table, ps, pe, pj, F,
+                            T, gl, shifted)
+                for k in range(b - 1, b + 1):
+                    _correct_block(k, bb, hout, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf,
+                                   alf, rf, r1f, qs, qn)
+                    if nxt:
+                        _walls_block(k, bb, wout, dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf,
+                                     rwf, shape, law, r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
+                                     shifted, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz,
+                                     grav, drag, half_skin2)
+
+    _sweep_par, _sweep_ser = _over_cores(_sweep_each)
+
+    @_kernel()
+    def _sweep_all(inner, cb, bb, nxt, pout, hout, wout, law, r1, vp, rw, Rw, mw, sid, table,
+                   ps, pe, pj, F, T, gl, dt, hdt2, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf,
+                   alf, rf, r1f, qs, qn, R3, vpf, rwf, shape, ref, wk, wks, sec, ogw, shifted,
+                   gs, cgw, frames, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
+        """The rest of a large bed's step after pass 1 (:func:`_sweep_each`, the chunks over
+        the cores where ``inner``): pass 2 (the pairs; their loss per grain into ``gl`` where
+        ``shifted``), pass 3 (the corrector and the rotation into ``qn``) and, where ``nxt``,
+        the next step's pass 1 (positions of the box ``z1``, ``zdp``, ``frames``; the grains' wall terms into
+        ``gs``), every block's data read once. Returns the pairs' sums ``(elastic energy,
+        normal loss, friction loss)``, the corrector's check sum and pass 1's sums
+        (:func:`_walls_sums`; zeros where not ``nxt``), each added block after block."""
+        for phase in range(2):
+            if inner:
+                _sweep_par(phase, cb, bb, nxt, pout, hout, wout, law, r1, vp, rw, Rw, mw, sid,
+                           table, ps, pe, pj, F, T, gl, dt, hdt2, w2, al2, wm, Ff, Tf, im3, iI3,
+                           vf, af, wf, alf, rf, r1f, qs, qn, R3, vpf, rwf, shape, ref, wk, wks,
+                           sec, ogw, shifted, gs, cgw, frames, ex, ey, ez, z1, zdp, Lz, grav,
+                           drag, half_skin2)
+            else:
+                _sweep_ser(phase, cb, bb, nxt, pout, hout, wout, law, r1, vp, rw, Rw, mw, sid,
+                           table, ps, pe, pj, F, T, gl, dt, hdt2, w2, al2, wm, Ff, Tf, im3, iI3,
+                           vf, af, wf, alf, rf, r1f, qs, qn, R3, vpf, rwf, shape, ref, wk, wks,
+                           sec, ogw, shifted, gs, cgw, frames, ex, ey, ez, z1, zdp, Lz, grav,
+                           drag, half_skin2)
+        nb = bb.shape[0] - 1
+        e = 0.0
+        ln = 0.0
+        lf = 0.0
+        h = 0.0
+        for k in range(nb):
+            e += pout[k, 0]
+            ln += pout[k, 1]
+            lf += pout[k, 2]
+            h += hout[k]
+        return e, ln, lf, h, _walls_sums(nb if nxt else 0, wout)
 
     @_kernel()
     def _cell_sums_by_grain(x, cg, out):
@@ -886,71 +990,6 @@ if AVAILABLE:
             out[c] = 0.0
         for i in range(x.shape[0]):
             out[cg[i]] += x[i]
-
-    @_kernel()
-    def _walls_all(inner, bb, out, correct, hout, w2, al2, wm, Ff, Tf, im3, iI3, qs, qn, dt,
-                   hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law, r1, vp, rw, Rw, mw,
-                   ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp,
-                   Lz, grav, drag, half_skin2):
-        """Pass 1 of a large bed (:func:`_walls_block`, after the previous step's pass 3 where
-        ``correct``), the blocks over the cores where ``inner``; returns :func:`grain_walls`'
-        sums, added block after block (the same numbers on any number of cores), and the
-        pass 3 check sum (0 where not ``correct``)."""
-        if inner:
-            _walls_par(bb, out, correct, hout, w2, al2, wm, Ff, Tf, im3, iI3, qs, qn, dt, hdt2,
-                       rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law, r1, vp, rw, Rw, mw,
-                       ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex, ey, ez, z1,
-                       zdp, Lz, grav, drag, half_skin2)
-        else:
-            _walls_ser(bb, out, correct, hout, w2, al2, wm, Ff, Tf, im3, iI3, qs, qn, dt, hdt2,
-                       rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law, r1, vp, rw, Rw, mw,
-                       ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex, ey, ez, z1,
-                       zdp, Lz, grav, drag, half_skin2)
-        s = np.zeros(12)
-        h = 0.0
-        for k in range(bb.shape[0] - 1):
-            for c in range(12):
-                s[c] += out[k, c]
-            if correct:
-                h += hout[k]
-        return (s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7], s[8], s[9], s[10],
-                s[11] > 0.0, h)
-
-    @_kernel()
-    def _pairs_all(inner, bb, out, law, r, v, rw, R, m, sid, table, ps, pe, pj, F, T, gl):
-        """Pass 2 of a large bed (:func:`_pair_block`): the even blocks, then the odd ones,
-        over the cores where ``inner``; returns the pairs' sums, added block after block."""
-        for parity in range(2):
-            if inner:
-                _pairs_par(parity, bb, out, law, r, v, rw, R, m, sid, table, ps, pe, pj, F, T,
-                           gl)
-            else:
-                _pairs_ser(parity, bb, out, law, r, v, rw, R, m, sid, table, ps, pe, pj, F, T,
-                           gl)
-        e = 0.0
-        ln = 0.0
-        lf = 0.0
-        for k in range(bb.shape[0] - 1):
-            e += out[k, 0]
-            ln += out[k, 1]
-            lf += out[k, 2]
-        return e, ln, lf
-
-    @_kernel()
-    def _correct_all(inner, bb, out, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf,
-                     r1f, qs, qn):
-        """Pass 3 of a large bed (:func:`_correct_block`), over the cores where ``inner``;
-        returns the finite-check sum."""
-        if inner:
-            _correct_par(bb, out, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f,
-                         qs, qn)
-        else:
-            _correct_ser(bb, out, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f,
-                         qs, qn)
-        h = 0.0
-        for k in range(bb.shape[0] - 1):
-            h += out[k]
-        return h
 
     @_kernel()
     def _reorder(p, bx, by, bz, cutoff, K, curved, r1f, rf, vf, wf, af, alf, qs, R3, im3, iI3,
@@ -982,13 +1021,13 @@ if AVAILABLE:
 
     @_kernel()
     def _relist(ok, p, bx, by, bz, extra, key, start, dims, K, R, ref, ps, pe, pj, per, inner,
-                block):
+                block, chunk):
         """The half lists of a large bed in cell order (after :func:`_reorder`), block by block
         (:func:`_blocks` of about ``block`` grains, :func:`_list_block`, over the cores where
         ``inner``), growing ``pj``
         (``per`` pairs per grain) until every block's fit; the reference positions ``ref`` =
-        ``p`` in the box frame. Returns ``(block bounds, per, pj)``; no pairs where not
-        ``ok``."""
+        ``p`` in the box frame. Returns ``(block bounds, chunk bounds, per, pj)``: the sweep's
+        chunks of about ``chunk`` blocks (:func:`_chunks`); no pairs where not ``ok``."""
         n = p.shape[0]
         for i in range(n):
             ref[i, 0] = p[i, 0] - bx
@@ -1000,7 +1039,7 @@ if AVAILABLE:
             for i in range(n):
                 ps[i] = 0
                 pe[i] = 0
-            return bb, per, pj
+            return bb, _chunks(1, chunk), per, pj
         bb = _blocks(start, K, dims, n, min(MAX_BLOCKS, max(1, n // block)))
         nb = bb.shape[0] - 1
         counts = np.empty(nb, np.int64)
@@ -1016,7 +1055,7 @@ if AVAILABLE:
                 size = bb[k + 1] - bb[k]
                 need = max(need, (counts[k] + size - 1) // size)
             if need <= per:
-                return bb, per, pj
+                return bb, _chunks(nb, chunk), per, pj
             per = need + need // 4 + 1
 
     @_kernel()
@@ -1047,10 +1086,13 @@ if AVAILABLE:
 
         A bed of :data:`LARGE` grains or more keeps its grains in cell order inside the call
         (:func:`_reorder` at the start and at every rebuild; records and the returned state in
-        the user's numbering), its passes in blocks of whole cell layers (:func:`_walls_all`,
-        :func:`_pairs_all`, :func:`_correct_all`) and, where ``inner``, the blocks over the
-        cores; its sums are added block after block, so its numbers do not depend on the cores
-        nor on the batch it runs in."""
+        the user's numbering) and its step in one sweep over blocks of whole cell layers
+        (:func:`_sweep_all`: the pairs, the corrector and the next step's pass 1 of a block
+        while it is in the cache; pass 1 alone, :func:`_walls_all`, at the start and after a
+        rebuild) and, where ``inner``, the sweep's chunks over the cores; its sums are added
+        block after block, so its numbers do not depend on the cores nor on the batch it runs
+        in. Every path predicts the box, the structure and the cells of the next step as soon
+        as the mount has responded (the large path's sweep needs them)."""
         n = sid.shape[0]
         row = st[b]  # so.NAME, po.NAME: where the field NAME starts in the rows
         prow = pm[b]
@@ -1164,6 +1206,7 @@ if AVAILABLE:
         Rw, mw, sidw, cgw, ogw = Rb.copy(), mb.copy(), sid.copy(), cg.copy(), og.copy()
         bb = np.zeros(2, np.int64)
         bb[1] = n
+        cb = bb.copy()
         per = 8
         ps = np.zeros(n, np.int64)
         pe = np.zeros(n, np.int64)
@@ -1171,16 +1214,31 @@ if AVAILABLE:
         wout = np.empty((MAX_BLOCKS + 1, 12))
         pout = np.empty((MAX_BLOCKS + 1, 3))
         hout = np.empty(MAX_BLOCKS + 1)
-        pending = False  # a large bed's pass 3 of the last step, done with the next pass 1
-        h_late = 0.0
+        gn = np.zeros((n, 2))  # a large bed's gs of the next step (its sweep's pass 1)
+        frames_rec = np.zeros((K, 2))
+        # the first step's prediction of the box, the structure and the cells; each step
+        # predicts the next one's once its own mount has responded (the large path's sweep
+        # does the next step's pass 1)
+        t1 = t + dt
+        z1, zdp = predict_scalar(mount, t1, dt, z, zd, zdd, prow, po)
+        for j in range(ny):
+            y1[j] = yv[j] + dt * ydv[j] + hdt2 * yddv[j]
+            ydp[j] = ydv[j] + dt * yddv[j]
+        if not one_cell:
+            cell_frames(cdof, z1, zdp, y1, ydp, frames)
+        ws = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False)
         if large:
             rf, vf, wf, af, alf = rf.copy(), vf.copy(), wf.copy(), af.copy(), alf.copy()
             ok, key, start, gdims = _reorder(rf.reshape((n, 3)), ex * z, ey * z, ez * z, cutoff,
                                              K, kappa != 0.0, r1f, rf, vf, wf, af, alf, qs, R3,
                                              im3, iI3, Rw, mw, wk, wks, ogw, sidw, cgw, perm)
-            bb, per, pl = _relist(ok, rf.reshape((n, 3)), ex * z, ey * z, ez * z,
-                                  cutoff - 2.0 * r_max, key, start, gdims, K, Rw, ref, ps, pe,
-                                  pl, per, inner, dims.large)
+            bb, cb, per, pl = _relist(ok, rf.reshape((n, 3)), ex * z, ey * z, ez * z,
+                                      cutoff - 2.0 * r_max, key, start, gdims, K, Rw, ref, ps,
+                                      pe, pl, per, inner, dims.large, dims.chunk)
+            ws = _walls_all(inner, bb, wout, dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf,
+                            shape, law, r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, not one_cell,
+                            gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
+                            half_skin2)
         r2, v2 = rf.reshape((n, 3)), vf.reshape((n, 3))
         w2, al2 = wf.reshape((n, 3)), alf.reshape((n, 3))
         e_el = 0.0
@@ -1193,37 +1251,24 @@ if AVAILABLE:
             imp0 = 0.0
             imp1 = 0.0
             for it in range(record_every):
-                t1 = t + dt
-                z1, zdp = predict_scalar(mount, t1, dt, z, zd, zdd, prow, po)
-                for j in range(ny):
-                    y1[j] = yv[j] + dt * ydv[j] + hdt2 * yddv[j]
-                    ydp[j] = ydv[j] + dt * yddv[j]
-                if not one_cell:
-                    cell_frames(cdof, z1, zdp, y1, ydp, frames)
+                last = k_rec == n_records - 1 and it == record_every - 1
                 # pass 1: predictor, body force, walls, drag power, displacement since the build
-                if large:  # in blocks, after the previous step's pass 3 where it is pending;
-                    # a rebuild re-sorts the grains and redoes the pass
-                    h_late = 0.0
-                    for attempt in range(2):
-                        (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor,
-                         l_lid, pdrag, far, h_pass) = _walls_all(
-                            inner, bb, wout, pending, hout, w2, al2, wm, Ff, Tf, im3, iI3, qs, qn,
-                            dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law, r1, vp,
-                            rw, Rw, mw, ref, wk, wks, sec, ogw, not one_cell, gs, cgw, frames, F,
-                            T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
-                        h_late += h_pass
-                        if pending:  # the previous step's rotation is done
-                            qs, qn = qn, qs
-                            pending = False
-                        if attempt == 1 or not far or n < 2:
-                            break
+                if large:  # done by the last step's sweep; a rebuild re-sorts the grains and
+                    # redoes it
+                    if ws[11] and n > 1:
                         ok, key, start, gdims = _reorder(
                             r1, ex * z1, ey * z1, ez * z1, cutoff, K, kappa != 0.0, r1f, rf, vf,
                             wf, af, alf, qs, R3, im3, iI3, Rw, mw, wk, wks, ogw, sidw, cgw, perm)
-                        bb, per, pl = _relist(ok, r1, ex * z1, ey * z1, ez * z1,
-                                              cutoff - 2.0 * r_max, key, start, gdims, K, Rw,
-                                              ref, ps, pe, pl, per, inner, dims.large)
-                    far = False
+                        bb, cb, per, pl = _relist(ok, r1, ex * z1, ey * z1, ez * z1,
+                                                  cutoff - 2.0 * r_max, key, start, gdims, K, Rw,
+                                                  ref, ps, pe, pl, per, inner, dims.large,
+                                                  dims.chunk)
+                        ws = _walls_all(inner, bb, wout, dt, hdt2, rf, vf, af, wf, alf, R3, r1f,
+                                        vpf, rwf, shape, law, r1, vp, rw, Rw, mw, ref, wk, wks,
+                                        sec, ogw, not one_cell, gs, cgw, frames, F, T, ex, ey,
+                                        ez, z1, zdp, Lz, grav, drag, half_skin2)
+                    (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
+                     pdrag, far) = ws
                 else:
                     for j in range(3 * n):  # the predicted positions, velocities and R ω
                         r1f[j] = rf[j] + dt * vf[j] + hdt2 * af[j]
@@ -1245,27 +1290,12 @@ if AVAILABLE:
                          pdrag, far) = grain_walls(shape, law, 0, n, 1, r1, vp, rw, Rb, mb, ref, wk,
                                                    wks, sec, og, True, gs, cg, frames, F, T,
                                                    ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
+                    if n > 1 and far:  # a grain moved more than skin/2: list the pairs anew
+                        npairs, pi, pj, pc = _pairs(r1, ex * z1, ey * z1, ez * z1, cutoff, pi,
+                                                    pj, pc, ref, Rb, mb, sid, tab, law)
                 n_side = n_wall - n_floor - n_lid
-                if n > 1 and far:  # a grain moved more than skin/2: list the pairs anew
-                    npairs, pi, pj, pc = _pairs(r1, ex * z1, ey * z1, ez * z1, cutoff, pi, pj,
-                                                pc, ref, Rb, mb, sid, tab, law)
-                # pass 2: the grain pairs
-                if large and one_cell:
-                    pp_e, pp_n, pp_f = _pairs_all(inner, bb, pout, law, r1, vp, rw, Rw, mw, sidw,
-                                                  tab, ps, pe, pl, F, T, None)
-                elif large:
-                    pp_e, pp_n, pp_f = _pairs_all(inner, bb, pout, law, r1, vp, rw, Rw, mw, sidw,
-                                                  tab, ps, pe, pl, F, T, gs[:, 0])
-                    _cell_sums_by_grain(gs[:, 0], cgw, pwc)
-                elif one_cell:  # its loss is the damper's: formed from the channels at the sample
-                    pp_e, pp_n, pp_f = _pair_forces(law, r1, vp, rw, Rb, pi, pj, pc, npairs, F,
-                                                    T, None)
-                else:
-                    pp_e, pp_n, pp_f = _pair_forces(law, r1, vp, rw, Rb, pi, pj, pc, npairs, F,
-                                                    T, gs[:, 0])
-                    cell_sums(gs[:, 0], bounds, pwc, 0, 1)
-                e_el += pp_e
-                # pass 3: the mount, then the corrector and the rotation (_correct)
+                # the mount: its response to the grains' forces on the walls (pass 1), which
+                # completes the step of the box and the structure
                 if spread and large:  # each cell's force on its own degree of freedom
                     _cell_sums_by_grain(gs[:, 1], cgw, bzc)
                 elif spread:
@@ -1274,23 +1304,51 @@ if AVAILABLE:
                     mount, t1, z1, zdp, y1, ydp, dof_loads(spread, cdof, bzc, box_z, fdof), prow,
                     po, n_lines, xs, xds, acc, tmp)
                 zd1 = zdp if prescribed else zd + 0.5 * dt * (zdd + zdd1)
+                for j in range(ny):
+                    ydv[j] = ydv[j] + 0.5 * dt * (yddv[j] + acc[j + 1])
+                    yddv[j] = acc[j + 1]
+                    yv[j] = y1[j]
+                if t1 >= t_win:
+                    zmax = max(zmax, z1)
+                    zmin = min(zmin, z1)
+                z, zd, zdd, t = z1, zd1, zdd1, t1
+                # the next step's prediction of the box, the structure and the cells
+                t1 = t + dt
+                z1, zdp = predict_scalar(mount, t1, dt, z, zd, zdd, prow, po)
+                for j in range(ny):
+                    y1[j] = yv[j] + dt * ydv[j] + hdt2 * yddv[j]
+                    ydp[j] = ydv[j] + dt * yddv[j]
+                if not one_cell:
+                    cell_frames(cdof, z1, zdp, y1, ydp, frames)
+                # pass 2, the grain pairs, and pass 3, the corrector and the rotation; a large
+                # bed also does the next step's pass 1 while each block is in the cache
+                if large:
+                    pp_e, pp_n, pp_f, h, ws = _sweep_all(
+                        inner, cb, bb, not last, pout, hout, wout, law, r1, vp, rw, Rw, mw, sidw,
+                        tab, ps, pe, pl, F, T, gs[:, 0], dt, hdt2, w2, al2,
+                        wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f, qs, qn, R3, vpf, rwf,
+                        shape, ref, wk, wks, sec, ogw, not one_cell, gn, cgw, frames, ex, ey, ez,
+                        z1, zdp, Lz, grav, drag, half_skin2)
+                    if not one_cell:
+                        _cell_sums_by_grain(gs[:, 0], cgw, pwc)
+                        gs, gn = gn, gs
+                else:
+                    if one_cell:  # its loss is the damper's: formed from the channels
+                        pp_e, pp_n, pp_f = _pair_forces(law, r1, vp, rw, Rb, pi, pj, pc, npairs,
+                                                        F, T, None)
+                    else:
+                        pp_e, pp_n, pp_f = _pair_forces(law, r1, vp, rw, Rb, pi, pj, pc, npairs,
+                                                        F, T, gs[:, 0])
+                        cell_sums(gs[:, 0], bounds, pwc, 0, 1)
+                    h = _correct(n, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f,
+                                 qs, qn)
+                qs, qn = qn, qs
+                e_el += pp_e
                 pw[_PPN], pw[_PPF], pw[_PWN], pw[_PWF] = pp_n, pp_f, pw_n, pw_f
                 pw[_DRAG] = drag * pdrag
                 pw[_PW_FLOOR], pw[_PW_LID] = l_floor, l_lid
                 pw[_PW_SIDE] = pw_n + pw_f - l_floor - l_lid
-                health = box_z + e_el + pp_n + pp_f + pw_n + pw_f + z1 + zdp + zdd1
-                if large and it < record_every - 1:  # pass 3 with the next step's pass 1
-                    health += h_late
-                    pending = True
-                elif large:  # the sample needs the state of this step
-                    health += h_late + _correct_all(inner, bb, hout, dt, w2, al2, wm, Ff, Tf,
-                                                    im3, iI3, vf, af, wf, alf, rf, r1f, qs, qn)
-                    qs, qn = qn, qs
-                else:
-                    health += _correct(n, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf,
-                                       r1f, qs, qn)
-                    qs, qn = qn, qs
-                if not math.isfinite(health):
+                if not math.isfinite(box_z + e_el + pp_n + pp_f + pw_n + pw_f + z + zd + zdd + h):
                     # the state blew up: mark it non-finite and stop; the runner reports it
                     for j in range(3 * n):
                         rf[j] = np.nan
@@ -1304,14 +1362,6 @@ if AVAILABLE:
                     for c in range(K):
                         work_cell[c] = work_cell[c] + 0.5 * dt * (power_cell[c] + pwc[c])
                         power_cell[c] = pwc[c]
-                for j in range(ny):
-                    ydv[j] = ydv[j] + 0.5 * dt * (yddv[j] + acc[j + 1])
-                    yddv[j] = acc[j + 1]
-                    yv[j] = y1[j]
-                z, zd, zdd, t = z1, zd1, zdd1, t1
-                if t1 >= t_win:
-                    zmax = max(zmax, z1)
-                    zmin = min(zmin, z1)
                 step += 1
                 imp0 += floor_lid
                 imp1 += box_z
@@ -1326,7 +1376,7 @@ if AVAILABLE:
             record_row(rec[b, k_rec], t, z, zd, yv, e_prim, rb, vb, wb, mb, Ib, Rb, grav, Lz, ez,
                        e_el, e_start, imp0 / record_every, imp1 / record_every, n_floor, n_lid,
                        n_side, work, work_cell, bounds,
-                       cell_frames(cdof, z, zd, yv, ydv, frames))
+                       cell_frames(cdof, z, zd, yv, ydv, frames_rec))
         for i in range(n):
             for k in range(4):
                 qb[perm[i], k] = qs[k, i]
@@ -1413,7 +1463,8 @@ def kernel_args(model, state_layout, param_layout):
                 n_cols=int(table[2]), n_lines=int(shapes["lines"][0]),
                 ndof=int(shapes["s_r"][0]), n_section=int(shapes["section"][0]),
                 cells=int(model.cells),
-                large=int(BLOCK_GRAINS) if model.n >= max(LARGE, 2) else 0)
+                large=int(BLOCK_GRAINS) if model.n >= max(LARGE, 2) else 0,
+                chunk=max(2, int(CHUNK_BLOCKS)))
     return (dims, StateOffsets(*offsets(state_layout, STATE_FIELDS)),
             ParamOffsets(*offsets(param_layout, PARAM_FIELDS)),
             model.species_index().astype(np.int64), bounds,
