@@ -479,6 +479,21 @@ if AVAILABLE:
         return frames[:, 0]
 
     @_kernel(inline="always")
+    def _predict(mount, t1, dt, hdt2, z, zd, zdd, prow, po, yv, ydv, yddv, y1, ydp, one_cell,
+                 cdof, frames):
+        """The prediction of the step that ends at ``t1`` from the last one's ``(z, z', z'')``
+        and the structure's ``yv``, ``ydv``, ``yddv``: the box's ``(z1, z1')`` (returned), the
+        structure's other degrees of freedom into ``y1``, ``ydp`` and, with several damper
+        cells, each cell's position and velocity into ``frames``."""
+        z1, zdp = predict_scalar(mount, t1, dt, z, zd, zdd, prow, po)
+        for j in range(y1.shape[0]):
+            y1[j] = yv[j] + dt * ydv[j] + hdt2 * yddv[j]
+            ydp[j] = ydv[j] + dt * yddv[j]
+        if not one_cell:
+            cell_frames(cdof, z1, zdp, y1, ydp, frames)
+        return z1, zdp
+
+    @_kernel(inline="always")
     def dof_loads(spread, cdof, bzc, box_z, fdof):
         """The grains' forces on the degrees of freedom, into ``fdof`` (returned): ``box_z`` on
         the box's (the others stay as they are: zero), or where ``spread`` (cells on several)
@@ -1220,12 +1235,8 @@ if AVAILABLE:
         # predicts the next one's once its own mount has responded (the large path's sweep
         # does the next step's pass 1)
         t1 = t + dt
-        z1, zdp = predict_scalar(mount, t1, dt, z, zd, zdd, prow, po)
-        for j in range(ny):
-            y1[j] = yv[j] + dt * ydv[j] + hdt2 * yddv[j]
-            ydp[j] = ydv[j] + dt * yddv[j]
-        if not one_cell:
-            cell_frames(cdof, z1, zdp, y1, ydp, frames)
+        z1, zdp = _predict(mount, t1, dt, hdt2, z, zd, zdd, prow, po, yv, ydv, yddv, y1, ydp,
+                           one_cell, cdof, frames)
         ws = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False)
         if large:
             rf, vf, wf, af, alf = rf.copy(), vf.copy(), wf.copy(), af.copy(), alf.copy()
@@ -1314,12 +1325,8 @@ if AVAILABLE:
                 z, zd, zdd, t = z1, zd1, zdd1, t1
                 # the next step's prediction of the box, the structure and the cells
                 t1 = t + dt
-                z1, zdp = predict_scalar(mount, t1, dt, z, zd, zdd, prow, po)
-                for j in range(ny):
-                    y1[j] = yv[j] + dt * ydv[j] + hdt2 * yddv[j]
-                    ydp[j] = ydv[j] + dt * yddv[j]
-                if not one_cell:
-                    cell_frames(cdof, z1, zdp, y1, ydp, frames)
+                z1, zdp = _predict(mount, t1, dt, hdt2, z, zd, zdd, prow, po, yv, ydv, yddv, y1,
+                                   ydp, one_cell, cdof, frames)
                 # pass 2, the grain pairs, and pass 3, the corrector and the rotation; a large
                 # bed also does the next step's pass 1 while each block is in the cache
                 if large:
