@@ -261,6 +261,17 @@ if AVAILABLE:
             oy, oz = q // 3 - 1, q % 3 - 1
         return ox, oy, oz
 
+    @_kernel(inline="always")
+    def listed(ref, R, i, j, extra):
+        """Whether grains ``i``, ``j`` (reference positions ``ref``, radii ``R``) belong in a
+        neighbour list of skin ``extra``: their surfaces closer than it, ``|r_i − r_j| < R_i +
+        R_j + extra`` (both list builds, :func:`_build_pairs` and :func:`_list_block`)."""
+        dx = ref[i, 0] - ref[j, 0]
+        dy = ref[i, 1] - ref[j, 1]
+        dz = ref[i, 2] - ref[j, 2]
+        lim = R[i] + R[j] + extra
+        return dx * dx + dy * dy + dz * dz < lim * lim
+
     @_kernel()
     def _build_pairs(r, bx, by, bz, cutoff, pi, pj, pc, ref, R, m, sid, table, law):
         """Half list of the pairs whose surfaces are closer than the skin, ``|r_i - r_j| < R_i +
@@ -331,11 +342,7 @@ if AVAILABLE:
                     j = order[s]
                     if o == 0 and j <= i:
                         continue
-                    dx = ref[i, 0] - ref[j, 0]
-                    dy = ref[i, 1] - ref[j, 1]
-                    dz = ref[i, 2] - ref[j, 2]
-                    lim = R[i] + R[j] + extra
-                    if dx * dx + dy * dy + dz * dz < lim * lim:
+                    if listed(ref, R, i, j, extra):
                         if k < cap:
                             pi[k] = i
                             pj[k] = j
@@ -722,11 +729,7 @@ if AVAILABLE:
                 for j in range(start[cc], start[cc + 1]):
                     if o == 0 and j <= i:
                         continue
-                    dx = ref[i, 0] - ref[j, 0]
-                    dy = ref[i, 1] - ref[j, 1]
-                    dz = ref[i, 2] - ref[j, 2]
-                    lim = R[i] + R[j] + extra
-                    if dx * dx + dy * dy + dz * dz < lim * lim:
+                    if listed(ref, R, i, j, extra):
                         if k < end:
                             pj[k] = j
                         k += 1
