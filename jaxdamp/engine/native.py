@@ -916,6 +916,22 @@ if AVAILABLE:
             cb[i] = (i * nb) // c
         return cb
 
+    @_kernel()
+    def _done_blocks(k0, k1, bb, nxt, hout, wout, dt, hdt2, w2, al2, wm, Ff, Tf, im3, iI3, vf,
+                     af, wf, alf, rf, r1f, qs, qn, R3, vpf, rwf, shape, law, r1, vp, rw, Rw, mw, ref, wk,
+                     wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav,
+                     drag, half_skin2):
+        """Blocks ``k0 … k1 − 1`` done (:func:`_sweep_each`): the corrector
+        (:func:`_correct_block`) and, where ``nxt``, the next step's pass 1
+        (:func:`_walls_block`)."""
+        for k in range(k0, k1):
+            _correct_block(k, bb, hout, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf,
+                           r1f, qs, qn)
+            if nxt:
+                _walls_block(k, bb, wout, dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape,
+                             law, r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, shifted, gs, cgw,
+                             frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
+
     def _sweep_each(phase, cb, bb, nxt, pout, hout, wout, law, r1, vp, rw, Rw, mw, sid, table,
                     ps, pe, pj, F, T, gl, dt, hdt2, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf,
                     alf, rf, r1f, qs, qn, R3, vpf, rwf, shape, ref, wk, wks, sec, ogw, shifted,
@@ -940,26 +956,20 @@ if AVAILABLE:
                     _pair_block(k, bb, pout, law, r1, vp, rw, Rw, mw, sid, table, ps, pe, pj, F,
                                 T, gl, shifted)
                     if k > s or c == 0:
-                        _correct_block(k, bb, hout, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af,
-                                       wf, alf, rf, r1f, qs, qn)
-                        if nxt:
-                            _walls_block(k, bb, wout, dt, hdt2, rf, vf, af, wf, alf, R3, r1f,
-                                         vpf, rwf, shape, law, r1, vp, rw, Rw, mw, ref, wk, wks,
-                                         sec, ogw, shifted, gs, cgw, frames, F, T, ex, ey, ez,
-                                         z1, zdp, Lz, grav, drag, half_skin2)
+                        _done_blocks(k, k + 1, bb, nxt, hout, wout, dt, hdt2, w2, al2, wm, Ff,
+                                     Tf, im3, iI3, vf, af, wf, alf, rf, r1f, qs, qn, R3, vpf, rwf, shape,
+                                     law, r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, shifted, gs,
+                                     cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
+                                     half_skin2)
         else:
             for c in prange(nc - 1):
                 b = cb[c + 1]
                 _pair_block(b - 1, bb, pout, law, r1, vp, rw, Rw, mw, sid, table, ps, pe, pj, F,
                             T, gl, shifted)
-                for k in range(b - 1, b + 1):
-                    _correct_block(k, bb, hout, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf,
-                                   alf, rf, r1f, qs, qn)
-                    if nxt:
-                        _walls_block(k, bb, wout, dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf,
-                                     rwf, shape, law, r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
-                                     shifted, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz,
-                                     grav, drag, half_skin2)
+                _done_blocks(b - 1, b + 1, bb, nxt, hout, wout, dt, hdt2, w2, al2, wm, Ff, Tf,
+                             im3, iI3, vf, af, wf, alf, rf, r1f, qs, qn, R3, vpf, rwf, shape, law, r1, vp, rw,
+                             Rw, mw, ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex,
+                             ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
 
     _sweep_par, _sweep_ser = _over_cores(_sweep_each)
 
@@ -971,9 +981,9 @@ if AVAILABLE:
         """The rest of a large bed's step after pass 1 (:func:`_sweep_each`, the chunks over
         the cores where ``inner``): pass 2 (the pairs; their loss per grain into ``gl`` where
         ``shifted``), pass 3 (the corrector and the rotation into ``qn``) and, where ``nxt``,
-        the next step's pass 1 (positions of the box ``z1``, ``zdp``, ``frames``; the grains' wall terms into
-        ``gs``), every block's data read once. Returns the pairs' sums ``(elastic energy,
-        normal loss, friction loss)``, the corrector's check sum and pass 1's sums
+        the next step's pass 1 (positions of the box ``z1``, ``zdp``, ``frames``; the grains'
+        wall terms into ``gs``), every block's data read once. Returns the pairs' sums
+        ``(elastic energy, normal loss, friction loss)``, the corrector's check sum and pass 1's sums
         (:func:`_walls_sums`; zeros where not ``nxt``), each added block after block."""
         for phase in range(2):
             if inner:
