@@ -17,7 +17,10 @@ rounds, and the ratio to the first revision. Do not run while other jobs use the
 
 ``--n N``: instead, one system of ``bench_large.py``'s bed of N grains (the thesis damper
 scaled in base area, driven, from its cached warm state: the same state for every revision),
-``--steps`` steps per timed chunk (default 1000), also in ns per particle-step.
+``--steps`` steps per timed chunk (default 1000), also in ns per particle-step. ``--large L``
+sets ``native.LARGE`` to L in every worker: the large-bed path for a bed smaller than its
+threshold (``--n 1000 --large 2``: the large path's cost against the small path's, where the
+bed fits in the cache).
 """
 
 from __future__ import annotations
@@ -67,12 +70,15 @@ for line in sys.stdin:
 '''
 
 
-def bed_code(n: int | None) -> str:
+def bed_code(n: int | None, large: int | None = None) -> str:
     """The worker's lines that make ``(cfg, model, params, st)``: the moving thesis bed of
-    ``bench_lammps.py``, or (``n``) the warm large bed of ``bench_large.py``."""
+    ``bench_lammps.py``, or (``n``) the warm large bed of ``bench_large.py``; ``large``: the
+    native kernel's large-bed threshold (:data:`jaxdamp.engine.native.LARGE`)."""
+    head = ("" if large is None else
+            f"from jaxdamp.engine import native\nnative.LARGE = {int(large)}\n")
     if n is None:
-        return 'cfg, model, params, st = bench_lammps.moving_bed("thesis")'
-    return ("import bench_large\n"
+        return head + 'cfg, model, params, st = bench_lammps.moving_bed("thesis")'
+    return head + ("import bench_large\n"
             "from jaxdamp.physics.model import build\n"
             f"st, _ = bench_large.warm_state(bench_large.bed_config({n}, 0.03), 0.04, 100,\n"
             "                                os.path.expanduser(bench_large.DEFAULT_CACHE),\n"
@@ -101,9 +107,11 @@ def main(argv=None):
     ap.add_argument("--json", help="write the times here")
     ap.add_argument("--n", type=int, help="one system of bench_large.py's bed of N grains")
     ap.add_argument("--steps", type=int, default=1000, help="steps per chunk with --n")
+    ap.add_argument("--large", type=int, help="native.LARGE in the workers (the large-bed "
+                    "path from this many grains)")
     a = ap.parse_args(argv)
     os.makedirs(a.base, exist_ok=True)
-    code = WORKER.format(bench=HERE, bed=bed_code(a.n))
+    code = WORKER.format(bench=HERE, bed=bed_code(a.n, a.large))
     work = WORK if a.n is None else [(1, a.steps)]
     procs = {}
     for rev in a.revs:
