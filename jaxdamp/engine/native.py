@@ -84,15 +84,22 @@ except ImportError:  # pragma: no cover - numba is a dependency; keep the JAX en
 #: rebuilds from 7 to ~2 per 100 steps (benchmarks/RESULTS.md).
 REBUILD_STEPS = 40
 
+U = np.uint64
+"""Array indices the kernel cannot prove non-negative are cast to this: numba wraps a signed
+index (``a[-1]``), a compare and an add at every access that also keep a loop from SIMD code
+(the corrector over a block: 4.4 against 3.0 ns per grain); it does not wrap an unsigned one.
+Careful: numba types ``uint64 ± int64`` as float64 (write ``U(3) * i``, not ``3 * i``)."""
+
 #: Beds of at least this many grains take the large-bed path of the kernel: grains kept in
 #: cell order (re-sorted at every list rebuild, invisible outside the kernel), pairs listed per
 #: block of whole cell layers, and a single system's blocks spread over the cores. Measured on
-#: the 2-core reference machine, one driven thesis-like bed, ns per particle-step, small path /
-#: large path on 2 cores / large path on 1 core: 34.0 / 34.6 / 35.2 at 4 000 grains, 48.5 /
-#: 46.5 / 59.8 at 16 000, 60.7 / 37.5 / 62.8 at 50 000 (benchmarks/RESULTS.md, "Large beds on
-#: the CPU"): below ~16 000 grains the small path is as fast for one system and faster in a
-#: batch (where each system runs on one core).
-LARGE = 20000
+#: the 2-core reference machine after the indices went unsigned (:data:`U`), one driven
+#: thesis-like bed, ns per particle-step, small path / large path, one system and a batch of 2
+#: (of 4 at 4 000 and 8 000): 34 / 73 and 66 / 66 at 4 000 grains, 39 / 50 and 81 / 76 at 8 000,
+#: 43 / 47 and 44 / 38 at 12 000, 43 / 26 and 47 / 38 at 16 000 (benchmarks/RESULTS.md, "Large
+#: beds: unsigned indices"): below ~16 000 grains one system waits on the cores' wake-ups
+#: between the sweep's two parallel regions more than the large path saves.
+LARGE = 16000
 #: Grains per block of the large-bed path (the blocks are whole layers of cells, so about).
 BLOCK_GRAINS = 512
 #: At most this many blocks (enough for the cores of one machine).
@@ -201,7 +208,7 @@ def _over_cores(fn):
     ``prange`` loops parallel regions) and without (``prange`` then runs as ``range``). The
     large-bed path calls the first for one system alone and the second inside the batch's own
     parallel loop, where numba would nest a region (which its ``workqueue`` layer refuses)."""
-    return _kernel(parallel=True)(fn), _kernel()(fn)
+    return _kernel(parallel=True)(fn), _kernel(_nrt=False)(fn)
 
 
 if AVAILABLE:
@@ -537,8 +544,8 @@ if AVAILABLE:
         ln_sum = 0.0
         lf_sum = 0.0
         for p in range(npairs):
-            i = pi[p]
-            j = pj[p]
+            i = U(pi[p])  # unsigned indices (:data:`U`)
+            j = U(pj[p])
             dx = r[i, 0] - r[j, 0]
             dy = r[i, 1] - r[j, 1]
             dz = r[i, 2] - r[j, 2]
@@ -570,8 +577,8 @@ if AVAILABLE:
                 gl[i] += ln + lf
         return e_sum, ln_sum, lf_sum
 
-    @_kernel()
-    def _correct(n, dt, wb, alb, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f, qs, qn):
+    @_kernel(_nrt=False)
+    def _correct(g0, g1, dt, wb, alb, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f, qs, qn):
         """Pass 3 over the grains: the velocity-Verlet corrector (new accelerations from the
         forces ``Ff`` and torques ``Tf``, flat ``(3n,)``; velocities, angular velocities and
         the predicted positions ``r1f`` into the state's flat views) and the rotation of the
@@ -580,32 +587,33 @@ if AVAILABLE:
         from the kernel's large body, so that its loops compile as loops alone (9 % of the
         step, ``benchmarks/ab_native.py``)."""
         h = 0.0
-        for i in range(n):
+        u0, u1 = U(g0), U(g1)  # unsigned indices (:data:`U`)
+        for i in range(u0, u1):
             # the mid-step angular velocity ω + α dt/2 of the rotation (below)
             wm[0, i] = wb[i, 0] + 0.5 * dt * alb[i, 0]
             wm[1, i] = wb[i, 1] + 0.5 * dt * alb[i, 1]
             wm[2, i] = wb[i, 2] + 0.5 * dt * alb[i, 2]
-        for j in range(3 * n):  # the corrector, flat
+        for j in range(U(3 * g0), U(3 * g1)):  # the corrector, flat
             a1 = Ff[j] * im3[j]
             h += a1
             vf[j] = vf[j] + 0.5 * dt * (af[j] + a1)
             af[j] = a1
-        for j in range(3 * n):
+        for j in range(U(3 * g0), U(3 * g1)):
             al1 = Tf[j] * iI3[j]
             h += al1
             wf[j] = wf[j] + 0.5 * dt * (alf[j] + al1)
             alf[j] = al1
-        for j in range(3 * n):
+        for j in range(U(3 * g0), U(3 * g1)):
             rf[j] = r1f[j]
         # the rotation, component arrays and no branch: SIMD over the grains; the
         # exact form only for grains where the series do not hold (fast spins)
         exact = 0
-        for i in range(n):
+        for i in range(u0, u1):
             qn[0, i], qn[1, i], qn[2, i], qn[3, i], ok = rotate_series_scalar(
                 qs[0, i], qs[1, i], qs[2, i], qs[3, i], wm[0, i], wm[1, i], wm[2, i], dt)
             exact += not ok
         if exact:
-            for i in range(n):
+            for i in range(u0, u1):
                 if not rotate_series_scalar(qs[0, i], qs[1, i], qs[2, i], qs[3, i],
                                             wm[0, i], wm[1, i], wm[2, i], dt)[4]:
                     qn[0, i], qn[1, i], qn[2, i], qn[3, i] = rotate_scalar(
@@ -712,7 +720,7 @@ if AVAILABLE:
         cells = dims[0] * plane
         k = base
         end = base + cap
-        for i in range(g0, g1):
+        for i in range(U(g0), U(g1)):  # unsigned indices (:data:`U`)
             c = key[i]
             own = c % cells
             damper = c - own
@@ -725,8 +733,8 @@ if AVAILABLE:
                 b0, b1, b2 = c0 + o0, c1 + o1, c2 + o2
                 if b1 < 0 or b1 >= dims[1] or b2 < 0 or b2 >= dims[2] or b0 >= dims[0]:
                     continue
-                cc = damper + (b0 * dims[1] + b1) * dims[2] + b2
-                for j in range(start[cc], start[cc + 1]):
+                cc = U(damper + (b0 * dims[1] + b1) * dims[2] + b2)
+                for j in range(U(start[cc]), U(start[cc + U(1)])):
                     if o == 0 and j <= i:
                         continue
                     if listed(ref, R, i, j, extra):
@@ -763,31 +771,31 @@ if AVAILABLE:
             for k in range(src.shape[1]):
                 dst[perm[s], k] = src[s, k]
 
-    @_kernel()
+    @_kernel(_nrt=False)
     def _walls_block(k, bb, out, dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law,
                      r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T,
                      ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
         """Pass 1 of block ``k`` (grains ``bb[k] … bb[k + 1] − 1``): the predictor and
         :func:`grain_walls` (``F``, ``T`` set to the walls' forces); its sums into ``out[k]``
         (the last: whether a grain moved more than skin/2)."""
-        g0, g1 = bb[k], bb[k + 1]
-        for j in range(3 * g0, 3 * g1):
+        g0, g1 = U(bb[k]), U(bb[k + 1])  # unsigned indices (:data:`U`)
+        for j in range(U(3) * g0, U(3) * g1):
             r1f[j] = rf[j] + dt * vf[j] + hdt2 * af[j]
             vpf[j] = vf[j] + dt * af[j]
-        for j in range(3 * g0, 3 * g1):
+        for j in range(U(3) * g0, U(3) * g1):
             rwf[j] = R3[j] * (wf[j] + dt * alf[j])
         # three copies, as in _advance_one: the container and the cells as constants fold the
         # branches of the common damper away (its walls pass: 34 -> 16.7 ns per grain, 50 000)
         if shape == _BOX and not shifted:
-            s = grain_walls(_BOX, law, g0, g1, 1, r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
+            s = grain_walls(_BOX, law, g0, g1, U(1), r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
                             False, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
                             half_skin2)
         elif not shifted:
-            s = grain_walls(shape, law, g0, g1, 1, r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
+            s = grain_walls(shape, law, g0, g1, U(1), r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
                             False, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
                             half_skin2)
         else:
-            s = grain_walls(shape, law, g0, g1, 1, r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
+            s = grain_walls(shape, law, g0, g1, U(1), r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
                             True, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
                             half_skin2)
         (out[k, 0], out[k, 1], out[k, 2], out[k, 3], out[k, 4], out[k, 5], out[k, 6], out[k, 7],
@@ -833,7 +841,7 @@ if AVAILABLE:
                        ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
         return _walls_sums(bb.shape[0] - 1, out)
 
-    @_kernel()
+    @_kernel(_nrt=False)
     def _pair_block(k, bb, out, law, r, v, rw, R, m, sid, table, ps, pe, pj, F, T, gl, lossy):
         """Pass 2 of block ``k``: the forces and torques of its grains' listed pairs (half
         list in cell order, :func:`_list_block`; Newton's third law), added to ``F``, ``T``;
@@ -844,7 +852,7 @@ if AVAILABLE:
         e_sum = 0.0
         ln_sum = 0.0
         lf_sum = 0.0
-        for i in range(bb[k], bb[k + 1]):
+        for i in range(U(bb[k]), U(bb[k + 1])):  # unsigned indices (:data:`U`)
             xi, yi, zi = r[i, 0], r[i, 1], r[i, 2]
             Ri = R[i]
             fxi = 0.0
@@ -854,8 +862,8 @@ if AVAILABLE:
             cyi = 0.0
             czi = 0.0
             li = 0.0
-            for p in range(ps[i], pe[i]):
-                j = pj[p]
+            for p in range(U(ps[i]), U(pe[i])):
+                j = U(pj[p])
                 dx = xi - r[j, 0]
                 dy = yi - r[j, 1]
                 dz = zi - r[j, 2]
@@ -863,8 +871,8 @@ if AVAILABLE:
                 rs = Ri + R[j]
                 if d2 >= rs * rs:
                     continue
-                rs, kk, g, gamma_s, mu = pair_constants(law, table, sid[i], sid[j], Ri, R[j],
-                                                        m[i], m[j])
+                rs, kk, g, gamma_s, mu = pair_constants(law, table, U(sid[i]), U(sid[j]), Ri,
+                                                        R[j], m[i], m[j])
                 fx, fy, fz, cx, cy, cz, e, ln, lf = pair_contact(
                     law, dx, dy, dz, d2, rs, v[i, 0] - v[j, 0], v[i, 1] - v[j, 1],
                     v[i, 2] - v[j, 2], rw[i, 0] + rw[j, 0], rw[i, 1] + rw[j, 1],
@@ -895,16 +903,13 @@ if AVAILABLE:
                 gl[i] += li
         out[k, 0], out[k, 1], out[k, 2] = e_sum, ln_sum, lf_sum
 
-    @_kernel()
+    @_kernel(_nrt=False)
     def _correct_block(k, bb, out, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f,
                        qs, qn):
         """Pass 3 (:func:`_correct`) of block ``k``'s grains; its finite-check sum into
         ``out[k]``."""
-        a, b = bb[k], bb[k + 1]
-        out[k] = _correct(b - a, dt, w2[a:b], al2[a:b], wm[:, a:b], Ff[3 * a:3 * b],
-                          Tf[3 * a:3 * b], im3[3 * a:3 * b], iI3[3 * a:3 * b], vf[3 * a:3 * b],
-                          af[3 * a:3 * b], wf[3 * a:3 * b], alf[3 * a:3 * b], rf[3 * a:3 * b],
-                          r1f[3 * a:3 * b], qs[:, a:b], qn[:, a:b])
+        out[k] = _correct(bb[k], bb[k + 1], dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf,
+                          rf, r1f, qs, qn)
 
     @_kernel()
     def _chunks(nb, per):
@@ -916,7 +921,7 @@ if AVAILABLE:
             cb[i] = (i * nb) // c
         return cb
 
-    @_kernel()
+    @_kernel(_nrt=False)
     def _done_blocks(k0, k1, bb, nxt, hout, wout, dt, hdt2, w2, al2, wm, Ff, Tf, im3, iI3, vf,
                      af, wf, alf, rf, r1f, qs, qn, R3, vpf, rwf, shape, law, r1, vp, rw, Rw, mw, ref, wk,
                      wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav,
@@ -1360,7 +1365,7 @@ if AVAILABLE:
                         pp_e, pp_n, pp_f = _pair_forces(law, r1, vp, rw, Rb, pi, pj, pc, npairs,
                                                         F, T, gs[:, 0])
                         cell_sums(gs[:, 0], bounds, pwc, 0, 1)
-                    h = _correct(n, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f,
+                    h = _correct(0, n, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f,
                                  qs, qn)
                 qs, qn = qn, qs
                 e_el += pp_e
