@@ -64,10 +64,11 @@ CELL_BYTES = 4000
 SECONDS_PER_GRAIN_STEP = {"native": 24e-9, "jax": 600e-9}
 #: A large bed in the native kernel (:data:`jaxdamp.engine.native.LARGE` grains or more, fewer
 #: systems than cores: its blocks over the cores) costs this many times the small bed's
-#: grain-step on the reference machine's 2 cores (memory-bound: 37.5 ns per grain-step at
-#: 50 000 grains against :data:`SECONDS_PER_GRAIN_STEP`'s 24; benchmarks/RESULTS.md, "Large
-#: beds on the CPU").
-LARGE_BED_FACTOR = 1.6
+#: grain-step on the reference machine's 2 cores, a whole command-line run's steps counted
+#: (pouring, settling and start-up included): the 50 000-grain thesis-like damper of
+#: benchmarks/RESULTS.md ("Large beds: unsigned indices") ran 3.85e4 steps in 56 s, 29 ns per
+#: grain-step (the kernel alone 21–25 ns) against :data:`SECONDS_PER_GRAIN_STEP`'s 24.
+LARGE_BED_FACTOR = 1.2
 #: HDF5 chunking and metadata over the raw bytes of a run file (measured 1.2).
 FILE_OVERHEAD = 1.3
 #: Refuse a batch above this fraction of the memory this process may use.
