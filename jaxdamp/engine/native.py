@@ -196,7 +196,12 @@ def _cache_on_sources(dispatcher):
 
 
 def _kernel(**flags):
-    """``njit`` with the kernel's flags and the source-keyed cache."""
+    """``njit`` with the kernel's flags and the source-keyed cache. ``_nrt=False`` (numba's
+    option) compiles a function that allocates nothing without reference counting: the large
+    path's per-block functions and :func:`_over_cores`' serial compiles, whose calls with ~40
+    arrays each cost ~2 µs of atomic refcounts per block on the serial path (a large bed in a
+    batch, or one core; ``benchmarks/RESULTS.md``, "Large beds: unsigned indices"). numba
+    refuses to compile an allocation in such a function."""
     def wrap(fn):
         return _cache_on_sources(njit(cache=True, error_model="numpy", fastmath=FASTMATH,
                                       **flags)(fn))
@@ -579,9 +584,10 @@ if AVAILABLE:
 
     @_kernel(_nrt=False)
     def _correct(g0, g1, dt, wb, alb, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f, qs, qn):
-        """Pass 3 over the grains: the velocity-Verlet corrector (new accelerations from the
-        forces ``Ff`` and torques ``Tf``, flat ``(3n,)``; velocities, angular velocities and
-        the predicted positions ``r1f`` into the state's flat views) and the rotation of the
+        """Pass 3 over grains ``g0 … g1 − 1`` (a block, or ``0, n``): the velocity-Verlet
+        corrector (new accelerations from the forces ``Ff`` and torques ``Tf``, flat
+        ``(3n,)``; velocities, angular velocities and the predicted positions ``r1f`` into the
+        state's flat views) and the rotation of the
         quaternions ``qs`` into ``qn`` by the mid-step angular velocity. Returns the sum of
         the new accelerations (the step's finite check). A function of its own, compiled apart
         from the kernel's large body, so that its loops compile as loops alone (9 % of the
@@ -923,9 +929,9 @@ if AVAILABLE:
 
     @_kernel(_nrt=False)
     def _done_blocks(k0, k1, bb, nxt, hout, wout, dt, hdt2, w2, al2, wm, Ff, Tf, im3, iI3, vf,
-                     af, wf, alf, rf, r1f, qs, qn, R3, vpf, rwf, shape, law, r1, vp, rw, Rw, mw, ref, wk,
-                     wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav,
-                     drag, half_skin2):
+                     af, wf, alf, rf, r1f, qs, qn, R3, vpf, rwf, shape, law, r1, vp, rw, Rw, mw,
+                     ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp,
+                     Lz, grav, drag, half_skin2):
         """Blocks ``k0 … k1 − 1`` done (:func:`_sweep_each`): the corrector
         (:func:`_correct_block`) and, where ``nxt``, the next step's pass 1
         (:func:`_walls_block`)."""
@@ -962,19 +968,19 @@ if AVAILABLE:
                                 T, gl, shifted)
                     if k > s or c == 0:
                         _done_blocks(k, k + 1, bb, nxt, hout, wout, dt, hdt2, w2, al2, wm, Ff,
-                                     Tf, im3, iI3, vf, af, wf, alf, rf, r1f, qs, qn, R3, vpf, rwf, shape,
-                                     law, r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, shifted, gs,
-                                     cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
-                                     half_skin2)
+                                     Tf, im3, iI3, vf, af, wf, alf, rf, r1f, qs, qn, R3, vpf, rwf,
+                                     shape, law, r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
+                                     shifted, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav,
+                                     drag, half_skin2)
         else:
             for c in prange(nc - 1):
                 b = cb[c + 1]
                 _pair_block(b - 1, bb, pout, law, r1, vp, rw, Rw, mw, sid, table, ps, pe, pj, F,
                             T, gl, shifted)
                 _done_blocks(b - 1, b + 1, bb, nxt, hout, wout, dt, hdt2, w2, al2, wm, Ff, Tf,
-                             im3, iI3, vf, af, wf, alf, rf, r1f, qs, qn, R3, vpf, rwf, shape, law, r1, vp, rw,
-                             Rw, mw, ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex,
-                             ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
+                             im3, iI3, vf, af, wf, alf, rf, r1f, qs, qn, R3, vpf, rwf, shape, law,
+                             r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, shifted, gs, cgw, frames,
+                             F, T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
 
     _sweep_par, _sweep_ser = _over_cores(_sweep_each)
 
@@ -988,8 +994,9 @@ if AVAILABLE:
         ``shifted``), pass 3 (the corrector and the rotation into ``qn``) and, where ``nxt``,
         the next step's pass 1 (positions of the box ``z1``, ``zdp``, ``frames``; the grains'
         wall terms into ``gs``), every block's data read once. Returns the pairs' sums
-        ``(elastic energy, normal loss, friction loss)``, the corrector's check sum and pass 1's sums
-        (:func:`_walls_sums`; zeros where not ``nxt``), each added block after block."""
+        ``(elastic energy, normal loss, friction loss)``, the corrector's check sum and pass
+        1's sums (:func:`_walls_sums`; zeros where not ``nxt``), each added block after
+        block."""
         for phase in range(2):
             if inner:
                 _sweep_par(phase, cb, bb, nxt, pout, hout, wout, law, r1, vp, rw, Rw, mw, sid,
