@@ -85,10 +85,12 @@ except ImportError:  # pragma: no cover - numba is a dependency; keep the JAX en
 REBUILD_STEPS = 40
 
 U = np.uint64
-"""Array indices the kernel cannot prove non-negative are cast to this: numba wraps a signed
-index (``a[-1]``), a compare and an add at every access that also keep a loop from SIMD code
-(the corrector over a block: 4.4 against 3.0 ns per grain); it does not wrap an unsigned one.
-Careful: numba types ``uint64 ± int64`` as float64 (write ``U(3) * i``, not ``3 * i``)."""
+"""In the step's loops, array indices the kernel cannot prove non-negative (block bounds,
+list offsets and partners, species) are cast to this: numba wraps a signed index (``a[-1]``),
+a compare and an add at every access that also keep a loop from SIMD code (the corrector over
+a block: 4.4 against 3.0 ns per grain); it does not wrap an unsigned one. The list builds and
+the re-sort keep signed indices (cast, they measured the same). Careful: numba types ``uint64
+± int64`` as float64 (write ``U(3) * i``, not ``3 * i``)."""
 
 #: Beds of at least this many grains take the large-bed path of the kernel: grains kept in
 #: cell order (re-sorted at every list rebuild, invisible outside the kernel), pairs listed per
