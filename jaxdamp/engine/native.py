@@ -215,7 +215,7 @@ def _over_cores(fn):
     ``prange`` loops parallel regions) and without (``prange`` then runs as ``range``). The
     large-bed path calls the first for one system alone and the second inside the batch's own
     parallel loop, where numba would nest a region (which its ``workqueue`` layer refuses)."""
-    return _kernel(parallel=True)(fn), _kernel(_nrt=False)(fn)
+    return _kernel(parallel=True)(fn), _kernel()(fn)
 
 
 if AVAILABLE:
@@ -584,7 +584,7 @@ if AVAILABLE:
                 gl[i] += ln + lf
         return e_sum, ln_sum, lf_sum
 
-    @_kernel(_nrt=False)
+    @_kernel()
     def _correct(g0, g1, dt, wb, alb, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f, qs, qn):
         """Pass 3 over grains ``g0 … g1 − 1`` (a block, or ``0, n``): the velocity-Verlet
         corrector (new accelerations from the forces ``Ff`` and torques ``Tf``, flat
@@ -779,7 +779,7 @@ if AVAILABLE:
             for k in range(src.shape[1]):
                 dst[perm[s], k] = src[s, k]
 
-    @_kernel(_nrt=False)
+    @_kernel()
     def _walls_block(k, bb, out, dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law,
                      r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T,
                      ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
@@ -849,7 +849,7 @@ if AVAILABLE:
                        ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
         return _walls_sums(bb.shape[0] - 1, out)
 
-    @_kernel(_nrt=False)
+    @_kernel()
     def _pair_block(k, bb, out, law, r, v, rw, R, m, sid, table, ps, pe, pj, F, T, gl, lossy):
         """Pass 2 of block ``k``: the forces and torques of its grains' listed pairs (half
         list in cell order, :func:`_list_block`; Newton's third law), added to ``F``, ``T``;
@@ -911,7 +911,7 @@ if AVAILABLE:
                 gl[i] += li
         out[k, 0], out[k, 1], out[k, 2] = e_sum, ln_sum, lf_sum
 
-    @_kernel(_nrt=False)
+    @_kernel()
     def _correct_block(k, bb, out, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f,
                        qs, qn):
         """Pass 3 (:func:`_correct`) of block ``k``'s grains; its finite-check sum into
@@ -929,7 +929,7 @@ if AVAILABLE:
             cb[i] = (i * nb) // c
         return cb
 
-    @_kernel(_nrt=False)
+    @_kernel()
     def _done_blocks(k0, k1, bb, nxt, hout, wout, dt, hdt2, w2, al2, wm, Ff, Tf, im3, iI3, vf,
                      af, wf, alf, rf, r1f, qs, qn, R3, vpf, rwf, shape, law, r1, vp, rw, Rw, mw,
                      ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp,
