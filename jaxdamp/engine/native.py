@@ -198,12 +198,7 @@ def _cache_on_sources(dispatcher):
 
 
 def _kernel(**flags):
-    """``njit`` with the kernel's flags and the source-keyed cache. ``_nrt=False`` (numba's
-    option) compiles a function that allocates nothing without reference counting: the large
-    path's per-block functions and :func:`_over_cores`' serial compiles, whose calls with ~40
-    arrays each cost ~2 µs of atomic refcounts per block on the serial path (a large bed in a
-    batch, or one core; ``benchmarks/RESULTS.md``, "Large beds: unsigned indices"). numba
-    refuses to compile an allocation in such a function."""
+    """``njit`` with the kernel's flags and the source-keyed cache."""
     def wrap(fn):
         return _cache_on_sources(njit(cache=True, error_model="numpy", fastmath=FASTMATH,
                                       **flags)(fn))
