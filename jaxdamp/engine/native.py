@@ -51,7 +51,7 @@ from collections import namedtuple
 
 import numpy as np
 
-from jaxdamp.physics.contact import FASTMATH, GAMMA_S, MU, contact_scalar, pair_scalar
+from jaxdamp.physics.contact import FASTMATH, FASTMATH_STABLE, GAMMA_S, MU, contact_scalar, pair_scalar
 from jaxdamp.physics.containers import (
     CONTAINERS,
     section_scalar,
@@ -197,10 +197,11 @@ def _cache_on_sources(dispatcher):
     return dispatcher
 
 
-def _kernel(**flags):
-    """``njit`` with the kernel's flags and the source-keyed cache."""
+def _kernel(fastmath=FASTMATH, **flags):
+    """``njit`` with the kernel's flags (``fastmath``: :data:`FASTMATH`, or
+    :data:`FASTMATH_STABLE`) and the source-keyed cache."""
     def wrap(fn):
-        return _cache_on_sources(njit(cache=True, error_model="numpy", fastmath=FASTMATH,
+        return _cache_on_sources(njit(cache=True, error_model="numpy", fastmath=fastmath,
                                       **flags)(fn))
     return wrap
 
@@ -579,17 +580,19 @@ if AVAILABLE:
                 gl[i] += ln + lf
         return e_sum, ln_sum, lf_sum
 
-    @_kernel()
+    @_kernel(fastmath=FASTMATH_STABLE)
     def _correct(g0, g1, dt, wb, alb, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f, qs, qn):
         """Pass 3 over grains ``g0 … g1 − 1`` (a block, or ``0, n``): the velocity-Verlet
         corrector (new accelerations from the forces ``Ff`` and torques ``Tf``, flat
         ``(3n,)``; velocities, angular velocities and the predicted positions ``r1f`` into the
         state's flat views) and the rotation of the
-        quaternions ``qs`` into ``qn`` by the mid-step angular velocity. Returns the sum of
-        the new accelerations (the step's finite check). A function of its own, compiled apart
+        quaternions ``qs`` into ``qn`` by the mid-step angular velocity. Returns the step's
+        finite check: 0.0 where every new acceleration is finite, else NaN (counted in
+        integers, a sum whose order does not matter). A function of its own, compiled apart
         from the kernel's large body, so that its loops compile as loops alone (9 % of the
-        step, ``benchmarks/ab_native.py``)."""
-        h = 0.0
+        step, ``benchmarks/ab_native.py``), and with :data:`FASTMATH_STABLE`: the same bits
+        in every caller."""
+        bad = 0  # non-finite accelerations (x − x is 0 for a finite x, NaN otherwise)
         u0, u1 = U(g0), U(g1)  # unsigned indices (:data:`U`)
         for i in range(u0, u1):
             # the mid-step angular velocity ω + α dt/2 of the rotation (below)
@@ -598,12 +601,12 @@ if AVAILABLE:
             wm[2, i] = wb[i, 2] + 0.5 * dt * alb[i, 2]
         for j in range(U(3 * g0), U(3 * g1)):  # the corrector, flat
             a1 = Ff[j] * im3[j]
-            h += a1
+            bad += a1 - a1 != 0.0
             vf[j] = vf[j] + 0.5 * dt * (af[j] + a1)
             af[j] = a1
         for j in range(U(3 * g0), U(3 * g1)):
             al1 = Tf[j] * iI3[j]
-            h += al1
+            bad += al1 - al1 != 0.0
             wf[j] = wf[j] + 0.5 * dt * (alf[j] + al1)
             alf[j] = al1
         for j in range(U(3 * g0), U(3 * g1)):
@@ -622,7 +625,7 @@ if AVAILABLE:
                     qn[0, i], qn[1, i], qn[2, i], qn[3, i] = rotate_scalar(
                         qs[0, i], qs[1, i], qs[2, i], qs[3, i], wm[0, i], wm[1, i],
                         wm[2, i], dt)
-        return h
+        return 0.0 if bad == 0 else np.nan
 
     # -- large beds: grains in cell order, in blocks, the blocks over the cores ---------------
 
@@ -909,7 +912,7 @@ if AVAILABLE:
     @_kernel()
     def _correct_block(k, bb, out, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f,
                        qs, qn):
-        """Pass 3 (:func:`_correct`) of block ``k``'s grains; its finite-check sum into
+        """Pass 3 (:func:`_correct`) of block ``k``'s grains; its finite check into
         ``out[k]``."""
         out[k] = _correct(bb[k], bb[k + 1], dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf,
                           rf, r1f, qs, qn)
@@ -991,7 +994,7 @@ if AVAILABLE:
         ``shifted``), pass 3 (the corrector and the rotation into ``qn``) and, where ``nxt``,
         the next step's pass 1 (positions of the box ``z1``, ``zdp``, ``frames``; the grains'
         wall terms into ``gs``), every block's data read once. Returns the pairs' sums
-        ``(elastic energy, normal loss, friction loss)``, the corrector's check sum and pass
+        ``(elastic energy, normal loss, friction loss)``, the corrector's finite check (0 or NaN) and pass
         1's sums (:func:`_walls_sums`; zeros where not ``nxt``), each added block after
         block."""
         for phase in range(2):
