@@ -51,7 +51,14 @@ from collections import namedtuple
 
 import numpy as np
 
-from jaxdamp.physics.contact import FASTMATH, FASTMATH_STABLE, GAMMA_S, MU, contact_scalar, pair_scalar
+from jaxdamp.physics.contact import (
+    FASTMATH,
+    FASTMATH_STABLE,
+    GAMMA_S,
+    MU,
+    contact_scalar,
+    pair_scalar,
+)
 from jaxdamp.physics.containers import (
     CONTAINERS,
     section_scalar,
@@ -994,9 +1001,9 @@ if AVAILABLE:
         ``shifted``), pass 3 (the corrector and the rotation into ``qn``) and, where ``nxt``,
         the next step's pass 1 (positions of the box ``z1``, ``zdp``, ``frames``; the grains'
         wall terms into ``gs``), every block's data read once. Returns the pairs' sums
-        ``(elastic energy, normal loss, friction loss)``, the corrector's finite check (0 or NaN) and pass
-        1's sums (:func:`_walls_sums`; zeros where not ``nxt``), each added block after
-        block."""
+        ``(elastic energy, normal loss, friction loss)``, the corrector's finite check (0 or
+        NaN) and pass 1's sums (:func:`_walls_sums`; zeros where not ``nxt``), each added block
+        after block."""
         for phase in range(2):
             if inner:
                 _sweep_par(phase, cb, bb, nxt, pout, hout, wout, law, r1, vp, rw, Rw, mw, sid,
