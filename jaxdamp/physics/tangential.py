@@ -1,0 +1,153 @@
+"""The tangential spring with contact history (Mindlin–Deresiewicz, no-slip form): one contact's
+step, in both engines' forms (docs/physics.md §2, issue 39).
+
+jaxdamp's tangential force has been the thesis' viscous force capped by Coulomb
+(:func:`jaxdamp.physics.contact.contact_force`), with no memory of the contact. Every peer code
+(EDEM, Rocky, Chrono DEM-Engine, LAMMPS ``tangential mindlin``) also has a tangential spring: a
+contact remembers how far its two surfaces have moved against each other while touching, so that
+friction can hold a contact at rest (stick) and release elastic energy, not only dissipate. This
+module is that spring, one contact and one time step at a time:
+
+1. the stored displacement ``s`` (the contact's history, in the contact plane of the last step)
+   is turned into the present plane: its normal part removed and its length kept;
+2. it grows by the sliding velocity: ``s ← s + v_s dt`` (``v_s`` the tangential velocity of
+   grain ``i``'s surface against its partner's at the contact point);
+3. the force on ``i`` is the spring and a dashpot, ``F_t = −k_t s − γ_t v_s``;
+4. where ``|F_t| > μ F_n`` the contact slips: ``F_t`` is cut to ``μ F_n`` along itself and the
+   spring set to what that force implies, ``s = −(F_t + γ_t v_s)/k_t`` (the energy of the cut
+   part of the spring is dissipated by the slip).
+
+The spring's elastic energy is ``k_t |s|² / 2``. Out of contact the history is zero. The
+stiffness is Mindlin's for a Hertz contact,
+
+    k_t = 8 G* sqrt(R* ξ),    1/G* = (2 − ν_i)/G_i + (2 − ν_j)/G_j,    G = λ E / (2 (1 + ν)),
+
+so that ``k_t`` over the normal law's tangent stiffness ``dF_n/dξ = 2 E* sqrt(R* ξ)`` is
+``2 (1 − ν)/(2 − ν)`` for like materials (0.82 at ν = 0.3), at every overlap (:func:`stiffness`,
+:func:`compliance`). Where the stiffness changes within a contact (it grows and falls with
+``ξ``), ``k_t |s|²/2`` is not a potential: the force ``−k_t s`` does work that the spring's
+energy does not account for — the known incompleteness of the no-slip form (Thornton, Cummins &
+Cleary 2011), which the energy balance names as a channel of its own when the law is wired into
+the engines.
+
+The JAX form (:func:`spring_jax`) is safe under ``jax.grad`` (no division by a zero length);
+the scalar form (:func:`spring_scalar`) is compiled by numba for the native kernel and runs the
+same arithmetic. ``tests/test_tangential.py`` checks both against analytic oblique impacts of a
+sphere on a wall: the stick limit of a linear contact (the surfaces' tangential velocity after
+the impact is ``cos(π sqrt(7 k_t / (2 k_n)))`` times the one before) and gross sliding (the
+tangential impulse is ``μ`` times the normal one).
+
+All functions are pure; SI units.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import jax.numpy as jnp
+
+from jaxdamp.physics.contact import Vec, safe_sqrt, scalar_form
+
+
+def compliance(E: float, nu: float, stiffness_scale: float = 1.0) -> float:
+    """One body's shear compliance in Mindlin's ``1/G*``: ``(2 − ν)/G`` [1/Pa], with
+    ``G = λ E / (2 (1 + ν))`` (``λ``: the model's ``stiffness_scale``, as for ``E*``)."""
+    G = stiffness_scale * E / (2.0 * (1.0 + nu))
+    return (2.0 - nu) / G
+
+
+def stiffness(G_star, r_eff, xi):
+    """Mindlin's tangential stiffness ``k_t = 8 G* sqrt(R* ξ)`` [N/m] at overlaps ``ξ ≥ 0``
+    (JAX or NumPy arrays, or floats)."""
+    return 8.0 * G_star * jnp.sqrt(r_eff * jnp.maximum(xi, 0.0))
+
+
+class Spring(NamedTuple):
+    """One step of tangential springs. Shapes: leading axes ``S``.
+
+    Attributes:
+      force: tangential force on grain ``i`` [N], a :class:`Vec`.
+      history: the spring's displacement after the step [m], a :class:`Vec` in the contact
+        plane (zero where not touching).
+      energy: the spring's elastic energy ``k_t |s|² / 2`` [J].
+      sliding: whether the contact slipped (``|F_t|`` cut to ``μ F_n``).
+    """
+
+    force: Vec
+    history: Vec
+    energy: jnp.ndarray
+    sliding: jnp.ndarray
+
+
+def spring_jax(s: Vec, n: Vec, v_slide: Vec, dt, kt, gt, f_normal, mu, touching) -> Spring:
+    """One time step of tangential springs (module docstring), JAX form.
+
+    Args:
+      s: the stored displacements [m] (the last step's :attr:`Spring.history`), :class:`Vec`.
+      n: unit normals from the partner to grain ``i``, :class:`Vec`.
+      v_slide: tangential velocity of ``i``'s surface against its partner's at the contact
+        point [m/s] (in the plane normal to ``n``), :class:`Vec`.
+      dt: the time step [s].
+      kt: tangential stiffness [N/m] (:func:`stiffness`), > 0 where ``touching``.
+      gt: tangential damping [kg/s].
+      f_normal: normal force magnitude ``F_n ≥ 0`` [N].
+      mu: Coulomb coefficient [-].
+      touching: ``ξ > 0``; elsewhere force, history and energy are zero.
+
+    Example::
+
+        >>> import jax.numpy as jnp
+        >>> from jaxdamp.physics.contact import Vec
+        >>> z, one = jnp.zeros(()), jnp.ones(())
+        >>> sp = spring_jax(Vec(z, z, z), Vec(z, z, one), Vec(one, z, z), 1e-3, 1e4, 0.0,
+        ...                 1.0, 0.5, jnp.array(True))
+        >>> float(sp.force.x), bool(sp.sliding)   # the spring's 10 N cut to μ F_n = 0.5 N
+        (-0.5, True)
+    """
+    # 1. into the present contact plane, keeping the length
+    sr = s - n.scale(s.dot(n))
+    old2, new2 = s.dot(s), sr.dot(sr)
+    turned = new2 > 0
+    keep = jnp.where(turned, safe_sqrt(old2, turned) / safe_sqrt(new2, turned), 1.0)
+    # 2. grown by the sliding of this step
+    s1 = sr.scale(keep) + v_slide.scale(dt)
+    # 3. spring and dashpot; 4. cut to the Coulomb limit where it slips
+    f = Vec(-kt * s1.x - gt * v_slide.x, -kt * s1.y - gt * v_slide.y,
+            -kt * s1.z - gt * v_slide.z)
+    f2 = f.dot(f)
+    cap = mu * f_normal
+    sliding = touching & (f2 > cap * cap)
+    cut = jnp.where(sliding, cap / safe_sqrt(f2, sliding), 1.0)
+    f = f.scale(cut)
+    inv_k = jnp.where(touching, 1.0 / jnp.where(touching, kt, 1.0), 0.0)
+    slipped = Vec(-(f.x + gt * v_slide.x) * inv_k, -(f.y + gt * v_slide.y) * inv_k,
+                  -(f.z + gt * v_slide.z) * inv_k)
+    s2 = Vec(*(jnp.where(touching, jnp.where(sliding, a, b), 0.0)
+               for a, b in zip(slipped, s1)))
+    f = Vec(*(jnp.where(touching, c, 0.0) for c in f))
+    return Spring(force=f, history=s2, energy=0.5 * kt * s2.dot(s2), sliding=sliding)
+
+
+@scalar_form
+def spring_scalar(sx, sy, sz, nx, ny, nz, vx, vy, vz, dt, kt, gt, f_normal, mu):
+    """Scalar form of :func:`spring_jax` for one touching contact (``kt > 0``).
+
+    Returns the force on ``i`` ``(fx, fy, fz)``, the new history ``(sx, sy, sz)``, the
+    spring's energy and whether it slipped."""
+    sn = sx * nx + sy * ny + sz * nz
+    rx, ry, rz = sx - sn * nx, sy - sn * ny, sz - sn * nz
+    old2 = sx * sx + sy * sy + sz * sz
+    new2 = rx * rx + ry * ry + rz * rz
+    keep = math.sqrt(old2) / math.sqrt(new2) if new2 > 0.0 else 1.0
+    s1x, s1y, s1z = rx * keep + vx * dt, ry * keep + vy * dt, rz * keep + vz * dt
+    fx, fy, fz = -kt * s1x - gt * vx, -kt * s1y - gt * vy, -kt * s1z - gt * vz
+    f2 = fx * fx + fy * fy + fz * fz
+    cap = mu * f_normal
+    sliding = f2 > cap * cap
+    if sliding:
+        cut = cap / math.sqrt(f2)
+        fx, fy, fz = fx * cut, fy * cut, fz * cut
+        s1x, s1y, s1z = -(fx + gt * vx) / kt, -(fy + gt * vy) / kt, -(fz + gt * vz) / kt
+    energy = 0.5 * kt * (s1x * s1x + s1y * s1y + s1z * s1z)
+    return fx, fy, fz, s1x, s1y, s1z, energy, sliding

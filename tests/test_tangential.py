@@ -1,0 +1,181 @@
+"""The tangential spring with history (:mod:`jaxdamp.physics.tangential`): a sphere's oblique
+impact on a flat wall against analytic and independent results, and the JAX form against the
+scalar form."""
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from jaxdamp.physics import tangential as tg
+from jaxdamp.physics.contact import Vec
+
+M, R = 0.01, 0.005  # the sphere [kg], [m]; I = (2/5) M R²
+INERTIA = 0.4 * M * R * R
+NU = 0.3
+KAPPA = 2.0 * (1.0 - NU) / (2.0 - NU)  # Mindlin's k_t over the normal tangent stiffness
+
+
+def _impact(normal, kt_of, vn, vt, mu, gt=0.0, steps=20000):
+    """A sphere at the wall (``ξ = 0``) moving into it at ``vn`` and along it at ``vt`` [m/s],
+    not spinning, through its contact with the scalar spring (symplectic Euler, ``steps``
+    steps per contact duration estimate). ``normal(ξ) -> F_n``, ``kt_of(ξ) -> k_t``. Returns
+    the velocities after the contact: normal, tangential, ``R ω`` and the contact point's
+    tangential velocity ``v_t − R ω``."""
+    # contact time of the linear contact at this stiffness sets the step; Hertz runs longer
+    k0 = normal(1e-5) / 1e-5
+    dt = math.pi / math.sqrt(k0 / M) / steps
+    z, vz, vx, wy = R, -vn, vt, 0.0
+    s = (0.0, 0.0, 0.0)
+    for _ in range(50 * steps):
+        xi = R - z
+        fx = fz = 0.0
+        if xi > 0.0:
+            fn = normal(xi)
+            u = vx - R * wy  # the contact point's tangential velocity (x only)
+            fx, _, _, s0, s1, s2, _, _ = tg.spring_scalar(*s, 0.0, 0.0, 1.0, u, 0.0, 0.0, dt,
+                                                          kt_of(xi), gt, fn, mu)
+            s = (s0, s1, s2)
+            fz = fn
+        else:
+            s = (0.0, 0.0, 0.0)
+            if vz > 0.0:
+                break
+        vz += dt * fz / M
+        vx += dt * fx / M
+        wy += dt * (-R * fx) / INERTIA  # torque −R n × F_t about y
+        z += dt * vz
+    else:  # pragma: no cover
+        raise AssertionError("the sphere never left the wall")
+    return vz, vx, R * wy, vx - R * wy
+
+
+def test_stick_limit_of_a_linear_contact_is_a_tangential_oscillation():
+    """A linear normal contact (``k_n``) and a constant tangential spring ``k_t = κ k_n``, no
+    slip (μ huge), no damping: the contact point's tangential velocity ``u`` obeys
+    ``ü = −(7/2)(k_t/m) u`` while the contact lasts ``π/ω_n``, so after the impact
+    ``u/u_0 = cos(π sqrt(7 k_t/(2 k_n)))`` (0.582 at ν = 0.3: the tangential oscillation runs
+    0.85 of its period while the contact lasts) — an elastic exchange between sliding and
+    spin that the viscous law cannot produce (it only slows ``u``). The normal velocity is
+    restored (elastic), and the tangential impulse ``J`` moves ``v_t`` by ``J/m`` and ``R ω``
+    by ``−(5/2) J/m`` (a solid sphere)."""
+    kn = 1.0e5
+    vz, vx, rw, u = _impact(lambda xi: kn * xi, lambda xi: KAPPA * kn, 1.0, 0.5, 1e9)
+    want = math.cos(math.pi * math.sqrt(3.5 * KAPPA))
+    assert u / 0.5 == pytest.approx(want, abs=2e-3)
+    assert vz == pytest.approx(1.0, rel=1e-3)
+    assert rw == pytest.approx(-2.5 * (vx - 0.5), rel=1e-9)
+
+
+def _hertz(E_star):
+    return lambda xi: (4.0 / 3.0) * E_star * math.sqrt(R) * xi ** 1.5
+
+
+E_STAR = 1.0e8 / (2.0 * (1.0 - NU**2))  # two like bodies of E = 100 MPa (the wall as rigid: 1)
+G_STAR = 1.0 / (2.0 * tg.compliance(1.0e8, NU))
+
+
+def test_gross_sliding_impulse_is_mu_times_the_normal_one():
+    """Hertz normal and Mindlin tangential contact, tangential speed far above what friction
+    can stop (``v_t/v_n = 5``, μ = 0.1: the rigid-body slip criterion ``(7/2) μ (1 + e) v_n <
+    v_t`` holds with room): the contact slides throughout, so the tangential impulse is μ times
+    the normal one: ``v_t' = v_t − 2 μ v_n`` and ``R ω' = 5 μ v_n`` (elastic: ``e = 1``)."""
+    vz, vx, rw, _ = _impact(_hertz(E_STAR), lambda xi: float(tg.stiffness(G_STAR, R, xi)),
+                            1.0, 5.0, 0.1)
+    assert vz == pytest.approx(1.0, rel=1e-3)
+    assert vx == pytest.approx(5.0 - 2 * 0.1 * 1.0, rel=1e-4)
+    assert rw == pytest.approx(5 * 0.1 * 1.0, rel=1e-3)
+
+
+def test_stick_limit_of_hertz_mindlin_against_an_ode_solver():
+    """Hertz normal and Mindlin tangential contact without slip or damping against scipy's
+    adaptive Runge–Kutta on the continuous equations ``ξ'' = −F_n(ξ)/m``, ``s' = u``,
+    ``u' = −(7/2) k_t(ξ) s/m``: the contact point's tangential velocity after the impact
+    agrees to 1e-3 m/s (2e-3 of its initial value)."""
+    fn = _hertz(E_STAR)
+
+    def rhs(t, y):
+        xi, xid, s, u = y
+        x = max(xi, 0.0)
+        return [xid, -fn(x) / M, u, -3.5 * 8.0 * G_STAR * math.sqrt(R * x) * s / M]
+
+    def left(t, y):
+        return y[0]
+    left.terminal, left.direction = True, -1
+    sol = solve_ivp(rhs, (0, 1.0), [1e-12, 1.0, 0.0, 0.5], rtol=1e-10, atol=1e-14,
+                    events=left)
+    u_ref = sol.y_events[0][0][3]
+    _, _, _, u = _impact(fn, lambda xi: float(tg.stiffness(G_STAR, R, xi)), 1.0, 0.5, 1e9)
+    assert u == pytest.approx(u_ref, abs=1e-3)
+    assert abs(u_ref - 0.5) > 0.01  # the spring changed the sliding velocity (0.477 m/s)
+
+
+def test_history_turns_into_the_new_contact_plane_keeping_its_length():
+    """A stored displacement in the plane of an old normal, the normal turned by 10°: the
+    history used is in the new plane (normal part zero) and as long as before."""
+    s = Vec(*(jnp.asarray(x) for x in (1e-6, 2e-6, 0.0)))
+    a = math.radians(10.0)
+    n = Vec(*(jnp.asarray(x) for x in (math.sin(a), 0.0, math.cos(a))))
+    zero = Vec(*(jnp.zeros(()) for _ in range(3)))
+    sp = tg.spring_jax(s, n, zero, 1e-6, 1e3, 0.0, 1.0, 1e9, jnp.asarray(True))
+    h = sp.history
+    assert abs(float(h.dot(n))) < 1e-21
+    assert float(jnp.sqrt(h.dot(h))) == pytest.approx(math.sqrt(5e-12), rel=1e-12)
+    assert float(sp.energy) == pytest.approx(0.5 * 1e3 * 5e-12, rel=1e-12)
+
+
+def _random_contacts(n, seed=0):
+    rng = np.random.default_rng(seed)
+    nrm = rng.normal(size=(n, 3))
+    nrm /= np.linalg.norm(nrm, axis=1, keepdims=True)
+    s = rng.normal(scale=1e-6, size=(n, 3))
+    s -= nrm * np.sum(s * nrm, 1, keepdims=True)  # last step's plane ...
+    s += rng.normal(scale=2e-7, size=(n, 3))  # ... off this step's by a little
+    v = rng.normal(scale=0.1, size=(n, 3))
+    v -= nrm * np.sum(v * nrm, 1, keepdims=True)
+    kt = rng.uniform(1e3, 1e5, n)
+    gt = rng.uniform(0.0, 0.2, n)
+    fn = rng.uniform(0.0, 0.3, n)
+    mu = rng.uniform(0.1, 0.6, n)
+    s[:5] = 0.0  # new contacts
+    return nrm, s, v, kt, gt, fn, mu
+
+
+def test_jax_form_equals_scalar_form():
+    """200 contacts, sticking and sliding, new and old, some with a history off the present
+    plane: both forms give the same force, history, energy and slip flag to round-off; where
+    not touching the JAX form gives zeros."""
+    nrm, s, v, kt, gt, fn, mu = _random_contacts(200)
+    dt = 1e-6
+    touching = np.ones(200, bool)
+    touching[-3:] = False
+    sp = tg.spring_jax(Vec.of(jnp.asarray(s)), Vec.of(jnp.asarray(nrm)), Vec.of(jnp.asarray(v)),
+                       dt, jnp.asarray(kt), jnp.asarray(gt), jnp.asarray(fn), jnp.asarray(mu),
+                       jnp.asarray(touching))
+    jf, jh = np.asarray(sp.force.stack()), np.asarray(sp.history.stack())
+    sliding = np.asarray(sp.sliding)
+    assert 20 < sliding.sum() < 180  # both regimes
+    for i in range(197):
+        out = tg.spring_scalar(*s[i], *nrm[i], *v[i], dt, kt[i], gt[i], fn[i], mu[i])
+        np.testing.assert_allclose(jf[i], out[:3], rtol=1e-12, atol=1e-18)
+        np.testing.assert_allclose(jh[i], out[3:6], rtol=1e-12, atol=1e-22)
+        assert float(sp.energy[i]) == pytest.approx(out[6], rel=1e-12, abs=1e-24)
+        assert bool(sliding[i]) == out[7]
+        assert np.linalg.norm(jf[i]) <= mu[i] * fn[i] * (1 + 1e-12) or not out[7]
+    assert not jf[-3:].any() and not jh[-3:].any() and not np.asarray(sp.energy)[-3:].any()
+
+
+def test_gradients_are_finite_at_a_new_contact():
+    """``jax.grad`` of the force through a contact with no history yet (zero lengths) and
+    through a sliding one: finite."""
+    def fx(vx, s0):
+        z = jnp.zeros(())
+        sp = tg.spring_jax(Vec(s0, z, z), Vec(z, z, z + 1.0), Vec(vx, z, z), 1e-6, 1e4, 0.1,
+                           1.0, 0.3, jnp.asarray(True))
+        return sp.force.x + sp.energy
+    for vx, s0 in ((0.0, 0.0), (1.0, 0.0), (0.0, 1e-3)):
+        g = jax.grad(fx, argnums=(0, 1))(jnp.asarray(vx), jnp.asarray(s0))
+        assert all(np.isfinite(float(x)) for x in g)
