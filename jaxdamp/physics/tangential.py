@@ -13,11 +13,32 @@ module is that spring, one contact and one time step at a time:
 2. it grows by the sliding velocity: ``s ← s + v_s dt`` (``v_s`` the tangential velocity of
    grain ``i``'s surface against its partner's at the contact point);
 3. the force on ``i`` is the spring and a dashpot, ``F_t = −k_t s − γ_t v_s``;
-4. where ``|F_t| > μ F_n`` the contact slips: ``F_t`` is cut to ``μ F_n`` along itself and the
-   spring set to what that force implies, ``s = −(F_t + γ_t v_s)/k_t`` (the energy of the cut
-   part of the spring is dissipated by the slip).
+4. where ``|F_t| > μ F_n`` the contact slips: ``F_t`` is cut to ``μ F_n`` along itself, by a
+   factor ``c < 1``, and the spring and the dashpot with it: ``s ← c s`` (the energy of the cut
+   part of the spring is dissipated by the slip). LAMMPS' ``tangential mindlin`` sets the spring
+   to ``−(F_t + γ_t v_s)/k_t`` instead (the dashpot uncut); the two agree without damping, and
+   the cut of both keeps the slip's loss from going negative (below).
 
-The spring's elastic energy is ``k_t |s|² / 2``. Out of contact the history is zero. The
+The spring's elastic energy is ``k_t |s|² / 2``. Out of contact the history is zero.
+
+**Energy.** With ``s_a`` the turned history (as long as ``s``), ``s'`` the new one and ``F_t``
+the force, ``F_t = −k_t s' − c γ_t v_s`` holds in both regimes, so the power the grains give the
+contact, ``−F_t·v_s``, splits exactly, step by step, into
+
+* damping ``c γ_t |v_s|²`` [W] (:attr:`Spring.damping`; ``c = 1`` while it sticks);
+* slip ``(k_t s'·v_s dt − k_t (|s'|² − |s_a|²)/2)/dt`` [W] (:attr:`Spring.slip`): the work the
+  spring took and did not store; while it sticks, only the update's ``k_t |v_s dt|²/(2 dt)``
+  (``O(dt)``, the discrete spring's own loss). With ``s' = c s_1`` (``s_1 = s_a + v_s dt``,
+  ``x = |v_s dt|``) it is at least ``k_t ((1 − c²)|s_1|² − 2 (1 − c)|s_1| x + x²)/(2 dt)``, a
+  quadratic in ``x`` whose discriminant ``−8 c (1 − c)|s_1|²`` is not positive: never
+  negative;
+* the spring's energy change at the new stiffness, ``k_t (|s'|² − |s_a|²)/2``;
+
+and the change of stiffness between steps adds ``(k_t − k_t^{old}) |s|²/2`` to the spring's
+energy without any force doing it (:attr:`Spring.turned` is ``k_t |s|²/2``, the old
+displacement at the new stiffness: the sum over contacts less the last step's total spring
+energy is that work, a channel of the balance; at separation it takes the spring's remaining
+energy). The
 stiffness is Mindlin's for a Hertz contact,
 
     k_t = 8 G* sqrt(R* ξ),    1/G* = (2 − ν_i)/G_i + (2 − ν_j)/G_j,    G = λ E / (2 (1 + ν)),
@@ -70,13 +91,19 @@ class Spring(NamedTuple):
       force: tangential force on grain ``i`` [N], a :class:`Vec`.
       history: the spring's displacement after the step [m], a :class:`Vec` in the contact
         plane (zero where not touching).
-      energy: the spring's elastic energy ``k_t |s|² / 2`` [J].
+      energy: the spring's elastic energy ``k_t |s'|² / 2`` after the step [J].
+      turned: the last step's displacement at this step's stiffness, ``k_t |s|² / 2`` [J].
+      damping: the dashpot's loss ``c γ_t |v_s|²`` [W] (``c``: the Coulomb cut, 1 in stick).
+      slip: the slip's loss [W] (module docstring; ≥ 0).
       sliding: whether the contact slipped (``|F_t|`` cut to ``μ F_n``).
     """
 
     force: Vec
     history: Vec
     energy: jnp.ndarray
+    turned: jnp.ndarray
+    damping: jnp.ndarray
+    slip: jnp.ndarray
     sliding: jnp.ndarray
 
 
@@ -118,15 +145,14 @@ def spring_jax(s: Vec, n: Vec, v_slide: Vec, dt, kt, gt, f_normal, mu, touching)
     f2 = f.dot(f)
     cap = mu * f_normal
     sliding = touching & (f2 > cap * cap)
-    cut = jnp.where(sliding, cap / safe_sqrt(f2, sliding), 1.0)
+    cut = jnp.where(touching, jnp.where(sliding, cap / safe_sqrt(f2, sliding), 1.0), 0.0)
     f = f.scale(cut)
-    inv_k = jnp.where(touching, 1.0 / jnp.where(touching, kt, 1.0), 0.0)
-    slipped = Vec(-(f.x + gt * v_slide.x) * inv_k, -(f.y + gt * v_slide.y) * inv_k,
-                  -(f.z + gt * v_slide.z) * inv_k)
-    s2 = Vec(*(jnp.where(touching, jnp.where(sliding, a, b), 0.0)
-               for a, b in zip(slipped, s1)))
-    f = Vec(*(jnp.where(touching, c, 0.0) for c in f))
-    return Spring(force=f, history=s2, energy=0.5 * kt * s2.dot(s2), sliding=sliding)
+    s2 = s1.scale(cut)  # the spring cut with the force (zero where not touching)
+    kt = jnp.where(touching, kt, 0.0)
+    s22, sa2 = s2.dot(s2), old2  # |s_a| = |s|
+    slip = kt * (s2.dot(v_slide) - 0.5 * (s22 - sa2) / dt)
+    return Spring(force=f, history=s2, energy=0.5 * kt * s22, turned=0.5 * kt * sa2,
+                  damping=cut * gt * v_slide.dot(v_slide), slip=slip, sliding=sliding)
 
 
 @scalar_form
@@ -134,7 +160,8 @@ def spring_scalar(sx, sy, sz, nx, ny, nz, vx, vy, vz, dt, kt, gt, f_normal, mu):
     """Scalar form of :func:`spring_jax` for one touching contact (``kt > 0``).
 
     Returns the force on ``i`` ``(fx, fy, fz)``, the new history ``(sx, sy, sz)``, the
-    spring's energy and whether it slipped."""
+    spring's energy, the turned energy, the damping and slip losses and whether it slipped
+    (:class:`Spring`)."""
     sn = sx * nx + sy * ny + sz * nz
     rx, ry, rz = sx - sn * nx, sy - sn * ny, sz - sn * nz
     old2 = sx * sx + sy * sy + sz * sz
@@ -145,9 +172,12 @@ def spring_scalar(sx, sy, sz, nx, ny, nz, vx, vy, vz, dt, kt, gt, f_normal, mu):
     f2 = fx * fx + fy * fy + fz * fz
     cap = mu * f_normal
     sliding = f2 > cap * cap
+    cut = 1.0
     if sliding:
         cut = cap / math.sqrt(f2)
         fx, fy, fz = fx * cut, fy * cut, fz * cut
-        s1x, s1y, s1z = -(fx + gt * vx) / kt, -(fy + gt * vy) / kt, -(fz + gt * vz) / kt
-    energy = 0.5 * kt * (s1x * s1x + s1y * s1y + s1z * s1z)
-    return fx, fy, fz, s1x, s1y, s1z, energy, sliding
+        s1x, s1y, s1z = s1x * cut, s1y * cut, s1z * cut
+    s22 = s1x * s1x + s1y * s1y + s1z * s1z
+    slip = kt * (s1x * vx + s1y * vy + s1z * vz - 0.5 * (s22 - old2) / dt)
+    return (fx, fy, fz, s1x, s1y, s1z, 0.5 * kt * s22, 0.5 * kt * old2,
+            cut * gt * (vx * vx + vy * vy + vz * vz), slip, sliding)
