@@ -20,49 +20,12 @@ KAPPA = 2.0 * (1.0 - NU) / (2.0 - NU)  # Mindlin's k_t over the normal tangent s
 
 
 def _impact(normal, kt_of, vn, vt, mu, gt=0.0, steps=20000, energy=None):
-    """A sphere at the wall (``ξ = 0``) moving into it at ``vn`` and along it at ``vt`` [m/s],
-    not spinning, through its contact with the scalar spring (symplectic Euler, ``steps``
-    steps per contact duration estimate). ``normal(ξ) -> F_n``, ``kt_of(ξ) -> k_t``. Returns
-    the velocities after the contact: normal, tangential, ``R ω`` and the contact point's
-    tangential velocity ``v_t − R ω``; where ``energy`` is a dict, the tangential force's
-    work on the sphere, the spring's losses and the stiffness work summed into it [J]."""
-    # contact time of the linear contact at this stiffness sets the step; Hertz runs longer
-    k0 = normal(1e-5) / 1e-5
-    dt = math.pi / math.sqrt(k0 / M) / steps
-    z, vz, vx, wy = R, -vn, vt, 0.0
-    s = (0.0, 0.0, 0.0)
-    e = dict(work=0.0, damping=0.0, slip=0.0, stiffness=0.0, spring=0.0, max_spring=0.0)
-    for _ in range(50 * steps):
-        xi = R - z
-        fx = fz = 0.0
-        if xi > 0.0:
-            fn = normal(xi)
-            u = vx - R * wy  # the contact point's tangential velocity (x only)
-            (fx, _, _, s0, s1, s2, en, turned, damp, slip, _) = tg.spring_scalar(
-                *s, 0.0, 0.0, 1.0, u, 0.0, 0.0, dt, kt_of(xi), gt, fn, mu)
-            s = (s0, s1, s2)
-            fz = fn
-            e["work"] += fx * u * dt
-            e["damping"] += damp * dt
-            e["slip"] += slip * dt
-            e["stiffness"] += turned - e["spring"]
-            e["spring"] = en
-            e["max_spring"] = max(e["max_spring"], en)
-        else:
-            s = (0.0, 0.0, 0.0)
-            e["stiffness"] -= e["spring"]  # the spring's energy at separation
-            e["spring"] = 0.0
-            if vz > 0.0:
-                break
-        vz += dt * fz / M
-        vx += dt * fx / M
-        wy += dt * (-R * fx) / INERTIA  # torque −R n × F_t about y
-        z += dt * vz
-    else:  # pragma: no cover
-        raise AssertionError("the sphere never left the wall")
+    """:func:`tangential.oblique_impact` of the test's sphere: ``(vn, vt, R ω, u)`` after the
+    contact; its books into the dict ``energy``."""
+    out = tg.oblique_impact(normal, kt_of, M, R, vn, vt, mu, gt, steps)
     if energy is not None:
-        energy.update(e)
-    return vz, vx, R * wy, vx - R * wy
+        energy.update(out._asdict())
+    return out.vn, out.vt, out.spin, out.u
 
 
 def _balance(e):
