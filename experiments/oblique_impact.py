@@ -38,6 +38,7 @@ from scipy.integrate import solve_ivp
 from jaxdamp.cases import presets
 from jaxdamp.io.common import put
 from jaxdamp.physics import tangential as tg
+from jaxdamp.physics.contact import hertz_normal_scalar
 from jaxdamp.studies import scaffold
 
 R, VN = 3e-3, 1.0  # [m], [m/s]
@@ -52,11 +53,15 @@ def _material():
 
 
 def _laws(E_star, G_star):
+    """The contact's normal force ``F_n(ξ)`` (the Hertz law, elastic: ``R* = R`` on a wall)
+    and tangential stiffness ``k_t(ξ)`` (:func:`tangential.stiffness_scalar`)."""
+    k = (4.0 / 3.0) * E_star * math.sqrt(R)  # hertz_pair_scalar's k_n
+
     def normal(xi):
-        return (4.0 / 3.0) * E_star * math.sqrt(R) * xi**1.5
+        return hertz_normal_scalar(xi, math.sqrt(xi), 0.0, k, 0.0)[0]
 
     def kt(xi):
-        return 8.0 * G_star * math.sqrt(R * max(xi, 0.0))
+        return tg.stiffness_scalar(G_star, R, xi)
     return normal, kt
 
 

@@ -79,7 +79,7 @@ def test_gross_sliding_impulse_is_mu_times_the_normal_one():
     v_t`` holds with room): the contact slides throughout, so the tangential impulse is μ times
     the normal one: ``v_t' = v_t − 2 μ v_n`` and ``R ω' = 5 μ v_n`` (elastic: ``e = 1``)."""
     e = {}
-    vz, vx, rw, _ = _impact(_hertz(E_STAR), lambda xi: float(tg.stiffness(G_STAR, R, xi)),
+    vz, vx, rw, _ = _impact(_hertz(E_STAR), lambda xi: tg.stiffness_scalar(G_STAR, R, xi),
                             1.0, 5.0, 0.1, gt=1e-3, energy=e)
     assert vz == pytest.approx(1.0, rel=1e-3)
     assert vx == pytest.approx(5.0 - 2 * 0.1 * 1.0, rel=1e-4)
@@ -110,7 +110,7 @@ def test_stick_limit_of_hertz_mindlin_against_an_ode_solver():
     sol = solve_ivp(rhs, (0, 1.0), [1e-12, 1.0, 0.0, 0.5], rtol=1e-10, atol=1e-14,
                     events=left)
     u_ref = sol.y_events[0][0][3]
-    _, _, _, u = _impact(fn, lambda xi: float(tg.stiffness(G_STAR, R, xi)), 1.0, 0.5, 1e9)
+    _, _, _, u = _impact(fn, lambda xi: tg.stiffness_scalar(G_STAR, R, xi), 1.0, 0.5, 1e9)
     assert u == pytest.approx(u_ref, abs=1e-3)
     assert abs(u_ref - 0.5) > 0.01  # the spring changed the sliding velocity (0.477 m/s)
 
@@ -193,3 +193,14 @@ def test_gradients_are_finite_at_a_new_contact():
     for vx, s0 in ((0.0, 0.0), (1.0, 0.0), (0.0, 1e-3)):
         g = jax.grad(fx, argnums=(0, 1))(jnp.asarray(vx), jnp.asarray(s0))
         assert all(np.isfinite(float(x)) for x in g)
+
+
+def test_stiffness_forms_agree():
+    """Mindlin's ``k_t = 8 G* sqrt(R* ξ)``: the JAX form equals the scalar form, and both are
+    zero where ``ξ ≤ 0``."""
+    xi = np.array([-1e-6, 0.0, 1e-9, 1e-6, 3e-5])
+    want = [tg.stiffness_scalar(G_STAR, R, float(x)) for x in xi]
+    np.testing.assert_allclose(np.asarray(tg.stiffness(G_STAR, R, jnp.asarray(xi))), want,
+                               rtol=1e-14)
+    assert want[0] == want[1] == 0.0
+    assert want[3] == pytest.approx(8 * G_STAR * math.sqrt(R * 1e-6), rel=1e-14)

@@ -73,12 +73,12 @@ except ImportError:  # pragma: no cover - numba is a dependency; keep the JAX en
 FASTMATH = {"contract", "reassoc", "arcp", "nsz"}
 #: The flags that keep a function's bits independent of where LLVM inlines it: contraction
 #: (an FMA is the same in SIMD and scalar code) and signed zeros, not reassociation nor
-#: reciprocals. With those two, a function's arithmetic may be re-ordered after LLVM inlines it
-#: into a caller, and whether it does depends on numba's cache (a callee loaded from the cache
-#: is linked as object code, one compiled in the process as IR): the same step gave other
-#: quaternion bits in a batch than alone when the cache was written mid-way (benchmarks/
-#: RESULTS.md, "Bits that depend on the cache"). For the kernel's functions whose results are
-#: state (the corrector and the rotation).
+#: reciprocals. With reassociation or reciprocals, a function's arithmetic may be re-ordered
+#: after LLVM inlines it into a caller, and whether it does depends on numba's cache (a callee
+#: loaded from the cache is linked as object code, one compiled in the process as IR): the
+#: same step gave other quaternion bits in a batch than alone when the cache was written
+#: mid-way (benchmarks/RESULTS.md, "Bits that depend on the cache"). For the kernel's
+#: functions whose results are state (the corrector and the rotation).
 FASTMATH_STABLE = {"contract", "nsz"}
 
 

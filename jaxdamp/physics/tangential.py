@@ -81,9 +81,15 @@ def compliance(E: float, nu: float, stiffness_scale: float = 1.0) -> float:
 
 
 def stiffness(G_star, r_eff, xi):
-    """Mindlin's tangential stiffness ``k_t = 8 G* sqrt(R* ξ)`` [N/m] at overlaps ``ξ ≥ 0``
-    (JAX or NumPy arrays, or floats)."""
+    """Mindlin's tangential stiffness ``k_t = 8 G* sqrt(R* ξ)`` [N/m] at overlaps ``ξ``
+    (zero where ``ξ ≤ 0``), JAX form."""
     return 8.0 * G_star * jnp.sqrt(r_eff * jnp.maximum(xi, 0.0))
+
+
+@scalar_form
+def stiffness_scalar(G_star, r_eff, xi):
+    """Scalar form of :func:`stiffness`."""
+    return 8.0 * G_star * math.sqrt(r_eff * max(xi, 0.0))
 
 
 class Spring(NamedTuple):
