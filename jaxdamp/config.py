@@ -402,6 +402,12 @@ class Config:
       contact_law: the normal contact law by name, one of :data:`jaxdamp.physics.contact.LAWS`:
         ``"hertz"`` (Hertz + viscoelastic, docs/physics.md §2) or ``"linear"`` (linear spring–dashpot
         with a speed-independent restitution; needs ``Material.linear_stiffness``).
+      tangential_law: the tangential contact force by name, one of
+        :data:`jaxdamp.validation.TANGENTIAL_LAWS`: ``"viscous"`` (default; the
+        thesis' ``γ_s sqrt(ξ) |v_s|`` capped by Coulomb, no memory) or ``"mindlin"`` (the
+        Hertz–Mindlin tangential spring with contact history, ``k_t = 8 G* sqrt(R* ξ)`` from
+        the materials' ``E`` and ``nu``, damped with the normal law's relaxation time;
+        ``gamma_s`` is then unused; Hertz law; the JAX engine; docs/physics.md §2).
       name: preset or user label.
       notes: free text, e.g. deviations from a source.
       cells: the number ``k`` of identical cells of the damper on the same primary degree of
@@ -428,6 +434,7 @@ class Config:
     mixing: str = "arithmetic"
     wall_damping: str = "mixed"
     contact_law: str = "hertz"
+    tangential_law: str = "viscous"
     name: str = "custom"
     notes: str = ""
     container: Container | None = None

@@ -48,6 +48,12 @@ def _material(mat: Material, name: str, grain: bool) -> None:
 #: named here so that a wrong name is refused without importing the physics.
 CONTACT_LAWS = ("hertz", "linear")
 
+#: The tangential laws by name (``Config.tangential_law``; named here, so that a wrong name is
+#: refused without importing the physics): ``"viscous"``, the thesis' viscous force capped by
+#: Coulomb, without memory (:func:`jaxdamp.physics.contact.contact_force`), and ``"mindlin"``,
+#: the spring with history (:func:`jaxdamp.physics.tangential.contact_force`; Hertz only).
+TANGENTIAL_LAWS = ("viscous", "mindlin")
+
 #: Grain–wall damping conventions (``Config.wall_damping``).
 WALL_DAMPING = ("mixed", "calibrated")
 
@@ -68,6 +74,16 @@ def engine_precision_error(engine: str, precision: str) -> str | None:
     if engine in ("native", "fused") and precision != "float64":
         return (f"numerics.precision = {precision!r} runs on the JAX engine only (the "
                 f"{engine} kernel computes in float64): set numerics.engine = 'jax' or 'auto'")
+    return None
+
+
+def engine_tangential_error(engine: str, tangential: str) -> str | None:
+    """Why ``engine`` cannot run the tangential law ``tangential``, or ``None``: the tangential
+    spring with history (``"mindlin"``) runs on the JAX engine only so far (the native kernel
+    and the fused device step have the viscous law)."""
+    if engine in ("native", "fused") and tangential != "viscous":
+        return (f"tangential_law = {tangential!r} runs on the JAX engine only (the {engine} "
+                "kernel has the viscous tangential law): set numerics.engine = 'jax' or 'auto'")
     return None
 
 
@@ -315,6 +331,21 @@ def _container_shape(config: Config) -> None:
                           f"{', '.join(fields)} [m] (and Lz)")
 
 
+def _check_tangential(config: Config) -> None:
+    """``tangential_law``: a registered name; the spring with history needs the Hertz law
+    (its stiffness ``8 G* sqrt(R* ξ)`` and its damping follow the Hertz contact) and a bed."""
+    law = config.tangential_law
+    if law not in TANGENTIAL_LAWS:
+        raise ConfigError(f"tangential_law = {law!r}: expected one of {TANGENTIAL_LAWS}")
+    if law == "mindlin" and config.contact_law != "hertz":
+        raise ConfigError(f"tangential_law = 'mindlin' needs contact_law = 'hertz' (got "
+                          f"{config.contact_law!r}): Mindlin's stiffness 8 G* sqrt(R* ξ) and "
+                          "its damping are those of a Hertz contact")
+    if law == "mindlin" and config.system == "impact":
+        raise ConfigError("tangential_law = 'mindlin' applies to the DEM systems ('primary', "
+                          "'driven'); system = 'impact' (S3) has no tangential force")
+
+
 def validate(config: Config) -> Config:
     """Raise :class:`ConfigError` for any invalid value; return the config, with every
     species' count derived from its ``mass_ratio`` or ``fill_fraction`` where it states one
@@ -326,6 +357,7 @@ def validate(config: Config) -> Config:
     if config.contact_law not in CONTACT_LAWS:
         raise ConfigError(
             f"contact_law = {config.contact_law!r}: expected one of {CONTACT_LAWS}")
+    _check_tangential(config)
     if config.wall_damping not in WALL_DAMPING:
         raise ConfigError(f"wall_damping = {config.wall_damping!r}: expected one of "
                           f"{WALL_DAMPING}")
@@ -412,6 +444,8 @@ def validate(config: Config) -> Config:
         raise ConfigError(f"numerics.precision = {num.precision!r}: expected one of "
                           f"{PRECISIONS}")
     if (why := engine_precision_error(num.engine, num.precision)) is not None:
+        raise ConfigError(why)
+    if (why := engine_tangential_error(num.engine, config.tangential_law)) is not None:
         raise ConfigError(why)
     if num.engine == "native" and importlib.util.find_spec("numba") is None:
         raise ConfigError("numerics.engine = 'native' needs numba (pip install numba)")

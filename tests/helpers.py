@@ -94,7 +94,8 @@ def advance(model, st, nbrs, pb, n_records, record_every, engine="jax", on_reall
     """One driver chunk from given states and lists (no non-finite check: tests may blow
     up on purpose): ``(batch, records)``."""
     model, engine = engine_model(model, engine)
-    b = driver.Batch(model, pb, st, nbrs, driver.resolve_engine(engine, model.precision), 1.5)
+    b = driver.Batch(model, pb, st, nbrs, driver.resolve_engine(
+        engine, model.precision, tangential=model.tangential), 1.5)
     return driver.advance(b, n_records, record_every, on_realloc=on_realloc, check=False)
 
 

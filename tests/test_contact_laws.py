@@ -45,7 +45,7 @@ def _random_rows(law, rng, n):
     for c, name in enumerate(law.columns):
         lo, hi = {"gamma_s": (0.0, 300.0), "mu": (0.0, 0.8), "E_star": (1e8, 1e11),
                   "gamma_n": (0.0, 100.0), "A": (0.0, 1e-5), "k": (1e3, 1e7),
-                  "zeta": (0.0, 0.9)}[name]
+                  "zeta": (0.0, 0.9), "G_star": (1e8, 1e11)}[name]
         rows[:, c] = rng.uniform(lo, hi, n)
     return rows
 

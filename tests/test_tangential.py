@@ -11,7 +11,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from jaxdamp.physics import tangential as tg
-from jaxdamp.physics.contact import Vec
+from jaxdamp.physics.contact import Vec, shear_compliance
 
 M, R = 0.01, 0.005  # the sphere [kg], [m]; I = (2/5) M R²
 INERTIA = 0.4 * M * R * R
@@ -55,10 +55,10 @@ def test_stick_limit_of_a_linear_contact_is_a_tangential_oscillation():
     assert u / 0.5 == pytest.approx(want, abs=2e-3)
     assert vz == pytest.approx(1.0, rel=1e-3)
     assert rw == pytest.approx(-2.5 * (vx - 0.5), rel=1e-9)
-    # the books: no damping, a slip loss that is the update's own O(dt) (below 1e-3 of the
-    # spring's peak energy), and the spring's energy at separation gone as stiffness work
+    # the books: no damping, no slip loss (it sticks: the discrete spring is conservative),
+    # and the spring's energy at separation gone as stiffness work
     _balance(e)
-    assert e["damping"] == 0.0 and 0.0 <= e["slip"] < 1e-3 * e["max_spring"]
+    assert e["damping"] == 0.0 and abs(e["slip"]) < 1e-12 * e["max_spring"]
     assert e["spring"] == 0.0 and e["stiffness"] < 0.0
     # ... the sphere's tangential energy changed by the force's work (the integrator's error)
     ke0 = _tangential_ke(0.5, 0.0)
@@ -70,7 +70,7 @@ def _hertz(E_star):
 
 
 E_STAR = 1.0e8 / (2.0 * (1.0 - NU**2))  # two like bodies of E = 100 MPa (the wall as rigid: 1)
-G_STAR = 1.0 / (2.0 * tg.compliance(1.0e8, NU))
+G_STAR = 1.0 / (2.0 * shear_compliance(1.0e8, NU))
 
 
 def test_gross_sliding_impulse_is_mu_times_the_normal_one():
@@ -85,27 +85,32 @@ def test_gross_sliding_impulse_is_mu_times_the_normal_one():
     assert vx == pytest.approx(5.0 - 2 * 0.1 * 1.0, rel=1e-4)
     assert rw == pytest.approx(5 * 0.1 * 1.0, rel=1e-3)
     # the books close; the sphere's lost tangential energy is the slip's loss (the spring
-    # holds a displacement of μ F_n / k_t only: its energy and stiffness work are tiny)
+    # holds a force of μ F_n only: its energy and stiffness work are small, measured 2.2e-3
+    # of the loss: the unloading contact's rescaled force, grown back by the sliding)
     _balance(e)
     lost = _tangential_ke(5.0, 0.0) - _tangential_ke(vx, rw)
-    assert e["slip"] + e["damping"] == pytest.approx(lost, rel=1e-3)
+    assert e["slip"] + e["damping"] == pytest.approx(lost, rel=5e-3)
+    assert abs(e["stiffness"]) < 5e-3 * lost
     assert 0.0 < e["damping"] < 0.01 * e["slip"]
 
 
 def test_stick_limit_of_hertz_mindlin_against_an_ode_solver():
     """Hertz normal and Mindlin tangential contact without slip or damping against scipy's
-    adaptive Runge–Kutta on the continuous equations ``ξ'' = −F_n(ξ)/m``, ``s' = u``,
-    ``u' = −(7/2) k_t(ξ) s/m``: the contact point's tangential velocity after the impact
-    agrees to 1e-3 m/s (2e-3 of its initial value)."""
+    adaptive Runge–Kutta on the continuous equations of the incremental spring,
+    ``ξ'' = −F_n(ξ)/m``, ``F_s' = −k_t(ξ) u + F_s ξ'/(2 ξ)`` (the second term while the
+    contact unloads, ``ξ' < 0``: the force scaled with ``k_t ∝ sqrt(ξ)``), ``u' = (7/2) F_s/m``:
+    the contact point's tangential velocity after the impact agrees to 1e-3 m/s (2e-3 of its
+    initial value)."""
     fn = _hertz(E_STAR)
 
     def rhs(t, y):
-        xi, xid, s, u = y
-        x = max(xi, 0.0)
-        return [xid, -fn(x) / M, u, -3.5 * 8.0 * G_STAR * math.sqrt(R * x) * s / M]
+        xi, xid, f, u = y
+        x = max(xi, 1e-300)
+        df = -8.0 * G_STAR * math.sqrt(R * x) * u + (0.5 * f * xid / x if xid < 0 else 0.0)
+        return [xid, -fn(x) / M, df, 3.5 * f / M]
 
-    def left(t, y):
-        return y[0]
+    def left(t, y):  # just before the end: F_s ∝ sqrt(ξ) there, its rate singular at 0
+        return y[0] - 1e-13
     left.terminal, left.direction = True, -1
     sol = solve_ivp(rhs, (0, 1.0), [1e-12, 1.0, 0.0, 0.5], rtol=1e-10, atol=1e-14,
                     events=left)
@@ -116,8 +121,9 @@ def test_stick_limit_of_hertz_mindlin_against_an_ode_solver():
 
 
 def test_history_turns_into_the_new_contact_plane_keeping_its_length():
-    """A stored displacement in the plane of an old normal, the normal turned by 10°: the
-    history used is in the new plane (normal part zero) and as long as before."""
+    """A stored spring force in the plane of an old normal, the normal turned by 10°: the
+    history used is in the new plane (normal part zero) and as long as before, its energy
+    ``|F|²/(2 k_t)``."""
     s = Vec(*(jnp.asarray(x) for x in (1e-6, 2e-6, 0.0)))
     a = math.radians(10.0)
     n = Vec(*(jnp.asarray(x) for x in (math.sin(a), 0.0, math.cos(a))))
@@ -126,7 +132,7 @@ def test_history_turns_into_the_new_contact_plane_keeping_its_length():
     h = sp.history
     assert abs(float(h.dot(n))) < 1e-21
     assert float(jnp.sqrt(h.dot(h))) == pytest.approx(math.sqrt(5e-12), rel=1e-12)
-    assert float(sp.energy) == pytest.approx(0.5 * 1e3 * 5e-12, rel=1e-12)
+    assert float(sp.energy) == pytest.approx(0.5 * 5e-12 / 1e3, rel=1e-12)
 
 
 def _random_contacts(n, seed=0):
@@ -143,43 +149,65 @@ def _random_contacts(n, seed=0):
     fn = rng.uniform(0.0, 0.3, n)
     mu = rng.uniform(0.1, 0.6, n)
     s[:5] = 0.0  # new contacts
-    return nrm, s, v, kt, gt, fn, mu
+    return nrm, s * kt[:, None], v, kt, gt, fn, mu  # the springs' forces [N]
 
 
 def test_jax_form_equals_scalar_form():
     """200 contacts, sticking and sliding, new and old, some with a history off the present
-    plane: both forms give the same force, history, energy and slip flag to round-off; where
-    not touching the JAX form gives zeros."""
+    plane, the spring growing with a velocity ``u`` near the dashpot's ``v`` (the engines'
+    half-step velocity): both forms give the same force, history, energy and slip flag to
+    round-off; where not touching the JAX form gives zeros."""
     nrm, s, v, kt, gt, fn, mu = _random_contacts(200)
+    u = v + np.random.default_rng(1).normal(scale=0.01, size=v.shape)
+    u -= nrm * np.sum(u * nrm, 1, keepdims=True)
     dt = 1e-6
+    rescale = np.where(np.arange(200) % 3 == 0, 0.97, 1.0)  # every third contact unloading
     touching = np.ones(200, bool)
     touching[-3:] = False
     sp = tg.spring_jax(Vec.of(jnp.asarray(s)), Vec.of(jnp.asarray(nrm)), Vec.of(jnp.asarray(v)),
                        dt, jnp.asarray(kt), jnp.asarray(gt), jnp.asarray(fn), jnp.asarray(mu),
-                       jnp.asarray(touching))
+                       jnp.asarray(touching), Vec.of(jnp.asarray(u)), jnp.asarray(rescale))
     jf, jh = np.asarray(sp.force.stack()), np.asarray(sp.history.stack())
     sliding = np.asarray(sp.sliding)
     assert 20 < sliding.sum() < 180  # both regimes
     for i in range(197):
-        out = tg.spring_scalar(*s[i], *nrm[i], *v[i], dt, kt[i], gt[i], fn[i], mu[i])
+        out = tg.spring_scalar(*s[i], *nrm[i], *v[i], *u[i], dt, kt[i], gt[i], fn[i], mu[i],
+                               rescale[i])
         np.testing.assert_allclose(jf[i], out[:3], rtol=1e-12, atol=1e-18)
         np.testing.assert_allclose(jh[i], out[3:6], rtol=1e-12, atol=1e-22)
         for k, name in enumerate(("energy", "turned", "damping", "slip")):
+            # (the slip's loss is a difference: in stick it is round-off of the energy / dt)
+            tol = 1e-12 * abs(out[6]) if name != "slip" else 1e-10 * max(out[6], out[7]) / dt
             assert float(getattr(sp, name)[i]) == pytest.approx(out[6 + k], rel=1e-9,
-                                                                abs=1e-12 * abs(out[6])), name
+                                                                abs=tol), name
         assert bool(sliding[i]) == out[10]
         assert np.linalg.norm(jf[i]) <= mu[i] * fn[i] * (1 + 1e-12) or not out[10]
-        # the step's books: −F·v dt = (damping + slip) dt + energy − turned
-        lhs = -np.dot(out[:3], v[i]) * dt
-        assert lhs == pytest.approx((out[8] + out[9]) * dt + out[6] - out[7], rel=1e-8,
-                                    abs=1e-12 * max(out[6], out[7], 1e-30))
-        assert out[9] >= -1e-9 * (abs(out[8]) + kt[i] * np.dot(v[i], v[i]) * dt), "slip < 0"
-        if out[10]:  # slipped: the spring cut with the force, along itself
-            s1 = s[i] - nrm[i] * np.dot(s[i], nrm[i])
-            s1 = s1 * (np.linalg.norm(s[i]) / np.linalg.norm(s1)) + v[i] * dt
-            assert np.linalg.norm(np.cross(out[3:6], s1)) <= 1e-9 * np.linalg.norm(s1) ** 2
-    for x in (jf, jh, sp.energy, sp.turned, sp.damping, sp.slip):
+        # the step's books: the spring's trapezoid work −(F_s + F_s')·u dt/2 (F_s the old
+        # force turned, F_a = rescale F_s) is its energy change from where the step starts it
+        # (``turned``) and the slip's loss
+        ft = s[i] - nrm[i] * np.dot(s[i], nrm[i])
+        if np.dot(ft, ft) > 0:
+            ft = ft * (np.linalg.norm(s[i]) / np.linalg.norm(ft))
+        fa = ft * rescale[i]
+        work = -0.5 * np.dot(ft + np.asarray(out[3:6]), u[i]) * dt
+        scale = max(out[6], out[7], 1e-30)
+        assert work == pytest.approx(out[9] * dt + out[6] - out[7], rel=1e-8, abs=1e-10 * scale)
+        off = 0.5 * np.dot(ft - fa, u[i]) * dt
+        assert out[7] == pytest.approx(0.5 * np.dot(fa, fa) / kt[i] + off, rel=1e-9,
+                                       abs=1e-12 * scale)
+        if out[10]:  # slipped: a loss ≥ 0, the spring cut with the force, along itself
+            assert out[9] >= 0.0, "slip < 0"
+            g = fa - kt[i] * u[i] * dt
+            assert np.linalg.norm(np.cross(out[3:6], g)) <= 1e-9 * np.dot(g, g)
+        else:  # stuck: no loss (the discrete spring is conservative)
+            assert abs(out[9]) * dt <= 1e-9 * scale
+    for x in (jf, jh, sp.energy, sp.damping, sp.slip):
         assert not np.asarray(x)[-3:].any()
+    for i in range(197, 200):  # contacts that ended: the old force's work over the step
+        ft = s[i] - nrm[i] * np.dot(s[i], nrm[i])
+        if np.dot(ft, ft) > 0:
+            ft = ft * (np.linalg.norm(s[i]) / np.linalg.norm(ft))
+        assert float(sp.turned[i]) == pytest.approx(0.5 * dt * np.dot(ft, u[i]), rel=1e-9)
 
 
 def test_gradients_are_finite_at_a_new_contact():

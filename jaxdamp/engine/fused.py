@@ -307,6 +307,8 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
         red = cuda.shared.array((N_SUMS, THREADS), float64)
         sh = cuda.shared.array(4, float64)  # t1, z1, z'1 of the step; 1 once it blew up
         pw = cuda.local.array(N_CHANNELS, float64)
+        for c in range(N_CHANNELS):  # the channels the step never sets (springs) stay 0
+            pw[c] = 0.0
         parts = cuda.local.array(N_SUMS, float64)
         ft = cuda.local.array(6, float64)  # a grain's force and torque
 

@@ -16,6 +16,8 @@ bug; the engines stop on it.
 
 from __future__ import annotations
 
+import dataclasses
+
 import jax
 import jax.numpy as jnp
 
@@ -60,3 +62,30 @@ def carry(old_idx, new_idx, history):
     n = old_idx.shape[0]
     out, lost = jax.vmap(lambda o, w, h: _row(o, w, h, n))(old_idx, new_idx, history)
     return out, jnp.sum(lost)
+
+
+def rekey(states, idx):
+    """Batched states whose springs (``State.spring_pair``, written against
+    ``State.spring_partner``) are carried over to the neighbour blocks ``idx`` ``(B, N, K)``
+    by pair identity (:func:`carry`); ``spring_partner`` becomes ``idx``.
+
+    Returns ``(states, lost (B,))``. States without springs (``spring_partner`` empty) come
+    back as they are, with ``lost`` zero. Inside ``jit`` the carry runs only when some
+    system's list differs from its springs' (a rebuild), else it is skipped."""
+    old = states.spring_partner
+    b = idx.shape[0]
+    if old.shape[-1] == 0 and states.spring_pair.shape[-2] == 0:
+        return states, jnp.zeros((b,), jnp.int32)
+    idx = jnp.asarray(idx, jnp.int32)
+
+    def moved(_):
+        springs, lost = jax.vmap(carry)(old, idx, states.spring_pair)
+        return springs, lost.astype(jnp.int32)
+
+    if old.shape == idx.shape:
+        springs, lost = jax.lax.cond(
+            jnp.any(old != idx), moved,
+            lambda _: (states.spring_pair, jnp.zeros((b,), jnp.int32)), None)
+    else:  # re-allocated lists: another capacity
+        springs, lost = moved(None)
+    return dataclasses.replace(states, spring_pair=springs, spring_partner=idx), lost

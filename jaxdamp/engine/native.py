@@ -1227,7 +1227,7 @@ if AVAILABLE:
         iI3 = np.empty(3 * n)
         for j in range(3 * n):
             R3[j], im3[j], iI3[j] = Rb[j // 3], inv_m[j // 3], inv_I[j // 3]
-        pw = np.empty(N_CHANNELS)
+        pw = np.zeros(N_CHANNELS)  # the channels the kernel never sets (springs) stay 0
         # several cells: each grain's loss power and force on its container, then each
         # cell's (pwc, bzc), and each cell's container's position and velocity along e
         gs = np.zeros((n, 2))

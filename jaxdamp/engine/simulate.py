@@ -12,12 +12,14 @@ time loop is the driver's (:mod:`jaxdamp.engine.driver`).
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxdamp.engine import history
 from jaxdamp.engine import neighbors as nb
 from jaxdamp.engine.choice import resolve_engine
 from jaxdamp.physics.energy import record
@@ -40,7 +42,7 @@ def chunk_fn(model: Model, n_records: int, record_every: int, remat: bool = Fals
     jit partitions by itself, the kernels advance every local shard in its own host thread
     and put the results back on the shards' devices.
     """
-    resolved = resolve_engine(engine, model.precision)
+    resolved = resolve_engine(engine, model.precision, tangential=model.tangential)
     if resolved in ("native", "fused"):
         return _packed_chunk(model, n_records, record_every, sharding, resolved)
     block = _jax_block(model, record_every)
@@ -67,13 +69,18 @@ def chunk_fn(model: Model, n_records: int, record_every: int, remat: bool = Fals
 def _jax_block(model: Model, record_every: int):
     """``(states, nbrs, params) -> (states, nbrs, mean forces)``: ``record_every`` steps of
     the pure-JAX step; the mean forces are the grains' vertical forces on floor + lid and on
-    the whole box averaged over the block."""
+    the whole box averaged over the block. With tangential springs a rebuilt list takes their
+    history over by pair identity (:func:`jaxdamp.engine.history.rekey`); a history the new
+    list would lose counts as an overflow (the driver redoes the chunk with larger lists)."""
     step_b = jax.vmap(step, in_axes=(0, 0, 0, None))
 
     def block(states, nbrs, params):
         def inner(carry, _):
             states, nbrs, impulse = carry
             nbrs = nb.update(model, nbrs, box_frame(states, params, params.dt), params.radius)
+            if model.springs:
+                states, lost = history.rekey(states, nbrs.idx)
+                nbrs = dataclasses.replace(nbrs, overflow=nbrs.overflow | (lost > 0))
             states = step_b(states, nbrs.idx, params, model)
             impulse = impulse + jnp.stack([states.f_floor_lid, states.f_box], axis=-1)
             return (states, nbrs, impulse), None

@@ -309,7 +309,7 @@ def energy_figure(t, work, channels, residual, *, t0=None, t1=None, title="", pa
     from jaxdamp.physics.model import CHANNELS, LOSSES  # the physics: on use
 
     turnover = np.abs(col.get("input", np.zeros_like(t))) + sum(
-        np.abs(col[k]) for k in CHANNELS[LOSSES] if k in col)  # not the wall breakdown
+        np.abs(col[CHANNELS[i]]) for i in LOSSES if CHANNELS[i] in col)  # not the breakdowns
     rel = float(np.max(np.abs(res)) / max(np.max(turnover), 1e-300))
     a3.set_ylabel("balance residual [J]")
     a3.set_xlabel("time t [s]")

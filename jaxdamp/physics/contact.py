@@ -194,20 +194,27 @@ def _columns(*own: str) -> tuple[str, ...]:
 # ---------------------------------------------------------------------------------------------
 # Hertz + viscoelastic
 
-#: Table columns of the Hertz law: ``E*`` [Pa], thesis ``γ_n`` [kg s^-1 m^-1/2], paper ``A`` [s].
-HERTZ_COLUMNS = _columns("E_star", "gamma_n", "A")
-_H_E, _H_GN, _H_A = (HERTZ_COLUMNS.index(c) for c in ("E_star", "gamma_n", "A"))
+#: Table columns of the Hertz law: ``E*`` [Pa], thesis ``γ_n`` [kg s^-1 m^-1/2], paper ``A`` [s],
+#: and Mindlin's shear modulus ``G*`` [Pa] of the tangential spring
+#: (:mod:`jaxdamp.physics.tangential`; read only with ``tangential_law = "mindlin"``).
+HERTZ_COLUMNS = _columns("E_star", "gamma_n", "A", "G_star")
+_H_E, _H_GN, _H_A, _H_G = (HERTZ_COLUMNS.index(c) for c in ("E_star", "gamma_n", "A", "G_star"))
+#: The column of ``G*`` in a Hertz table (the tangential spring's stiffness).
+G_STAR = _H_G
 
 
 def hertz_material(mat: Material, radius: float, stiffness_scale: float) -> dict:
-    """Per-material constants of the Hertz law: compliance ``(1-ν²)/(λE)`` [1/Pa], ``A`` [s],
-    ``γ_n``, ``γ_s`` [kg s^-1 m^-1/2] (scaled by ``λ^{3/5}``, :func:`restitution.scale_damping`)
-    and ``μ``. A ``restitution`` at ``v_ref`` is turned into ``A`` for a like-pair collision of
-    grains of ``radius`` (or ``mat.calibration_radius``) — exact for this force law."""
+    """Per-material constants of the Hertz law: compliance ``(1-ν²)/(λE)`` [1/Pa], the shear
+    compliance of Mindlin's ``1/G*`` (:func:`shear_compliance`), ``A``
+    [s], ``γ_n``, ``γ_s`` [kg s^-1 m^-1/2] (scaled by ``λ^{3/5}``,
+    :func:`restitution.scale_damping`) and ``μ``. A ``restitution`` at ``v_ref`` is turned into
+    ``A`` for a like-pair collision of grains of ``radius`` (or ``mat.calibration_radius``) —
+    exact for this force law."""
     compliance = (1.0 - mat.nu**2) / (stiffness_scale * mat.E)
     scale = rst.scale_damping(1.0, stiffness_scale)
     out = dict(compliance=compliance, gamma_s=mat.gamma_s * scale, mu=mat.mu, A=0.0,
-               gamma_n=(mat.gamma_n or 0.0) * scale)
+               gamma_n=(mat.gamma_n or 0.0) * scale,
+               shear=shear_compliance(mat.E, mat.nu, stiffness_scale))
     if mat.restitution is not None:
         r = mat.calibration_radius if mat.calibration_radius is not None else radius
         m = mat.density * 4.0 / 3.0 * math.pi * r**3
@@ -217,12 +224,21 @@ def hertz_material(mat: Material, radius: float, stiffness_scale: float) -> dict
     return out
 
 
+def shear_compliance(E: float, nu: float, stiffness_scale: float = 1.0) -> float:
+    """One body's shear compliance in Mindlin's ``1/G*`` (the tangential spring,
+    :mod:`jaxdamp.physics.tangential`): ``(2 − ν)/G`` [1/Pa], with ``G = λ E / (2 (1 + ν))``
+    (``λ``: the model's ``stiffness_scale``, as for ``E*``)."""
+    G = stiffness_scale * E / (2.0 * (1.0 + nu))
+    return (2.0 - nu) / G
+
+
 def hertz_mix(a: dict, b: dict, rule: str) -> tuple[float, ...]:
-    """Table row of two materials: ``1/E* = c_a + c_b`` (series compliances, exact), ``γ_s``,
-    ``μ``, ``γ_n``, ``A`` by the mixing ``rule`` (the 2023 paper: arithmetic mean of ``A``)."""
+    """Table row of two materials: ``1/E* = c_a + c_b`` and ``1/G* = s_a + s_b`` (series
+    compliances, exact), ``γ_s``, ``μ``, ``γ_n``, ``A`` by the mixing ``rule`` (the 2023 paper:
+    arithmetic mean of ``A``)."""
     return (mix(a["gamma_s"], b["gamma_s"], rule), mix(a["mu"], b["mu"], rule),
             1.0 / (a["compliance"] + b["compliance"]), mix(a["gamma_n"], b["gamma_n"], rule),
-            mix(a["A"], b["A"], rule))
+            mix(a["A"], b["A"], rule), 1.0 / (a["shear"] + b["shear"]))
 
 
 def calibrate_wall_row(law, row, restitution: float, v: float, m: float, r: float):
@@ -456,8 +472,18 @@ class ContactForce(NamedTuple):
       normal_loss: dissipated power of the normal force [W], ``S`` (≥ 0):
         ``(F_n - F_elastic) ξ'``, which is the damping force times ``ξ'`` while the force is
         not clipped and also counts the elastic energy lost when clipping to zero releases it.
-      friction_loss: dissipated power of the tangential force ``|F_t| |v_s|`` [W], ``S`` (≥ 0).
+      friction_loss: dissipated power of the tangential force [W], ``S`` (≥ 0): the viscous
+        law's ``|F_t| |v_s|``; the spring's damping and slip losses (:class:`Mindlin`).
       touching: ``ξ > 0``, ``S``.
+      history: with a tangential spring, its force after the step [N] (:class:`Vec`, the
+        contact's history); else ``None``.
+      turned: with a spring, the energy the step starts it with [J]
+        (:attr:`jaxdamp.physics.tangential.Spring.turned`); else ``None``.
+      slip_loss: with a spring, the slip's part of ``friction_loss`` [W]; else ``None``.
+      spring_energy: with a spring, its ``|F_s|²/(2 k_t)`` after the step [J]; else ``None``.
+
+    With a spring (:func:`jaxdamp.physics.tangential.contact_force`), ``elastic_energy`` holds
+    the normal law's energy and the spring's.
     """
 
     force: Vec
@@ -467,11 +493,53 @@ class ContactForce(NamedTuple):
     normal_loss: jnp.ndarray
     friction_loss: jnp.ndarray
     touching: jnp.ndarray
+    history: Vec | None = None
+    turned: jnp.ndarray | None = None
+    slip_loss: jnp.ndarray | None = None
+    spring_energy: jnp.ndarray | None = None
+
+
+class Normal(NamedTuple):
+    """The normal part of contacts (:func:`normal_part`), what both tangential laws start
+    from. Shapes ``S``: ``touching`` (``ξ > 0``), ``xi`` the overlap where touching (else 0)
+    [m], ``sqrt_xi``, ``xi_dot`` its rate [m/s], ``f_elastic`` [N], ``f_normal`` the normal
+    force ``F_n ≥ 0`` [N], ``e_elastic`` the law's elastic energy [J], ``v_slide`` the
+    tangential velocity of grain ``i``'s surface against its partner's at the contact point
+    [m/s] (:class:`Vec`)."""
+
+    touching: jnp.ndarray
+    xi: jnp.ndarray
+    sqrt_xi: jnp.ndarray
+    xi_dot: jnp.ndarray
+    f_elastic: jnp.ndarray
+    f_normal: jnp.ndarray
+    e_elastic: jnp.ndarray
+    v_slide: Vec
+
+    def loss(self):
+        """The normal force's dissipated power ``(F_n − F_elastic) ξ'`` [W] (≥ 0)."""
+        return (self.f_normal - self.f_elastic) * self.xi_dot
+
+
+def normal_part(law: Law, xi, n: Vec, v_rel: Vec, spin: Vec, k, g) -> Normal:
+    """The normal force of contacts and their sliding velocity (arguments as
+    :func:`contact_force`'s), JAX form."""
+    touching = xi > 0
+    sqrt_xi = safe_sqrt(xi, touching)
+    xi_pos = jnp.where(touching, xi, 0.0)
+    xi_dot = -v_rel.dot(n)
+    f_elastic, f_damping, e_elastic = law.normal_jax(xi_pos, sqrt_xi, xi_dot, k, g)
+    f_normal = jnp.where(touching, jnp.maximum(f_elastic + f_damping, 0.0), 0.0)
+    v_contact = v_rel - spin.cross(n)
+    v_slide = v_contact - n.scale(v_contact.dot(n))
+    return Normal(touching, xi_pos, sqrt_xi, xi_dot, f_elastic, f_normal, e_elastic, v_slide)
 
 
 def contact_force(law: Law, xi, n: Vec, v_rel: Vec, spin: Vec, radius_i, k, g, gamma_s,
                   mu) -> ContactForce:
-    """Force, torque and losses of a sphere contact (docs/physics.md §2), JAX form.
+    """Force, torque and losses of a sphere contact with the viscous tangential force
+    (docs/physics.md §2), JAX form. (The tangential spring with history is
+    :func:`jaxdamp.physics.tangential.contact_force`, on the same normal part.)
 
     Args:
       law: the normal law (:data:`LAWS`).
@@ -484,31 +552,23 @@ def contact_force(law: Law, xi, n: Vec, v_rel: Vec, spin: Vec, radius_i, k, g, g
       gamma_s: tangential damping [kg s^-1 m^-1/2], broadcastable to ``S``.
       mu: Coulomb coefficient [-], broadcastable to ``S``.
     """
-    touching = xi > 0
-    sqrt_xi = safe_sqrt(xi, touching)
-    xi_pos = jnp.where(touching, xi, 0.0)
-    xi_dot = -v_rel.dot(n)
-    f_elastic, f_damping, e_elastic = law.normal_jax(xi_pos, sqrt_xi, xi_dot, k, g)
-    f_normal = jnp.where(touching, jnp.maximum(f_elastic + f_damping, 0.0), 0.0)
-
-    v_contact = v_rel - spin.cross(n)
-    v_slide = v_contact - n.scale(v_contact.dot(n))
-    speed2 = v_slide.dot(v_slide)
-    sliding = touching & (speed2 > 0)
+    c = normal_part(law, xi, n, v_rel, spin, k, g)
+    speed2 = c.v_slide.dot(c.v_slide)
+    sliding = c.touching & (speed2 > 0)
     speed = safe_sqrt(speed2, sliding)
     # |F_t| / |v_s| = min(γ_s sqrt(ξ), μ F_n / |v_s|): no division by a zero speed.
-    drag = jnp.minimum(gamma_s * sqrt_xi, mu * f_normal / jnp.where(sliding, speed, 1.0))
+    drag = jnp.minimum(gamma_s * c.sqrt_xi, mu * c.f_normal / jnp.where(sliding, speed, 1.0))
     drag = jnp.where(sliding, drag, 0.0)
-    f_tangent = v_slide.scale(-drag)
+    f_tangent = c.v_slide.scale(-drag)
 
     return ContactForce(
-        force=n.scale(f_normal) + f_tangent,
+        force=n.scale(c.f_normal) + f_tangent,
         torque=n.scale(-radius_i).cross(f_tangent),
-        normal=f_normal,
-        elastic_energy=e_elastic,
-        normal_loss=(f_normal - f_elastic) * xi_dot,
+        normal=c.f_normal,
+        elastic_energy=c.e_elastic,
+        normal_loss=c.loss(),
         friction_loss=drag * speed2,
-        touching=touching,
+        touching=c.touching,
     )
 
 

@@ -60,7 +60,8 @@ def granular_loss(work):
     return work[..., CH["pp_normal"] : CH["pw_friction"] + 1].sum(axis=-1)
 
 
-_LOSS_FIRST, _LOSS_END = LOSSES.start, LOSSES.stop
+#: Whether each channel is a loss of the balance (:data:`LOSSES`), for the scalar form.
+_IS_LOSS = tuple(bool(c in set(LOSSES.tolist())) for c in range(N_CHANNELS))
 
 #: Time series recorded at every sample, with units.
 RECORD_UNITS = {
@@ -254,7 +255,7 @@ def record_row(out, t, z, zd, y, e_prim, r, v, w, mass, inertia, radius, gravity
     losses = 0.0
     for c in range(work.shape[0]):
         out[k + c] = work[c]
-        if _LOSS_FIRST <= c < _LOSS_END:  # primary damping, granular losses, drag (LOSSES)
+        if _IS_LOSS[c]:  # primary damping, granular losses, drag, spring stiffness (LOSSES)
             losses += work[c]
     k += work.shape[0]
     out[k] = kin + rot + grav + e_elastic + e_prim - e_start + losses - work[0]

@@ -32,7 +32,14 @@ import jax.numpy as jnp
 
 from jaxdamp.physics.contact import safe_norm, scalar_form
 from jaxdamp.physics.energy import mechanical_energy
-from jaxdamp.physics.model import N_CHANNELS, Model, Params, State, grain_positions_of_boxes
+from jaxdamp.physics.model import (
+    INCREMENT_OF,
+    N_CHANNELS,
+    Model,
+    Params,
+    State,
+    grain_positions_of_boxes,
+)
 from jaxdamp.physics.mounts import mount_of
 from jaxdamp.physics.pairs import pair_forces
 from jaxdamp.physics.walls import wall_forces
@@ -53,15 +60,31 @@ class Forces(NamedTuple):
     wall_groups: jnp.ndarray  # (3,) pw_floor, pw_lid, pw_side powers [W]
     cell_losses: jnp.ndarray  # (cells,) each cell's granular loss power [W]
     dof_forces: jnp.ndarray  # (dofs,) the grains' forces on the degrees of freedom along e [N]
+    spring_pair: jnp.ndarray  # (N, K, 3) the grain–grain springs after the step [m]
+    spring_wall: jnp.ndarray  # (N, 2 + W, 3) the grain–wall springs after the step [m]
+    turned: jnp.ndarray  # the springs' last displacements at this step's stiffness [J]
+    spring_energy: jnp.ndarray  # the springs' energy after the step [J] (in elastic_energy)
+    slip_losses: jnp.ndarray  # (2,) pp_slip, pw_slip powers [W]
 
 
-def forces(r, v, w, z_box, zd_box, y, yd, idx, p: Params, model: Model) -> Forces:
+def forces(r, v, w, z_box, zd_box, y, yd, idx, p: Params, model: Model, spring_pair=None,
+           spring_wall=None, step_vw=None) -> Forces:
     """All forces on the grains of one system for the given (predicted) kinematics: the box
     at ``z_box`` moving at ``zd_box``, the structure's other degrees of freedom at ``y``,
-    ``yd`` (cells may sit on them, :attr:`Model.cell_dofs`)."""
-    pf = pair_forces(r, v, w, idx, p, model)
+    ``yd`` (cells may sit on them, :attr:`Model.cell_dofs`). With tangential springs
+    (``model.springs``), ``spring_pair`` ``(N, K, 3)`` (per slot of ``idx``) and
+    ``spring_wall`` are their displacements before this force evaluation (``None``: none
+    yet); each evaluation advances them by one step, with the velocities ``step_vw = (v, w,
+    zd_box, yd)`` over the step (``None``: the evaluation's)."""
+    pf = pair_forces(r, v, w, idx, p, model, spring_pair,
+                     None if step_vw is None else step_vw[:2])
+    wall_step = None
+    if step_vw is not None:
+        wall_step = (step_vw[0], step_vw[1],
+                     grain_positions_of_boxes(step_vw[2], step_vw[3], model))
     wf = wall_forces(r, v, w, grain_positions_of_boxes(z_box, y, model),
-                     grain_positions_of_boxes(zd_box, yd, model), p, model)
+                     grain_positions_of_boxes(zd_box, yd, model), p, model, spring_wall,
+                     wall_step)
     losses = jnp.stack([pf.normal_loss, pf.friction_loss, wf.normal_loss, wf.friction_loss])
     fx, fy, fz = body_force(p.mass, v[:, 0], v[:, 1], v[:, 2], p.gravity, p.drag)
     f = pf.force + wf.force + jnp.stack([fx, fy, fz], axis=-1)
@@ -78,6 +101,11 @@ def forces(r, v, w, z_box, zd_box, y, yd, idx, p: Params, model: Model) -> Force
         wall_groups=wf.group_loss,
         cell_losses=cell_losses(losses, pf.grain_loss + wf.grain_loss, model),
         dof_forces=dof_forces(wf, model),
+        spring_pair=pf.history,
+        spring_wall=wf.history,
+        turned=pf.turned + wf.turned,
+        spring_energy=pf.spring_energy + wf.spring_energy,
+        slip_losses=jnp.stack([pf.slip_loss, wf.slip_loss]),
     )
 
 
@@ -112,13 +140,26 @@ def body_force(m, vx, vy, vz, gravity, drag):
 body_force_scalar = scalar_form(body_force)
 
 
-def _powers(fo: Forces, mount, z, zd, y, yd, t, v_pred, p: Params):
+def _powers(fo: Forces, mount, z, zd, y, yd, t, v_pred, p: Params, e_spring):
     """Channel powers [W] at one force evaluation (see :data:`jaxdamp.physics.model.CHANNELS`):
-    the mount's input and damping, the granular losses, the settling drag and the grain–wall
-    losses by wall group."""
+    the mount's input and damping, the granular losses, the settling drag, the grain–wall
+    losses by wall group, the springs' slip losses and the energy their change of stiffness
+    took since the last evaluation, ``(e_spring - turned)/dt`` (``e_spring``: the springs'
+    energy then)."""
     p_in, p_c = mount.powers(fo.dof_forces, z, zd, y, yd, t, p)
     p_drag = p.drag * jnp.sum(p.mass * jnp.sum(v_pred * v_pred, axis=-1))
-    return jnp.concatenate([jnp.stack([p_in, p_c]), fo.losses, p_drag[None], fo.wall_groups])
+    p_stiff = (e_spring - fo.turned) / p.dt
+    return jnp.concatenate([jnp.stack([p_in, p_c]), fo.losses, p_drag[None], fo.wall_groups,
+                            fo.slip_losses, p_stiff[None]])
+
+
+def _integrate(power_old, power_new, dt):
+    """The work channels' change over a step [J]: the trapezoid rule of the powers at its two
+    ends, except for the parts that are the step's own energy over ``dt``
+    (:data:`jaxdamp.physics.model.INCREMENT_OF`), taken whole from its end."""
+    src = jnp.asarray(INCREMENT_OF)
+    part = lambda p: jnp.where(src >= 0, p[jnp.maximum(src, 0)], 0.0)  # noqa: E731
+    return 0.5 * dt * (power_old + power_new) + 0.5 * dt * (part(power_new) - part(power_old))
 
 
 def rotate(q, w, dt):
@@ -213,6 +254,9 @@ def rotate_scalar(qw, qx, qy, qz, ox, oy, oz, dt):
 def _finish(state_fields: dict, fo: Forces, power, p: Params) -> State:
     return State(
         **state_fields,
+        spring_pair=fo.spring_pair,
+        spring_wall=fo.spring_wall,
+        e_spring=fo.spring_energy,
         power=power,
         power_cell=fo.cell_losses,
         e_elastic=fo.elastic_energy,
@@ -230,7 +274,9 @@ def initial_state(r, v, w, q, z, zd, t, idx, p: Params, model: Model, e_start=No
     ``z``, ``zd``: the box's position and velocity, or for a structure of ``model.dofs``
     degrees of freedom the vectors ``(dofs,)`` in the engines' order (the box first). For S2
     they are ignored and taken from the drive. ``e_start`` is the reference mechanical energy
-    of the balance; by default the energy of this state.
+    of the balance; by default the energy of this state. With tangential springs
+    (``model.springs``) every contact starts without history: the evaluation at ``t`` is its
+    first step (a contact that forms between steps starts the same way).
     """
     r, v, w = jnp.asarray(r), jnp.asarray(v), jnp.asarray(w)
     t = jnp.asarray(t, jnp.float64)
@@ -247,7 +293,7 @@ def initial_state(r, v, w, q, z, zd, t, idx, p: Params, model: Model, e_start=No
         z, zd = x[0], xd[0]
     fo = forces(r, v, w, z, zd, y, yd, idx, p, model)
     zdd, ydd = mount.accelerate(z, zd, y, yd, t, fo.dof_forces, p)
-    power = _powers(fo, mount, z, zd, y, yd, t, v, p)
+    power = _powers(fo, mount, z, zd, y, yd, t, v, p, jnp.zeros(()))
     st = _finish(
         dict(
             r=r, v=v, w=w, q=jnp.asarray(q), a=fo.force / p.mass[:, None],
@@ -255,6 +301,7 @@ def initial_state(r, v, w, q, z, zd, t, idx, p: Params, model: Model, e_start=No
             step=jnp.zeros((), jnp.int64), work=jnp.zeros(N_CHANNELS),
             work_cell=jnp.zeros(model.cells), e_start=jnp.zeros(()),
             z_max=jnp.asarray(-jnp.inf), z_min=jnp.asarray(jnp.inf),
+            spring_partner=partners(idx, model),
         ),
         fo,
         power,
@@ -264,8 +311,18 @@ def initial_state(r, v, w, q, z, zd, t, idx, p: Params, model: Model, e_start=No
     return dataclasses.replace(st, e_start=jnp.asarray(e0, jnp.float64))
 
 
+def partners(idx, model: Model):
+    """``State.spring_partner`` of springs written against the neighbour block ``idx``
+    ``(N, K)``: ``idx`` itself (int32) with springs, else an empty ``(N, 0)``."""
+    if model.springs:
+        return jnp.asarray(idx, jnp.int32)
+    return jnp.zeros((model.n, 0), jnp.int32)
+
+
 def step(st: State, idx, p: Params, model: Model) -> State:
-    """Advance one system by one time step ``p.dt``. ``idx``: neighbour block ``(N, K)``."""
+    """Advance one system by one time step ``p.dt``. ``idx``: neighbour block ``(N, K)``;
+    with tangential springs it must be the list their history was written against
+    (``st.spring_partner``; after a rebuild, :func:`jaxdamp.engine.history.rekey`)."""
     dt = p.dt
     t1 = st.t + dt
     mount = mount_of(model)
@@ -276,13 +333,18 @@ def step(st: State, idx, p: Params, model: Model) -> State:
     y1 = st.y + dt * st.yd + 0.5 * dt * dt * st.ydd
     yd_pred = st.yd + dt * st.ydd
 
-    fo = forces(r1, v_pred, w_pred, z1, zd_pred, y1, yd_pred, idx, p, model)
+    step_vw = None
+    if model.springs:  # the springs grow with the displacements over the step (half-steps)
+        step_vw = (st.v + 0.5 * dt * st.a, st.w + 0.5 * dt * st.alpha, (z1 - st.z) / dt,
+                   (y1 - st.y) / dt)
+    fo = forces(r1, v_pred, w_pred, z1, zd_pred, y1, yd_pred, idx, p, model, st.spring_pair,
+                st.spring_wall, step_vw)
     a1 = fo.force / p.mass[:, None]
     alpha1 = fo.torque / p.inertia[:, None]
     zdd1, ydd1 = mount.accelerate(z1, zd_pred, y1, yd_pred, t1, fo.dof_forces, p)
     zd1 = zd_pred if mount.prescribed else st.zd + 0.5 * dt * (st.zdd + zdd1)
 
-    power = _powers(fo, mount, z1, zd_pred, y1, yd_pred, t1, v_pred, p)
+    power = _powers(fo, mount, z1, zd_pred, y1, yd_pred, t1, v_pred, p, st.e_spring)
     in_window = t1 >= p.t_window
     return _finish(
         dict(
@@ -300,11 +362,12 @@ def step(st: State, idx, p: Params, model: Model) -> State:
             ydd=ydd1,
             t=t1,
             step=st.step + 1,
-            work=st.work + 0.5 * dt * (st.power + power),
+            work=st.work + _integrate(st.power, power, dt),
             work_cell=st.work_cell + 0.5 * dt * (st.power_cell + fo.cell_losses),
             e_start=st.e_start,
             z_max=jnp.where(in_window, jnp.maximum(st.z_max, z1), st.z_max),
             z_min=jnp.where(in_window, jnp.minimum(st.z_min, z1), st.z_min),
+            spring_partner=partners(idx, model),
         ),
         fo,
         power,

@@ -40,13 +40,33 @@ from jaxdamp.physics.structure import internal
 #:   pw_floor, pw_lid, pw_side: the grain–wall losses (``pw_normal + pw_friction``) split by
 #:                the wall they occur at: the floor, the lid, the container's side walls. A
 #:                breakdown, not a term of the energy balance (:data:`LOSSES` are its terms).
+#:   pp_slip, pw_slip: the slip's part of ``pp_friction``, ``pw_friction`` (the rest is the
+#:                tangential dashpot's) with the tangential spring (``tangential_law =
+#:                "mindlin"``, :mod:`jaxdamp.physics.tangential`); zero for the viscous law. A
+#:                breakdown, not a term of the balance.
+#:   spring_stiffness: the energy the tangential springs lose as their stiffness
+#:                ``8 G* sqrt(R* ξ)`` changes with the overlap, at constant displacement (no
+#:                force does this work; at a contact's end it is the spring's whole remaining
+#:                energy): the no-slip Mindlin model's own term of the balance, of either
+#:                sign; zero for the viscous law.
 CHANNELS = ("input", "primary_damping", "pp_normal", "pp_friction", "pw_normal", "pw_friction",
-            "drag", "pw_floor", "pw_lid", "pw_side")
+            "drag", "pw_floor", "pw_lid", "pw_side", "pp_slip", "pw_slip", "spring_stiffness")
 N_CHANNELS = len(CHANNELS)
 CH = {name: i for i, name in enumerate(CHANNELS)}
-#: The loss channels of the energy balance ``W_input = ΔE + Σ losses``: ``primary_damping``
-#: to ``drag`` (every channel after ``input`` and before the wall breakdown).
-LOSSES = slice(CH["primary_damping"], CH["drag"] + 1)
+#: The loss channels of the energy balance ``W_input = ΔE + Σ losses`` (names).
+LOSS_CHANNELS = ("primary_damping", "pp_normal", "pp_friction", "pw_normal", "pw_friction",
+                 "drag", "spring_stiffness")
+#: Their places in :data:`CHANNELS` (an index array: ``work[..., LOSSES]``).
+LOSSES = np.array([CH[k] for k in LOSS_CHANNELS])
+#: The channels whose power is, wholly or in part, the energy of one step divided by ``dt``
+#: (the springs' slip and stiffness work: what a step did, not a rate at an instant), and
+#: where that part is: each channel's source channel, or -1. The engines integrate such a
+#: part as ``power × dt`` of the step it belongs to; the trapezoid rule of the other powers
+#: would put half of it a step late.
+INCREMENT_OF = np.array([{"pp_friction": CH["pp_slip"], "pw_friction": CH["pw_slip"],
+                          "pp_slip": CH["pp_slip"], "pw_slip": CH["pw_slip"],
+                          "spring_stiffness": CH["spring_stiffness"]}.get(k, -1)
+                         for k in CHANNELS])
 #: The wall groups every engine reports apart (contact counts ``n_floor``, ``n_lid``,
 #: ``n_side`` and the channels ``pw_floor``, ``pw_lid``, ``pw_side``).
 WALL_GROUPS = ("floor", "lid", "side")
@@ -82,6 +102,9 @@ class Model:
       cell_dofs: where each cell's degree of freedom sits in the engines' order
         (:func:`jaxdamp.physics.structure.cell_dofs`: 0 the box, ``p`` ``State.y[p - 1]``);
         empty: every cell on the box's (:meth:`dofs_of_cells`).
+      tangential: the tangential law's name (``Config.tangential_law``,
+        :data:`jaxdamp.validation.TANGENTIAL_LAWS`); ``"mindlin"`` gives the state its
+        springs (:class:`State`).
     """
 
     n: int
@@ -95,6 +118,12 @@ class Model:
     container: str = "box"
     cells: int = 1
     cell_dofs: tuple[int, ...] = ()
+    tangential: str = "viscous"
+
+    @property
+    def springs(self) -> bool:
+        """Whether the contacts carry tangential springs with history (``"mindlin"``)."""
+        return self.tangential == "mindlin"
 
     def species_slices(self) -> tuple[slice, ...]:
         """Index range of every species in the grain arrays (at least one, possibly empty)."""
@@ -223,6 +252,16 @@ class State:
     touching them, ``n_side`` contacts with the side walls (a grain in a corner of the box
     touches two);
     ``z_max``, ``z_min`` [m] box extrema since ``t_window``; ``step`` steps taken.
+
+    The contacts' history (tangential springs, ``Model.tangential = "mindlin"``,
+    :mod:`jaxdamp.physics.tangential`): ``spring_pair`` ``(N, K, 3)`` [m] the displacement of
+    grain ``i``'s contact with its partner ``spring_partner[i, k]`` ``(N, K)`` (int32; the
+    neighbour list the history was written against, padded with ``N``; a rebuilt list takes
+    the history over by pair identity, :mod:`jaxdamp.engine.history`); ``spring_wall``
+    ``(N, 2 + W, 3)`` [m] of its contact with each wall (floor, lid, the sides); ``e_spring``
+    [J] their elastic energy (a part of ``e_elastic``). Under the viscous law the three arrays
+    are empty (``(N, 0, 3)``, ``(N, 0)``, ``(N, 0, 3)``) and ``e_spring`` is 0: nothing to
+    carry.
     """
 
     r: jnp.ndarray
@@ -252,6 +291,10 @@ class State:
     n_side: jnp.ndarray
     z_max: jnp.ndarray
     z_min: jnp.ndarray
+    spring_pair: jnp.ndarray
+    spring_partner: jnp.ndarray
+    spring_wall: jnp.ndarray
+    e_spring: jnp.ndarray
 
 
 # ---------------------------------------------------------------------------------------------
@@ -385,6 +428,7 @@ def build(config: Config, radii: np.ndarray | None = None) -> tuple[Model, Param
         dofs=len(structure["s_r"]) if structure else 1,
         precision=config.numerics.precision, container=vessel.name, cells=config.cells,
         cell_dofs=_cell_dofs(config) if structure else (),
+        tangential=config.tangential_law,
     )
     prim = config.primary
     shock = config.shock if config.system == "primary" else None

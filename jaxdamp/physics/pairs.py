@@ -17,7 +17,8 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
-from jaxdamp.physics.contact import GAMMA_S, LAWS, MU, Vec, contact_force, force_dtype
+from jaxdamp.physics import tangential
+from jaxdamp.physics.contact import G_STAR, GAMMA_S, LAWS, MU, Vec, contact_force, force_dtype
 
 #: Where padding entries of the neighbour list point: far away, so they never touch.
 _GHOST = 1.0e6
@@ -25,8 +26,13 @@ _GHOST = 1.0e6
 
 class PairForces(NamedTuple):
     """Grain–grain forces. ``force``, ``torque``: ``(N, 3)`` [N], [N m]; totals
-    ``elastic_energy`` [J], ``normal_loss``, ``friction_loss`` [W]; ``grain_loss`` ``(N,)``
-    [W]: each grain's half of the loss (normal + friction) of its contacts."""
+    ``elastic_energy`` [J] (the tangential springs' included), ``normal_loss``,
+    ``friction_loss`` [W]; ``grain_loss`` ``(N,)`` [W]: each grain's half of the loss (normal +
+    friction) of its contacts. With tangential springs (``model.springs``): ``history``
+    ``(N, K, 3)`` [m] the springs after the step, per slot of ``idx``; ``turned`` [J] the
+    pairs' :attr:`jaxdamp.physics.contact.ContactForce.turned`, ``slip_loss`` [W] the slip's
+    part of ``friction_loss``, ``spring_energy`` [J] the springs' part of ``elastic_energy``
+    (totals); without, ``history`` is ``(N, 0, 3)`` and the three 0."""
 
     force: jnp.ndarray
     torque: jnp.ndarray
@@ -34,22 +40,33 @@ class PairForces(NamedTuple):
     normal_loss: jnp.ndarray
     friction_loss: jnp.ndarray
     grain_loss: jnp.ndarray
+    history: jnp.ndarray
+    turned: jnp.ndarray
+    slip_loss: jnp.ndarray
+    spring_energy: jnp.ndarray
 
 
-def pair_forces(r, v, w, idx, p, model) -> PairForces:
+def pair_forces(r, v, w, idx, p, model, history=None, step_vw=None) -> PairForces:
     """Contact forces between grains.
 
     Args:
       r, v, w: positions [m], velocities [m/s], angular velocities [rad/s], ``(N, 3)``.
       idx: neighbour indices ``(N, K)``, entries ``N`` are padding.
       p: :class:`jaxdamp.physics.model.Params`.
-      model: :class:`jaxdamp.physics.model.Model` (the law and the grains' species).
+      model: :class:`jaxdamp.physics.model.Model` (the laws and the grains' species).
+      history: with tangential springs (``model.springs``), their displacements ``(N, K, 3)``
+        [m] per slot of ``idx`` before the step (``None``: none yet); they advance by one
+        step ``p.dt``. Ignored without springs.
+      step_vw: with springs, the velocities and angular velocities ``(v, w)`` over the step
+        with which they grow (:class:`jaxdamp.physics.contact.Mindlin`; ``None``: ``v``, ``w``).
     """
     n = r.shape[0]
+    springs = model.springs
     if n < 2 or idx.shape[1] == 0:
         zero = jnp.zeros_like(r)
         return PairForces(zero, zero, jnp.zeros(()), jnp.zeros(()), jnp.zeros(()),
-                          jnp.zeros(n, r.dtype))
+                          jnp.zeros(n, r.dtype), jnp.zeros((n, idx.shape[1] if springs else 0, 3)),
+                          jnp.zeros(()), jnp.zeros(()), jnp.zeros(()))
 
     lo = force_dtype(model)
 
@@ -81,12 +98,27 @@ def pair_forces(r, v, w, idx, p, model) -> PairForces:
     law = LAWS[model.law]
     row = _rows(p.pair_table.astype(lo), model.species_index(), idx)
     stiffness, damping = law.pair_jax(row, r_eff, m_eff)
-    Rw = radius[:, None] * w
-    spin = Vec(*(own(Rw[:, k]) + other(Rw[:, k]) for k in range(3)))
+    def spin_of(w):  # R_i ω_i + R_j ω_j
+        Rw = radius[:, None] * w
+        return Vec(*(own(Rw[:, k]) + other(Rw[:, k]) for k in range(3)))
 
-    c = contact_force(law, xi, nrm, pair_vec(v), spin, R_i, stiffness, damping,
-                      row[..., GAMMA_S], row[..., MU])
+    spin = spin_of(w)
+
+    if springs:
+        s = jnp.zeros(idx.shape + (3,), lo) if history is None else history.astype(lo)
+        v_step = w_step = None
+        if step_vw is not None:
+            v_step, w_step = (x.astype(lo) for x in step_vw)
+        spring = tangential.Mindlin(Vec.of(s), p.dt.astype(lo), row[..., G_STAR], r_eff,
+                                    None if v_step is None else pair_vec(v_step),
+                                    None if w_step is None else spin_of(w_step))
+        c = tangential.contact_force(law, xi, nrm, pair_vec(v), spin, R_i, stiffness, damping,
+                                     row[..., MU], spring)
+    else:
+        c = contact_force(law, xi, nrm, pair_vec(v), spin, R_i, stiffness, damping,
+                          row[..., GAMMA_S], row[..., MU])
     hi = r.dtype
+    zero = jnp.zeros((), hi)
     return PairForces(
         force=c.force.sum(axis=1).stack().astype(hi),
         torque=c.torque.sum(axis=1).stack().astype(hi),
@@ -94,6 +126,10 @@ def pair_forces(r, v, w, idx, p, model) -> PairForces:
         normal_loss=0.5 * c.normal_loss.astype(hi).sum(),
         friction_loss=0.5 * c.friction_loss.astype(hi).sum(),
         grain_loss=0.5 * (c.normal_loss + c.friction_loss).astype(hi).sum(axis=1),
+        history=(c.history.stack().astype(hi) if springs else jnp.zeros((n, 0, 3), hi)),
+        turned=0.5 * c.turned.astype(hi).sum() if springs else zero,
+        slip_loss=0.5 * c.slip_loss.astype(hi).sum() if springs else zero,
+        spring_energy=0.5 * c.spring_energy.astype(hi).sum() if springs else zero,
     )
 
 

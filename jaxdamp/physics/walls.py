@@ -20,7 +20,8 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
-from jaxdamp.physics.contact import GAMMA_S, LAWS, MU, Vec, contact_force, force_dtype
+from jaxdamp.physics import tangential
+from jaxdamp.physics.contact import G_STAR, GAMMA_S, LAWS, MU, Vec, contact_force, force_dtype
 from jaxdamp.physics.containers import CONTAINERS, effective_radius
 
 #: The floor's and the lid's places among a grain's walls (the sides follow).
@@ -44,6 +45,10 @@ class WallForces(NamedTuple):
         contacts [W].
       grain_box_z: ``(N,)`` each grain's force on its container along ``e`` [N] (``box_z``
         per grain: the cells' forces on their degrees of freedom).
+      history: with tangential springs (``model.springs``), ``(N, 2 + W, 3)`` [m] each
+        grain's spring with each wall after the step; without, ``(N, 0, 3)``.
+      turned, spring_energy: [J], slip_loss: [W] the springs' totals
+        (:class:`jaxdamp.physics.pairs.PairForces`); 0 without springs.
     """
 
     force: jnp.ndarray
@@ -59,9 +64,13 @@ class WallForces(NamedTuple):
     group_loss: jnp.ndarray
     grain_loss: jnp.ndarray
     grain_box_z: jnp.ndarray
+    history: jnp.ndarray
+    turned: jnp.ndarray
+    slip_loss: jnp.ndarray
+    spring_energy: jnp.ndarray
 
 
-def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
+def wall_forces(r, v, w, z_box, zd_box, p, model, history=None, step_vw=None) -> WallForces:
     """Contacts of grains ``(N, 3)`` with the walls of a container at ``e z_box``.
 
     Args:
@@ -70,7 +79,12 @@ def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
         ``(N,)`` each grain's container's (cells on several degrees of freedom,
         :func:`jaxdamp.physics.model.grain_positions_of_boxes`).
       p: :class:`jaxdamp.physics.model.Params`.
-      model: :class:`jaxdamp.physics.model.Model` (the law, the container, the species).
+      model: :class:`jaxdamp.physics.model.Model` (the laws, the container, the species).
+      history: with tangential springs (``model.springs``), their displacements
+        ``(N, 2 + W, 3)`` [m] before the step (``None``: none yet); they advance by one step
+        ``p.dt``. Ignored without springs.
+      step_vw: with springs, ``(v, w, zd_box)`` over the step with which they grow
+        (:class:`jaxdamp.physics.contact.Mindlin`; ``None``: ``v``, ``w``, ``zd_box``).
     """
     # Signed distance of each centre to each wall, (N, 2 + W): floor, lid, the sides; (x, y)
     # in the frame of the grain's own cell (its corner at p.origin in the box frame)
@@ -95,14 +109,27 @@ def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
         R_contact = effective_radius(R, kappa)
     stiffness, damping = law.pair_jax(row, R_contact, p.mass[:, None].astype(lo))
     normals = Vec(*_normals(snx, sny, lo))  # (2 + W,) each, or (N, 2 + W) for curved sides
-    # the walls move with e zd_box
-    zd_col = jnp.reshape(zd_box, (-1, 1)) if jnp.ndim(zd_box) else zd_box
-    v_rel = Vec(*((v[:, k:k + 1] - e * zd_col).astype(lo)
-                  for k, e in enumerate((p.ex, p.ey, p.ez))))
-    Rw = R * w.astype(lo)
-    spin = Vec(Rw[:, 0:1], Rw[:, 1:2], Rw[:, 2:3])
-    c = contact_force(law, xi, normals, v_rel, spin, R, stiffness, damping, row[..., GAMMA_S],
-                      row[..., MU])
+    def relative(v, w, zd_box):  # the walls move with e zd_box
+        zd_col = jnp.reshape(zd_box, (-1, 1)) if jnp.ndim(zd_box) else zd_box
+        v_rel = Vec(*((v[:, k:k + 1] - e * zd_col).astype(lo)
+                      for k, e in enumerate((p.ex, p.ey, p.ez))))
+        Rw = R * w.astype(lo)
+        return v_rel, Vec(Rw[:, 0:1], Rw[:, 1:2], Rw[:, 2:3])
+
+    v_rel, spin = relative(v, w, zd_box)
+    spring = None
+    if model.springs:
+        s = jnp.zeros(xi.shape + (3,), lo) if history is None else history.astype(lo)
+        v_step = spin_step = None
+        if step_vw is not None:
+            v_step, spin_step = relative(*step_vw)
+        spring = tangential.Mindlin(Vec.of(s), p.dt.astype(lo), row[..., G_STAR], R_contact,
+                                    v_step, spin_step)
+        c = tangential.contact_force(law, xi, normals, v_rel, spin, R, stiffness, damping,
+                                     row[..., MU], spring)
+    else:
+        c = contact_force(law, xi, normals, v_rel, spin, R, stiffness, damping,
+                          row[..., GAMMA_S], row[..., MU])
 
     f = Vec(*(x.astype(hi) for x in c.force))  # (N, 2 + W): force of wall on grain
     per_contact = (c.normal_loss + c.friction_loss).astype(hi)  # (N, 2 + W)
@@ -122,6 +149,12 @@ def wall_forces(r, v, w, z_box, zd_box, p, model) -> WallForces:
         group_loss=jnp.stack([loss[FLOOR], loss[LID], loss[LID + 1:].sum()]),
         grain_loss=per_contact.sum(axis=1),
         grain_box_z=along,
+        history=(c.history.stack().astype(hi) if spring is not None
+                 else jnp.zeros((r.shape[0], 0, 3), hi)),
+        turned=c.turned.astype(hi).sum() if spring is not None else jnp.zeros((), hi),
+        slip_loss=c.slip_loss.astype(hi).sum() if spring is not None else jnp.zeros((), hi),
+        spring_energy=(c.spring_energy.astype(hi).sum() if spring is not None
+                       else jnp.zeros((), hi)),
     )
 
 

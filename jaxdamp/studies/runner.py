@@ -159,7 +159,8 @@ def batch_budget(config: Config, sched: Schedule, systems: int = 1, out: str | N
         systems=systems, grains=config.n_grains, steps=steps,
         samples=sched.n_chunks * sched.records_per_chunk,
         sample_bytes=8 * (24 + 4 * len(config.grains) + dofs),
-        engine=resolve_engine(num.engine, num.precision, systems), snapshots=snapshots,
+        engine=resolve_engine(num.engine, num.precision, systems,
+                              tangential=config.tangential_law), snapshots=snapshots,
         out=out is not None)
 
 
@@ -224,7 +225,8 @@ def run(
     t_window = analysis_start(config, sched.duration)
     params = dataclasses.replace(params, t_window=jnp.asarray(t_window))
     pb = driver.batched(params)
-    choice = choose(config.numerics.engine, config.numerics.precision, batch=1)
+    choice = choose(config.numerics.engine, config.numerics.precision, batch=1,
+                    tangential=config.tangential_law)
     radii = np.asarray(params.radius)
     masses = np.asarray(params.mass)
     m_grains = float(masses.sum())

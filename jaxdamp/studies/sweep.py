@@ -222,7 +222,8 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
         raise ConfigError(f"{P} systems need {len(waves)} waves of {W}, and a sweep in waves "
                           "runs in one process: run it on one host, or split the grid into "
                           "sweeps that fit each host's memory")
-    choice = choose(base.numerics.engine, base.numerics.precision, batch=W)
+    choice = choose(base.numerics.engine, base.numerics.precision, batch=W,
+                    tangential=base.tangential_law)
     if resuming:  # the engine the file was written with
         choice = stored_choice(SweepFile.attrs_of(out), choice)
     engine = choice.engine
