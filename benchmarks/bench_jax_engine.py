@@ -2,6 +2,7 @@
 
     python benchmarks/bench_jax_engine.py                        # this checkout, float64/32
     python benchmarks/bench_jax_engine.py --checkout /path/old   # and an older checkout
+    python benchmarks/bench_jax_engine.py --precision float64 --tangential both  # the spring
 
 The state is ``bench_lammps.py``'s thesis bed in motion (driven at 3 cm, 15 Hz, after 0.4 s,
 by the native engine), repeated ``--batch`` times with drive frequencies spread by ±3 %.
@@ -11,7 +12,9 @@ amplitudes, so their grains need new neighbour lists at different steps; identic
 rebuild together and hide the cost of one system forcing a rebuild of all).
 Each measurement runs in a fresh interpreter (``PYTHONPATH`` set to the checkout), compiles a
 chunk of ``--steps`` steps, runs it once more from where it ended, and times a third run; the
-checkouts and precisions are interleaved over ``--rounds`` rounds. Prints µs per
+checkouts and precisions (and with ``--tangential both`` the viscous law and the spring with
+history, whose copies start from the moving bed with fresh springs) are interleaved over
+``--rounds`` rounds. Prints µs per
 system-step, median [min, max], and, from ``--steps`` single steps after the timed run, how
 often the lists were rebuilt: the fraction of steps in which any system rebuilt and the mean
 fraction of systems rebuilt per step. Do not run while other jobs use the cores.
@@ -50,6 +53,12 @@ if {decorrelate} > 0:  # driven apart by the native engine
     states = jax.tree_util.tree_map(jnp.asarray, nat.states)
 if precision != "float64":
     model = dataclasses.replace(model, precision=precision)
+if {tangential!r} != "viscous":  # the same bed with fresh springs (the warm-up chunk loads them)
+    from jaxdamp.engine.simulate import init_states
+    model = dataclasses.replace(model, tangential={tangential!r})
+    states = init_states(model, pb, states.r, states.v, states.w, states.q, states.z,
+                         states.zd, float(states.t[0]),
+                         nb.allocate(model, box_frame(states, pb), 1.0).idx)
 nbrs = nb.allocate(model, box_frame(states, pb), 1.5)
 every = 100
 fn = chunk_fn(model, max(1, steps // every), every, engine="jax")
@@ -72,9 +81,9 @@ print(json.dumps(dict(per=per, capacity=int(nb.capacity(nbrs)),
 
 
 def measure(checkout: str, precision: str, batch: int, steps: int,
-            decorrelate: float = 0.0) -> dict:
+            decorrelate: float = 0.0, tangential: str = "viscous") -> dict:
     code = WORKER.format(bench=HERE, batch=batch, steps=steps, precision=precision,
-                         decorrelate=float(decorrelate))
+                         decorrelate=float(decorrelate), tangential=tangential)
     env = dict(os.environ, PYTHONPATH=checkout)
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           env=env, check=True, cwd=checkout)  # '' on sys.path is the checkout
@@ -94,23 +103,27 @@ def main(argv=None):
                     help="drive the copies apart for S seconds first (frequencies ±20%%)")
     ap.add_argument("--precision", choices=("float64", "float32", "both", "none"), default="both",
                     help="this checkout's precisions (none: only the --checkout ones)")
+    ap.add_argument("--tangential", choices=("viscous", "mindlin", "both"), default="viscous",
+                    help="this checkout's tangential laws (Config.tangential_law)")
     args = ap.parse_args(argv)
     here = os.path.dirname(HERE)
     mine = {"both": ["float64", "float32"], "none": []}.get(args.precision, [args.precision])
-    cases = [(c, "float64") for c in args.checkout] + [(here, p) for p in mine]
+    laws = ["viscous", "mindlin"] if args.tangential == "both" else [args.tangential]
+    cases = ([(c, "float64", "viscous") for c in args.checkout]
+             + [(here, p, t) for p in mine for t in laws])
     runs = {c: [] for c in cases}
     for _ in range(args.rounds):
         for c in cases:
-            runs[c].append(measure(c[0], c[1], args.batch, args.steps, args.decorrelate))
+            runs[c].append(measure(c[0], c[1], args.batch, args.steps, args.decorrelate, c[2]))
     import numpy as np
 
     print(f"JAX engine, moving thesis bed (250 grains), batch {args.batch}"
           + (f" driven apart {args.decorrelate} s" if args.decorrelate else "")
           + f", {args.steps} steps timed per round, {args.rounds} rounds; µs per system-step, "
           "median [min, max]; rebuilds: steps with any system rebuilt, systems rebuilt per step:")
-    for (path, precision), r in runs.items():
+    for (path, precision, law), r in runs.items():
         t = 1e6 * np.array([x["per"] for x in r])
-        print(f"  {path} ({precision}): {np.median(t):.1f} [{t.min():.1f}, {t.max():.1f}]; "
+        print(f"  {path} ({precision}, {law}): {np.median(t):.1f} [{t.min():.1f}, {t.max():.1f}]; "
               f"rebuilds {r[-1]['any_rate']:.3f}, {r[-1]['system_rate']:.4f}")
 
 

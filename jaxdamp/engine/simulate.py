@@ -57,6 +57,8 @@ def chunk_fn(model: Model, n_records: int, record_every: int, remat: bool = Fals
 
     @jax.jit
     def run(states, nbrs, params):
+        if model.springs:  # springs written against other lists (a start, a re-allocation)
+            states, nbrs = _rekeyed(states, nbrs)
         (states, nbrs), recs = jax.lax.scan(
             functools.partial(outer, params=params), (states, nbrs), None, length=n_records
         )
@@ -64,6 +66,14 @@ def chunk_fn(model: Model, n_records: int, record_every: int, remat: bool = Fals
         return states, nbrs, recs
 
     return run
+
+
+def _rekeyed(states, nbrs):
+    """The states' springs carried over to the lists ``nbrs`` by pair identity
+    (:func:`jaxdamp.engine.history.rekey`); a history the lists would lose marks them
+    overflowed (the driver redoes the chunk with larger lists)."""
+    states, lost = history.rekey(states, nbrs.idx)
+    return states, dataclasses.replace(nbrs, overflow=nbrs.overflow | (lost > 0))
 
 
 def _jax_block(model: Model, record_every: int):
@@ -79,8 +89,7 @@ def _jax_block(model: Model, record_every: int):
             states, nbrs, impulse = carry
             nbrs = nb.update(model, nbrs, box_frame(states, params, params.dt), params.radius)
             if model.springs:
-                states, lost = history.rekey(states, nbrs.idx)
-                nbrs = dataclasses.replace(nbrs, overflow=nbrs.overflow | (lost > 0))
+                states, nbrs = _rekeyed(states, nbrs)
             states = step_b(states, nbrs.idx, params, model)
             impulse = impulse + jnp.stack([states.f_floor_lid, states.f_box], axis=-1)
             return (states, nbrs, impulse), None
