@@ -110,6 +110,16 @@ def trajectory(model, pb, st, nbrs, n_steps, every=1):
     return st, out
 
 
+def gas(n=27, side=0.02, seed=1):
+    """``(r, v, w)`` of ``n`` grains on a jittered cubic lattice filling ``side`` [m] from the
+    corner, fast (0.5 m/s) and spinning (50 rad/s): a granular gas."""
+    rng = np.random.default_rng(seed)
+    k = round(n ** (1 / 3))
+    grid = np.stack(np.meshgrid(*[np.arange(k)] * 3, indexing="ij"), -1).reshape(-1, 3) + 0.5
+    r = grid * (side / k) + rng.uniform(-5e-4, 5e-4, (n, 3))
+    return r, rng.normal(0, 0.5, (n, 3)), rng.normal(0, 50.0, (n, 3))
+
+
 def load_experiment(name):
     """The study ``experiments/<name>.py``, imported as the module ``experiments.<name>``
     (the repository root is on the tests' path: ``pythonpath`` in pyproject.toml)."""

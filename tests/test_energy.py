@@ -4,21 +4,12 @@ import math
 
 import numpy as np
 import pytest
-from helpers import ENGINES, ENGINES_UNSIMULATED, config, engine_overrides, run_steps, start
+from helpers import ENGINES, ENGINES_UNSIMULATED, config, engine_overrides, gas, run_steps, start
 
 from jaxdamp.cases import presets
 from jaxdamp.config import Material, Primary, apply_overrides
 from jaxdamp.physics.model import CH, build
 from jaxdamp.studies.runner import run
-
-
-def _gas(n=27, side=0.02, seed=1):
-    rng = np.random.default_rng(seed)
-    k = round(n ** (1 / 3))
-    grid = np.stack(np.meshgrid(*[np.arange(k)] * 3, indexing="ij"), -1).reshape(-1, 3) + 0.5
-    r = grid * (side / k) + rng.uniform(-5e-4, 5e-4, (n, 3))
-    return r, rng.normal(0, 0.5, (n, 3)), rng.normal(0, 50.0, (n, 3))
-
 
 ELASTIC = Material(E=2e9, nu=0.3, density=7850.0, mu=0.3, gamma_n=0.0, gamma_s=0.0)
 
@@ -36,7 +27,7 @@ def test_energy_conserved_without_damping(engine):
     cfg = config(n=n, radius=2e-3, material=ELASTIC, box=(0.02, 0.02, 0.02), system="primary",
                  primary=Primary(M=0.05, K=0.0, C=0.0, U=0.0), v_impact=1.0,
                  dt_per_collision=400)
-    model, pb, st, nbrs = start(cfg, *_gas(n))
+    model, pb, st, nbrs = start(cfg, *gas(n))
     st, nbrs, rec = run_steps(model, pb, st, nbrs, 1000, 100, engine=engine)
     e0 = float(st.e_start[0])
     assert np.all(rec["work"] == 0.0)  # nothing dissipates, nothing drives

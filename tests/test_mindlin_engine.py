@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 import pytest
-from helpers import config, run_steps, start, trajectory
+from helpers import config, gas, run_steps, start, trajectory
 
 from jaxdamp.config import ConfigError, Material, Primary
 from jaxdamp.engine import driver
@@ -177,14 +177,6 @@ def test_a_squeezed_grain_sticks_below_the_friction_limit_and_slides_above():
     assert np.abs(x).max() > 100 * np.abs(stuck).max()
 
 
-def _gas(n=27, side=0.02, seed=1):
-    rng = np.random.default_rng(seed)
-    k = round(n ** (1 / 3))
-    grid = np.stack(np.meshgrid(*[np.arange(k)] * 3, indexing="ij"), -1).reshape(-1, 3) + 0.5
-    r = grid * (side / k) + rng.uniform(-5e-4, 5e-4, (n, 3))
-    return r, rng.normal(0, 0.5, (n, 3)), rng.normal(0, 50.0, (n, 3))
-
-
 def _gas_run(law, steps=20000, material=None):
     """27 grains with friction (μ = 0.3, elastic normal law unless ``material``) in a free
     2 cm box (a primary of K = C = U = 0): the records of ``steps`` steps, and ``E(0)``."""
@@ -194,7 +186,7 @@ def _gas_run(law, steps=20000, material=None):
                  primary=Primary(M=0.05, K=0.0, C=0.0, U=0.0), v_impact=1.0,
                  dt_per_collision=100)
     cfg = dataclasses.replace(cfg, tangential_law=law)
-    model, pb, st, nbrs = start(cfg, *_gas(27))
+    model, pb, st, nbrs = start(cfg, *gas(27))
     st, nbrs, rec = run_steps(model, pb, st, nbrs, 200, steps // 200)
     return st, rec, float(st.e_start[0])
 
@@ -225,15 +217,20 @@ def test_energy_balance_closes_in_a_frictional_gas():
     assert work_m[CH["spring_stiffness"]] != 0
 
 
+def _packed_bed():
+    """27 damped frictional grains with springs, packed into the lower corner of a 2 cm box
+    under gravity (springs held after 2 000 steps): ``start``'s model, params, state, lists."""
+    cfg = dataclasses.replace(config(n=27, radius=2e-3, material=Material(
+        E=2e9, nu=0.3, density=7850.0, mu=0.3, restitution=0.7), box=(0.02, 0.02, 0.02),
+        gravity=9.8, dt_per_collision=50), tangential_law="mindlin")
+    return start(cfg, *gas(27, side=0.0125))
+
+
 def test_resumes_bit_identically_from_a_checkpoint():
     """With springs in the state: 4 000 steps in one go equal 2 000, a checkpoint (host
     arrays), a restore and 2 000 more, in every field (springs, partners, work); 27 grains
     packed into the lower corner of the box, so that springs are held at the checkpoint."""
-    cfg = dataclasses.replace(config(n=27, radius=2e-3, material=Material(
-        E=2e9, nu=0.3, density=7850.0, mu=0.3, restitution=0.7), box=(0.02, 0.02, 0.02),
-        gravity=9.8, dt_per_collision=50), tangential_law="mindlin")
-    r, v, w = _gas(27, side=0.0125)
-    model, pb, st, nbrs = start(cfg, r, v, w)
+    model, pb, st, nbrs = _packed_bed()
     one, _, _ = run_steps(model, pb, st, nbrs, 2, 2000)
     half, nb_half, _ = run_steps(model, pb, st, nbrs, 1, 2000)
     b = driver.Batch(model, pb, half, nb_half, "jax", 1.5)
@@ -291,11 +288,7 @@ def test_springs_follow_their_pairs_into_reallocated_lists():
     """Lists re-allocated larger (``driver.grow``, as after an overflow: another capacity,
     other slots) take the springs over by pair identity: the next chunk equals the one on the
     old lists to round-off (the pair sums run over other slot orders), with springs held."""
-    cfg = dataclasses.replace(config(n=27, radius=2e-3, material=Material(
-        E=2e9, nu=0.3, density=7850.0, mu=0.3, restitution=0.7), box=(0.02, 0.02, 0.02),
-        gravity=9.8, dt_per_collision=50), tangential_law="mindlin")
-    r, v, w = _gas(27, side=0.0125)
-    model, pb, st, nbrs = start(cfg, r, v, w)
+    model, pb, st, nbrs = _packed_bed()
     st, nbrs, _ = run_steps(model, pb, st, nbrs, 1, 2000)
     assert np.asarray(st.spring_pair).any()
     b = driver.Batch(model, pb, st, nbrs, "jax", 1.5)

@@ -75,8 +75,8 @@ def damping(kt, k, g):
     normal law, ``τ = γ_n sqrt(ξ) / (dF_n/dξ) = γ_n / (1.5 k_n)`` (``k``, ``g``: the normal
     law's ``k_n`` and ``γ_n``, :attr:`jaxdamp.physics.contact.Law.pair_jax`): the tangential
     dashpot relaxes the tangential spring as fast as the normal one relaxes the normal spring,
-    at every overlap. For the Kuwabara–Kono form of the paper ``τ = A``. Elementwise; also the scalar
-    form (arithmetic only)."""
+    at every overlap. For the Kuwabara–Kono form of the paper ``τ = A``. Elementwise; also the
+    scalar form (arithmetic only)."""
     return kt * g / (1.5 * k)
 
 
