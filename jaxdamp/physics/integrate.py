@@ -60,9 +60,9 @@ class Forces(NamedTuple):
     wall_groups: jnp.ndarray  # (3,) pw_floor, pw_lid, pw_side powers [W]
     cell_losses: jnp.ndarray  # (cells,) each cell's granular loss power [W]
     dof_forces: jnp.ndarray  # (dofs,) the grains' forces on the degrees of freedom along e [N]
-    spring_pair: jnp.ndarray  # (N, K, 3) the grain–grain springs after the step [m]
-    spring_wall: jnp.ndarray  # (N, 2 + W, 3) the grain–wall springs after the step [m]
-    turned: jnp.ndarray  # the springs' last displacements at this step's stiffness [J]
+    spring_pair: jnp.ndarray  # (N, K, 3) the grain–grain springs' forces after the step [N]
+    spring_wall: jnp.ndarray  # (N, 2 + W, 3) the grain–wall springs' forces after it [N]
+    turned: jnp.ndarray  # the energy the step starts the springs with (Spring.turned) [J]
     spring_energy: jnp.ndarray  # the springs' energy after the step [J] (in elastic_energy)
     slip_losses: jnp.ndarray  # (2,) pp_slip, pw_slip powers [W]
 
@@ -73,7 +73,7 @@ def forces(r, v, w, z_box, zd_box, y, yd, idx, p: Params, model: Model, spring_p
     at ``z_box`` moving at ``zd_box``, the structure's other degrees of freedom at ``y``,
     ``yd`` (cells may sit on them, :attr:`Model.cell_dofs`). With tangential springs
     (``model.springs``), ``spring_pair`` ``(N, K, 3)`` (per slot of ``idx``) and
-    ``spring_wall`` are their displacements before this force evaluation (``None``: none
+    ``spring_wall`` are their forces (the history) before this force evaluation (``None``: none
     yet); each evaluation advances them by one step, with the velocities ``step_vw = (v, w,
     zd_box, yd)`` over the step (``None``: the evaluation's)."""
     pf = pair_forces(r, v, w, idx, p, model, spring_pair,

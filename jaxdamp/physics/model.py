@@ -45,7 +45,7 @@ from jaxdamp.physics.structure import internal
 #:                "mindlin"``, :mod:`jaxdamp.physics.tangential`); zero for the viscous law. A
 #:                breakdown, not a term of the balance.
 #:   spring_stiffness: the energy the tangential springs lose as their stiffness
-#:                ``8 G* sqrt(R* ξ)`` changes with the overlap, at constant displacement (no
+#:                ``8 G* sqrt(R* ξ)`` changes with the overlap, at constant force (no
 #:                force does this work; at a contact's end it is the spring's whole remaining
 #:                energy): the no-slip Mindlin model's own term of the balance, of either
 #:                sign; zero for the viscous law.
@@ -254,11 +254,11 @@ class State:
     ``z_max``, ``z_min`` [m] box extrema since ``t_window``; ``step`` steps taken.
 
     The contacts' history (tangential springs, ``Model.tangential = "mindlin"``,
-    :mod:`jaxdamp.physics.tangential`): ``spring_pair`` ``(N, K, 3)`` [m] the displacement of
+    :mod:`jaxdamp.physics.tangential`): ``spring_pair`` ``(N, K, 3)`` [N] the spring's force of
     grain ``i``'s contact with its partner ``spring_partner[i, k]`` ``(N, K)`` (int32; the
     neighbour list the history was written against, padded with ``N``; a rebuilt list takes
     the history over by pair identity, :mod:`jaxdamp.engine.history`); ``spring_wall``
-    ``(N, 2 + W, 3)`` [m] of its contact with each wall (floor, lid, the sides); ``e_spring``
+    ``(N, 2 + W, 3)`` [N] of its contact with each wall (floor, lid, the sides); ``e_spring``
     [J] their elastic energy (a part of ``e_elastic``). Under the viscous law the three arrays
     are empty (``(N, 0, 3)``, ``(N, 0)``, ``(N, 0, 3)``) and ``e_spring`` is 0: nothing to
     carry.

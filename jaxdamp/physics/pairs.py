@@ -29,7 +29,7 @@ class PairForces(NamedTuple):
     ``elastic_energy`` [J] (the tangential springs' included), ``normal_loss``,
     ``friction_loss`` [W]; ``grain_loss`` ``(N,)`` [W]: each grain's half of the loss (normal +
     friction) of its contacts. With tangential springs (``model.springs``): ``history``
-    ``(N, K, 3)`` [m] the springs after the step, per slot of ``idx``; ``turned`` [J] the
+    ``(N, K, 3)`` [N] the springs' forces after the step, per slot of ``idx``; ``turned`` [J] the
     pairs' :attr:`jaxdamp.physics.contact.ContactForce.turned`, ``slip_loss`` [W] the slip's
     part of ``friction_loss``, ``spring_energy`` [J] the springs' part of ``elastic_energy``
     (totals); without, ``history`` is ``(N, 0, 3)`` and the three 0."""
@@ -54,8 +54,8 @@ def pair_forces(r, v, w, idx, p, model, history=None, step_vw=None) -> PairForce
       idx: neighbour indices ``(N, K)``, entries ``N`` are padding.
       p: :class:`jaxdamp.physics.model.Params`.
       model: :class:`jaxdamp.physics.model.Model` (the laws and the grains' species).
-      history: with tangential springs (``model.springs``), their displacements ``(N, K, 3)``
-        [m] per slot of ``idx`` before the step (``None``: none yet); they advance by one
+      history: with tangential springs (``model.springs``), their forces ``(N, K, 3)`` [N]
+        per slot of ``idx`` before the step (``None``: none yet); they advance by one
         step ``p.dt``. Ignored without springs.
       step_vw: with springs, the velocities and angular velocities ``(v, w)`` over the step
         with which they grow (:class:`jaxdamp.physics.contact.Mindlin`; ``None``: ``v``, ``w``).

@@ -45,7 +45,7 @@ class WallForces(NamedTuple):
         contacts [W].
       grain_box_z: ``(N,)`` each grain's force on its container along ``e`` [N] (``box_z``
         per grain: the cells' forces on their degrees of freedom).
-      history: with tangential springs (``model.springs``), ``(N, 2 + W, 3)`` [m] each
+      history: with tangential springs (``model.springs``), ``(N, 2 + W, 3)`` [N] each
         grain's spring with each wall after the step; without, ``(N, 0, 3)``.
       turned, spring_energy: [J], slip_loss: [W] the springs' totals
         (:class:`jaxdamp.physics.pairs.PairForces`); 0 without springs.
@@ -80,8 +80,8 @@ def wall_forces(r, v, w, z_box, zd_box, p, model, history=None, step_vw=None) ->
         :func:`jaxdamp.physics.model.grain_positions_of_boxes`).
       p: :class:`jaxdamp.physics.model.Params`.
       model: :class:`jaxdamp.physics.model.Model` (the laws, the container, the species).
-      history: with tangential springs (``model.springs``), their displacements
-        ``(N, 2 + W, 3)`` [m] before the step (``None``: none yet); they advance by one step
+      history: with tangential springs (``model.springs``), their forces
+        ``(N, 2 + W, 3)`` [N] before the step (``None``: none yet); they advance by one step
         ``p.dt``. Ignored without springs.
       step_vw: with springs, ``(v, w, zd_box)`` over the step with which they grow
         (:class:`jaxdamp.physics.contact.Mindlin`; ``None``: ``v``, ``w``, ``zd_box``).
