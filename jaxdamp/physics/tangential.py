@@ -85,19 +85,11 @@ def unloading(xi, xi_old):
     over a step: the overlap at which the step's stiffness is taken, the mean
     ``(ξ + ξ_old)/2`` (a contact new in the step started at ``ξ_old = 0``), and the factor
     ``sqrt(ξ/ξ_old)`` on the stored force where the contact shrank (1 where it grew).
-    Arithmetic and ``sqrt`` only: JAX arrays (safe under ``jax.grad``) and, compiled, the
-    kernel's scalars (:data:`unloading_scalar`)."""
+    JAX arrays, safe under ``jax.grad``. (The native kernel, when it gets the spring, needs
+    a scalar form beside it; :func:`oblique_impact` forms the same from its ``kt_of``.)"""
     shrank = xi_old > xi
     ratio = xi / jnp.where(shrank, xi_old, 1.0)
     return 0.5 * (xi + xi_old), jnp.where(shrank, jnp.sqrt(jnp.where(shrank, ratio, 1.0)), 1.0)
-
-
-@scalar_form
-def unloading_scalar(xi, xi_old):
-    """Scalar form of :func:`unloading`."""
-    if xi_old > xi:
-        return 0.5 * (xi + xi_old), math.sqrt(xi / xi_old)
-    return 0.5 * (xi + xi_old), 1.0
 
 
 def stiffness(G_star, r_eff, xi):
