@@ -492,6 +492,64 @@ if AVAILABLE:
                 pdrag, far)
 
     @_kernel(inline="always")
+    def box_walls(law, g0, g1, r1, vp, rw, Rb, mb, ref, wk, wks, sec, og, gs, cg, frames, F, T,
+                  ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
+        """:func:`grain_walls` of grains ``g0 … g1 − 1`` of a one-cell box (a large bed's
+        block, :func:`_walls_block`) in two loops, the same sums: the first, over every grain
+        without a branch (SIMD code), sets ``F`` to the body force, ``T`` to zero, and sums
+        ``Σ m v²`` and the largest displacement since the list was built; the second gives the
+        grains within reach of a wall (the floor, the lid, a side: most of a large bed touches
+        none) to :func:`grain_walls` one by one. In one loop the eleven running sums of the
+        wall contacts are carried through every grain's branches, and that loop cost a large
+        bed's grain 2× its pairs' … (``benchmarks/RESULTS.md``)."""
+        pdrag = 0.0
+        moved = 0.0
+        for i in range(g0, g1):
+            ux, uy, uz = vp[i, 0], vp[i, 1], vp[i, 2]
+            ddx = r1[i, 0] - ex * z1 - ref[i, 0]
+            ddy = r1[i, 1] - ey * z1 - ref[i, 1]
+            ddz = r1[i, 2] - ez * z1 - ref[i, 2]
+            moved = max(moved, ddx * ddx + ddy * ddy + ddz * ddz)
+            pdrag += mb[i] * (ux * ux + uy * uy + uz * uz)
+            F[i, 0], F[i, 1], F[i, 2] = body_force_scalar(mb[i], ux, uy, uz, grav, drag)
+            T[i, 0] = 0.0
+            T[i, 1] = 0.0
+            T[i, 2] = 0.0
+        e_el = 0.0
+        pw_n = 0.0
+        pw_f = 0.0
+        box_z = 0.0
+        floor_lid = 0.0
+        n_floor = 0.0
+        n_lid = 0.0
+        n_wall = 0.0
+        l_floor = 0.0
+        l_lid = 0.0
+        for i in range(g0, g1):
+            Ri = Rb[i]
+            bx = r1[i, 0] - ex * z1
+            by = r1[i, 1] - ey * z1
+            floor = r1[i, 2] - ez * z1
+            if (floor >= Ri and Lz - floor >= Ri and bx >= Ri and sec[0] - bx >= Ri
+                    and by >= Ri and sec[1] - by >= Ri):
+                continue
+            s = grain_walls(_BOX, law, i, i + U(1), U(1), r1, vp, rw, Rb, mb, ref, wk, wks, sec,
+                            og, False, gs, cg, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav,
+                            drag, half_skin2)
+            e_el += s[0]
+            pw_n += s[1]
+            pw_f += s[2]
+            box_z += s[3]
+            floor_lid += s[4]
+            n_floor += s[5]
+            n_lid += s[6]
+            n_wall += s[7]
+            l_floor += s[8]
+            l_lid += s[9]
+        return (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
+                pdrag, moved > half_skin2)
+
+    @_kernel(inline="always")
     def cell_frames(cdof, z, zd, y, yd, frames):
         """Each cell's container's position ``frames[c, 0]`` and velocity ``frames[c, 1]``
         along ``e``: its degree of freedom ``cdof[c]`` of ``(z, y)``, ``(z', y')``; returns
@@ -800,9 +858,8 @@ if AVAILABLE:
         # three copies, as in _advance_one: the container and the cells as constants fold the
         # branches of the common damper away (its walls pass: 34 -> 16.7 ns per grain, 50 000)
         if shape == _BOX and not shifted:
-            s = grain_walls(_BOX, law, g0, g1, U(1), r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
-                            False, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
-                            half_skin2)
+            s = box_walls(law, g0, g1, r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, gs, cgw,
+                          frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
         elif not shifted:
             s = grain_walls(shape, law, g0, g1, U(1), r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
                             False, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
