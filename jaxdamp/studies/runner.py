@@ -161,7 +161,7 @@ def batch_budget(config: Config, sched: Schedule, systems: int = 1, out: str | N
         sample_bytes=8 * (24 + 4 * len(config.grains) + dofs),
         engine=resolve_engine(num.engine, num.precision, systems,
                               tangential=config.tangential_law), snapshots=snapshots,
-        out=out is not None)
+        out=out is not None, tangential=config.tangential_law)
 
 
 @dataclass
