@@ -346,6 +346,27 @@ def _check_tangential(config: Config) -> None:
                           "'driven'); system = 'impact' (S3) has no tangential force")
 
 
+def unused_note(config: Config) -> str | None:
+    """One sentence naming the settings that a run of ``config`` does not use, or ``None``:
+    under ``tangential_law = 'mindlin'`` the materials' ``gamma_s`` (the viscous law's
+    tangential constant; the spring's damping follows the normal one,
+    :func:`jaxdamp.physics.tangential.damping`). Printed before a run, so that a value that
+    changes nothing is not taken for one that does."""
+    if config.tangential_law != "mindlin":
+        return None
+    vessel = config.box if config.box is not None else config.container
+    where = "box" if config.box is not None else "container"
+    mats = [(f"grains.{i}.material", sp.material) for i, sp in enumerate(config.grains)]
+    if vessel is not None and vessel.wall is not None:
+        mats.append((f"{where}.wall", vessel.wall))
+    named = [f"{name}.gamma_s = {m.gamma_s:g}" for name, m in mats if m.gamma_s]
+    if not named:
+        return None
+    return (f"note: {', '.join(named)} [kg s^-1 m^-1/2] not used: under tangential_law = "
+            "'mindlin' the tangential damping follows the normal one (γ_t = k_t γ_n / "
+            "(1.5 k_n), docs/physics.md §2)")
+
+
 def validate(config: Config) -> Config:
     """Raise :class:`ConfigError` for any invalid value; return the config, with every
     species' count derived from its ``mass_ratio`` or ``fill_fraction`` where it states one

@@ -264,6 +264,27 @@ def test_configuration_refuses_what_the_spring_cannot_do():
                   tangential="viscous").engine == "native"
 
 
+def test_a_run_says_which_settings_the_spring_does_not_use():
+    """Under the spring the materials' ``gamma_s`` changes nothing: a run says so, naming each
+    (``validation.unused_note``, printed before the run by ``run`` and ``sweep``); nothing is
+    said under the viscous law, nor where every ``gamma_s`` is 0."""
+    from jaxdamp.cases import presets
+    from jaxdamp.config import apply_overrides
+    from jaxdamp.validation import unused_note
+
+    base = apply_overrides(presets.get("sanchez2012-optimal"),
+                           ["grains.0.material.gamma_s=2.5", "box.wall=steel",
+                            "box.wall.gamma_s=0.5"])
+    note = unused_note(apply_overrides(base, ["tangential_law='mindlin'"]))
+    assert note is not None
+    assert "grains.0.material.gamma_s = 2.5" in note and "box.wall.gamma_s = 0.5" in note
+    assert "not used" in note and "tangential_law = 'mindlin'" in note
+    assert unused_note(base) is None
+    quiet = apply_overrides(base, ["grains.0.material.gamma_s=0", "box.wall.gamma_s=0",
+                                   "tangential_law='mindlin'"])
+    assert unused_note(quiet) is None
+
+
 @pytest.mark.long  # ~50 s each on 2 cores (the JAX engine)
 @pytest.mark.parametrize("system", ["primary", "driven"])
 def test_energy_balance_closes_in_a_damper_run_end_to_end(system):

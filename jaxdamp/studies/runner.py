@@ -38,7 +38,7 @@ from jaxdamp.io.common import (
 from jaxdamp.physics.containers import container
 from jaxdamp.physics.excitation import random_start
 from jaxdamp.physics.model import State, build, grain_species
-from jaxdamp.validation import validate
+from jaxdamp.validation import unused_note, validate
 
 
 @dataclass(frozen=True)
@@ -211,6 +211,8 @@ def run(
     model, params = build(config)
     sched = schedule(config, float(params.dt))
     if (note := schedule_note(config, sched)) is not None:
+        say(note)
+    if (note := unused_note(config)) is not None:
         say(note)
     if not resume:
         cost = batch_budget(config, sched, 1, out, sched.n_chunks if snapshots else 0)

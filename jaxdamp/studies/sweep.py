@@ -57,6 +57,7 @@ from jaxdamp.studies.runner import (
     schedule,
     schedule_note,
 )
+from jaxdamp.validation import unused_note
 
 
 def _mesh_sharding(batch: int):
@@ -202,6 +203,8 @@ def sweep(config: Config, axes: dict, out: str | None = None, resume: bool = Fal
     sched = schedule(dataclasses.replace(
         base, numerics=dataclasses.replace(base.numerics, dt=dt)), dt)
     if (note := schedule_note(base, sched)) is not None:
+        say(note)
+    if (note := unused_note(base)) is not None:
         say(note)
     built = [build(c, radii) for c in configs]
     model = built[0][0]
