@@ -496,7 +496,7 @@ if AVAILABLE:
                   ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
         """:func:`grain_walls` of grains ``g0 … g1 − 1`` of a one-cell box (a large bed's
         block, :func:`_walls_block`) in two loops, the same sums: the first, over every grain
-        without a branch (SIMD code), sets ``F`` to the body force, ``T`` to zero, and sums
+        without a branch, sets ``F`` to the body force, ``T`` to zero, and sums
         ``Σ m v²`` and the largest displacement since the list was built; the second gives the
         grains within reach of a wall (the floor, the lid, a side: most of a large bed touches
         none) to :func:`grain_walls` one by one (the test is the negation of its contact
