@@ -495,28 +495,17 @@ if AVAILABLE:
     def box_walls(law, g0, g1, r1, vp, rw, Rb, mb, ref, wk, wks, sec, og, gs, cg, frames, F, T,
                   ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
         """:func:`grain_walls` of grains ``g0 … g1 − 1`` of a one-cell box (a large bed's
-        block, :func:`_walls_block`) in two loops, the same sums: the first, over every grain
-        without a branch, sets ``F`` to the body force, ``T`` to zero, and sums
-        ``Σ m v²`` and the largest displacement since the list was built; the second gives the
-        grains within reach of a wall (the floor, the lid, a side: most of a large bed touches
-        none) to :func:`grain_walls` one by one (the test is the negation of its contact
-        conditions, and its sums for one grain are added in the same order). In
-        :func:`grain_walls`' single loop the eleven running sums ride through every grain's
-        branches; in two loops the 50 000-grain bed's whole step takes 0.91× the time
-        (``benchmarks/RESULTS.md``, "Large beds: the wall pass in two loops")."""
+        block, :func:`_walls_block`), the same sums: every grain's body force into ``F``, zero
+        into ``T``, ``Σ m v²`` and the largest displacement since the list was built, and only
+        the grains within reach of a wall (the floor, the lid, a side: most of a large bed
+        touches none) through :func:`grain_walls` itself, one grain at a time (the test is the
+        negation of its contact conditions, and its sums for one grain are added in the same
+        order). In :func:`grain_walls`' loop the eleven running sums ride through every
+        grain's branches; here they change only in the rare branch, and the 50 000-grain
+        bed's whole step takes 0.91× the time (``benchmarks/RESULTS.md``, "Large beds: the
+        wall pass in two loops")."""
         pdrag = 0.0
         moved = 0.0
-        for i in range(g0, g1):
-            ux, uy, uz = vp[i, 0], vp[i, 1], vp[i, 2]
-            ddx = r1[i, 0] - ex * z1 - ref[i, 0]
-            ddy = r1[i, 1] - ey * z1 - ref[i, 1]
-            ddz = r1[i, 2] - ez * z1 - ref[i, 2]
-            moved = max(moved, ddx * ddx + ddy * ddy + ddz * ddz)
-            pdrag += mb[i] * (ux * ux + uy * uy + uz * uz)
-            F[i, 0], F[i, 1], F[i, 2] = body_force_scalar(mb[i], ux, uy, uz, grav, drag)
-            T[i, 0] = 0.0
-            T[i, 1] = 0.0
-            T[i, 2] = 0.0
         e_el = 0.0
         pw_n = 0.0
         pw_f = 0.0
@@ -528,10 +517,20 @@ if AVAILABLE:
         l_floor = 0.0
         l_lid = 0.0
         for i in range(g0, g1):
-            Ri = Rb[i]
+            ux, uy, uz = vp[i, 0], vp[i, 1], vp[i, 2]
             bx = r1[i, 0] - ex * z1
             by = r1[i, 1] - ey * z1
             floor = r1[i, 2] - ez * z1
+            ddx = bx - ref[i, 0]
+            ddy = by - ref[i, 1]
+            ddz = floor - ref[i, 2]
+            moved = max(moved, ddx * ddx + ddy * ddy + ddz * ddz)
+            pdrag += mb[i] * (ux * ux + uy * uy + uz * uz)
+            F[i, 0], F[i, 1], F[i, 2] = body_force_scalar(mb[i], ux, uy, uz, grav, drag)
+            T[i, 0] = 0.0
+            T[i, 1] = 0.0
+            T[i, 2] = 0.0
+            Ri = Rb[i]
             if (floor >= Ri and Lz - floor >= Ri and bx >= Ri and sec[0] - bx >= Ri
                     and by >= Ri and sec[1] - by >= Ri):
                 continue
