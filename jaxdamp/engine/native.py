@@ -503,7 +503,7 @@ if AVAILABLE:
         order). In :func:`grain_walls`' loop the eleven running sums ride through every
         grain's branches; here they change only in the rare branch, and the 50 000-grain
         bed's whole step takes 0.91× the time (``benchmarks/RESULTS.md``, "Large beds: the
-        wall pass in two loops")."""
+        wall pass without the walls' sums per grain")."""
         pdrag = 0.0
         moved = 0.0
         e_el = 0.0
