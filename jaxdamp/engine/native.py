@@ -393,8 +393,7 @@ if AVAILABLE:
                                                                     m[i], kappa)
         return wk
 
-    @_kernel(inline="always")
-    def grain_walls(shape, law, lo, n, step, r1, vp, rw, Rb, mb, ref, wk, wks, sec, og, shifted,
+    def _grain_walls(shape, law, lo, n, step, r1, vp, rw, Rb, mb, ref, wk, wks, sec, og, shifted,
                     gs, cg, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
         """Pass 1 over the grains ``lo, lo + step, … < n`` (all of them on the CPU; a thread's
         own on the device, :mod:`jaxdamp.engine.fused`: the one definition of a grain's walls
@@ -491,6 +490,9 @@ if AVAILABLE:
         return (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
                 pdrag, far)
 
+    grain_walls = _kernel(inline="always")(_grain_walls)
+    walls_of = _kernel()(_grain_walls)
+
     @_kernel(inline="always")
     def box_walls(law, g0, g1, r1, vp, rw, Rb, mb, ref, wk, wks, sec, og, gs, cg, frames, F, T,
                   ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
@@ -534,7 +536,7 @@ if AVAILABLE:
             if (floor >= Ri and Lz - floor >= Ri and bx >= Ri and sec[0] - bx >= Ri
                     and by >= Ri and sec[1] - by >= Ri):
                 continue
-            s = grain_walls(_BOX, law, i, i + U(1), U(1), r1, vp, rw, Rb, mb, ref, wk, wks, sec,
+            s = walls_of(_BOX, law, i, i + U(1), U(1), r1, vp, rw, Rb, mb, ref, wk, wks, sec,
                             og, False, gs, cg, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav,
                             drag, half_skin2)
             e_el += s[0]
@@ -862,11 +864,11 @@ if AVAILABLE:
             s = box_walls(law, g0, g1, r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, gs, cgw,
                           frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
         elif not shifted:
-            s = grain_walls(shape, law, g0, g1, U(1), r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
+            s = walls_of(shape, law, g0, g1, U(1), r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
                             False, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
                             half_skin2)
         else:
-            s = grain_walls(shape, law, g0, g1, U(1), r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
+            s = walls_of(shape, law, g0, g1, U(1), r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
                             True, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
                             half_skin2)
         (out[k, 0], out[k, 1], out[k, 2], out[k, 3], out[k, 4], out[k, 5], out[k, 6], out[k, 7],
@@ -877,8 +879,8 @@ if AVAILABLE:
                     vp, rw, Rw, mw, ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex,
                     ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
         """:func:`_walls_block` of every block (:func:`_over_cores`)."""
-        for k in prange(bb.shape[0] - 1):
-            _walls_block(k, bb, out, dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape,
+        for k in prange(bb.shape[0] - 1):  # k as int64: one compiled _walls_block for all
+            _walls_block(np.int64(k), bb, out, dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape,
                          law, r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, shifted, gs, cgw,
                          frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
 
@@ -1376,21 +1378,23 @@ if AVAILABLE:
                         vpf[j] = vf[j] + dt * af[j]
                     for j in range(3 * n):
                         rwf[j] = R3[j] * (wf[j] + dt * alf[j])
-                    if shape == _BOX and one_cell:  # the common damper: its branches folded
-                        (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
-                         pdrag, far) = grain_walls(_BOX, law, 0, n, 1, r1, vp, rw, Rb, mb, ref, wk,
-                                                   wks, sec, og, False, gs, cg, frames, F, T,
-                                                   ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
+                    # the walls compiled apart (walls_of), the container and the cells constants
+                    # of the compiled code where they fold the branches: the common damper's box
+                    # (its one cell), another one-cell container, several cells
+                    if shape == _BOX and one_cell:
+                        ws = walls_of(_BOX, law, U(0), U(n), U(1), r1, vp, rw, Rw, mw, ref, wk,
+                                      wks, sec, ogw, False, gs, cg, frames, F, T, ex, ey, ez, z1,
+                                      zdp, Lz, grav, drag, half_skin2)
                     elif one_cell:
-                        (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
-                         pdrag, far) = grain_walls(shape, law, 0, n, 1, r1, vp, rw, Rb, mb, ref, wk,
-                                                   wks, sec, og, False, gs, cg, frames, F, T,
-                                                   ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
+                        ws = walls_of(shape, law, U(0), U(n), U(1), r1, vp, rw, Rw, mw, ref, wk,
+                                      wks, sec, ogw, False, gs, cg, frames, F, T, ex, ey, ez, z1,
+                                      zdp, Lz, grav, drag, half_skin2)
                     else:  # several cells: each grain's walls are its own cell's
-                        (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
-                         pdrag, far) = grain_walls(shape, law, 0, n, 1, r1, vp, rw, Rb, mb, ref, wk,
-                                                   wks, sec, og, True, gs, cg, frames, F, T,
-                                                   ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
+                        ws = walls_of(shape, law, U(0), U(n), U(1), r1, vp, rw, Rw, mw, ref, wk,
+                                      wks, sec, ogw, True, gs, cg, frames, F, T, ex, ey, ez, z1,
+                                      zdp, Lz, grav, drag, half_skin2)
+                    (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
+                     pdrag, far) = ws
                     if n > 1 and far:  # a grain moved more than skin/2: list the pairs anew
                         npairs, pi, pj, pc = _pairs(r1, ex * z1, ey * z1, ez * z1, cutoff, pi,
                                                     pj, pc, ref, Rb, mb, sid, tab, law)
@@ -1437,7 +1441,7 @@ if AVAILABLE:
                         pp_e, pp_n, pp_f = _pair_forces(law, r1, vp, rw, Rb, pi, pj, pc, npairs,
                                                         F, T, gs[:, 0])
                         cell_sums(gs[:, 0], bounds, pwc, 0, 1)
-                    h = _correct(0, n, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f,
+                    h = _correct(np.int64(0), n, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f,
                                  qs, qn)
                 qs, qn = qn, qs
                 e_el += pp_e
@@ -1488,9 +1492,12 @@ if AVAILABLE:
     @_kernel(parallel=True)
     def _advance(n_records, record_every, dims, skin, st, pm, so, po, sid, bounds, cg, cdof, rec):
         """The batch over the cores (OpenMP threads, one system per thread at a time)."""
+        inner = dims.large < 0  # False (the systems are over the cores), typed as the flag
+        # of _advance_serial, and b as its int64: both share one compiled _advance_one (its
+        # compile is most of the kernel's)
         for b in prange(st.shape[0]):
-            _advance_one(b, n_records, record_every, dims, skin, st, pm, so, po, sid, bounds, cg,
-                         cdof, rec, False)
+            _advance_one(np.int64(b), n_records, record_every, dims, skin, st, pm, so, po, sid,
+                         bounds, cg, cdof, rec, inner)
 
     @_kernel(nogil=True)
     def _advance_serial(n_records, record_every, dims, skin, st, pm, so, po, sid, bounds, cg, cdof,
