@@ -409,12 +409,10 @@ if AVAILABLE:
         into ``F``, ``T``; returns the
         sums ``(elastic energy, normal loss, friction loss, box_z, floor + lid force, grains on
         the floor, on the lid, wall contacts (all walls), the floor's loss, the lid's loss,
-        Σ m v², whether a grain moved more than skin/2 since the list was built)``. Inlined
-        where ``shape`` and ``shifted`` are constants, their branches fold away:
-        :func:`_advance_one` keeps a copy for the one-cell box, one for another one-cell
-        container and one for several cells (the one-cell copies are the kernel's code before
-        cells existed, to the bit: a change of the loop's code moved the compiler's fast-math
-        reassociation of the energy sums by an ulp)."""
+        Σ m v², whether a grain moved more than skin/2 since the list was built)``. Compiled
+        where ``shape`` and ``shifted`` are constants (:data:`walls_of`, :data:`grain_walls`),
+        their branches fold away: the CPU kernel calls a copy for the one-cell box, one for
+        another one-cell container and one for several cells."""
         e_el = 0.0
         pw_n = 0.0
         pw_f = 0.0
@@ -490,7 +488,17 @@ if AVAILABLE:
         return (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
                 pdrag, far)
 
+    #: :func:`_grain_walls` inlined where it is called: the device's threads
+    #: (:mod:`jaxdamp.engine.fused`), whose registers it shares, and a large bed's grains
+    #: near a wall (:func:`box_walls`, one grain per call: a call apart cost the 50 000-grain
+    #: step 1.08×, ``benchmarks/ab_native.py``).
     grain_walls = _kernel(inline="always")(_grain_walls)
+    #: :func:`_grain_walls` compiled apart, once per signature: the CPU kernel's, called once
+    #: per grain loop. Called with the container ``shape`` and ``shifted`` as constants
+    #: (literals), it compiles with their branches folded, as inlined code would; apart, the
+    #: kernel's cold compile took 171 s instead of 388 s (five inlined copies of every
+    #: container's and law's scalar forms before; one run of ``jaxdamp run --set
+    #: numerics.engine=native``, empty numba cache, 2-core AMD host).
     walls_of = _kernel()(_grain_walls)
 
     @_kernel(inline="always")
@@ -536,7 +544,7 @@ if AVAILABLE:
             if (floor >= Ri and Lz - floor >= Ri and bx >= Ri and sec[0] - bx >= Ri
                     and by >= Ri and sec[1] - by >= Ri):
                 continue
-            s = walls_of(_BOX, law, i, i + U(1), U(1), r1, vp, rw, Rb, mb, ref, wk, wks, sec,
+            s = grain_walls(_BOX, law, i, i + U(1), U(1), r1, vp, rw, Rb, mb, ref, wk, wks, sec,
                             og, False, gs, cg, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav,
                             drag, half_skin2)
             e_el += s[0]
@@ -865,12 +873,12 @@ if AVAILABLE:
                           frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
         elif not shifted:
             s = walls_of(shape, law, g0, g1, U(1), r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
-                            False, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
-                            half_skin2)
+                         False, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
+                         half_skin2)
         else:
             s = walls_of(shape, law, g0, g1, U(1), r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
-                            True, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
-                            half_skin2)
+                         True, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
+                         half_skin2)
         (out[k, 0], out[k, 1], out[k, 2], out[k, 3], out[k, 4], out[k, 5], out[k, 6], out[k, 7],
          out[k, 8], out[k, 9], out[k, 10], far) = s
         out[k, 11] = 1.0 if far else 0.0
@@ -880,9 +888,9 @@ if AVAILABLE:
                     ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
         """:func:`_walls_block` of every block (:func:`_over_cores`)."""
         for k in prange(bb.shape[0] - 1):  # k as int64: one compiled _walls_block for all
-            _walls_block(np.int64(k), bb, out, dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape,
-                         law, r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, shifted, gs, cgw,
-                         frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
+            _walls_block(np.int64(k), bb, out, dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf,
+                         shape, law, r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, shifted, gs,
+                         cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
 
     _walls_par, _walls_ser = _over_cores(_walls_each)
 
@@ -1441,8 +1449,8 @@ if AVAILABLE:
                         pp_e, pp_n, pp_f = _pair_forces(law, r1, vp, rw, Rb, pi, pj, pc, npairs,
                                                         F, T, gs[:, 0])
                         cell_sums(gs[:, 0], bounds, pwc, 0, 1)
-                    h = _correct(np.int64(0), n, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f,
-                                 qs, qn)
+                    h = _correct(np.int64(0), n, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf,
+                                 alf, rf, r1f, qs, qn)
                 qs, qn = qn, qs
                 e_el += pp_e
                 pw[_PPN], pw[_PPF], pw[_PWN], pw[_PWF] = pp_n, pp_f, pw_n, pw_f
