@@ -94,8 +94,8 @@ def test_kernel_caches_are_keyed_on_the_physics_sources():
 
     digest = native._source_hash()
     kernels = [native._build_pairs, native._pairs, native._wall_constants, native.grain_walls,
-               native._pair_forces, native._advance_one, native._advance, native._sweep_par,
-               native._sweep_ser]
+               native.walls_of, native._pair_forces, native._advance_one, native._advance,
+               native._sweep_par, native._sweep_ser]
     for k in kernels:
         key = k._cache._index_key((), k.targetctx.codegen())
         assert key[-1].startswith(digest), k.py_func.__name__

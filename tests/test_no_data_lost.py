@@ -439,7 +439,7 @@ def test_info_plot_and_export_see_a_file_whose_bytes_were_overwritten(tmp_path, 
 
 
 def test_a_cold_native_kernel_is_announced_before_it_compiles(monkeypatch):
-    """The first use after an install compiles the kernel (about a minute on 2 cores, with the
+    """The first use after an install compiles the kernel (about three minutes on 2 cores, with the
     first bar still at 0 %): said before, not after."""
     from jaxdamp.engine import native
 

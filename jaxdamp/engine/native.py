@@ -1624,8 +1624,9 @@ def advance_packed(model, state_packed, params_packed, state_layout, param_layou
 
 def compile_note(engine: str) -> str | None:
     """A one-line note when ``engine`` is ``"native"`` and the kernel has no on-disk cache yet
-    (the first use after an install or an update compiles it: about a minute on 2 cores, during
-    which the first progress bar cannot move), else ``None``."""
+    (the first use after an install or an update compiles it: 2.7 minutes on a 2-core AMD EPYC
+    for a driven bed's kernel, during which the first progress bar cannot move), else
+    ``None``."""
     if engine != "native" or not AVAILABLE:
         return None
     try:
@@ -1634,5 +1635,5 @@ def compile_note(engine: str) -> str | None:
         return None
     if cached:
         return None
-    return ("compiling the native kernel once (about a minute on 2 cores; cached for later "
-            "runs) — the first progress bar starts after it")
+    return ("compiling the native kernel once (about three minutes on 2 cores; cached for "
+            "later runs) — the first progress bar starts after it")
