@@ -496,9 +496,9 @@ if AVAILABLE:
     #: :func:`_grain_walls` compiled apart, once per signature: the CPU kernel's, called once
     #: per grain loop. Called with the container ``shape`` and ``shifted`` as constants
     #: (literals), it compiles with their branches folded, as inlined code would; apart, the
-    #: kernel's cold compile took 171 s instead of 388 s (five inlined copies of every
+    #: kernel's cold compile took 161 s instead of 388 s (five inlined copies of every
     #: container's and law's scalar forms before; one run of ``jaxdamp run --set
-    #: numerics.engine=native``, empty numba cache, 2-core AMD host).
+    #: numerics.engine=native``, empty numba cache, 2-core AMD host, ``benchmarks/RESULTS.md``).
     walls_of = _kernel()(_grain_walls)
 
     @_kernel(inline="always")
