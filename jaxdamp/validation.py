@@ -77,13 +77,25 @@ def engine_precision_error(engine: str, precision: str) -> str | None:
     return None
 
 
-def engine_tangential_error(engine: str, tangential: str) -> str | None:
-    """Why ``engine`` cannot run the tangential law ``tangential``, or ``None``: the tangential
-    spring with history (``"mindlin"``) runs on the JAX engine only so far (the native kernel
-    and the fused device step have the viscous law)."""
-    if engine in ("native", "fused") and tangential != "viscous":
-        return (f"tangential_law = {tangential!r} runs on the JAX engine only (the {engine} "
-                "kernel has the viscous tangential law): set numerics.engine = 'jax' or 'auto'")
+def engine_tangential_error(engine: str, tangential: str, cells: int = 1,
+                            grains: int = 0) -> str | None:
+    """Why ``engine`` cannot run the tangential law ``tangential`` for a damper of ``cells``
+    cells and ``grains`` grains in all, or ``None``: the tangential spring with history
+    (``"mindlin"``) runs on the JAX engine and, for a one-cell damper of fewer than
+    :data:`jaxdamp.engine.native.LARGE` grains, on the native kernel (the fused device step
+    has the viscous law only)."""
+    if tangential == "viscous" or engine in ("jax", "auto"):
+        return None
+    if engine == "fused":
+        return (f"tangential_law = {tangential!r} runs on the JAX engine and the native kernel "
+                "(the fused kernel has the viscous tangential law): set numerics.engine = "
+                "'native', 'jax' or 'auto'")
+    from jaxdamp.engine.native import LARGE
+
+    if cells > 1 or grains >= LARGE:
+        return (f"tangential_law = {tangential!r} on the native kernel needs a one-cell damper "
+                f"of fewer than {LARGE} grains (got cells = {cells}, {grains} grains): set "
+                "numerics.engine = 'jax' or 'auto'")
     return None
 
 
@@ -466,7 +478,8 @@ def validate(config: Config) -> Config:
                           f"{PRECISIONS}")
     if (why := engine_precision_error(num.engine, num.precision)) is not None:
         raise ConfigError(why)
-    if (why := engine_tangential_error(num.engine, config.tangential_law)) is not None:
+    if (why := engine_tangential_error(num.engine, config.tangential_law, config.cells,
+                                       config.n_grains)) is not None:
         raise ConfigError(why)
     if num.engine == "native" and importlib.util.find_spec("numba") is None:
         raise ConfigError("numerics.engine = 'native' needs numba (pip install numba)")

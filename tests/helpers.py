@@ -99,10 +99,12 @@ def advance(model, st, nbrs, pb, n_records, record_every, engine="jax", on_reall
     return driver.advance(b, n_records, record_every, on_realloc=on_realloc, check=False)
 
 
-def trajectory(model, pb, st, nbrs, n_steps, every=1):
-    """States of system 0 after every ``every`` steps, as a list of numpy dicts (slow: tests)."""
+def trajectory(model, pb, st, nbrs, n_steps, every=1, engine="jax"):
+    """States of system 0 after every ``every`` steps with ``engine``, as a list of numpy
+    dicts (slow: tests)."""
     out = []
-    fn = chunk_fn(model, 1, every)
+    model, engine = engine_model(model, engine)
+    fn = chunk_fn(model, 1, every, engine=engine)
     for _ in range(n_steps // every):
         st, nbrs, _ = fn(st, nbrs, pb)
         s0 = driver.take(st, 0)

@@ -57,10 +57,14 @@ def _contact_time(m_eff, r_eff, vn, mat=STEEL):
 # Ψ = v_t / (μ v_n): sticking through most of the contact (0.5), the transition (3), sliding
 # throughout (10)
 PSI = (0.5, 3.0, 10.0)
+#: The engines with the spring: the JAX engine and the native kernel (its first use compiles
+#: the kernel's spring form, about three minutes on 2 cores cold: long).
+ENGINES = ("jax", pytest.param("native", marks=pytest.mark.long))
 
 
+@pytest.mark.parametrize("engine", ENGINES)
 @pytest.mark.parametrize("psi", PSI)
-def test_wall_impact_matches_the_single_contact_reference(psi):
+def test_wall_impact_matches_the_single_contact_reference(psi, engine):
     """A sphere hits the floor obliquely (no gravity, 200 steps per contact): its rebound
     velocity and spin match the reference integration of the same contact law (20 000 steps
     per contact) to 2e-3 of the impact's tangential speed (the spin ``R ω`` to 2.5 times that:
@@ -75,7 +79,7 @@ def test_wall_impact_matches_the_single_contact_reference(psi):
     dt = t_c / 200
     cfg = _mindlin(config(n=1, radius=R, material=STEEL), dt=dt)
     model, pb, st, nbrs = start(cfg, [[0.025, 0.025, R + 0.2 * vn * dt]], [[vt, 0.0, -vn]])
-    st, _, _ = run_steps(model, pb, st, nbrs, 1, int(2 * t_c / dt))
+    st, _, _ = run_steps(model, pb, st, nbrs, 1, int(2 * t_c / dt), engine)
     v, w = np.asarray(st.v[0, 0]), np.asarray(st.w[0, 0])
     ref = _reference(m, R, vn, vt)
     assert v[2] == pytest.approx(ref.vn, rel=1e-4)
@@ -85,7 +89,7 @@ def test_wall_impact_matches_the_single_contact_reference(psi):
     assert float(st.e_spring[0]) == 0.0 and not np.asarray(st.spring_wall).any()  # left
 
 
-def _pair_impact(skin):
+def _pair_impact(skin, engine="jax"):
     """Two like spheres' oblique impact (Ψ = 0.5) with ``numerics.skin = skin``: the final
     velocities and angular velocities ``(2, 3)``, the reference and ``v_t``."""
     vn, psi = 0.5, 0.5
@@ -98,11 +102,12 @@ def _pair_impact(skin):
     r = [[0.025, 0.025, 0.02], [0.025, 0.025, 0.02 + 2 * R + gap]]
     v = [[0.5 * vt, 0.0, 0.5 * vn], [-0.5 * vt, 0.0, -0.5 * vn]]
     model, pb, st, nbrs = start(cfg, r, v)
-    st, _, _ = run_steps(model, pb, st, nbrs, 1, int(2 * t_c / dt))
+    st, _, _ = run_steps(model, pb, st, nbrs, 1, int(2 * t_c / dt), engine)
     return np.asarray(st.v[0]), np.asarray(st.w[0]), _reference(0.5 * m, 0.5 * R, vn, vt), vt
 
 
-def test_sphere_pair_impact_matches_the_reference_and_keeps_history_over_rebuilds():
+@pytest.mark.parametrize("engine", ENGINES)
+def test_sphere_pair_impact_matches_the_reference_and_keeps_history_over_rebuilds(engine):
     """Two like spheres collide obliquely: their relative motion is the reference's for one
     sphere of ``m/2``, ``R/2`` on a wall of the same material (an exact mapping, with each
     sphere's ``I``). With ``numerics.skin = 1e-3`` the neighbour list is rebuilt at nearly
@@ -117,7 +122,7 @@ def test_sphere_pair_impact_matches_the_reference_and_keeps_history_over_rebuild
     contact (converging to that ~1e-3, not to zero)."""
     out = {}
     for skin in (0.5, 1e-3):
-        v, w, ref, vt = _pair_impact(skin)
+        v, w, ref, vt = _pair_impact(skin, engine)
         rel = v[0] - v[1]
         assert -rel[2] == pytest.approx(ref.vn, rel=1e-4)  # separating
         assert abs(rel[0] - ref.vt) < 4e-3 * vt
@@ -131,7 +136,7 @@ def test_sphere_pair_impact_matches_the_reference_and_keeps_history_over_rebuild
     np.testing.assert_allclose(R * wa, R * wb, rtol=0, atol=1e-13)
 
 
-def _squeezed(fraction, law="mindlin"):
+def _squeezed(fraction, law="mindlin", engine="jax"):
     """A grain squeezed between floor and lid (overlap 1 µm each, no gravity) in a box driven
     along x at 50 Hz (``A cos ωt``) with peak acceleration ``fraction`` times the friction
     limit ``2 μ F_n / m``, over two periods. Returns the times [s], the grain's displacement in
@@ -151,7 +156,7 @@ def _squeezed(fraction, law="mindlin"):
     cfg = dataclasses.replace(cfg, direction=(1.0, 0.0, 0.0), tangential_law=law)
     model, pb, st, nbrs = start(cfg, [[0.01, 0.01, R - delta]], [[0.0, 0.0, 0.0]])
     steps = int(0.04 / float(pb.dt[0]))
-    _, traj = trajectory(model, pb, st, nbrs, steps, steps // 400)
+    _, traj = trajectory(model, pb, st, nbrs, steps, steps // 400, engine=engine)
     t = np.array([s["t"] for s in traj])
     # in the box: the box's corner starts at +A (the drive's z(0)) and moves by A (cos ωt − 1)
     x = np.array([s["r"][0, 0] for s in traj]) - 0.01 - amp * (np.cos(omega * t) - 1.0)
@@ -160,7 +165,8 @@ def _squeezed(fraction, law="mindlin"):
     return t, x, stuck
 
 
-def test_a_squeezed_grain_sticks_below_the_friction_limit_and_slides_above():
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_squeezed_grain_sticks_below_the_friction_limit_and_slides_above(engine):
     """Static friction, the spring's reason to be. At a quarter of the friction limit the grain
     sticks: its displacement in the box follows the analytic stuck oscillator (the box starts
     with its full acceleration, so the undamped springs ring about the quasi-static
@@ -169,15 +175,15 @@ def test_a_squeezed_grain_sticks_below_the_friction_limit_and_slides_above():
     without creep. At twice the limit it slides, by far more than any elastic displacement
     (measured 1 500 times the stuck oscillator's peak). (The viscous law, with
     ``gamma_s = 0`` here, has no tangential force at rest at all.)"""
-    t, x, stuck = _squeezed(0.25)
+    t, x, stuck = _squeezed(0.25, engine=engine)
     peak = np.abs(stuck).max()
     assert np.abs(x - stuck).max() < 0.03 * peak
     assert abs(np.abs(x).max() - peak) < 0.01 * peak
-    t, x, stuck = _squeezed(2.0)
+    t, x, stuck = _squeezed(2.0, engine=engine)
     assert np.abs(x).max() > 100 * np.abs(stuck).max()
 
 
-def _gas_run(law, steps=10000, material=None):
+def _gas_run(law, steps=10000, material=None, engine="jax"):
     """27 grains with friction (μ = 0.3, elastic normal law unless ``material``) in a free
     2 cm box (a primary of K = C = U = 0): the records of ``steps`` steps, and ``E(0)``."""
     mat = material or Material(E=2e9, nu=0.3, density=7850.0, mu=0.3, gamma_n=0.0,
@@ -187,11 +193,12 @@ def _gas_run(law, steps=10000, material=None):
                  dt_per_collision=100)
     cfg = dataclasses.replace(cfg, tangential_law=law)
     model, pb, st, nbrs = start(cfg, *gas(27))
-    st, nbrs, rec = run_steps(model, pb, st, nbrs, 200, steps // 200)
+    st, nbrs, rec = run_steps(model, pb, st, nbrs, 200, steps // 200, engine)
     return st, rec, float(st.e_start[0])
 
 
-def test_energy_balance_closes_in_a_frictional_gas():
+@pytest.mark.parametrize("engine", ENGINES)
+def test_energy_balance_closes_in_a_frictional_gas(engine):
     """27 grains colliding with friction in a free box, elastic normal law: the tangential
     springs dissipate by slip (and store, and give back), their stiffness work is booked in
     ``spring_stiffness``: ``E(t) − E(0) + losses = 0`` to 2e-5 of ``E(0)`` over 1e4 steps
@@ -201,7 +208,7 @@ def test_energy_balance_closes_in_a_frictional_gas():
     elastic energy."""
     out = {}
     for law in ("viscous", "mindlin"):
-        st, rec, e0 = _gas_run(law)
+        st, rec, e0 = _gas_run(law, engine=engine)
         err = np.abs(rec["balance_residual"]).max() / e0
         work = rec["work"][-1]
         out[law] = err, work
@@ -227,17 +234,18 @@ def _packed_bed():
     return start(cfg, *gas(27, side=0.0125))
 
 
-def test_resumes_bit_identically_from_a_checkpoint():
+@pytest.mark.parametrize("engine", ENGINES)
+def test_resumes_bit_identically_from_a_checkpoint(engine):
     """With springs in the state: 2 000 steps after 2 000 equal 2 000 after a checkpoint of
     the same state (host arrays) and a restore, in every field (springs, partners, work); 27
     grains packed into the lower corner of the box, so that springs are held at the
     checkpoint."""
     model, pb, st, nbrs = _packed_bed()
-    half, nb_half, _ = run_steps(model, pb, st, nbrs, 1, 2000)
-    one, _, _ = run_steps(model, pb, half, nb_half, 1, 2000)  # (one compiled chunk)
-    b = driver.Batch(model, pb, half, nb_half, "jax", 1.5)
-    back = driver.restore(model, pb, driver.checkpoint(b), engine="jax")
-    two, _, _ = run_steps(model, pb, back.states, back.nbrs, 1, 2000)
+    half, nb_half, _ = run_steps(model, pb, st, nbrs, 1, 2000, engine)
+    one, _, _ = run_steps(model, pb, half, nb_half, 1, 2000, engine)  # (one compiled chunk)
+    b = driver.Batch(model, pb, half, nb_half, engine, 1.5)
+    back = driver.restore(model, pb, driver.checkpoint(b), engine=engine)
+    two, _, _ = run_steps(model, pb, back.states, back.nbrs, 1, 2000, engine)
     assert np.asarray(half.spring_pair).any()  # grain–grain springs held at the checkpoint
     for f in dataclasses.fields(one):
         np.testing.assert_array_equal(np.asarray(getattr(one, f.name)),
@@ -245,8 +253,10 @@ def test_resumes_bit_identically_from_a_checkpoint():
 
 
 def test_configuration_refuses_what_the_spring_cannot_do():
-    """``tangential_law`` names a law; the spring needs the Hertz law and the JAX engine
-    (``auto`` picks it); the messages name the parameters."""
+    """``tangential_law`` names a law; the spring needs the Hertz law, and runs on the JAX
+    engine and, for one-cell dampers below the large-bed size, on the native kernel, not on
+    the fused device step (``auto`` picks accordingly); the messages name the parameters and
+    the limits."""
     base = config(n=2, radius=R, material=STEEL)
     with pytest.raises(ConfigError, match="tangential_law = 'coulomb'"):
         validate(dataclasses.replace(base, tangential_law="coulomb"))
@@ -254,14 +264,22 @@ def test_configuration_refuses_what_the_spring_cannot_do():
     with pytest.raises(ConfigError, match="needs contact_law = 'hertz'"):
         validate(dataclasses.replace(config(n=2, radius=R, material=lin, contact_law="linear"),
                                      tangential_law="mindlin"))
-    for engine in ("native", "fused"):
-        with pytest.raises(ConfigError, match="runs on the JAX engine only"):
-            validate(_mindlin(base, engine=engine))
+    with pytest.raises(ConfigError, match="the fused kernel has the viscous tangential law"):
+        validate(_mindlin(base, engine="fused"))
+    assert validate(_mindlin(base, engine="native")).numerics.engine == "native"
     assert validate(_mindlin(base, engine="auto")).tangential_law == "mindlin"
-    assert choose("auto", "float64", 1, backend="cpu", device_kind="cpu", have_native=True,
-                  tangential="mindlin").engine == "jax"
-    assert choose("auto", "float64", 1, backend="cpu", device_kind="cpu", have_native=True,
-                  tangential="viscous").engine == "native"
+    for cells, grains in ((2, 500), (1, 16000)):  # the native kernel's spring: small, one cell
+        with pytest.raises(ValueError, match=f"one-cell damper of fewer than 16000 grains "
+                                             f"\\(got cells = {cells}, {grains} grains\\)"):
+            choose("native", tangential="mindlin", cells=cells, grains=grains)
+        assert choose("auto", "float64", 1, backend="cpu", device_kind="cpu", have_native=True,
+                      tangential="mindlin", cells=cells, grains=grains).engine == "jax"
+    for law in ("mindlin", "viscous"):
+        assert choose("auto", "float64", 1, backend="cpu", device_kind="cpu", have_native=True,
+                      tangential=law, grains=250).engine == "native"
+    assert choose("auto", "float64", 16384, backend="gpu", device_kind="NVIDIA H200",
+                  have_native=True, have_fused=True, tangential="mindlin",
+                  grains=250).engine != "fused"
 
 
 def test_a_run_says_which_settings_the_spring_does_not_use():
@@ -307,18 +325,19 @@ def test_energy_balance_closes_in_a_damper_run_end_to_end(system):
     assert s["balance_error"] < 1e-3
 
 
-def test_springs_follow_their_pairs_into_reallocated_lists():
+@pytest.mark.parametrize("engine", ENGINES)
+def test_springs_follow_their_pairs_into_reallocated_lists(engine):
     """Lists re-allocated larger (``driver.grow``, as after an overflow: another capacity,
     other slots) take the springs over by pair identity: the next 2 000 steps equal those on
     the old lists to round-off (the pair sums run over other slot orders), with springs held."""
     model, pb, st, nbrs = _packed_bed()
-    st, nbrs, _ = run_steps(model, pb, st, nbrs, 1, 2000)
+    st, nbrs, _ = run_steps(model, pb, st, nbrs, 1, 2000, engine)
     assert np.asarray(st.spring_pair).any()
-    b = driver.Batch(model, pb, st, nbrs, "jax", 1.5)
+    b = driver.Batch(model, pb, st, nbrs, engine, 1.5)
     big = driver.grow(b)
     assert nb_capacity(big.nbrs) > nb_capacity(nbrs)
-    same, _, _ = run_steps(model, pb, st, nbrs, 1, 2000)
-    grown, _, _ = run_steps(model, pb, st, big.nbrs, 1, 2000)
+    same, _, _ = run_steps(model, pb, st, nbrs, 1, 2000, engine)
+    grown, _, _ = run_steps(model, pb, st, big.nbrs, 1, 2000, engine)
     scale = np.abs(np.asarray(same.v)).max()
     np.testing.assert_allclose(np.asarray(grown.v), np.asarray(same.v), rtol=0,
                                atol=1e-9 * scale)

@@ -378,7 +378,7 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                  parts[8], parts[9], parts[10],
                  far) = grain_walls(shape, law, tid, n, nt, r1, vp, rw, Rb, mb, ref, wk, wks, sec,
                                     og, cells, grain, cg, frames, Fs, Ts, ex, ey, ez, z1, zdp,
-                                    Lz, grav, drag, half_skin2)
+                                    Lz, (grav, drag), half_skin2, None)
                 if cuda.syncthreads_or(1 if far else 0) or first:
                     # the lists anew, from the predicted positions in the box frame
                     first = False
@@ -580,8 +580,8 @@ def _advance_packed(model, state_packed, params_packed, state_layout, param_layo
             cuda.device_array((batch, size)), sc, cuda.device_array((batch, cap, n), np.int32),
             cuda.device_array((batch, n), np.int32), status)
         need = int(status.copy_to_host().max())
-        if need <= cap:
-            return d_st.copy_to_host(), d_rec.copy_to_host()
+        if need <= cap:  # (no tangential springs here: nothing lost)
+            return d_st.copy_to_host(), d_rec.copy_to_host(), np.zeros(batch, np.int64)
         cap = need + need // 4  # room for the most any grain needed, and some
 
 

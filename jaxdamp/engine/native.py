@@ -54,6 +54,7 @@ import numpy as np
 from jaxdamp.physics.contact import (
     FASTMATH,
     FASTMATH_STABLE,
+    G_STAR,
     GAMMA_S,
     MU,
     contact_scalar,
@@ -65,13 +66,14 @@ from jaxdamp.physics.containers import (
     side_contacts_scalar,
     side_curvature_scalar,
 )
-from jaxdamp.physics.containers._scalar import add_wall_scalar
+from jaxdamp.physics.containers._scalar import add_wall_scalar, held
 from jaxdamp.physics.energy import cell_bounds, record_row
 from jaxdamp.physics.excitation import base_motion_scalar, drive_motion_scalar
 from jaxdamp.physics.integrate import body_force_scalar, rotate_scalar, rotate_series_scalar
-from jaxdamp.physics.model import CH, N_CHANNELS, Params, State
+from jaxdamp.physics.model import CH, INCREMENT_OF, N_CHANNELS, Params, State
 from jaxdamp.physics.mounts import DRIVEN, energy_scalar, mount_of, predict_scalar, respond_scalar
 from jaxdamp.physics.structure import acceleration_scalar as structure_acceleration_scalar
+from jaxdamp.physics.tangential import mindlin_called, mindlin_scalar
 
 # numba's OpenMP threads spin between parallel regions by default; a spinning thread took the
 # second core from the single system it was waiting beside (13.4 -> 9.4 µs per step of the
@@ -130,6 +132,9 @@ _BOX = CONTAINERS["box"].id
 _IN, _PRIM, _PPN, _PPF, _PWN, _PWF, _DRAG, _PW_FLOOR, _PW_LID, _PW_SIDE = (
     CH[k] for k in ("input", "primary_damping", "pp_normal", "pp_friction", "pw_normal",
                     "pw_friction", "drag", "pw_floor", "pw_lid", "pw_side"))
+_PP_SLIP, _PW_SLIP, _STIFF = (CH[k] for k in ("pp_slip", "pw_slip", "spring_stiffness"))
+#: Each channel's part that is a step's own energy over ``dt`` (:data:`INCREMENT_OF`).
+_INCREMENT_OF = np.asarray(INCREMENT_OF, np.int64)
 
 #: Where each field starts in a packed row (:func:`offsets`), read by name in the kernel.
 StateOffsets = namedtuple("StateOffsets", STATE_FIELDS)
@@ -140,9 +145,10 @@ ParamOffsets = namedtuple("ParamOffsets", PARAM_FIELDS)
 #: the container's section numbers, the damper's cells (``Model.cells``) and, for a bed that
 #: takes the large-bed path (at least :data:`LARGE` grains), its grains per block
 #: (:data:`BLOCK_GRAINS`; 0: the small-bed path) and blocks per chunk (:data:`CHUNK_BLOCKS`),
-#: all read when the call is made.
+#: all read when the call is made; with tangential springs, the state's spring slots per grain
+#: (``State.spring_partner``'s ``K``; 0 without) and the walls per grain (2 + the sides).
 Dims = namedtuple("Dims", ("mount", "law", "shape", "n_species", "n_cols", "n_lines", "ndof",
-                           "n_section", "cells", "large", "chunk"))
+                           "n_section", "cells", "large", "chunk", "slots", "walls"))
 
 #: The scalar forms the kernels inline (with the forms they call, from the same modules): a
 #: change to their source files must recompile the cached kernels (numba's cache only watches
@@ -150,7 +156,7 @@ Dims = namedtuple("Dims", ("mount", "law", "shape", "n_species", "n_cols", "n_li
 _INLINED = (contact_scalar, pair_scalar, side_contacts_scalar, base_motion_scalar,
             drive_motion_scalar, body_force_scalar, predict_scalar, respond_scalar,
             energy_scalar, rotate_scalar, rotate_series_scalar, record_row,
-            structure_acceleration_scalar)
+            structure_acceleration_scalar, mindlin_scalar, add_wall_scalar)
 
 
 def _source_files() -> tuple[str, ...]:
@@ -204,6 +210,10 @@ def _cache_on_sources(dispatcher):
     return dispatcher
 
 
+if AVAILABLE:  # the scalar forms the kernel calls (not inlined) cache on the same sources
+    _cache_on_sources(mindlin_called)
+
+
 def _kernel(fastmath=FASTMATH, **flags):
     """``njit`` with the kernel's flags (``fastmath``: :data:`FASTMATH`, or
     :data:`FASTMATH_STABLE`) and the source-keyed cache."""
@@ -220,6 +230,24 @@ def _over_cores(fn):
     parallel loop, where numba would nest a region (which its ``workqueue`` layer refuses)."""
     return _kernel(parallel=True)(fn), _kernel()(fn)
 
+
+def with_springs(springs, value):
+    """``value``, or ``None`` where ``springs`` is ``None``, decided by ``springs``' numba
+    type (:func:`_with_springs`): the kernel's spring arguments are a tuple or ``None``,
+    never optional, so that the functions they are passed to compile apart, the branches on
+    ``None`` folded."""
+    return None if springs is None else value
+
+
+if AVAILABLE:
+    from numba.core import types as _types
+    from numba.extending import overload
+
+    @overload(with_springs, inline="always")
+    def _with_springs(springs, value):
+        if isinstance(springs, (_types.NoneType, _types.Omitted)):
+            return lambda springs, value: None
+        return lambda springs, value: value
 
 if AVAILABLE:
 
@@ -259,6 +287,38 @@ if AVAILABLE:
         fx, fy, fz, tx, ty, tz, e, ln, lf = contact_scalar(law, xi, nx, ny, nz, vx, vy, vz, sx,
                                                            sy, sz, k, g, gamma_s, mu)
         return (fx, fy, fz, ny * tz - nz * ty, nz * tx - nx * tz, nx * ty - ny * tx, e, ln, lf)
+
+    @_kernel(inline="always")
+    def pair_spring(law, dx, dy, dz, d2, rs, vx, vy, vz, sx, sy, sz, k, g, mu, sp, p, i, j):
+        """:func:`pair_contact` with the tangential spring of listed pair ``p`` (grains ``i``,
+        ``j``; :func:`jaxdamp.physics.tangential.mindlin_scalar`), for a pair that touches or
+        held a spring after the last step (:func:`held_pair`). ``sp = (hp, pg, vh, sh, tot,
+        dt)``: the pairs' springs ``hp (P, 3)`` (read and written in place), their ``(G*,
+        R*)`` ``pg (P, 2)``, the half-step velocities ``vh`` and spins ``sh = R ω`` with which
+        they grow, the step's totals ``tot`` (added to; as the walls',
+        :func:`~jaxdamp.physics.containers._scalar.add_wall_scalar`) and the time step."""
+        hp, pg, vh, sh, tot, dt = sp
+        d = math.sqrt(d2)
+        inv = 1.0 / d
+        nx, ny, nz = dx * inv, dy * inv, dz * inv
+        (fx, fy, fz, tx, ty, tz, e, ln, lf, h0, h1, h2, turned, slip, e_s) = mindlin_scalar(
+            law, rs - d, nx, ny, nz, vx, vy, vz, sx, sy, sz, vh[i, 0] - vh[j, 0],
+            vh[i, 1] - vh[j, 1], vh[i, 2] - vh[j, 2], sh[i, 0] + sh[j, 0], sh[i, 1] + sh[j, 1],
+            sh[i, 2] + sh[j, 2], k, g, pg[p, 0], pg[p, 1], mu, dt, hp[p, 0], hp[p, 1], hp[p, 2])
+        hp[p, 0], hp[p, 1], hp[p, 2] = h0, h1, h2
+        tot[0] += turned
+        tot[1] += slip
+        tot[3] += e_s
+        return (fx, fy, fz, ny * tz - nz * ty, nz * tx - nx * tz, nx * ty - ny * tx, e, ln, lf)
+
+    @_kernel(inline="always")
+    def held_pair(sp, p):
+        """Whether listed pair ``p`` held a spring after the last step (``sp``:
+        :func:`pair_spring`'s, or ``None``: never)."""
+        if sp is None:
+            return False
+        hp = sp[0]
+        return hp[p, 0] != 0.0 or hp[p, 1] != 0.0 or hp[p, 2] != 0.0
 
     @_kernel(inline="always")
     def half_stencil(o):
@@ -380,6 +440,92 @@ if AVAILABLE:
             k = _build_pairs(r, bx, by, bz, cutoff, pi, pj, pc, ref, R, m, sid, table, law)
         return k, pi, pj, pc
 
+    # -- contact history: the pairs' springs between the state's rows and the half list -----
+
+    @_kernel(inline="always")
+    def _slot(part, rows, cnt, a, b, hx, hy, hz):
+        """Put the spring ``h`` of grain ``a`` with partner ``b`` in row ``a``'s next slot;
+        returns 1 where the row is full (the spring lost), else 0."""
+        k = cnt[a]
+        if k >= part.shape[1]:
+            return 1
+        part[a, k] = b
+        rows[a, k, 0], rows[a, k, 1], rows[a, k, 2] = hx, hy, hz
+        cnt[a] = k + 1
+        return 0
+
+    @_kernel()
+    def _springs_out(pi, pj, hp, npairs, part, rows):
+        """The springs ``hp`` of the listed pairs ``(pi, pj)`` into the state's rows
+        (``State.spring_partner``, ``spring_pair``: per grain its partners in increasing order,
+        padded with ``N``, and the spring's force on it, the partner's row holding the
+        opposite force), as the JAX engine keeps them (:mod:`jaxdamp.engine.history`).
+        Returns the number of springs that did not fit (a row holds ``K`` of them; the runner
+        then redoes the chunk with larger lists)."""
+        n, K = part.shape
+        for i in range(n):
+            for k in range(K):
+                part[i, k] = n
+                rows[i, k, 0] = 0.0
+                rows[i, k, 1] = 0.0
+                rows[i, k, 2] = 0.0
+        cnt = np.zeros(n, np.int64)
+        lost = 0
+        for p in range(npairs):
+            hx, hy, hz = hp[p, 0], hp[p, 1], hp[p, 2]
+            if hx != 0.0 or hy != 0.0 or hz != 0.0:
+                i, j = pi[p], pj[p]
+                lost += _slot(part, rows, cnt, i, j, hx, hy, hz)
+                lost += _slot(part, rows, cnt, j, i, -hx, -hy, -hz)
+        for i in range(n):  # each row in increasing partner order (insertion sort: rows are short)
+            for k in range(1, cnt[i]):
+                q = part[i, k]
+                h0, h1, h2 = rows[i, k, 0], rows[i, k, 1], rows[i, k, 2]
+                m = k - 1
+                while m >= 0 and part[i, m] > q:
+                    part[i, m + 1] = part[i, m]
+                    rows[i, m + 1, 0] = rows[i, m, 0]
+                    rows[i, m + 1, 1] = rows[i, m, 1]
+                    rows[i, m + 1, 2] = rows[i, m, 2]
+                    m -= 1
+                part[i, m + 1] = q
+                rows[i, m + 1, 0], rows[i, m + 1, 1], rows[i, m + 1, 2] = h0, h1, h2
+        return lost
+
+    @_kernel()
+    def _springs_in(pi, pj, hp, pg, npairs, part, rows, table, sid, R):
+        """The springs of the state's rows (:func:`_springs_out`'s form, or the JAX engine's:
+        rows in increasing partner order, padded with ``N``) onto the listed pairs ``(pi,
+        pj)``, by pair identity: ``hp[p]`` the spring's force on ``pi[p]`` (zero for a pair
+        without one), and ``pg[p] = (G*, R*)`` (the pair table's column
+        :data:`~jaxdamp.physics.contact.G_STAR`, ``R_i R_j / (R_i + R_j)``). Returns the
+        number of springs in the rows that no listed pair took (lost: a touching pair is
+        always listed, so none unless a list overflowed)."""
+        n, K = part.shape
+        found = 0
+        for p in range(npairs):
+            i, j = pi[p], pj[p]
+            pg[p, 0] = table[sid[i], sid[j], G_STAR]
+            pg[p, 1] = R[i] * R[j] / (R[i] + R[j])
+            hp[p, 0] = 0.0
+            hp[p, 1] = 0.0
+            hp[p, 2] = 0.0
+            for k in range(K):
+                q = part[i, k]
+                if q >= j:
+                    if q == j:
+                        hp[p, 0], hp[p, 1], hp[p, 2] = rows[i, k, 0], rows[i, k, 1], rows[i, k, 2]
+                        found += hp[p, 0] != 0.0 or hp[p, 1] != 0.0 or hp[p, 2] != 0.0
+                    break
+        held = 0
+        for i in range(n):
+            for k in range(K):
+                q = part[i, k]
+                if q > i and q < n and (rows[i, k, 0] != 0.0 or rows[i, k, 1] != 0.0
+                                        or rows[i, k, 2] != 0.0):
+                    held += 1
+        return held - found
+
     @_kernel()
     def _wall_constants(R, m, sid, wall_table, law, kappa):
         """Per grain, the constants of its contact with a wall of curvature ``kappa`` (0: a
@@ -394,7 +540,7 @@ if AVAILABLE:
         return wk
 
     def _grain_walls(shape, law, lo, n, step, r1, vp, rw, Rb, mb, ref, wk, wks, sec, og, shifted,
-                    gs, cg, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
+                    gs, cg, frames, F, T, ex, ey, ez, z1, zdp, Lz, gd, half_skin2, sp):
         """Pass 1 over the grains ``lo, lo + step, … < n`` (all of them on the CPU; a thread's
         own on the device, :mod:`jaxdamp.engine.fused`: the one definition of a grain's walls
         for both kernels): body force, the floor, the lid and the container's sides
@@ -425,6 +571,7 @@ if AVAILABLE:
         l_lid = 0.0
         pdrag = 0.0
         far = False
+        grav, drag = gd
         for i in range(lo, n, step):
             x, y, zz = r1[i, 0], r1[i, 1], r1[i, 2]
             ux, uy, uz = vp[i, 0], vp[i, 1], vp[i, 2]
@@ -459,19 +606,19 @@ if AVAILABLE:
             acc = (fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z, n_wall)
             lost = pw_n + pw_f  # the losses and the force before this grain's walls
             pushed = box_z
-            if floor < Ri:
+            if floor < Ri or held(sp, i, 0):  # (or releasing its spring: sp)
                 acc, gz, loss = add_wall_scalar(law, Ri - floor, 0.0, 0.0, 1.0, wx, wy, wz, sx,
                                                 sy, sz, Ri, wk[i, 0], wk[i, 1], wk[i, 2],
-                                                wk[i, 3], ex, ey, ez, acc)
+                                                wk[i, 3], ex, ey, ez, acc, sp, i, 0)
                 floor_lid -= gz
-                n_floor += 1.0
+                n_floor += 1.0 if floor < Ri else 0.0
                 l_floor += loss
-            if Lz - floor < Ri:
+            if Lz - floor < Ri or held(sp, i, 1):
                 acc, gz, loss = add_wall_scalar(law, Ri - (Lz - floor), 0.0, 0.0, -1.0, wx, wy,
                                                 wz, sx, sy, sz, Ri, wk[i, 0], wk[i, 1],
-                                                wk[i, 2], wk[i, 3], ex, ey, ez, acc)
+                                                wk[i, 2], wk[i, 3], ex, ey, ez, acc, sp, i, 1)
                 floor_lid -= gz
-                n_lid += 1.0
+                n_lid += 1.0 if Lz - floor < Ri else 0.0
                 l_lid += loss
             cx = bx
             cy = by
@@ -479,7 +626,7 @@ if AVAILABLE:
                 cx = bx - og[i, 0]
                 cy = by - og[i, 1]
             fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z, n_wall = side_contacts_scalar(
-                shape, law, cx, cy, sec, Ri, wks, i, wx, wy, wz, sx, sy, sz, ex, ey, ez, acc)
+                shape, law, cx, cy, sec, Ri, wks, i, wx, wy, wz, sx, sy, sz, ex, ey, ez, acc, sp)
             F[i, 0], F[i, 1], F[i, 2] = fx, fy, fz
             T[i, 0], T[i, 1], T[i, 2] = tx, ty, tz
             if shifted:
@@ -545,8 +692,8 @@ if AVAILABLE:
                     and by >= Ri and sec[1] - by >= Ri):
                 continue
             s = grain_walls(_BOX, law, i, i + U(1), U(1), r1, vp, rw, Rb, mb, ref, wk, wks, sec,
-                            og, False, gs, cg, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav,
-                            drag, half_skin2)
+                            og, False, gs, cg, frames, F, T, ex, ey, ez, z1, zdp, Lz,
+                            (grav, drag), half_skin2, None)
             e_el += s[0]
             pw_n += s[1]
             pw_f += s[2]
@@ -613,12 +760,13 @@ if AVAILABLE:
             out[c] = total
 
     @_kernel()
-    def _pair_forces(law, r, v, rw, R, pi, pj, pc, npairs, F, T, gl):
+    def _pair_forces(law, r, v, rw, R, pi, pj, pc, npairs, F, T, gl, sp):
         """Adds the grain pairs' forces and torques to ``F``, ``T`` (half list: Newton's third
         law); ``rw[i] = R_i ω_i``. Returns ``(elastic energy, normal loss, friction loss)``,
         summed in registers. ``gl``: ``None``, or (several cells: a pair's grains share a cell)
-        an array to which each pair's loss is added at its first grain; numba compiles the two
-        apart, the branch folded away in the first."""
+        an array to which each pair's loss is added at its first grain; ``sp``: ``None`` (the
+        viscous law), or the pairs' tangential springs (:func:`pair_spring`); numba compiles
+        each apart, the branches on ``None`` folded away."""
         e_sum = 0.0
         ln_sum = 0.0
         lf_sum = 0.0
@@ -630,12 +778,18 @@ if AVAILABLE:
             dz = r[i, 2] - r[j, 2]
             d2 = dx * dx + dy * dy + dz * dz
             rs = pc[p, 0]
-            if d2 >= rs * rs:
+            if d2 >= rs * rs and not held_pair(sp, p):
                 continue
-            fx, fy, fz, cx, cy, cz, e, ln, lf = pair_contact(
-                law, dx, dy, dz, d2, rs, v[i, 0] - v[j, 0], v[i, 1] - v[j, 1], v[i, 2] - v[j, 2],
-                rw[i, 0] + rw[j, 0], rw[i, 1] + rw[j, 1], rw[i, 2] + rw[j, 2],
-                pc[p, 1], pc[p, 2], pc[p, 3], pc[p, 4])
+            vx, vy, vz = v[i, 0] - v[j, 0], v[i, 1] - v[j, 1], v[i, 2] - v[j, 2]
+            sx, sy, sz = rw[i, 0] + rw[j, 0], rw[i, 1] + rw[j, 1], rw[i, 2] + rw[j, 2]
+            if sp is None:
+                fx, fy, fz, cx, cy, cz, e, ln, lf = pair_contact(
+                    law, dx, dy, dz, d2, rs, vx, vy, vz, sx, sy, sz, pc[p, 1], pc[p, 2],
+                    pc[p, 3], pc[p, 4])
+            else:
+                fx, fy, fz, cx, cy, cz, e, ln, lf = pair_spring(
+                    law, dx, dy, dz, d2, rs, vx, vy, vz, sx, sy, sz, pc[p, 1], pc[p, 2],
+                    pc[p, 4], sp, p, i, j)
             F[i, 0] += fx
             F[i, 1] += fy
             F[i, 2] += fz
@@ -873,12 +1027,12 @@ if AVAILABLE:
                           frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
         elif not shifted:
             s = walls_of(shape, law, g0, g1, U(1), r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
-                         False, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
-                         half_skin2)
+                         False, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, (grav, drag),
+                         half_skin2, None)
         else:
             s = walls_of(shape, law, g0, g1, U(1), r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
-                         True, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
-                         half_skin2)
+                         True, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, (grav, drag),
+                         half_skin2, None)
         (out[k, 0], out[k, 1], out[k, 2], out[k, 3], out[k, 4], out[k, 5], out[k, 6], out[k, 7],
          out[k, 8], out[k, 9], out[k, 10], far) = s
         out[k, 11] = 1.0 if far else 0.0
@@ -1175,7 +1329,7 @@ if AVAILABLE:
 
     @_kernel()
     def _advance_one(b, n_records, record_every, dims, skin, st, pm, so, po, sid, bounds, cg,
-                     cdof, rec, inner):
+                     cdof, rec, inner, springs):
         """Advance system ``b`` of the packed batch by ``n_records × record_every`` steps in
         place, writing a sample after every ``record_every`` steps into ``rec[b]``
         (:func:`jaxdamp.physics.energy.record_row`; ``bounds``: the species' and cells' index
@@ -1207,7 +1361,15 @@ if AVAILABLE:
         rebuild) and, where ``inner``, the sweep's chunks over the cores; its sums are added
         block after block, so its numbers do not depend on the cores nor on the batch it runs
         in. Every path predicts the box, the structure and the cells of the next step as soon
-        as the mount has responded (the large path's sweep needs them)."""
+        as the mount has responded (the large path's sweep needs them).
+
+        ``springs``: ``None`` (the viscous tangential law: no code for springs is compiled), or
+        with tangential springs (:mod:`jaxdamp.physics.tangential`; small beds of one cell)
+        ``(B,)`` integers, set to the number of springs a system lost (its state's rows were
+        full, :func:`_springs_out`: the runner redoes the chunk with larger lists). The
+        pairs' springs ride on the half list by pair identity (:func:`_springs_in` at the
+        start and after each rebuild, :func:`_springs_out` before each rebuild and at the
+        end), the walls' are the state's own rows, updated in place."""
         n = sid.shape[0]
         row = st[b]  # so.NAME, po.NAME: where the field NAME starts in the rows
         prow = pm[b]
@@ -1277,6 +1439,29 @@ if AVAILABLE:
         if n > 1 and not large:
             npairs, pi, pj, pc = _pairs(rb, ex * z, ey * z, ez * z, cutoff, pi, pj, pc, ref, Rb,
                                         mb, sid, tab, law)
+        # the springs: the pairs' on the list, the walls' in the state's rows (sized 0 without)
+        ns = n if springs is not None else 0
+        KS, NW = dims.slots, dims.walls
+        spq = row[so.spring_partner:so.spring_partner + n * KS].reshape((n, KS))
+        spp = row[so.spring_pair:so.spring_pair + 3 * n * KS].reshape((n, KS, 3))
+        hw = row[so.spring_wall:so.spring_wall + 3 * n * NW].reshape((n, NW, 3))
+        hp = np.zeros((pi.shape[0] if ns else 0, 3))
+        pg = np.zeros((pi.shape[0] if ns else 0, 2))
+        vhf = np.empty(3 * ns)  # the half-step velocities and R ω, with which they grow
+        shf = np.empty(3 * ns)
+        vh, sh = vhf.reshape((ns, 3)), shf.reshape((ns, 3))
+        wg = np.empty((ns, 3))  # per grain (G*, R* of a plane, R* of the sides)
+        tot = np.zeros(4)  # a step's turned energy, slip losses (pairs, walls), energy
+        inc = np.zeros(N_CHANNELS)
+        lost = 0
+        e_spring = 0.0
+        if springs is not None:
+            lost = _springs_in(pi, pj, hp, pg, npairs, spq, spp, tab, sid, Rb)
+            for i in range(n):
+                wg[i, 0] = wtab[sid[i], G_STAR]
+                wg[i, 1] = Rb[i]
+                wg[i, 2] = Rb[i] / (1.0 - Rb[i] * kappa)
+            e_spring = row[so.e_spring]
         half_skin2 = 0.25 * skin * skin
         hdt2 = 0.5 * dt * dt
         # per-grain arrays (n, 3) and their flat views (3n): the predictor and the corrector
@@ -1386,26 +1571,40 @@ if AVAILABLE:
                         vpf[j] = vf[j] + dt * af[j]
                     for j in range(3 * n):
                         rwf[j] = R3[j] * (wf[j] + dt * alf[j])
+                    if springs is not None:
+                        for j in range(3 * n):
+                            vhf[j] = vf[j] + 0.5 * dt * af[j]
+                            shf[j] = R3[j] * (wf[j] + 0.5 * dt * alf[j])
+                        for c in range(4):
+                            tot[c] = 0.0
+                    sp_w = with_springs(springs, (hw, vh, sh, wg, tot, (z1 - z) / dt, dt))
                     # the walls compiled apart (walls_of), the container and the cells constants
                     # of the compiled code where they fold the branches: the common damper's box
                     # (its one cell), another one-cell container, several cells
                     if shape == _BOX and one_cell:
                         ws = walls_of(_BOX, law, U(0), U(n), U(1), r1, vp, rw, Rw, mw, ref, wk,
                                       wks, sec, ogw, False, gs, cg, frames, F, T, ex, ey, ez, z1,
-                                      zdp, Lz, grav, drag, half_skin2)
+                                      zdp, Lz, (grav, drag), half_skin2, sp_w)
                     elif one_cell:
                         ws = walls_of(shape, law, U(0), U(n), U(1), r1, vp, rw, Rw, mw, ref, wk,
                                       wks, sec, ogw, False, gs, cg, frames, F, T, ex, ey, ez, z1,
-                                      zdp, Lz, grav, drag, half_skin2)
+                                      zdp, Lz, (grav, drag), half_skin2, sp_w)
                     else:  # several cells: each grain's walls are its own cell's
                         ws = walls_of(shape, law, U(0), U(n), U(1), r1, vp, rw, Rw, mw, ref, wk,
                                       wks, sec, ogw, True, gs, cg, frames, F, T, ex, ey, ez, z1,
-                                      zdp, Lz, grav, drag, half_skin2)
+                                      zdp, Lz, (grav, drag), half_skin2, sp_w)
                     (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
                      pdrag, far) = ws
                     if n > 1 and far:  # a grain moved more than skin/2: list the pairs anew
+                        if springs is not None:
+                            lost += _springs_out(pi, pj, hp, npairs, spq, spp)
                         npairs, pi, pj, pc = _pairs(r1, ex * z1, ey * z1, ez * z1, cutoff, pi,
                                                     pj, pc, ref, Rb, mb, sid, tab, law)
+                        if springs is not None:  # the springs onto the new list, by pair
+                            if hp.shape[0] < pi.shape[0]:
+                                hp = np.zeros((pi.shape[0], 3))
+                                pg = np.zeros((pi.shape[0], 2))
+                            lost += _springs_in(pi, pj, hp, pg, npairs, spq, spp, tab, sid, Rb)
                 n_side = n_wall - n_floor - n_lid
                 # the mount: its response to the grains' forces on the walls (pass 1), which
                 # completes the step of the box and the structure
@@ -1442,12 +1641,13 @@ if AVAILABLE:
                         _cell_sums_by_grain(gs[:, 0], cgw, pwc)
                         gs, gn = gn, gs
                 else:
+                    sp_p = with_springs(springs, (hp, pg, vh, sh, tot, dt))
                     if one_cell:  # its loss is the damper's: formed from the channels
                         pp_e, pp_n, pp_f = _pair_forces(law, r1, vp, rw, Rb, pi, pj, pc, npairs,
-                                                        F, T, None)
+                                                        F, T, None, sp_p)
                     else:
                         pp_e, pp_n, pp_f = _pair_forces(law, r1, vp, rw, Rb, pi, pj, pc, npairs,
-                                                        F, T, gs[:, 0])
+                                                        F, T, gs[:, 0], sp_p)
                         cell_sums(gs[:, 0], bounds, pwc, 0, 1)
                     h = _correct(np.int64(0), n, dt, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf,
                                  alf, rf, r1f, qs, qn)
@@ -1457,6 +1657,10 @@ if AVAILABLE:
                 pw[_DRAG] = drag * pdrag
                 pw[_PW_FLOOR], pw[_PW_LID] = l_floor, l_lid
                 pw[_PW_SIDE] = pw_n + pw_f - l_floor - l_lid
+                if springs is not None:  # the springs' slip and stiffness channels
+                    pw[_PP_SLIP], pw[_PW_SLIP] = tot[1], tot[2]
+                    pw[_STIFF] = (e_spring - tot[0]) / dt
+                    e_spring = tot[3]
                 if not math.isfinite(box_z + e_el + pp_n + pp_f + pw_n + pw_f + z + zd + zdd + h):
                     # the state blew up: mark it non-finite and stop; the runner reports it
                     for j in range(3 * n):
@@ -1464,9 +1668,17 @@ if AVAILABLE:
                         vf[j] = np.nan
                     zd = np.nan
                     break
-                for c in range(N_CHANNELS):
-                    work[c] = work[c] + 0.5 * dt * (power[c] + pw[c])
-                    power[c] = pw[c]
+                if springs is None:
+                    for c in range(N_CHANNELS):
+                        work[c] = work[c] + 0.5 * dt * (power[c] + pw[c])
+                        power[c] = pw[c]
+                else:  # a step's own energies taken whole at its end (INCREMENT_OF)
+                    for c in range(N_CHANNELS):
+                        src = _INCREMENT_OF[c]
+                        inc[c] = 0.5 * dt * (pw[src] - power[src]) if src >= 0 else 0.0
+                    for c in range(N_CHANNELS):
+                        work[c] = work[c] + 0.5 * dt * (power[c] + pw[c]) + inc[c]
+                        power[c] = pw[c]
                 if not one_cell:
                     for c in range(K):
                         work_cell[c] = work_cell[c] + 0.5 * dt * (power_cell[c] + pwc[c])
@@ -1496,26 +1708,32 @@ if AVAILABLE:
         row[so.z_max], row[so.z_min], row[so.step] = zmax, zmin, step
         row[so.e_elastic], row[so.f_floor_lid], row[so.f_box] = e_el, floor_lid, box_z
         row[so.n_floor], row[so.n_lid], row[so.n_side] = n_floor, n_lid, n_side
+        if springs is not None:
+            if n > 1:
+                lost += _springs_out(pi, pj, hp, npairs, spq, spp)
+            springs[b] = lost
+            row[so.e_spring] = e_spring
 
     @_kernel(parallel=True)
-    def _advance(n_records, record_every, dims, skin, st, pm, so, po, sid, bounds, cg, cdof, rec):
+    def _advance(n_records, record_every, dims, skin, st, pm, so, po, sid, bounds, cg, cdof, rec,
+                 springs):
         """The batch over the cores (OpenMP threads, one system per thread at a time)."""
         inner = dims.large < 0  # False (the systems are over the cores), typed as the flag
         # of _advance_serial, and b as its int64: both share one compiled _advance_one (its
         # compile is most of the kernel's)
         for b in prange(st.shape[0]):
             _advance_one(np.int64(b), n_records, record_every, dims, skin, st, pm, so, po, sid,
-                         bounds, cg, cdof, rec, inner)
+                         bounds, cg, cdof, rec, inner, springs)
 
     @_kernel(nogil=True)
     def _advance_serial(n_records, record_every, dims, skin, st, pm, so, po, sid, bounds, cg, cdof,
-                        rec, inner):
+                        rec, inner, springs):
         """The batch in the calling thread, without the GIL, one system after the other: for
         sharded chunks, whose host threads (one per local shard) call the kernel side by side,
         and (``inner``) for fewer large beds than cores, each spread over the cores itself."""
         for b in range(st.shape[0]):
             _advance_one(b, n_records, record_every, dims, skin, st, pm, so, po, sid, bounds, cg,
-                         cdof, rec, inner)
+                         cdof, rec, inner, springs)
 
 
 # -- packing of pytrees (one float64 array per call across the JAX/Python boundary) ---------
@@ -1567,6 +1785,7 @@ def kernel_args(model, state_layout, param_layout):
     from jaxdamp.physics.energy import record_layout
 
     shapes = dict((name, shape) for name, shape, _ in param_layout)
+    shapes_s = dict((name, shape) for name, shape, _ in state_layout)
     table = shapes["pair_table"]
     width = sum(int(np.prod(shape, dtype=np.int64)) for _, shape in record_layout(model))
     bounds = cell_bounds(model)
@@ -1576,7 +1795,9 @@ def kernel_args(model, state_layout, param_layout):
                 ndof=int(shapes["s_r"][0]), n_section=int(shapes["section"][0]),
                 cells=int(model.cells),
                 large=int(BLOCK_GRAINS) if model.n >= max(LARGE, 2) else 0,
-                chunk=max(2, int(CHUNK_BLOCKS)))
+                chunk=max(2, int(CHUNK_BLOCKS)),
+                slots=int(shapes_s["spring_partner"][1]) if model.springs else 0,
+                walls=int(shapes_s["spring_wall"][1]) if model.springs else 0)
     return (dims, StateOffsets(*offsets(state_layout, STATE_FIELDS)),
             ParamOffsets(*offsets(param_layout, PARAM_FIELDS)),
             model.species_index().astype(np.int64), bounds,
@@ -1603,8 +1824,10 @@ def advance_packed(model, state_packed, params_packed, state_layout, param_layou
     """Advance a packed batch (:func:`pack`: ``(B, total)`` float64 rows of ``State`` and
     ``Params`` in the layouts ``state_layout``, ``param_layout``) by ``n_records ×
     record_every`` steps, sampling after every ``record_every``. Returns ``(new packed state,
-    samples (B, n_records, width))``, the samples' columns in the order of
-    :func:`jaxdamp.physics.energy.record_layout`; the inputs are not modified. The kernel
+    samples (B, n_records, width), lost (B,))``, the samples' columns in the order of
+    :func:`jaxdamp.physics.energy.record_layout`, ``lost`` the tangential springs each
+    system's rows had no room for (``model.springs``; the caller redoes the chunk with larger
+    lists; zeros without springs); the inputs are not modified. The kernel
     works in place on one copy of the state: no per-field copies, no re-packing.
     ``threads=False``: the batch runs in the calling thread (no OpenMP), for callers that run
     several batches side by side in their own threads (sharded chunks). ``device``: the GPU
@@ -1613,13 +1836,18 @@ def advance_packed(model, state_packed, params_packed, state_layout, param_layou
     pm = np.ascontiguousarray(params_packed, dtype=np.float64)
     dims, so, po, sid, bounds, cg, cdof, width = kernel_args(model, state_layout, param_layout)
     rec = np.empty((st.shape[0], int(n_records), width))
+    lost = np.zeros(st.shape[0], np.int64)
+    if model.springs and (dims.large or dims.cells > 1):
+        raise ValueError(f"the native kernel's tangential springs need one cell and fewer than "
+                         f"{LARGE} grains (got {dims.cells} cells, {model.n} grains)")
     args = (int(n_records), int(record_every), dims, model.skin, st, pm, so, po, sid, bounds, cg,
             cdof, rec)
+    springs = lost if model.springs else None  # None: no spring code compiled in
     if threads and (not dims.large or st.shape[0] >= numba.get_num_threads()):
-        _advance(*args)  # the systems over the cores
+        _advance(*args, springs)  # the systems over the cores
     else:  # one after the other; large beds each over the cores (threads), or in this thread
-        _advance_serial(*args, bool(threads and dims.large) and _threads_up())
-    return st, rec
+        _advance_serial(*args, bool(threads and dims.large) and _threads_up(), springs)
+    return st, rec, lost
 
 
 def compile_note(engine: str) -> str | None:

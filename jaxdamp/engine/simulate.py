@@ -42,7 +42,8 @@ def chunk_fn(model: Model, n_records: int, record_every: int, remat: bool = Fals
     jit partitions by itself, the kernels advance every local shard in its own host thread
     and put the results back on the shards' devices.
     """
-    resolved = resolve_engine(engine, model.precision, tangential=model.tangential)
+    resolved = resolve_engine(engine, model.precision, tangential=model.tangential, cells=model.cells,
+                            grains=model.n)
     if resolved in ("native", "fused"):
         return _packed_chunk(model, n_records, record_every, sharding, resolved)
     block = _jax_block(model, record_every)
@@ -145,18 +146,24 @@ def _packed_chunk(model: Model, n_records: int, record_every: int,
             k += size
         return native.unpack_like(new, states), recs
 
+    def lost_springs(nbrs, lost):  # springs the kernel had no room for: larger lists
+        return dataclasses.replace(nbrs, overflow=nbrs.overflow | (lost > 0))
+
     if sharding is None:
         def run(states, nbrs, params):
+            if model.springs:  # the springs in the layout of these lists (as the JAX engine's)
+                states, nbrs = _rekeyed(states, nbrs)
             lay = native.layout(states), native.layout(params)
             sp, pp = native.pack(states), native.pack(params)
             shapes = (jax.ShapeDtypeStruct(sp.shape, sp.dtype),
-                      jax.ShapeDtypeStruct((sp.shape[0], n_records, width), jnp.float64))
+                      jax.ShapeDtypeStruct((sp.shape[0], n_records, width), jnp.float64),
+                      jax.ShapeDtypeStruct((sp.shape[0],), jnp.int64))
             # the callback may hand over jax Arrays: np.asarray once (slicing them would
             # dispatch JAX ops); the kernel reads the fields at their offsets in the rows
-            new, flat = jax.pure_callback(
+            new, flat, lost = jax.pure_callback(
                 lambda a, b: advance(np.asarray(a), np.asarray(b), *lay), shapes, sp, pp)
             states, recs = unpack(new, flat, states)
-            return states, nbrs, recs
+            return states, lost_springs(nbrs, lost), recs
 
         return jax.jit(run)
 
@@ -168,7 +175,11 @@ def _packed_chunk(model: Model, n_records: int, record_every: int,
     finish = jax.jit(unpack, out_shardings=(sharding, sharding))
     pool = concurrent.futures.ThreadPoolExecutor(len(sharding.addressable_devices))
 
+    rekeyed = jax.jit(_rekeyed)
+
     def run_sharded(states, nbrs, params):
+        if model.springs:
+            states, nbrs = rekeyed(states, nbrs)
         lay = native.layout(states), native.layout(params)
         sp, pp = pack(states, params)
         pairs = list(zip(sp.addressable_shards, pp.addressable_shards, strict=True))
@@ -183,6 +194,9 @@ def _packed_chunk(model: Model, n_records: int, record_every: int,
             [jax.device_put(d[i], dev) for d, dev in zip(done, devices, strict=True)])
             for i in (0, 1))
         states, recs = finish(new, flat, states)
+        lost = np.concatenate([d[2] for d in done])
+        if lost.any():
+            nbrs = lost_springs(nbrs, jax.device_put(lost, nbrs.overflow.sharding))
         return states, nbrs, recs
 
     return run_sharded

@@ -82,13 +82,14 @@ FASTMATH = {"contract", "reassoc", "arcp", "nsz"}
 FASTMATH_STABLE = {"contract", "nsz"}
 
 
-def scalar_form(fn):
-    """Compile ``fn`` as a numba scalar form: inlined into its (numba) callers, float64, the
-    kernel's fast-math flags. Without numba it stays a plain Python function (the JAX engine
-    does not need it)."""
+def scalar_form(fn, inline: bool = True):
+    """Compile ``fn`` as a numba scalar form: inlined into its (numba) callers (or, with
+    ``inline=False``, compiled apart and called), float64, the kernel's fast-math flags.
+    Without numba it stays a plain Python function (the JAX engine does not need it)."""
     if not HAVE_NUMBA:  # pragma: no cover
         return fn
-    return njit(cache=True, inline="always", error_model="numpy", fastmath=FASTMATH)(fn)
+    return njit(cache=True, inline="always" if inline else "never", error_model="numpy",
+                fastmath=FASTMATH)(fn)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -67,7 +67,15 @@ from typing import Callable, NamedTuple
 
 import jax.numpy as jnp
 
-from jaxdamp.physics.contact import ContactForce, Law, Vec, normal_part, safe_sqrt, scalar_form
+from jaxdamp.physics.contact import (
+    ContactForce,
+    Law,
+    Vec,
+    normal_part,
+    normal_scalar,
+    safe_sqrt,
+    scalar_form,
+)
 
 
 def damping(kt, k, g):
@@ -78,6 +86,9 @@ def damping(kt, k, g):
     at every overlap. For the Kuwabara–Kono form of the paper ``τ = A``. Elementwise; also the
     scalar form (arithmetic only)."""
     return kt * g / (1.5 * k)
+
+
+damping_scalar = scalar_form(damping)
 
 
 def unloading(xi, xi_old):
@@ -226,6 +237,62 @@ def spring_scalar(fx, fy, fz, nx, ny, nz, vx, vy, vz, ux, uy, uz, dt, kt, gt, f_
     return (tx, ty, tz, gx, gy, gz, 0.5 * inv_k * (gx * gx + gy * gy + gz * gz),
             0.5 * inv_k * (ax * ax + ay * ay + az * az) + off,
             cut * gt * (vx * vx + vy * vy + vz * vz), slip, sliding)
+
+
+@scalar_form
+def mindlin_scalar(law, xi, nx, ny, nz, vx, vy, vz, sx, sy, sz, qx, qy, qz, px, py, pz, k, g,
+                   G_star, r_eff, mu, dt, hx, hy, hz):
+    """Scalar form of :func:`contact_force` for one contact that touches (``ξ > 0``) or held a
+    spring at the last step (``h ≠ 0``; ``ξ ≤ 0``: the contact ended, its spring gone), the
+    native kernel's: normal ``n`` (unit, from the partner to ``i``), relative velocity ``v``
+    and spin ``s`` (as :func:`jaxdamp.physics.contact.contact_scalar`'s), the same over the
+    step ``q``, ``p`` (the half-step velocities, :class:`Mindlin`), the normal law's ``k``,
+    ``g``, the spring's ``G*``, ``R*``, ``μ``, the time step and the stored spring force
+    ``h``.
+
+    Returns the force on ``i`` ``(fx, fy, fz)``, its tangential part ``(tx, ty, tz)`` (the
+    torque on a body of radius ``R`` is ``−R n × F_t``), the elastic energy (the spring's
+    included), the normal and friction losses [W], the new history ``(hx, hy, hz)``, the
+    turned energy, the slip loss [W] and the spring's energy (:class:`Spring`)."""
+    # the contact point's tangential velocity over the step, with which the spring grows
+    cx = qx - (py * nz - pz * ny)
+    cy = qy - (pz * nx - px * nz)
+    cz = qz - (px * ny - py * nx)
+    cn = cx * nx + cy * ny + cz * nz
+    ux, uy, uz = cx - cn * nx, cy - cn * ny, cz - cn * nz
+    if xi <= 0.0:  # ended: the old force, turned into the plane, does its work (Spring.turned)
+        fn_ = hx * nx + hy * ny + hz * nz
+        rx, ry, rz = hx - fn_ * nx, hy - fn_ * ny, hz - fn_ * nz
+        new2 = rx * rx + ry * ry + rz * rz
+        keep = math.sqrt(hx * hx + hy * hy + hz * hz) / math.sqrt(new2) if new2 > 0.0 else 1.0
+        return (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+                0.5 * dt * keep * (rx * ux + ry * uy + rz * uz), 0.0, 0.0)
+    sq = math.sqrt(xi)
+    xi_dot = -(vx * nx + vy * ny + vz * nz)
+    f_el, f_damp, e_el = normal_scalar(law, xi, sq, xi_dot, k, g)
+    f_n = max(f_el + f_damp, 0.0)
+    cx = vx - (sy * nz - sz * ny)
+    cy = vy - (sz * nx - sx * nz)
+    cz = vz - (sx * ny - sy * nx)
+    cn = cx * nx + cy * ny + cz * nz
+    wx, wy, wz = cx - cn * nx, cy - cn * ny, cz - cn * nz
+    # the step's stiffness and the rescaling of an unloading contact (:func:`unloading`)
+    xi_old = max(xi - dt * xi_dot, 0.0)
+    rescale = math.sqrt(xi / xi_old) if xi_old > xi else 1.0
+    kt = stiffness_scalar(G_star, r_eff, 0.5 * (xi + xi_old))
+    (tx, ty, tz, gx, gy, gz, e_s, turned, damp, slip, _) = spring_scalar(
+        hx, hy, hz, nx, ny, nz, wx, wy, wz, ux, uy, uz, dt, kt, damping_scalar(kt, k, g), f_n,
+        mu, rescale)
+    return (f_n * nx + tx, f_n * ny + ty, f_n * nz + tz, tx, ty, tz, e_el + e_s,
+            (f_n - f_el) * xi_dot, damp + slip, gx, gy, gz, turned, slip, e_s)
+
+
+#: :func:`mindlin_scalar` compiled apart and called (not inlined): the native kernel's wall
+#: contacts, one call per wall a grain touches, instead of a copy in every wall of every
+#: container of every compiled pass over the walls (the kernel's cold compile; the kernel keys
+#: its cache on the sources it calls, :func:`jaxdamp.engine.native._cache_on_sources`).
+mindlin_called = scalar_form(mindlin_scalar.py_func, inline=False) if hasattr(
+    mindlin_scalar, "py_func") else mindlin_scalar
 
 
 class Mindlin(NamedTuple):

@@ -95,19 +95,20 @@ def container(config) -> Container:
 
 @scalar_form
 def side_contacts_scalar(shape, law, x, y, section, Ri, wk, i, vx, vy, vz, sx, sy, sz, ex, ey,
-                         ez, acc):
+                         ez, acc, sp):
     """The contacts of grain ``i`` (centre ``(x, y)`` in the box frame, radius ``Ri``, its
     side-wall constants ``wk[i] = (k, g, γ_s, μ)`` formed at the sides' curvature
     (:func:`side_curvature_scalar`), velocity ``v`` relative to the walls, spin ``R ω``) with
     the side walls of container number ``shape`` (``section``: ``Params.section`` as the tuple
     of :func:`section_scalar`), added to
     ``acc = (fx, fy, fz, tx, ty, tz, elastic energy, normal loss, friction loss, box_z,
-    contacts)``."""
+    contacts)``; ``sp``: the tangential springs, or ``None`` for the viscous law
+    (:func:`jaxdamp.physics.containers._scalar.add_wall_scalar`)."""
     if shape == _CYLINDER:
         return cylinder.side_contacts_scalar(law, x, y, section, Ri, wk, i, vx, vy, vz, sx, sy,
-                                             sz, ex, ey, ez, acc)
+                                             sz, ex, ey, ez, acc, sp)
     return box.side_contacts_scalar(law, x, y, section, Ri, wk, i, vx, vy, vz, sx, sy, sz, ex,
-                                    ey, ez, acc)
+                                    ey, ez, acc, sp)
 
 
 #: How many section numbers (``Params.section``) the compiled kernel holds in registers: the

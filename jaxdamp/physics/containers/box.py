@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from jaxdamp.physics.contact import scalar_form
-from jaxdamp.physics.containers._scalar import add_wall_scalar
+from jaxdamp.physics.containers._scalar import add_wall_scalar, held, held_sides
 
 #: Inward unit normals ``(nx, ny)`` of the side walls x=0, x=Lx, y=0, y=Ly.
 NORMALS = np.array([[1.0, 0.0], [-1.0, 0.0], [0.0, 1.0], [0.0, -1.0]])
@@ -47,27 +47,30 @@ FIELDS = ()
 
 @scalar_form
 def side_contacts_scalar(law, x, y, section, Ri, wk, i, vx, vy, vz, sx, sy, sz, ex, ey, ez,
-                         acc):
+                         acc, sp):
     """Scalar form of the side walls' contacts of one grain at ``(x, y)`` (box frame), added
     to ``acc`` (:func:`jaxdamp.physics.containers._scalar.add_wall_scalar`; ``wk[i]``: the
-    grain's plane-wall constants ``(k, g, γ_s, μ)``). The four walls unrolled, in the order of
-    :data:`NORMALS`: most grains touch none, so the common path is four compares (no array
-    view is made per grain: its reference count would be touched by every thread)."""
-    if x >= Ri and section[0] - x >= Ri and y >= Ri and section[1] - y >= Ri:
+    grain's plane-wall constants ``(k, g, γ_s, μ)``; ``sp``: the tangential springs or
+    ``None``, and a wall whose spring the grain :func:`~jaxdamp.physics.containers._scalar.held`
+    is visited too). The four walls unrolled, in the order of :data:`NORMALS` (walls 2–5):
+    most grains touch none, so the common path is four compares (no array view is made per
+    grain: its reference count would be touched by every thread)."""
+    if (x >= Ri and section[0] - x >= Ri and y >= Ri and section[1] - y >= Ri
+            and not held_sides(sp, i, 4)):
         return acc
     k, g, gs, mu = wk[i, 0], wk[i, 1], wk[i, 2], wk[i, 3]
-    if x < Ri:
+    if x < Ri or held(sp, i, 2):
         acc, _, _ = add_wall_scalar(law, Ri - x, 1.0, 0.0, 0.0, vx, vy, vz, sx, sy, sz, Ri, k, g,
-                                 gs, mu, ex, ey, ez, acc)
-    if section[0] - x < Ri:
-        acc, _, _ = add_wall_scalar(law, Ri - (section[0] - x), -1.0, 0.0, 0.0, vx, vy, vz, sx, sy,
-                              sz, Ri, k, g, gs, mu, ex, ey, ez, acc)
-    if y < Ri:
+                                    gs, mu, ex, ey, ez, acc, sp, i, 2)
+    if section[0] - x < Ri or held(sp, i, 3):
+        acc, _, _ = add_wall_scalar(law, Ri - (section[0] - x), -1.0, 0.0, 0.0, vx, vy, vz, sx,
+                                    sy, sz, Ri, k, g, gs, mu, ex, ey, ez, acc, sp, i, 3)
+    if y < Ri or held(sp, i, 4):
         acc, _, _ = add_wall_scalar(law, Ri - y, 0.0, 1.0, 0.0, vx, vy, vz, sx, sy, sz, Ri, k, g,
-                                 gs, mu, ex, ey, ez, acc)
-    if section[1] - y < Ri:
-        acc, _, _ = add_wall_scalar(law, Ri - (section[1] - y), 0.0, -1.0, 0.0, vx, vy, vz, sx, sy,
-                              sz, Ri, k, g, gs, mu, ex, ey, ez, acc)
+                                    gs, mu, ex, ey, ez, acc, sp, i, 4)
+    if section[1] - y < Ri or held(sp, i, 5):
+        acc, _, _ = add_wall_scalar(law, Ri - (section[1] - y), 0.0, -1.0, 0.0, vx, vy, vz, sx,
+                                    sy, sz, Ri, k, g, gs, mu, ex, ey, ez, acc, sp, i, 5)
     return acc
 
 

@@ -36,7 +36,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxdamp.physics.contact import safe_norm, scalar_form
-from jaxdamp.physics.containers._scalar import add_wall_scalar
+from jaxdamp.physics.containers._scalar import add_wall_scalar, held
 
 #: The container's own dimensions (keys of its ``[container]`` table beside ``shape``, ``Lz``).
 FIELDS = ("radius",)
@@ -69,20 +69,22 @@ def sides_jax(bx, by, section):
 
 @scalar_form
 def side_contacts_scalar(law, x, y, section, Ri, wk, i, vx, vy, vz, sx, sy, sz, ex, ey, ez,
-                         acc):
+                         acc, sp):
     """Scalar form of the side wall's contact of grain ``i`` at ``(x, y)`` (box frame), added
-    to ``acc`` (:func:`jaxdamp.physics.containers._scalar.add_wall_scalar`): touching where
-    ``ρ² > (R_c − R)²`` (no square root otherwise), with the grain's constants ``wk[i]``
-    formed at the concave radius (the kernel forms them once per call from
-    :func:`curvature_scalar`)."""
+    to ``acc`` (:func:`jaxdamp.physics.containers._scalar.add_wall_scalar`; ``sp``: the
+    tangential springs or ``None``): touching where ``ρ² > (R_c − R)²`` (no square root
+    otherwise), or visited where the grain :func:`~jaxdamp.physics.containers._scalar.held`
+    a spring with the wall (wall 2), with the grain's constants ``wk[i]`` formed at the
+    concave radius (the kernel forms them once per call from :func:`curvature_scalar`)."""
     Rc = section[0]
     dx = x - Rc
     dy = y - Rc
     rho2 = dx * dx + dy * dy
-    if rho2 > (Rc - Ri) * (Rc - Ri):
+    if rho2 > (Rc - Ri) * (Rc - Ri) or held(sp, i, 2):
         d = math.sqrt(rho2)
-        acc, _, _ = add_wall_scalar(law, Ri - (Rc - d), -dx / d, -dy / d, 0.0, vx, vy, vz, sx, sy,
-                              sz, Ri, wk[i, 0], wk[i, 1], wk[i, 2], wk[i, 3], ex, ey, ez, acc)
+        acc, _, _ = add_wall_scalar(law, Ri - (Rc - d), -dx / d, -dy / d, 0.0, vx, vy, vz, sx,
+                                    sy, sz, Ri, wk[i, 0], wk[i, 1], wk[i, 2], wk[i, 3], ex, ey,
+                                    ez, acc, sp, i, 2)
     return acc
 
 
