@@ -478,9 +478,8 @@ def validate(config: Config) -> Config:
                           f"{PRECISIONS}")
     if (why := engine_precision_error(num.engine, num.precision)) is not None:
         raise ConfigError(why)
-    if (why := engine_tangential_error(num.engine, config.tangential_law, config.cells,
-                                       config.n_grains)) is not None:
-        raise ConfigError(why)
+    if (why := engine_tangential_error(num.engine, config.tangential_law)) is not None:
+        raise ConfigError(why)  # (the native kernel's size limit: once the counts are known)
     if num.engine == "native" and importlib.util.find_spec("numba") is None:
         raise ConfigError("numerics.engine = 'native' needs numba (pip install numba)")
     if num.engine == "fused":
@@ -513,6 +512,9 @@ def validate(config: Config) -> Config:
         if why is not None:
             raise ConfigError(why)
     config = resolve(config)  # counts from mass ratios and fill fractions
+    if (why := engine_tangential_error(num.engine, config.tangential_law, config.cells,
+                                       config.n_grains)) is not None:
+        raise ConfigError(why)
     volume = 0.0
     for i, sp in enumerate(config.grains):
         name = f"grains.{i}"

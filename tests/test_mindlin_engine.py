@@ -225,13 +225,24 @@ def test_energy_balance_closes_in_a_frictional_gas(engine):
     assert work_m[CH["spring_stiffness"]] != 0
 
 
-def _packed_bed():
+def _packed_bed(vessel="box"):
     """27 damped frictional grains with springs, packed into the lower corner of a 2 cm box
-    under gravity (springs held after 2 000 steps): ``start``'s model, params, state, lists."""
+    under gravity (springs held after 2 000 steps), or (``vessel = "cylinder"``) at the axis
+    of a cylinder of radius 12 mm, thrown outwards: ``start``'s model, params, state,
+    lists."""
     cfg = dataclasses.replace(config(n=27, radius=2e-3, material=Material(
         E=2e9, nu=0.3, density=7850.0, mu=0.3, restitution=0.7), box=(0.02, 0.02, 0.02),
         gravity=9.8, dt_per_collision=50), tangential_law="mindlin")
-    return start(cfg, *gas(27, side=0.0125))
+    r, v, w = gas(27, side=0.0125)
+    if vessel == "cylinder":
+        from jaxdamp.config import Container
+
+        rc = 0.012
+        cfg = dataclasses.replace(cfg, box=None, container=Container(
+            "cylinder", 0.02, (("radius", rc),)))
+        r = np.asarray(r) + [rc - 0.00625, rc - 0.00625, 0.0]
+        v = np.asarray(v) + 0.5 * (r - [rc, rc, 0.0]) / 0.00625 * [1.0, 1.0, 0.0]
+    return start(cfg, r, v, w)
 
 
 @pytest.mark.parametrize("engine", ENGINES)
@@ -303,13 +314,13 @@ def test_a_run_says_which_settings_the_spring_does_not_use():
     assert unused_note(quiet) is None
 
 
-@pytest.mark.long  # ~50 s each on 2 cores (the JAX engine)
+@pytest.mark.long  # ~25 s each on 2 cores (the engine auto picks: the native kernel)
 @pytest.mark.parametrize("system", ["primary", "driven"])
 def test_energy_balance_closes_in_a_damper_run_end_to_end(system):
     """The whole run (settling, driving, records, summary) with the spring: input work =
     Δ(mechanical energy) + all losses to better than 1e-3, as with the viscous law
-    (tests/test_energy.py; measured 7.3e-5 (S1) and 2.9e-4 (S2), the viscous law 5.2e-5 and
-    2.5e-4 on the same beds); friction dissipates by slip."""
+    (tests/test_energy.py; measured on the JAX engine 7.3e-5 (S1) and 2.9e-4 (S2), the
+    viscous law 5.2e-5 and 2.5e-4 on the same beds); friction dissipates by slip."""
     from jaxdamp.cases import presets
     from jaxdamp.config import apply_overrides
     from jaxdamp.studies.runner import run
@@ -346,3 +357,67 @@ def test_springs_follow_their_pairs_into_reallocated_lists(engine):
 
 def nb_capacity(nbrs):
     return int(nbrs.idx.shape[-1])
+
+
+@pytest.mark.long  # the native kernel's spring form (compiled once, cached)
+@pytest.mark.parametrize("vessel", ["box", "cylinder"])
+def test_native_springs_match_the_jax_engine(vessel):
+    """The native kernel's spring is the JAX engine's: the packed bed over 2 000 steps (pair
+    and wall springs loading, slipping, ending, lists rebuilt), velocities to 1e-9 of their
+    largest, positions to 1e-12 m, the springs' energy to 1e-7 of itself, every work channel
+    to 1e-9 of the largest, and the same springs held (measured in the box 1.4e-11, 1.9e-14 m,
+    2.4e-10; the two engines sum their pairs in other orders); in a cylinder (radius 12 mm,
+    the bed at its axis, thrown at the curved wall) as well."""
+    model, pb, st, nbrs = _packed_bed(vessel)
+    a, _, _ = run_steps(model, pb, st, nbrs, 4, 500, "native")
+    b, _, _ = run_steps(model, pb, st, nbrs, 4, 500, "jax")
+    assert float(a.work[0][CH["pw_side"]]) > 0  # the side walls touched (the curved one too)
+    scale = np.abs(np.asarray(b.v)).max()
+    np.testing.assert_allclose(np.asarray(a.v), np.asarray(b.v), rtol=0, atol=1e-9 * scale)
+    np.testing.assert_allclose(np.asarray(a.r), np.asarray(b.r), rtol=0, atol=1e-12)
+    assert float(a.e_spring[0]) == pytest.approx(float(b.e_spring[0]), rel=1e-7)
+    work_a, work_b = np.asarray(a.work[0]), np.asarray(b.work[0])
+    np.testing.assert_allclose(work_a, work_b, rtol=0, atol=1e-9 * np.abs(work_b).max())
+    assert work_a[CH["pp_slip"]] > 0 and work_a[CH["pw_slip"]] > 0
+    assert work_a[CH["spring_stiffness"]] != 0
+    held = lambda s: np.count_nonzero(np.abs(np.asarray(s.spring_pair)).sum(-1))  # noqa: E731
+    assert held(a) == held(b) > 0
+
+
+@pytest.mark.long
+def test_native_springs_without_room_redo_the_chunk_with_larger_lists():
+    """Lists of one neighbour per grain cannot hold the packed bed's springs: the native kernel
+    loses none silently: the chunk is flagged, redone with larger lists, and equals, bit for
+    bit, the chunk run on roomy lists."""
+    from helpers import advance
+
+    # a cube of 8 grains pressed together in a box that holds them (5 µm overlaps between
+    # grains, 2.5 µm with the walls), jostling: 3 grain springs each (and 3 wall springs)
+    cfg = dataclasses.replace(config(n=8, radius=2e-3, material=Material(
+        E=2e9, nu=0.3, density=7850.0, mu=0.3, restitution=0.7), box=(0.00799,) * 3,
+        dt_per_collision=50), tangential_law="mindlin")
+    grid = np.stack(np.meshgrid(*[np.arange(2)] * 3, indexing="ij"), -1).reshape(-1, 3)
+    rng = np.random.default_rng(3)
+    model, pb, st, nbrs = start(cfg, 1.9975e-3 + grid * 3.995e-3,
+                                rng.normal(0.0, 0.01, (8, 3)))
+    st, nbrs, _ = run_steps(model, pb, st, nbrs, 1, 200, "native")
+    assert int((np.abs(np.asarray(st.spring_pair)).sum(-1) > 0).sum(-1).max()) > 1
+    roomy, _ = advance(model, st, nbrs, pb, 1, 500, "native")
+    grown = []
+    tight = dataclasses.replace(nbrs, idx=nbrs.idx[..., :1])
+    redone, _ = advance(model, st, tight, pb, 1, 500, "native",
+                        on_realloc=lambda old, new: grown.append((old, new)))
+    assert grown and grown[0][0] == 1
+    for f in dataclasses.fields(roomy.states):
+        x, y = np.asarray(getattr(roomy.states, f.name)), np.asarray(getattr(redone.states,
+                                                                            f.name))
+        if f.name in ("spring_pair", "spring_partner"):  # rows as long as each list
+            continue
+        np.testing.assert_array_equal(x, y, err_msg=f.name)
+
+    def springs(s):  # {(grain, partner): force} of the springs held
+        part, force = np.asarray(s.spring_partner[0]), np.asarray(s.spring_pair[0])
+        return {(i, int(part[i, k])): tuple(force[i, k]) for i, k in zip(
+            *np.nonzero(np.abs(force).sum(-1)), strict=True)}
+
+    assert springs(roomy.states) == springs(redone.states) != {}
