@@ -34,13 +34,7 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 
-from bench_lammps import (  # noqa: E402
-    lammps_input,
-    lammps_us,
-    moving_bed,
-    time_jaxdamp,
-    wait_quiet,
-)
+from bench_lammps import lammps_input, lammps_us, moving_bed, time_jaxdamp, wait_quiet  # noqa: E402
 
 
 def with_springs(model, params, st):
@@ -81,15 +75,15 @@ def main(argv=None):
         path = lammps_input(cfg, params, st, args.steps, work)
         text = open(path).read()
         decks["viscous"] = path
-        spring = text.replace("tangential linear_nohistory", "tangential mindlin_rescale/force NULL")
+        spring = text.replace("tangential linear_nohistory",
+                              "tangential mindlin_rescale/force NULL")
         if spring == text:
             raise RuntimeError("bench_spring: the LAMMPS deck has no 'tangential linear_nohistory'")
         decks["mindlin"] = os.path.join(work, "in.spring")
         with open(decks["mindlin"], "w") as fh:
             fh.write(spring)
-    cases = {("native", "viscous", 1): (model, st), ("native", "mindlin", 1): (spring_model, spring_st),
-             ("native", "viscous", args.batch): (model, st),
-             ("native", "mindlin", args.batch): (spring_model, spring_st)}
+    cases = {("native", law, b): (m, s) for b in (1, args.batch)
+             for law, m, s in (("viscous", model, st), ("mindlin", spring_model, spring_st))}
     runs = {k: [] for k in list(cases) + [("lammps", law, 1) for law in decks]}
     for _ in range(args.rounds):
         for key, (m, s) in cases.items():

@@ -69,11 +69,14 @@ SECONDS_PER_GRAIN_STEP = {"native": 24e-9, "jax": 600e-9}
 #: benchmarks/RESULTS.md ("Large beds: unsigned indices") ran 3.85e4 steps in 56 s, 29 ns per
 #: grain-step (the kernel alone 21–25 ns) against :data:`SECONDS_PER_GRAIN_STEP`'s 24.
 LARGE_BED_FACTOR = 1.2
-#: The tangential spring with history (``tangential_law = "mindlin"``, JAX engine only) costs
-#: this many times the viscous law's grain-step: 1332.8 against 157.7 µs per system-step,
-#: thesis bed, batch 32, float64, 2 cores (``python benchmarks/bench_jax_engine.py --precision
-#: float64 --tangential both --batch 32 --steps 400 --rounds 3``; benchmarks/RESULTS.md).
-TANGENTIAL_FACTOR = {"viscous": 1.0, "mindlin": 8.5}
+#: The tangential spring with history (``tangential_law = "mindlin"``) costs this many times
+#: the viscous law's grain-step, per engine (the moving thesis bed, float64, 2 cores;
+#: benchmarks/RESULTS.md): the JAX engine 8.5× (1332.8 against 157.7 µs per system-step at
+#: batch 32, ``python benchmarks/bench_jax_engine.py --precision float64 --tangential both
+#: --batch 32 --steps 400 --rounds 3``), the native kernel 3.5× (20.5 against 5.8 at batch 8;
+#: 2.7× for one system, ``python benchmarks/bench_spring.py --rounds 3 --steps 5000``).
+TANGENTIAL_FACTOR = {"jax": {"viscous": 1.0, "mindlin": 8.5},
+                     "native": {"viscous": 1.0, "mindlin": 3.5}}
 #: HDF5 chunking and metadata over the raw bytes of a run file (measured 1.2).
 FILE_OVERHEAD = 1.3
 #: Refuse a batch above this fraction of the memory this process may use.
@@ -117,7 +120,7 @@ def estimate(*, systems: int, grains: int, steps: int, samples: int, sample_byte
     docstring for the model). ``seconds_per_step``: the wall time of one step of one system
     where the grain-step rate does not apply (the S3 model); ``record_copies``: copies of the
     samples held at once where :data:`RECORD_COPIES` does not apply; ``tangential``: the
-    tangential law (:data:`TANGENTIAL_FACTOR`)."""
+    tangential law (:data:`TANGENTIAL_FACTOR` of ``engine``)."""
     per_system = (record_copies * samples * sample_bytes + grains * GRAIN_BYTES
                   + (_jax_lists(grains) if engine == "jax" else 0))
     memory = BASE_MEMORY + systems * per_system
@@ -126,7 +129,7 @@ def estimate(*, systems: int, grains: int, steps: int, samples: int, sample_byte
     rate = SECONDS_PER_GRAIN_STEP.get(engine, SECONDS_PER_GRAIN_STEP["native"]) * max(grains, 1)
     if engine == "native" and _large(grains) and systems < (os.cpu_count() or 1):
         rate *= LARGE_BED_FACTOR
-    rate *= TANGENTIAL_FACTOR[tangential]
+    rate *= TANGENTIAL_FACTOR.get(engine, TANGENTIAL_FACTOR["jax"])[tangential]
     seconds = systems * steps * (rate if seconds_per_step is None else seconds_per_step)
     return Budget(int(systems), int(grains), int(steps), int(samples), float(memory),
                   float(file), float(seconds))

@@ -36,14 +36,14 @@ def chunk_fn(model: Model, n_records: int, record_every: int, remat: bool = Fals
     inner block of ``record_every`` steps is rematerialised in reverse mode (bounded memory for
     gradients through long scans). ``engine="native"`` advances the whole chunk in the compiled
     CPU kernel, samples included, in one host callback (forward only; the neighbour lists in
-    ``nbrs`` are then passed through unused); ``engine="fused"`` the same through the CUDA
+    ``nbrs`` then only set the springs' layout); ``engine="fused"`` the same through the CUDA
     kernel of :mod:`jaxdamp.engine.fused` (one launch per chunk). ``sharding``: the batch's
     sharding over several devices (the batch axis split over a mesh axis); the JAX engine's
     jit partitions by itself, the kernels advance every local shard in its own host thread
     and put the results back on the shards' devices.
     """
-    resolved = resolve_engine(engine, model.precision, tangential=model.tangential, cells=model.cells,
-                            grains=model.n)
+    resolved = resolve_engine(engine, model.precision, tangential=model.tangential,
+                              cells=model.cells, grains=model.n)
     if resolved in ("native", "fused"):
         return _packed_chunk(model, n_records, record_every, sharding, resolved)
     block = _jax_block(model, record_every)
@@ -114,7 +114,9 @@ def _packed_chunk(model: Model, n_records: int, record_every: int,
     (:func:`jaxdamp.physics.energy.record_row`, the scalar form of ``record``), so a chunk
     crosses the JAX/Python boundary once, not once per sample. State and parameters cross as
     two packed float64 arrays (:func:`jax.pure_callback` costs ~35 µs per array); the
-    neighbour lists are passed through unused (the kernel keeps its own).
+    neighbour lists are passed through (the kernel keeps its own; with tangential springs they
+    give the springs' rows their layout, and a spring the rows had no room for flags them
+    overflowed, so that the driver redoes the chunk with larger ones).
 
     With ``sharding`` (batch split over devices, possibly over processes) there is no callback:
     the packed batch is computed sharded, every local shard is copied to the host and advanced

@@ -48,8 +48,8 @@ def add_wall_scalar(law, xi, nx, ny, nz, vx, vy, vz, sx, sy, sz, Ri, k, g, gamma
     3)`` (read and written in place), the half-step velocities ``vh`` and spins ``sh = R ω``
     ``(N, 3)`` with which they grow, per grain ``wg (N, 3) = (G*, R*`` of a plane, ``R*`` of
     the sides``)``, the step's totals ``tot`` (added to: ``[0]`` the turned energy, ``[1]``,
-    ``[2]`` the pairs' and the walls' slip losses, ``[3]`` the springs' energy), the walls' mean velocity along ``e`` over the
-    step ``zds`` and the time step."""
+    ``[2]`` the pairs' and the walls' slip losses, ``[3]`` the springs' energy), the walls'
+    mean velocity along ``e`` over the step ``zds`` and the time step."""
     fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z, nc = acc
     if sp is None:
         gx, gy, gz, ax, ay, az, e, ln, lf = contact_scalar(law, xi, nx, ny, nz, vx, vy, vz, sx,
