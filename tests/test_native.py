@@ -83,19 +83,20 @@ def test_cell_grid_pair_list_is_complete_and_grows():
 
 
 def test_kernel_caches_are_keyed_on_the_physics_sources():
-    """The kernels inline scalar forms from contact.py, excitation.py, integrate.py, mounts.py
-    and the container modules; numba's
+    """The kernels inline scalar forms from contact.py, excitation.py, integrate.py, mounts.py,
+    tangential.py and the container modules (and call one, the walls' spring); numba's
     own cache would only notice edits to native.py and keep a stale law (checked by hand:
     an edited elastic energy was ignored), so every kernel's cache key holds their hash."""
     import os
 
-    from jaxdamp.physics import contact, excitation, integrate, mounts
+    from jaxdamp.physics import contact, excitation, integrate, mounts, tangential
     from jaxdamp.physics.containers import _scalar, box, cylinder
 
     digest = native._source_hash()
     kernels = [native._build_pairs, native._pairs, native._wall_constants, native.grain_walls,
                native.walls_of, native._pair_forces, native._advance_one, native._advance,
-               native._sweep_par, native._sweep_ser]
+               native._sweep_par, native._sweep_ser, native._springs_in, native._springs_out,
+               tangential.mindlin_called]
     for k in kernels:
         key = k._cache._index_key((), k.targetctx.codegen())
         assert key[-1].startswith(digest), k.py_func.__name__
@@ -104,5 +105,6 @@ def test_kernel_caches_are_keyed_on_the_physics_sources():
     ser = native._sweep_ser._cache._index_key((), native._sweep_ser.targetctx.codegen())
     assert par[-1] == digest + ":parallel" and ser[-1] == digest
     files = set(native._source_files())
-    for mod in (contact, excitation, integrate, mounts, box, cylinder, _scalar, native):
+    for mod in (contact, excitation, integrate, mounts, tangential, box, cylinder, _scalar,
+                native):
         assert os.path.abspath(mod.__file__) in files, mod.__name__

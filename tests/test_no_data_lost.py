@@ -450,6 +450,9 @@ def test_a_cold_native_kernel_is_announced_before_it_compiles(monkeypatch):
     assert "compiling the native kernel once" in native.compile_note("native")
     monkeypatch.setattr(native.os.path, "exists", lambda path: True)
     assert native.compile_note("native") is None
+    # the spring form is its own specialisation: announced until a cached entry has it
+    monkeypatch.setattr(native._advance._cache._cache_file, "_load_index", lambda: {})
+    assert "tangential-spring form" in native.compile_note("native", springs=True)
 
 
 def test_the_fused_kernel_is_announced_before_its_first_launch():

@@ -99,14 +99,15 @@ class Batch:
         return dataclasses.replace(self, **changes)
 
 
-def compile_note(engine: str) -> str | None:
+def compile_note(engine: str, tangential: str = "viscous") -> str | None:
     """A one-line note when ``engine``'s kernel will be compiled before the first chunk (the
-    native kernel without its on-disk cache, the fused one at its first launch in a process),
-    else ``None``: printed before settling, so that a still progress bar is explained."""
+    native kernel without its on-disk cache for ``tangential``'s form, the fused one at its
+    first launch in a process), else ``None``: printed before settling, so that a still
+    progress bar is explained."""
     if engine == "native":
         from jaxdamp.engine import native
 
-        return native.compile_note(engine)
+        return native.compile_note(engine, springs=tangential != "viscous")
     if engine == "fused":
         from jaxdamp.engine import fused
 

@@ -1850,18 +1850,27 @@ def advance_packed(model, state_packed, params_packed, state_layout, param_layou
     return st, rec, lost
 
 
-def compile_note(engine: str) -> str | None:
+def compile_note(engine: str, springs: bool = False) -> str | None:
     """A one-line note when ``engine`` is ``"native"`` and the kernel has no on-disk cache yet
     (the first use after an install or an update compiles it: 2.7 minutes on a 2-core AMD EPYC
-    for a driven bed's kernel, during which the first progress bar cannot move), else
-    ``None``."""
+    for a driven bed's kernel, during which the first progress bar cannot move), or, with
+    tangential springs (``springs``), no cached spring form (its own specialisation, about six
+    minutes there the first time, ``benchmarks/RESULTS.md``), else ``None``."""
     if engine != "native" or not AVAILABLE:
         return None
     try:
-        cached = os.path.exists(_advance._cache._cache_file._index_path)  # numba internals
-    except AttributeError:
+        index = _advance._cache._cache_file  # numba internals
+        cached = os.path.exists(index._index_path)
+        if cached and springs:  # a cached signature whose last argument (springs) is not None
+            digest = _source_hash() + ":parallel"
+            cached = any(key[-1] == digest and not isinstance(key[0][-1], numba.types.NoneType)
+                         for key in index._load_index())
+    except Exception:  # numba's internals moved: say nothing rather than something wrong
         return None
     if cached:
         return None
+    if springs:
+        return ("compiling the native kernel's tangential-spring form once (about six minutes "
+                "on 2 cores; cached for later runs) — the first progress bar starts after it")
     return ("compiling the native kernel once (about three minutes on 2 cores; cached for "
             "later runs) — the first progress bar starts after it")

@@ -574,6 +574,29 @@ def contact_force(law: Law, xi, n: Vec, v_rel: Vec, spin: Vec, radius_i, k, g, g
 
 
 @scalar_form
+def normal_force_scalar(law, xi, nx, ny, nz, vx, vy, vz, k, g):
+    """The normal part of a touching contact (``ξ > 0``, unit normal ``n``, relative velocity
+    ``v``; law number ``law``): ``(sqrt ξ, ξ', F_elastic, F_n = max(F_elastic + F_damping,
+    0), elastic energy)`` — scalar form of :func:`normal_part`'s, for both tangential laws."""
+    sq = math.sqrt(xi)
+    xi_dot = -(vx * nx + vy * ny + vz * nz)
+    f_el, f_damp, e_el = normal_scalar(law, xi, sq, xi_dot, k, g)
+    return sq, xi_dot, f_el, max(f_el + f_damp, 0.0), e_el
+
+
+@scalar_form
+def slide_scalar(nx, ny, nz, vx, vy, vz, sx, sy, sz):
+    """The tangential part of a contact point's relative velocity ``v − s × n`` (``v``: the
+    centres' relative velocity, ``s``: the spin ``R_i ω_i + R_j ω_j``, ``n``: the unit
+    normal) — scalar form of :attr:`Normal.v_slide`."""
+    cx = vx - (sy * nz - sz * ny)
+    cy = vy - (sz * nx - sx * nz)
+    cz = vz - (sx * ny - sy * nx)
+    cn = cx * nx + cy * ny + cz * nz
+    return cx - cn * nx, cy - cn * ny, cz - cn * nz
+
+
+@scalar_form
 def contact_scalar(law, xi, nx, ny, nz, vx, vy, vz, sx, sy, sz, k, g, gamma_s, mu):
     """Scalar form of :func:`contact_force` for one touching contact (``ξ > 0``).
 
@@ -582,18 +605,8 @@ def contact_scalar(law, xi, nx, ny, nz, vx, vy, vz, sx, sy, sz, k, g, gamma_s, m
     Written without data-dependent branches where a ``min``/``max`` does (branch mispredictions
     dominated the dense-bed cost), and with the one division of the Coulomb cap only where the
     cap applies."""
-    sq = math.sqrt(xi)
-    xi_dot = -(vx * nx + vy * ny + vz * nz)
-    f_el, f_damp, e_el = normal_scalar(law, xi, sq, xi_dot, k, g)
-    f_n = max(f_el + f_damp, 0.0)
-    # contact-point relative velocity v_rel - spin × n, and its tangential part
-    cx = vx - (sy * nz - sz * ny)
-    cy = vy - (sz * nx - sx * nz)
-    cz = vz - (sx * ny - sy * nx)
-    cn = cx * nx + cy * ny + cz * nz
-    tx = cx - cn * nx
-    ty = cy - cn * ny
-    tz = cz - cn * nz
+    sq, xi_dot, f_el, f_n, e_el = normal_force_scalar(law, xi, nx, ny, nz, vx, vy, vz, k, g)
+    tx, ty, tz = slide_scalar(nx, ny, nz, vx, vy, vz, sx, sy, sz)
     sp2 = tx * tx + ty * ty + tz * tz
     # |F_t| = min(γ_s sqrt(ξ) |v_s|, μ F_n): drag = |F_t| / |v_s|
     drag = gamma_s * sq

@@ -71,10 +71,11 @@ from jaxdamp.physics.contact import (
     ContactForce,
     Law,
     Vec,
+    normal_force_scalar,
     normal_part,
-    normal_scalar,
     safe_sqrt,
     scalar_form,
+    slide_scalar,
 )
 
 
@@ -255,11 +256,7 @@ def mindlin_scalar(law, xi, nx, ny, nz, vx, vy, vz, sx, sy, sz, qx, qy, qz, px, 
     included), the normal and friction losses [W], the new history ``(hx, hy, hz)``, the
     turned energy, the slip loss [W] and the spring's energy (:class:`Spring`)."""
     # the contact point's tangential velocity over the step, with which the spring grows
-    cx = qx - (py * nz - pz * ny)
-    cy = qy - (pz * nx - px * nz)
-    cz = qz - (px * ny - py * nx)
-    cn = cx * nx + cy * ny + cz * nz
-    ux, uy, uz = cx - cn * nx, cy - cn * ny, cz - cn * nz
+    ux, uy, uz = slide_scalar(nx, ny, nz, qx, qy, qz, px, py, pz)
     if xi <= 0.0:  # ended: the old force, turned into the plane, does its work (Spring.turned)
         fn_ = hx * nx + hy * ny + hz * nz
         rx, ry, rz = hx - fn_ * nx, hy - fn_ * ny, hz - fn_ * nz
@@ -267,15 +264,8 @@ def mindlin_scalar(law, xi, nx, ny, nz, vx, vy, vz, sx, sy, sz, qx, qy, qz, px, 
         keep = math.sqrt(hx * hx + hy * hy + hz * hz) / math.sqrt(new2) if new2 > 0.0 else 1.0
         return (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
                 0.5 * dt * keep * (rx * ux + ry * uy + rz * uz), 0.0, 0.0)
-    sq = math.sqrt(xi)
-    xi_dot = -(vx * nx + vy * ny + vz * nz)
-    f_el, f_damp, e_el = normal_scalar(law, xi, sq, xi_dot, k, g)
-    f_n = max(f_el + f_damp, 0.0)
-    cx = vx - (sy * nz - sz * ny)
-    cy = vy - (sz * nx - sx * nz)
-    cz = vz - (sx * ny - sy * nx)
-    cn = cx * nx + cy * ny + cz * nz
-    wx, wy, wz = cx - cn * nx, cy - cn * ny, cz - cn * nz
+    _, xi_dot, f_el, f_n, e_el = normal_force_scalar(law, xi, nx, ny, nz, vx, vy, vz, k, g)
+    wx, wy, wz = slide_scalar(nx, ny, nz, vx, vy, vz, sx, sy, sz)
     # the step's stiffness and the rescaling of an unloading contact (:func:`unloading`)
     xi_old = max(xi - dt * xi_dot, 0.0)
     rescale = math.sqrt(xi / xi_old) if xi_old > xi else 1.0

@@ -277,7 +277,7 @@ def run(
     else:
         engine = dict(engine=choice.engine, multiplier=config.numerics.capacity_multiplier)
         say(f"engine {choice.engine} ({choice.reason})")
-        if (note := driver.compile_note(choice.engine)):
+        if (note := driver.compile_note(choice.engine, config.tangential_law)):
             say(note)
         t0 = time.perf_counter()
         bed = settle(config, model, params,

@@ -380,7 +380,7 @@ class _Sweep:
         first = {k: i for i, k in reversed(list(enumerate(keys))) if k not in beds}
         order = sorted(first.values())  # one new bed per geometry, all settled in one batch
         if order:
-            if (note := driver.compile_note(self.engine)):
+            if (note := driver.compile_note(self.engine, model.tangential)):
                 say(note)
             settled = settle_many([configs[i] for i in order], model,
                                   [built[i][1] for i in order],
