@@ -75,3 +75,28 @@ def test_same_bits_whether_callees_were_compiled_or_loaded(tmp_path):
         by_field.setdefault(f, []).append(d)
     for f, ds in by_field.items():  # alone = each system of the batch
         assert len(set(ds)) == 1, f
+
+
+def _cli(cache: str, *overrides: str) -> subprocess.CompletedProcess:
+    env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+    args = [sys.executable, "-m", "jaxdamp", "run", "--preset", "sanchez2012-optimal",
+            "--set", "grains.0.count=20", "--set", "numerics.engine='native'", "--duration",
+            "0.1", "--no-progress"]
+    for o in overrides:
+        args += ["--set", o]
+    return subprocess.run(args, capture_output=True, text=True, env=env, timeout=1800)
+
+
+def test_the_spring_form_compiles_against_a_cached_viscous_kernel(tmp_path):
+    """The spring form of the kernel (``tangential_law = "mindlin"``) is a second
+    specialisation; compiled in a process that found the viscous one's parallel callees in the
+    cache, it links their thread scheduler, which numba registers only once its threads are
+    launched: the first spring run after a viscous one aborted with "LLVM ERROR: Symbol not
+    found: allocate_sched" until the kernel launched them before every call. Two processes on
+    one cache: a viscous run, then a spring run; both finish. Slow: two cold compiles."""
+    cache = str(tmp_path / "numba")
+    first = _cli(cache)
+    assert first.returncode == 0, first.stderr[-3000:]
+    second = _cli(cache, "tangential_law='mindlin'")
+    assert second.returncode == 0, (second.stdout + second.stderr)[-3000:]
+    assert "tangential-spring form" in second.stdout + second.stderr

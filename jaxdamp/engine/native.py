@@ -1843,10 +1843,15 @@ def advance_packed(model, state_packed, params_packed, state_layout, param_layou
     args = (int(n_records), int(record_every), dims, model.skin, st, pm, so, po, sid, bounds, cg,
             cdof, rec)
     springs = lost if model.springs else None  # None: no spring code compiled in
+    # numba's threads up first: a kernel compiled against parallel callees loaded from the
+    # cache (the spring form, after the viscous one was cached) links their scheduler, which
+    # exists only once the threads are launched ("LLVM ERROR: Symbol not found:
+    # allocate_sched" otherwise, found in this project)
+    up = _threads_up()
     if threads and (not dims.large or st.shape[0] >= numba.get_num_threads()):
         _advance(*args, springs)  # the systems over the cores
     else:  # one after the other; large beds each over the cores (threads), or in this thread
-        _advance_serial(*args, bool(threads and dims.large) and _threads_up(), springs)
+        _advance_serial(*args, bool(threads and dims.large) and up, springs)
     return st, rec, lost
 
 
