@@ -28,8 +28,11 @@ quantity a row quotes, relative to the protocol's value, with an interval over b
   - *grain–wall damping reading*: ``"calibrated"`` against the presets' ``"mixed"``, read from
     ``wall_damping/data.h5`` (row S9);
 
-* **tangential law**: a slot for the Hertz–Mindlin law with contact history (issue 39); not
-  measured, so it enters no total yet.
+* **tangential law**: the Hertz–Mindlin spring with contact history against the thesis'
+  viscous force (issue 39), at the thesis point only (the paper's grains are frictionless):
+  read from ``tangential_law/data.h5`` (``experiments/tangential_law.py``, this study's
+  protocol with each law; unpaired: the laws' beds settle differently); absent, the term is
+  "not measured" and enters no total.
 
 A shift ``δ`` measured with standard error ``s`` enters a row's uncertainty as the standard
 uncertainty ``u = sqrt(δ² + s²)`` (an uncorrected bias and the uncertainty of its size); the
@@ -254,6 +257,17 @@ def _stored_wall_reading(path=os.path.join(HERE, "wall_damping", "data.h5"), A=0
         return {k: np.asarray(g[f"{k}/values"])[i] for k in ("mixed", "calibrated")}
 
 
+def _stored_tangential(path=os.path.join(HERE, "tangential_law", "data.h5")) -> dict | None:
+    """The ``tangential_law`` study's per-bed ``Z_res``, ``f_res``, ``Z`` (averaged over its
+    frequencies) and ``loss`` under each law, or ``None`` where it has not run."""
+    if not os.path.exists(path):
+        return None
+    with h5py.File(path, "r") as h:
+        return {law: {q: np.asarray(h[f"{law}/{k}"]) for q, k in
+                      (("Z_res", "Z_res"), ("f_res", "f_res"), ("Z", "Z_mean"), ("loss", "loss"))}
+                for law in ("viscous", "mindlin")}
+
+
 def shift(x, ref, paired: bool) -> dict:
     """Relative shift of ``x`` against ``ref`` (per-bed values): ``delta`` = mean(x)/mean(ref) −
     1 (paired: the mean of the per-bed ratios − 1), its standard error ``se``, its degrees of
@@ -304,6 +318,7 @@ def budget(data) -> dict:
     pk = {k: _peaks(grids.get(k, s["freqs"]), v["Z"]) for k, v in th.items() if "Z" in v}
     stored = _stored_stiffness()
     stiff = {k: _peaks(stored["frequency"], z) for k, z in stored.items() if k != "frequency"}
+    tangential = _stored_tangential()
     thesis = {}
     for i, q in enumerate(("f_res", "Z_res", "Z")):  # _peaks' order, then the plain amplitude
         if q == "Z":  # each bed's amplitude averaged over the frequencies
@@ -319,7 +334,9 @@ def budget(data) -> dict:
             "grid": (shift(v["grid_gap_scan"], v["grid_dense"], paired=True) if q in PEAK
                      else "none: a value at a given frequency"),
             "wall_reading": "the thesis states one grain–wall γ_n (no reading to choose)",
-            "tangential_law": "not measured yet (issue 39)",
+            "tangential_law": (shift(tangential["mindlin"][q], tangential["viscous"][q],
+                                     paired=False) if tangential is not None
+                               else "not measured yet (issue 39)"),
         }
     P = {k: np.asarray(v["E_d"]) for k, v in data["paper"].items()}
     wall = _stored_wall_reading()

@@ -152,3 +152,25 @@ def test_gap_scan_full(tmp_path):
         assert 0.1095 <= o["mean"] <= 0.147 and np.isfinite(o["ci95"]), w
     for name in ("fig3_6.png", "fig3_7_3_8.png"):
         assert (tmp_path / name).stat().st_size > 10_000
+
+
+def test_tangential_law_quick(tmp_path):
+    """The thesis optimum under both tangential laws at test size (2 frequencies × 2 beds ×
+    0.7 s per law, ~3 min; slow rather than an example: its first spring run compiles the
+    native kernel's spring form for the coupled structure, minutes on a cold cache): the
+    budget's reader gives both laws' per-bed values, every shift is finite, and the summary is
+    rewritten byte for byte from data.h5."""
+    study = _load("tangential_law")
+    systematics = _load("systematics")
+    out = study.main(["--quick", "--out", str(tmp_path), "--no-progress"])
+    assert set(out) == {"viscous", "mindlin"}
+    stored = systematics._stored_tangential(str(tmp_path / "data.h5"))
+    for law in ("viscous", "mindlin"):
+        np.testing.assert_array_equal(stored[law]["Z_res"], out[law]["Z_res"])
+        assert stored[law]["Z"].shape == (2,)
+    values, shifts = study.shifts(str(tmp_path))
+    assert all(np.isfinite([s["delta"], s["ci95"], s["u"]]).all() for s in shifts.values())
+    first = (tmp_path / "summary.md").read_text()
+    assert "resonant amplitude Z_res" in first and "Quick mode" in first
+    study.main(["--from-data", "--out", str(tmp_path)])
+    assert (tmp_path / "summary.md").read_text() == first

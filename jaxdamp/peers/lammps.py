@@ -1,8 +1,9 @@
 """LAMMPS as an independent DEM: jaxdamp's contact constants mapped onto its GRANULAR package,
 the mapping's checks (small LAMMPS runs), input decks of the driven box, and running ``lmp``.
 
-Used by the cross-check studies of the box (``experiments/lammps_crosscheck.py``) and of the
-cylinder (``experiments/lammps_cylinder.py``), the speed comparison
+Used by the cross-check studies of the box (``experiments/lammps_crosscheck.py``), of the
+cylinder (``experiments/lammps_cylinder.py``) and of friction under both tangential laws
+(``experiments/lammps_friction.py``), the speed comparison
 (``benchmarks/bench_lammps.py``) and ``tests/test_lammps_crosscheck.py``.
 
 **The mapping** (``pair_style granular``; ``fix wall/gran granular``, three plane pairs):
@@ -16,6 +17,17 @@ cylinder (``experiments/lammps_cylinder.py``), the speed comparison
 * ``tangential linear_nohistory x_γt μ``: jaxdamp's ``F_t = γ_s sqrt(ξ) v_s`` capped at
   ``μ F_n`` (``x_γt = γ_s / g``; ``0 0`` when frictionless), ``limit_damping`` (the total
   normal force is clipped at zero, never attractive);
+* the spring (``Config.tangential_law = "mindlin"``, :mod:`jaxdamp.physics.tangential`):
+  ``tangential mindlin_rescale/force k_t x_γt μ`` — the history kept as the force, grown by
+  ``−k_t a v_t dt``, turned into the contact plane at constant length and cut by ``a/a_old``
+  when the contact shrinks, as jaxdamp's — with ``k_t = 8 G*`` given (LAMMPS multiplies it by
+  ``a = sqrt(R* ξ)``; not ``NULL``, so no modulus LAMMPS derives for a wall enters) and
+  ``x_γt = 4 G*/E*``, jaxdamp's ``γ_t = k_t γ_n/(1.5 k_n)`` over LAMMPS' normal damping
+  (:func:`tangential`). Where they differ (not tuned): on slip LAMMPS sets the spring to the
+  Coulomb force plus the dashpot's, jaxdamp scales both by one factor; LAMMPS takes ``k_t`` at
+  the present overlap, jaxdamp at the step's mean; LAMMPS' pair torque has the lever arm
+  ``R − ξ/2`` (its walls' ``R``), jaxdamp's ``R``. :func:`oblique_checks` measures the sum
+  (oblique impacts in both codes at one time step);
 * walls: the Debian build of LAMMPS (29 Sep 2021) builds the wall's effective modulus as
   ``E/(2(1-ν))`` instead of ``E/(2(1-ν²))``, i.e. walls ``1+ν`` = 1.3× too stiff (measured by
   :func:`static` and read in ``fix_wall_gran.cpp``). The walls are therefore given
@@ -37,7 +49,10 @@ cylinder (``experiments/lammps_cylinder.py``), the speed comparison
 
 **The driven box** (:func:`box_deck`) is simulated in the box frame: the walls are static and
 every grain feels ``g_eff = g - A_d ω² cos(ωt)`` along ``-z`` (``fix gravity`` with an
-equal-style variable of ``time``): gravity plus the inertial force of the box's acceleration.
+equal-style variable of ``time``): gravity plus the inertial force of the box's acceleration
+(driven along another axis ``d``, ``Config.direction``: gravity and a second ``fix gravity``
+of ``A_d ω² cos(ωt)`` along ``d``). The grains start with the settled bed's positions,
+velocities and spins; snapshots carry spins, so the energy balance counts rotation.
 Contact forces depend on relative positions and velocities only, so the contact dissipation is
 the same as in the lab frame. The container is a :class:`Cavity`: the box's three plane pairs,
 or the cylinder (floor and lid planes and ``zcylinder R_c``), whose axis LAMMPS fixes at
@@ -181,6 +196,12 @@ class Mapping:
     gamma_side: float = 0.0  # jaxdamp's damping coefficient at R_side [kg s^-1 m^-1/2]
     eta_side: float = 0.0   # LAMMPS viscoelastic prefactor of the side wall, γ/(m sqrt(R_side))
     xt_side: float = 0.0    # γ_s / g of the side wall
+    tangential: str = "viscous"  # Config.tangential_law: "viscous" or "mindlin"
+    kt_pp: float = 0.0      # Mindlin's k_t / a = 8 G* [Pa] (pairs; LAMMPS' k_t of mindlin)
+    kt_pw: float = 0.0      # the same for the walls (G*_pw; planes and the side)
+    xs_pp: float = 0.0      # the spring's dashpot over normal damping, γ_t / (g sqrt(ξ)) (pairs)
+    xs_pw: float = 0.0      # the same for the plane walls
+    xs_side: float = 0.0    # the same for the side wall
 
     def k_wall_lammps(self, E_fed: float, R_star: float | None = None) -> float:
         """Wall Hertz stiffness LAMMPS builds from ``E_fed`` (its ``E/(2(1-ν))`` formula) at
@@ -204,6 +225,7 @@ def build_mapping(cfg) -> Mapping:
     contact curvature (:func:`jaxdamp.physics.containers.effective_radius`)."""
     from jaxdamp.physics.containers import container, effective_radius
     from jaxdamp.physics.model import build, contact_law
+    from jaxdamp.physics.tangential import damping
 
     model, p = build(cfg)
     sp = cfg.grains[0]
@@ -238,6 +260,10 @@ def build_mapping(cfg) -> Mapping:
     # LAMMPS' pair builds E_eff = 1/(2(1-ν²)/E): must equal jaxdamp's from its compliance.
     assert abs(1.0 / (2 * (1 - nu**2) / E) - E_pp) < 1e-9 * E_pp, "compliance != (1-ν²)/E"
     E_wall = 2.0 * (1.0 - nu) * E_pw
+    # the spring (tangential.stiffness, tangential.damping) on LAMMPS' contact radius
+    # a = sqrt(R* ξ): k_t = 8 G* a and γ_t = (k_t / a) sqrt(R*) g sqrt(ξ) / (1.5 k_n)
+    kt_pp, kt_pw = 8.0 * float(pair[col("G_star")]), 8.0 * float(wall[col("G_star")])
+    xs = lambda kt, R_star, k: float(damping(kt * math.sqrt(R_star), k, 1.0))  # noqa: E731
     return Mapping(
         R=R, density=mat.density, mass=m, E=E, nu=nu, A=A, A_wall=A_w, compliance=c,
         wall_compliance=c_w, dt=float(p.dt), E_star_pp=E_pp, E_star_pw=E_pw, k_pp=k_pp,
@@ -246,32 +272,47 @@ def build_mapping(cfg) -> Mapping:
         wall_bug_factor=(E / (2 * (1 - nu))) / E_pw, mu=mu, xt_pp=xt(pair, g_pp),
         xt_pw=xt(wall, g_pw), curvature=kappa, R_side=R_side, k_side=k_side, gamma_side=g_side,
         eta_side=g_side / (m * math.sqrt(R_side)), xt_side=xt(wall, g_side),
+        tangential=cfg.tangential_law, kt_pp=kt_pp, kt_pw=kt_pw, xs_pp=xs(kt_pp, R_pp, k_pp),
+        xs_pw=xs(kt_pw, R, k_pw), xs_side=xs(kt_pw, R_side, k_side),
     )
+
+
+def tangential(mp: Mapping, contact: str = "pp") -> str:
+    """The ``tangential ...`` keywords of a ``contact`` (``"pp"``: grain–grain, ``"pw"``: a
+    plane wall, ``"side"``: the cylinder's side) for ``mp.tangential``: the viscous law as
+    ``linear_nohistory x_γt μ``, the spring as ``mindlin_rescale/force k_t x_γt μ`` (history
+    kept as the force, cut with the contact radius on unloading: :mod:`jaxdamp.physics.
+    tangential`; ``k_t`` given, not ``NULL``, so that no modulus LAMMPS derives for a wall
+    enters)."""
+    if mp.tangential == "mindlin":
+        kt = mp.kt_pp if contact == "pp" else mp.kt_pw
+        xs = {"pp": mp.xs_pp, "pw": mp.xs_pw, "side": mp.xs_side}[contact]
+        return f"tangential mindlin_rescale/force {kt!r} {xs!r} {mp.mu!r}"
+    xt = {"pp": mp.xt_pp, "pw": mp.xt_pw, "side": mp.xt_side}[contact]
+    return f"tangential linear_nohistory {xt!r} {mp.mu!r}"
 
 
 def pair_coeff(mp: Mapping, eta: float | None = None) -> str:
     eta = mp.eta_pp if eta is None else eta
-    return (f"pair_coeff * * hertz/material {mp.E!r} {eta!r} {mp.nu!r} "
-            f"tangential linear_nohistory {mp.xt_pp!r} {mp.mu!r} damping viscoelastic "
-            "limit_damping")
+    return (f"pair_coeff * * hertz/material {mp.E!r} {eta!r} {mp.nu!r} {tangential(mp)} "
+            "damping viscoelastic limit_damping")
 
 
 def wall_args(mp: Mapping, eta: float | None = None, E_wall: float | None = None,
-              xt: float | None = None) -> str:
+              contact: str = "pw") -> str:
     """``fix wall/gran`` arguments: the compensated modulus, the viscoelastic prefactor ``eta``
-    (default: a plane's, ``mp.eta_pw``) and the tangential multiplier ``xt`` (``mp.xt_pw``)."""
+    (default: a plane's, ``mp.eta_pw``) and the tangential keywords of ``contact``
+    (:func:`tangential`)."""
     eta = mp.eta_pw if eta is None else eta
     E_wall = mp.E_wall_lammps if E_wall is None else E_wall
-    xt = mp.xt_pw if xt is None else xt
-    return (f"granular hertz/material {E_wall!r} {eta!r} {mp.nu!r} "
-            f"tangential linear_nohistory {xt!r} {mp.mu!r} damping viscoelastic "
-            "limit_damping")
+    return (f"granular hertz/material {E_wall!r} {eta!r} {mp.nu!r} {tangential(mp, contact)} "
+            "damping viscoelastic limit_damping")
 
 
 def side_args(mp: Mapping, damped: bool = True, E_wall: float | None = None) -> str:
-    """:func:`wall_args` of the side walls (``eta_side``, ``xt_side``; undamped:
-    ``damped=False``)."""
-    return wall_args(mp, mp.eta_side if damped else 0.0, E_wall, mp.xt_side)
+    """:func:`wall_args` of the side walls (``eta_side``, their tangential keywords;
+    undamped: ``damped=False``)."""
+    return wall_args(mp, mp.eta_side if damped else 0.0, E_wall, "side")
 
 
 HEADER = """units si
@@ -374,6 +415,115 @@ print "RESULT $(v_v{c}:%.17g)"
     gap = sign * (wall - thermo_table(log)[:, 1])  # centre to wall
     assert gap[-1] > R, "grain still touching the wall at the end"
     return dict(v=v, restitution=-sign * vc / v, duration=int(np.sum(gap < R)) * dt)
+
+
+def oblique_collision(mp: Mapping, kind: str, vn: float, vt: float, workdir: str,
+                      exe=None) -> dict:
+    """An oblique impact in LAMMPS: ``kind = "wall"``, one grain touching the floor (centre at
+    ``z = R``) with velocity ``(vt, 0, −vn)``; ``"pair"``, two grains touching along x, grain 1
+    moving ``(vn/2, 0, vt/2)`` and grain 2 the opposite. No spin at the start, no gravity, the
+    time step ``mp.dt``, run until the contact has ended. Returns grain 1's final ``v`` and
+    ``w`` (box frame of :func:`jaxdamp_oblique`)."""
+    R, dt, L = mp.R, mp.dt, 0.08
+    m_eff, k = (mp.mass, mp.k_pw) if kind == "wall" else (mp.mass / 2, mp.k_pp)
+    steps = int(4 * 3.2 * (m_eff / k) ** 0.4 * vn**-0.2 / dt) + 20
+    r, v = _oblique_start(mp.R, kind, vn, vt, L)
+    atoms = "\n".join(f"create_atoms 1 single {x!r} {y!r} {z!r} units box" for x, y, z in r)
+    vels = "\n".join(f"set atom {i + 1} vx {a!r} vy {b!r} vz {c!r}"
+                      for i, (a, b, c) in enumerate(v))
+    wall = f"fix wall all wall/gran {wall_args(mp)} zplane 0.0 NULL" if kind == "wall" else ""
+    script = HEADER + f"""
+region sim block 0.0 {L!r} 0.0 {L!r} {-0.1 * R!r} {L!r} units box
+create_box 1 sim
+{atoms}
+set type 1 diameter {2 * R!r} density {mp.density!r}
+velocity all set 0.0 0.0 0.0 units box
+{vels}
+pair_style granular
+{pair_coeff(mp)}
+{wall}
+neighbor {0.3 * R!r} bin
+neigh_modify delay 0 every 1 check yes
+fix integ all nve/sphere
+timestep {dt!r}
+compute om all property/atom omegax omegay omegaz
+variable vx equal vx[1]
+variable vy equal vy[1]
+variable vz equal vz[1]
+variable wx equal c_om[1][1]
+variable wy equal c_om[1][2]
+variable wz equal c_om[1][3]
+thermo_style custom step v_vx v_vz v_wx v_wy v_wz
+thermo {steps}
+run {steps}
+print "RESULT $(v_vx:%.17g) $(v_vy:%.17g) $(v_vz:%.17g) $(v_wx:%.17g) $(v_wy:%.17g) $(v_wz:%.17g)"
+"""
+    log, _ = run(script, f"oblique_{kind}_{vn:g}_{vt:g}", workdir, exe)
+    out = np.asarray(printed(log, "RESULT")[-1])
+    return dict(v=out[:3], w=out[3:], steps=steps)
+
+
+def _oblique_start(R: float, kind: str, vn: float, vt: float, L: float):
+    """Positions and velocities of :func:`oblique_collision` (box frame, a cube of side L)."""
+    if kind == "wall":
+        return [(L / 2, L / 2, R)], [(vt, 0.0, -vn)]
+    return ([(L / 2 - R, L / 2, L / 2), (L / 2 + R, L / 2, L / 2)],
+            [(vn / 2, 0.0, vt / 2), (-vn / 2, 0.0, -vt / 2)])
+
+
+def jaxdamp_oblique(cfg, mp: Mapping, kind: str, vn: float, vt: float, steps: int) -> dict:
+    """:func:`oblique_collision` in jaxdamp: the configuration ``cfg``'s grains and walls
+    (its tangential law), one or two grains in a resting cube of 8 cm without gravity, its
+    JAX engine at LAMMPS' time step ``mp.dt`` for ``steps`` steps. Grain 1's final ``v``,
+    ``w``."""
+    import jax.numpy as jnp
+
+    from jaxdamp.config import apply_overrides
+    from jaxdamp.engine import driver
+    from jaxdamp.physics.model import build
+
+    n = 1 if kind == "wall" else 2
+    c = apply_overrides(cfg, {"grains.0.count": n, "gravity": 0.0, "box.Lx": 0.08,
+                              "box.Ly": 0.08, "box.Lz": 0.08, "container": None,
+                              "drive.amplitude": 0.0})
+    model, params = build(c)
+    params = dataclasses.replace(params, dt=jnp.asarray(mp.dt))
+    r, v = (np.asarray(x, float)[None] for x in _oblique_start(mp.R, kind, vn, vt, 0.08))
+    q = np.zeros((1, n, 4))
+    q[..., 0] = 1.0
+    zero = np.zeros(1)
+    b = driver.start(model, driver.batched(params), r, v, np.zeros_like(r), q, zero, zero,
+                     engine="jax")
+    b, _ = driver.advance(b, 1, steps)
+    s = driver.take(b.states, 0)
+    return dict(v=np.asarray(s.v)[0], w=np.asarray(s.w)[0])
+
+
+def oblique_checks(cfg, mp: Mapping, workdir: str, exe=None, vn: float = 1.0,
+                   ratios=(0.1, 0.5, 2.0)) -> list[dict]:
+    """Oblique impacts (:func:`oblique_collision`) on the floor and of two grains at normal
+    speed ``vn`` and tangential speeds ``ratio · vn`` — sticking, partly slipping, sliding
+    throughout for steel's μ — in LAMMPS and in jaxdamp (:func:`jaxdamp_oblique`); per impact
+    the rebound (grain 1: normal restitution, tangential velocity and spin against the ones
+    before) of both and their largest difference over ``vn``."""
+    rows = []
+    for kind in ("wall", "pair"):
+        for ratio in ratios:
+            vt = ratio * vn
+            lm = oblique_collision(mp, kind, vn, vt, workdir, exe)
+            jd = jaxdamp_oblique(cfg, mp, kind, vn, vt, lm["steps"])
+            axis_n, sn = (2, -1.0) if kind == "wall" else (0, 1.0)  # grain 1's normal speed
+            axis_t, vt1 = (0, vt) if kind == "wall" else (2, vt / 2)
+            vn1 = vn if kind == "wall" else vn / 2
+            row = dict(kind=kind, vn=vn, vt=vt, steps=lm["steps"])
+            for code, x in (("lammps", lm), ("jaxdamp", jd)):
+                row[code] = dict(restitution=-sn * x["v"][axis_n] / vn1,
+                                 tangential=x["v"][axis_t] / vt1,
+                                 spin=float(x["w"][1] * mp.R / vt1))
+            row["difference"] = float(np.max(np.abs(np.concatenate(
+                [lm["v"] - jd["v"], (lm["w"] - jd["w"]) * mp.R]))) / vn)
+            rows.append(row)
+    return rows
 
 
 WALLS = {  # name: (fix arguments, gravity direction pressing the grain onto that wall, axis, lo)
@@ -584,10 +734,20 @@ def box_deck(mp: Mapping, cfg, amplitude: float, data: str, dt: float | None = N
     cylinder) in the box frame, up to its first ``run``: the grains of the data file ``data``,
     the mapped pair and wall contacts (undamped: ``damped=False``), the time step (default
     ``mp.dt``) and the effective gravity of the drive ``z = amplitude cos(ω (t + t0))`` of
-    ``cfg.frequency``."""
+    ``cfg.frequency`` along ``cfg.direction``: vertical, one effective gravity ``g − A_d ω²
+    cos ωt`` along −z; along another axis ``d``, gravity and a second body force ``A_d ω² cos ωt``
+    along ``d`` (the inertial force of the box's acceleration ``−A_d ω² cos(ωt) d``)."""
     omega = 2 * math.pi * cfg.frequency
     eta_pp = mp.eta_pp if damped else 0.0
     phase = "time" if t0 == 0.0 else f"(time+{t0!r})"
+    d = drive_axis(cfg)
+    if d is None:
+        body = (f"variable geff equal {cfg.gravity!r}-v_Ad*v_w^2*cos(v_w*{phase})\n"
+                "fix grav all gravity v_geff vector 0 0 -1")
+    else:
+        body = (f"fix grav all gravity {cfg.gravity!r} vector 0 0 -1\n"
+                f"variable ain equal v_Ad*v_w^2*cos(v_w*{phase})\n"
+                f"fix drive all gravity v_ain vector {d[0]!r} {d[1]!r} {d[2]!r}")
     return HEADER + f"""
 read_data {data}
 pair_style granular
@@ -599,10 +759,16 @@ timestep {mp.dt if dt is None else dt!r}
 # box frame: gravity plus the inertial force of the box acceleration -A w^2 cos(w t)
 variable Ad equal {amplitude!r}
 variable w equal {omega!r}
-variable geff equal {cfg.gravity!r}-v_Ad*v_w^2*cos(v_w*{phase})
-fix grav all gravity v_geff vector 0 0 -1
+{body}
 fix integ all nve/sphere
 """
+
+
+def drive_axis(cfg) -> tuple[float, float, float] | None:
+    """The unit drive axis of ``cfg`` (``Config.direction``), ``None`` for the vertical."""
+    d = np.asarray(cfg.direction, float)
+    d = d / np.linalg.norm(d)
+    return None if np.allclose(d, (0.0, 0.0, 1.0)) else tuple(float(x) for x in d)
 
 
 def bed_script(mp: Mapping, cfg, amplitude: float, steps: list[int], data: str, snapdir: str,
@@ -612,13 +778,16 @@ def bed_script(mp: Mapping, cfg, amplitude: float, steps: list[int], data: str, 
     segs = []
     for n in range(1, len(steps)):
         segs.append(f"run {steps[n] - steps[n - 1]} pre no post no\n"
-                    f"write_dump all custom {snapdir}/snap.{n}.txt id x y z vx vy vz "
+                    f"write_dump all custom {snapdir}/snap.{n}.txt {SNAP} "
                     "modify sort id format float %.17g\n"
                     f'print "BOUNDARY {n} $(step) $(v_W:%.17g)"')
     te = thermo_every or max(1, int(round(1.0 / cfg.frequency / 200 / mp.dt)))
+    d = drive_axis(cfg)
+    v_d = "vcm(all,z)" if d is None else "+".join(
+        f"{c!r}*vcm(all,{x})" for c, x in zip(d, "xyz") if c != 0.0)
     return box_deck(mp, cfg, amplitude, data, damped=damped) + f"""\
 # power of the inertial force, its running mean over every step since step 0
-variable P equal mass(all)*v_Ad*v_w^2*cos(v_w*time)*vcm(all,z)
+variable P equal mass(all)*v_Ad*v_w^2*cos(v_w*time)*({v_d})
 fix pin all ave/time 1 1 1 v_P ave running
 variable W equal f_pin*(step+1)*dt
 variable zc equal xcm(all,z)
@@ -626,25 +795,35 @@ variable vz equal vcm(all,z)
 thermo_style custom step time v_zc v_vz v_W
 thermo_modify format float %.17g norm no lost error
 thermo {te}
-write_dump all custom {snapdir}/snap.0.txt id x y z vx vy vz modify sort id format float %.17g
+write_dump all custom {snapdir}/snap.0.txt {SNAP} modify sort id format float %.17g
 run 0 post no
 print "BOUNDARY 0 $(step) $(v_W:%.17g)"
 """ + "\n".join(segs) + "\n"
 
 
+#: the columns of a snapshot (:func:`read_snap`)
+SNAP = "id x y z vx vy vz omegax omegay omegaz"
+
+
 def read_snap(path: str) -> np.ndarray:
-    """(N, 7): id x y z vx vy vz of a ``write_dump`` file."""
+    """(N, 10): the columns :data:`SNAP` of a ``write_dump`` file (older snapshots: 7, no
+    spins)."""
     return np.loadtxt(path, skiprows=9)
 
 
 def mechanical_energy(snap: np.ndarray, mp: Mapping, box, g: float) -> dict:
-    """Box-frame kinetic, gravitational and elastic energy of a snapshot (LAMMPS' frame and
-    stiffness; ``box``: the :func:`cavity` of the run, or what makes it)."""
+    """Box-frame kinetic (translation and, where the snapshot has spins, rotation: ``I =
+    (2/5) m R²``), gravitational and elastic energy of a snapshot (LAMMPS' frame and
+    stiffness; ``box``: the :func:`cavity` of the run, or what makes it). The tangential
+    springs' energy (``mindlin``) is LAMMPS' contact history, not in a snapshot: left out
+    (its size: the summary of ``experiments/lammps_friction.py``)."""
     from scipy.spatial import cKDTree
 
     cav = cavity(box)
     r, v = snap[:, 1:4], snap[:, 4:7]
     ke = 0.5 * mp.mass * float(np.sum(v * v))
+    if snap.shape[1] >= 10:
+        ke += 0.5 * 0.4 * mp.mass * mp.R**2 * float(np.sum(snap[:, 7:10] ** 2))
     pe = mp.mass * g * float(np.sum(r[:, 2]))
     el = 0.0
     pairs = cKDTree(r).query_pairs(2 * mp.R, output_type="ndarray")
@@ -665,8 +844,9 @@ def mechanical_energy(snap: np.ndarray, mp: Mapping, box, g: float) -> dict:
 
 
 def driven_bed(mp: Mapping, cfg, amplitude: float, r0, v0, n_periods: int, workdir: str,
-               damped: bool = True, exe=None, tag: str = "") -> dict:
-    """Run the driven bed for ``n_periods`` periods from ``r0, v0`` (box frame).
+               damped: bool = True, exe=None, tag: str = "", w0=None) -> dict:
+    """Run the driven bed for ``n_periods`` periods from ``r0, v0`` and spins ``w0`` (default
+    none; box frame).
 
     Returns per-boundary cumulative input work, energies and dissipation, the thermo series
     and the wall time. ``tag`` names the bed (its working directory ``bed_A<cm>cm<tag>``).
@@ -679,7 +859,7 @@ def driven_bed(mp: Mapping, cfg, amplitude: float, r0, v0, n_periods: int, workd
         os.remove(os.path.join(snapdir, f))
     data = os.path.join(sub, "bed.data")
     cav = cavity(cfg)
-    write_data(data, np.asarray(r0), np.asarray(v0), mp, cav)
+    write_data(data, np.asarray(r0), np.asarray(v0), mp, cav, w0)
     T = 1.0 / cfg.frequency
     steps = boundary_steps(n_periods, T, mp.dt)
     script = bed_script(mp, cfg, amplitude, steps, data, snapdir, damped=damped)
@@ -729,7 +909,8 @@ def jaxdamp_periods(cfg, n_periods: int, progress=False) -> dict:
                 balance=float(res.summary["balance_error"]),
                 residual=float(np.max(np.abs(resid))), residual_final=float(resid[-1]),
                 input_final=float(inp[-1]), bed=res.bed, bed_r=np.asarray(res.bed.r),
-                bed_v=np.asarray(res.bed.v), settled=bool(res.bed.settled),
+                bed_v=np.asarray(res.bed.v), bed_w=np.asarray(res.bed.w),
+                settled=bool(res.bed.settled),
                 bed_height=float(res.bed.height), bed_max_speed=float(res.bed.max_speed),
                 records={k: np.asarray(rec[k]) for k in ("t", "z_cm", "z_box")})
 
@@ -749,6 +930,7 @@ def save_bed(path: str, key: dict, jd: dict, lm: dict) -> None:
     meta = dict(key=key, jd={k: jd[k] for k in JD_SCALARS}, lm={k: lm[k] for k in LM_SCALARS})
     arrays = {f"lm_{k}": np.asarray(lm[k]) for k in LM_ARRAYS}
     arrays.update(jd_t=jd["t"], jd_D=jd["D"], bed_r=jd["bed_r"], bed_v=jd["bed_v"],
+                  bed_w=jd["bed_w"],
                   **{f"rec_{k}": v for k, v in jd["records"].items()})
     tmp = path + ".tmp.npz"
     np.savez(tmp, meta=json.dumps(meta), **arrays)
@@ -766,6 +948,7 @@ def load_bed(path: str, key: dict, cfg):
         if meta["key"] != key:
             return None
         jd = dict(meta["jd"], t=z["jd_t"], D=z["jd_D"], bed_r=z["bed_r"], bed_v=z["bed_v"],
+                  bed_w=z["bed_w"] if "bed_w" in z.files else np.zeros_like(z["bed_v"]),
                   records={k: z[f"rec_{k}"] for k in ("t", "z_cm", "z_box")})
         lm = dict(meta["lm"], **{k: z[f"lm_{k}"] for k in LM_ARRAYS})
     jd["config"] = cfg
@@ -773,11 +956,12 @@ def load_bed(path: str, key: dict, cfg):
 
 
 def paired_bed(cfg, n_periods: int, key: dict, path: str, raw: str, exe, progress: bool,
-               log) -> dict:
+               log, tag: str = "") -> dict:
     """One bed poured by jaxdamp (``cfg``: a driven system and its ``numerics.seed``), driven
     for ``n_periods`` at ``cfg.drive.amplitude`` in jaxdamp and, from the same settled state,
     in LAMMPS (in ``raw``); stored as ``path`` under ``key`` (the settings it must match) and
-    reused from there by a re-run with the same ``key``."""
+    reused from there by a re-run with the same ``key`` (``tag``: more of the LAMMPS run's
+    directory name, for beds of one amplitude and seed in several variants)."""
     amplitude, seed = cfg.drive.amplitude, int(cfg.numerics.seed)
     got = load_bed(path, key, cfg)
     if got is not None:
@@ -792,7 +976,7 @@ def paired_bed(cfg, n_periods: int, key: dict, path: str, raw: str, exe, progres
     log(f"  jaxdamp: dt = {jd['dt']:.6g} s, {jd['wall']:.1f} s stepping "
         f"({jd['elapsed']:.1f} s with settling); LAMMPS ...")
     lm = driven_bed(mp, cfg, amplitude, jd["bed_r"], jd["bed_v"], n_periods, raw, exe=exe,
-                    tag=f"_seed{seed}")
+                    tag=f"_seed{seed}{tag}", w0=jd["bed_w"])
     log(f"  LAMMPS: {lm['wall']:.1f} s")
     save_bed(path, key, jd, lm)
     return dict(seed=seed, jd=jd, lm=lm, mp=mp, reused=False)
@@ -804,7 +988,7 @@ def closure(bed: dict, amplitude: float, periods: int, raw: str, exe=None) -> di
     0 when exact) and its largest value relative to the largest ``|ΔE|``."""
     jd = bed["jd"]
     clo = driven_bed(bed["mp"], jd["config"], amplitude, jd["bed_r"], jd["bed_v"], periods, raw,
-                     damped=False, exe=exe, tag=f"_seed{bed['seed']}")
+                     damped=False, exe=exe, tag=f"_seed{bed['seed']}", w0=jd.get("bed_w"))
     dE = float(np.max(np.abs(clo["E"] - clo["E"][0])))
     return dict(amplitude=amplitude, seed=bed["seed"], periods=periods, D=clo["D"].tolist(),
                 W=clo["W"].tolist(), E=clo["E"].tolist(),
@@ -869,8 +1053,8 @@ def stored_bed(b: dict, s: dict, T: float):
     start, stationary, _ = window(dl, dj, s, T)
     tab, rec = lm["thermo"], jd["records"]
     _, zl = phase_average(tab[:, 1], tab[:, 2], T, t0=start * T)
-    _, zj = phase_average(rec["t"], np.asarray(rec["z_cm"]) - np.asarray(rec["z_box"]), T,
-                          t0=start * T)
+    lift = np.asarray(rec["z_box"]) if drive_axis(jd["config"]) is None else 0.0  # box frame
+    _, zj = phase_average(rec["t"], np.asarray(rec["z_cm"]) - lift, T, t0=start * T)
     attrs = dict(seed=b["seed"], window_start=start, stationary=stationary,
                  lammps_wall_time=lm["wall"], lammps_loop_time=lm["loop_time"],
                  jaxdamp_wall_time=jd["wall"], jaxdamp_elapsed=jd["elapsed"],
