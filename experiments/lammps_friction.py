@@ -4,6 +4,8 @@ jaxdamp, under the viscous tangential law and under the Hertz–Mindlin spring (
     python experiments/lammps_friction.py          # full: 2 cases x 2 laws, 10 + 50 periods,
                                                    # 5 beds each (~40 min on 2 cores)
     python experiments/lammps_friction.py --quick  # 2 + 3 periods, 2 beds each (~6 min)
+    python experiments/lammps_friction.py --cases collisional --dt-per-collision 100 \
+        --replicates 3 --out experiments/lammps_friction/dt_half   # the time-step study
 
 The grains, walls and box of ``varela2023-reference`` (300 steel spheres, R = 2.5 mm, E = 2 GPa,
 ε = 0.75 at 1 m/s, cube of 8 cm, f = 70 Hz) given steel's friction, μ = 0.23 (dynamic,
@@ -35,6 +37,11 @@ of the two laws are poured separately), and **the codes agree on it** where the 
 interval of the per-bed paired differences (LAMMPS − jaxdamp) of the spring's beds minus the
 viscous law's contains 0 — its half-width says how small a disagreement could hide.
 
+``--laws`` runs one law only (no difference between the laws is formed), ``--dt-per-collision``
+sets both codes' time step (``numerics.dt_per_collision``; the preset's is 50): with 100, the
+step halved, a difference between the codes that is the integrators' shrinks and one that is
+the models' stays.
+
 Writes ``data.h5``, ``figure.png`` and ``summary.md`` in ``--out``; LAMMPS inputs, logs,
 snapshots and the beds' results in ``--out/raw`` (git-ignored; beds reused by a re-run with the
 same settings).
@@ -55,6 +62,7 @@ from jaxdamp.studies import scaffold
 PRESET = "varela2023-reference"
 MU = 0.23  # steel on steel, dynamic (jaxdamp.materials)
 LAWS = ("viscous", "mindlin")
+LABEL = {"viscous": "viscous", "mindlin": "Mindlin"}
 #: name: (drive axis, amplitude [m], settling time [s] or None for the preset's)
 CASES = {"collisional": ((0.0, 0.0, 1.0), 0.03, None),
          "gentle": ((1.0, 0.0, 0.0), 2e-5, 0.4)}
@@ -82,9 +90,10 @@ def base_config(law: str):
                                  "box.wall.gamma_s": gs})
 
 
-def case_config(law: str, case: str, n_periods: int, seed: int):
+def case_config(law: str, case: str, n_periods: int, seed: int, dt_per_collision=None):
     """:func:`base_config` driven as ``case`` (:data:`CASES`) for ``n_periods`` (samples every
-    T/500), its bed poured with ``numerics.seed = seed``."""
+    T/500), its bed poured with ``numerics.seed = seed`` (and ``numerics.dt_per_collision``
+    where given)."""
     from jaxdamp.config import apply_overrides
 
     axis, A, settle = CASES[case]
@@ -95,6 +104,8 @@ def case_config(law: str, case: str, n_periods: int, seed: int):
           "numerics.record_dt": T / 500}
     if settle is not None:
         ov["numerics.settle_time"] = settle
+    if dt_per_collision is not None:
+        ov["numerics.dt_per_collision"] = float(dt_per_collision)
     return apply_overrides(base, ov)
 
 
@@ -103,6 +114,12 @@ def options(ap) -> None:
                     help="independently poured beds per case and law (default 5; quick: 2)")
     ap.add_argument("--cases", nargs="+", choices=tuple(CASES), default=None,
                     help="the regimes to run (default: both)")
+    ap.add_argument("--laws", nargs="+", choices=LAWS, default=None,
+                    help="the tangential laws to run (default: both; with one, no difference "
+                         "between the laws is formed)")
+    ap.add_argument("--dt-per-collision", type=float, default=None,
+                    help="numerics.dt_per_collision of both codes' runs (default: the "
+                         "preset's 50): a time-step study of the codes' difference")
     ap.add_argument("--lmp", default=None, help="LAMMPS executable (default: lmp on PATH)")
 
 
@@ -114,7 +131,8 @@ def compute(quick: bool, log, ctx):
         s["replicates"] = args.replicates
     if s["replicates"] < 2:
         raise SystemExit("--replicates must be at least 2 (an error bar needs two beds)")
-    cases = tuple(args.cases or CASES)
+    cases, laws = tuple(args.cases or CASES), tuple(args.laws or LAWS)
+    dtc = args.dt_per_collision
     exe = args.lmp or lammps.executable()
     if exe is None:
         raise SystemExit("LAMMPS (`lmp`) is not on PATH: apt-get install lammps")
@@ -124,7 +142,7 @@ def compute(quick: bool, log, ctx):
     seeds = [replicate_seed(base_config("viscous").numerics.seed, k)
              for k in range(s["replicates"])]
     checks, t0 = {}, time.perf_counter()
-    for law in LAWS:
+    for law in laws:
         cfg = base_config(law)
         checks[law] = lammps.oblique_checks(cfg, lammps.build_mapping(cfg),
                                             os.path.join(raw, "checks", law), exe,
@@ -135,13 +153,15 @@ def compute(quick: bool, log, ctx):
     n_total = s["transient"] + s["periods"]
     runs = {}
     for case in cases:
-        for law in LAWS:
+        for law in laws:
             beds = []
             for seed in seeds:
-                cfg = case_config(law, case, n_total, seed)
+                cfg = case_config(law, case, n_total, seed, dtc)
                 key = dict(preset=PRESET, case=case, law=law, mu=MU, seed=int(seed),
                            amplitude=cfg.drive.amplitude, direction=list(cfg.direction),
                            transient=s["transient"], periods=s["periods"])
+                if dtc is not None:
+                    key["dt_per_collision"] = dtc
                 path = os.path.join(raw, "beds", f"{case}_{law}_seed{seed}.npz")
                 beds.append(lammps.paired_bed(cfg, n_total, key, path, raw, exe, ctx.progress,
                                               log, tag=f"_{case}_{law}"))
@@ -155,7 +175,7 @@ def compute(quick: bool, log, ctx):
                 f"{scaffold.pm(r['rel'], r['rel_hw'], '+.2f', '.2f', scale=100)} % (95 %)")
             runs[(case, law)] = c
     run = dict(runs=runs, checks=checks, checks_wall=checks_wall, version=version, settings=s,
-               seeds=seeds, cases=cases)
+               seeds=seeds, cases=cases, laws=laws, dt_per_collision=dtc)
     return run, lambda out, prov: record(run, out, prov)
 
 
@@ -167,7 +187,10 @@ def record(run: dict, out: str, prov: dict) -> None:
                             checks_wall_time=run["checks_wall"],
                             attribute_units=lammps.ATTR_UNITS) as h:
         h.attrs.update(transient_periods=s["transient"], periods=s["periods"],
-                       replicates=s["replicates"], seeds=np.asarray(run["seeds"]))
+                       replicates=s["replicates"], seeds=np.asarray(run["seeds"]),
+                       laws=json.dumps(run["laws"]))
+        if run["dt_per_collision"] is not None:
+            h.attrs["dt_per_collision"] = run["dt_per_collision"]
         for (case, law), c in run["runs"].items():
             g = h.require_group(f"{case}/{law}")
             g.attrs["mapping"] = json.dumps(c["mp"].as_dict())
@@ -183,13 +206,18 @@ def _plain(x):
     return x.tolist() if hasattr(x, "tolist") else str(x)
 
 
+def laws_of(data) -> tuple:
+    """The tangential laws a stored ``data.h5`` holds (both, where it does not say)."""
+    return tuple(_json(data.attrs["laws"])) if "laws" in data.attrs else LAWS
+
+
 def stored(data) -> tuple[dict, dict]:
     """``(settings, {(case, law): analysis})`` of a stored ``data.h5``."""
     a = data.attrs
     s = dict(transient=a["transient_periods"], periods=a["periods"], replicates=a["replicates"])
     table = {}
     for case in _json(a["cases"]):
-        for law in LAWS:
+        for law in laws_of(data):
             g = data[case][law]
             (name,) = [k for k in g if k.startswith("A_")]
             gA = g[name]
@@ -226,15 +254,17 @@ def report(data, out) -> None:
     s, table = stored(data)
     checks = _json(data.attrs["checks"])
     cases = list(_json(data.attrs["cases"]))
-    figure(table, cases, out)
+    figure(table, cases, laws_of(data), out)
     summary(data, s, table, checks, cases, out)
 
 
-def figure(table: dict, cases: list, out: str) -> None:
-    fig, axs = scaffold.subplots(2, len(cases), (6.5 * len(cases), 8.5), squeeze=False)
+def figure(table: dict, cases: list, laws: tuple, out: str) -> None:
+    both = len(laws) == 2
+    fig, axs = scaffold.subplots(1 + both, len(cases), (6.5 * len(cases), 4.5 + 4 * both),
+                                 squeeze=False)
     for j, case in enumerate(cases):
-        ax, bx = axs[0, j], axs[1, j]
-        for i, law in enumerate(LAWS):
+        ax = axs[0, j]
+        for i, law in enumerate(laws):
             r = table[(case, law)]
             tq = r["hw"] / r["sed"] if r["sed"] > 0 else math.nan
             for off, key, se, mk, code in ((-0.1, "ml", "sel", "o", "LAMMPS"),
@@ -245,11 +275,14 @@ def figure(table: dict, cases: list, out: str) -> None:
                             label=code if i == 0 else None)
                 ax.plot(np.full(r["R"], x + 0.04), [b[key] * 1e3 for b in r["beds"]], ".",
                         color="C0" if code == "LAMMPS" else "C1", alpha=0.5, ms=4)
-        ax.set_xticks(range(len(LAWS)), LAWS)
+        ax.set_xticks(range(len(laws)), laws)
         ax.set_ylabel("dissipation per period [mJ]")
         ax.set_title(f"{case}: A_d = {CASES[case][1] * 1e3:g} mm along "
                      f"{'xyz'[int(np.argmax(CASES[case][0]))]}; mean ± 95 % over beds")
         ax.legend()
+        if not both:
+            continue
+        bx = axs[1, j]
         ld = law_difference(table, case)
         for k, code in enumerate(("lammps", "jaxdamp")):
             bx.errorbar(k, ld[code]["rel"] * 100, yerr=ld[code]["rel_hw"] * 100, fmt="D",
@@ -265,6 +298,8 @@ def figure(table: dict, cases: list, out: str) -> None:
 def summary(data, s: dict, table: dict, checks: dict, cases: list, out: str) -> None:
     pm = scaffold.pm
     a = data.attrs
+    laws = laws_of(data)
+    both = len(laws) == 2
     L = scaffold.head("Friction with and without memory: LAMMPS and jaxdamp (issue 39)",
                       dict(a))
     w = L.append
@@ -274,18 +309,25 @@ def summary(data, s: dict, table: dict, checks: dict, cases: list, out: str) -> 
       f"spins; no spring history: both codes start the drive with none); "
       f"{s['transient']} transient + {s['periods']} periods, the window common to both codes "
       "(MSER, never before the transient).\n")
+    if "dt_per_collision" in a:
+        w(f"Time step: `numerics.dt_per_collision = {a['dt_per_collision']:g}` in both codes "
+          "(the preset's: 50), a time-step study of the codes' difference.\n")
     w("## The mapping of the tangential laws\n")
-    mp = _json(data[cases[0]]["mindlin"].attrs["mapping"])
-    mv = _json(data[cases[0]]["viscous"].attrs["mapping"])
-    L += scaffold.table(
-        ("law", "jaxdamp", "LAMMPS (pairs; walls)"),
-        [("viscous", "F_t = −min(γ_s sqrt(ξ)|v_s|, μ F_n) v̂_s",
-          f"`tangential linear_nohistory x μ`, x = γ_s/g = {mv['xt_pp']:.4g}; "
-          f"{mv['xt_pw']:.4g}"),
-         ("Mindlin", "spring force history, k_t = 8 G* sqrt(R* ξ), γ_t = k_t γ_n/(1.5 k_n), "
-          "rescaled by sqrt(ξ/ξ_old) on unloading",
-          f"`tangential mindlin_rescale/force k_t x μ`, k_t = 8 G* = {mp['kt_pp']:.4g} Pa, "
-          f"x = 4 G*/E* = {mp['xs_pp']:.4g}; {mp['kt_pw']:.4g} Pa, {mp['xs_pw']:.4g}")])
+    mapping = {law: _json(data[cases[0]][law].attrs["mapping"]) for law in laws}
+    rows = []
+    if "viscous" in mapping:
+        mv = mapping["viscous"]
+        rows.append(("viscous", "F_t = −min(γ_s sqrt(ξ)|v_s|, μ F_n) v̂_s",
+                     f"`tangential linear_nohistory x μ`, x = γ_s/g = {mv['xt_pp']:.4g}; "
+                     f"{mv['xt_pw']:.4g}"))
+    if "mindlin" in mapping:
+        mp = mapping["mindlin"]
+        rows.append(("Mindlin", "spring force history, k_t = 8 G* sqrt(R* ξ), γ_t = k_t γ_n/"
+                     "(1.5 k_n), rescaled by sqrt(ξ/ξ_old) on unloading",
+                     f"`tangential mindlin_rescale/force k_t x μ`, k_t = 8 G* = "
+                     f"{mp['kt_pp']:.4g} Pa, x = 4 G*/E* = {mp['xs_pp']:.4g}; "
+                     f"{mp['kt_pw']:.4g} Pa, {mp['xs_pw']:.4g}"))
+    L += scaffold.table(("law", "jaxdamp", "LAMMPS (pairs; walls)"), rows)
     w("\nKnown differences of the two implementations (none tuned away): on slip LAMMPS sets "
       "the spring to the Coulomb force plus the dashpot's force, jaxdamp scales spring and "
       "dashpot by the same factor (equal total force, the spring differs while it slips); "
@@ -302,7 +344,7 @@ def summary(data, s: dict, table: dict, checks: dict, cases: list, out: str) -> 
           f"{r['lammps']['restitution']:.5f} / {r['jaxdamp']['restitution']:.5f}",
           f"{r['lammps']['tangential']:.5f} / {r['jaxdamp']['tangential']:.5f}",
           f"{r['lammps']['spin']:.5f} / {r['jaxdamp']['spin']:.5f}", f"{r['difference']:.2g}")
-         for law in LAWS for r in checks[law]])
+         for law in laws for r in checks[law]])
     w("\n## Dissipation per period, per case and law\n")
     L += scaffold.table(
         ("case", "law", "beds (stationary)", "LAMMPS [J]", "jaxdamp [J]",
@@ -311,10 +353,9 @@ def summary(data, s: dict, table: dict, checks: dict, cases: list, out: str) -> 
           pm(r["mj"], r["sej"], 4), pm(r["d"], r["hw"], "+.3g"),
           pm(r["rel"], r["rel_hw"], "+.2f", ".2f", scale=100),
           "yes" if within_target(r) else "NO")
-         for case in cases for law in LAWS for r in [table[(case, law)]]])
-    w("\n## Mindlin − viscous\n")
+         for case in cases for law in laws for r in [table[(case, law)]]])
     rows, lds = [], {}
-    for case in cases:
+    for case in cases if both else ():
         ld = lds[case] = law_difference(table, case)
         rows.append((case, pm(ld["lammps"]["d"], ld["lammps"]["hw"], "+.3g"),
                      pm(ld["lammps"]["rel"], ld["lammps"]["rel_hw"], "+.2f", ".2f", scale=100),
@@ -322,9 +363,11 @@ def summary(data, s: dict, table: dict, checks: dict, cases: list, out: str) -> 
                      pm(ld["jaxdamp"]["rel"], ld["jaxdamp"]["rel_hw"], "+.2f", ".2f", scale=100),
                      pm(ld["codes"]["d"], ld["codes"]["hw"], "+.3g"),
                      "yes" if ld["codes"]["agree"] else "NO"))
-    L += scaffold.table(
-        ("case", "LAMMPS [J]", "LAMMPS [%]", "jaxdamp [J]", "jaxdamp [%]",
-         "LAMMPS − jaxdamp of the difference [J]", "codes agree (interval holds 0)"), rows)
+    if both:
+        w("\n## Mindlin − viscous\n")
+        L += scaffold.table(
+            ("case", "LAMMPS [J]", "LAMMPS [%]", "jaxdamp [J]", "jaxdamp [%]",
+             "LAMMPS − jaxdamp of the difference [J]", "codes agree (interval holds 0)"), rows)
     w("\n## Per bed\n")
     L += scaffold.table(
         ("case", "law", "seed", "window", "LAMMPS [J]", "jaxdamp [J]", "difference [%]",
@@ -332,18 +375,19 @@ def summary(data, s: dict, table: dict, checks: dict, cases: list, out: str) -> 
         [(case, law, x["seed"], f"{x['start'] + 1}–{x['start'] + x['kept']}",
           f"{x['ml']:.4g}", f"{x['mj']:.4g}", f"{x['rel'] * 100:+.2f}",
           f"{x['us_l']:.1f}", f"{x['us_j']:.1f}", f"{x['jaxdamp_balance_error']:.2g}")
-         for case in cases for law in LAWS for x in table[(case, law)]["beds"]])
+         for case in cases for law in laws for x in table[(case, law)]["beds"]])
     w("\nWall times on a shared 2-core machine: not benchmarks (`benchmarks/bench_spring.py` "
       "is). LAMMPS' dissipation is its energy balance at the period boundaries (input work − "
       "Δ(kinetic incl. rotation + gravitational + elastic)); the springs' stored energy, "
       "LAMMPS' contact history, is not in it — it enters a period's loss only through its "
       "change between two boundaries.\n")
     w("## Verdict\n")
-    worst = {law: max(r["difference"] for r in checks[law]) for law in LAWS}
-    w(f"- Oblique impacts: the codes' rebounds differ by at most {worst['viscous']:.2g} "
-      f"(viscous) and {worst['mindlin']:.2g} (Mindlin) of the normal speed.")
+    worst = {law: max(r["difference"] for r in checks[law]) for law in laws}
+    w("- Oblique impacts: the codes' rebounds differ by at most "
+      + " and ".join(f"{worst[law]:.2g} ({LABEL[law]})" for law in laws)
+      + " of the normal speed.")
     for case in cases:
-        for law in LAWS:
+        for law in laws:
             r = table[(case, law)]
             w(f"- {case}, {law}: LAMMPS − jaxdamp "
               f"{pm(r['rel'], r['rel_hw'], '+.2f', '.2f', scale=100)} % (paired 95 %): "
@@ -351,6 +395,8 @@ def summary(data, s: dict, table: dict, checks: dict, cases: list, out: str) -> 
                  "NOT shown within ±1 % (the interval reaches beyond it"
                  + (", and excludes 0: the codes differ" if abs(r["rel"]) > r["rel_hw"]
                     else "") + ")."))
+        if not both:
+            continue
         ld = lds[case]
         w(f"- {case}: Mindlin − viscous is "
           f"{pm(ld['jaxdamp']['rel'], ld['jaxdamp']['rel_hw'], '+.2f', '.2f', scale=100)} % in "

@@ -408,3 +408,30 @@ def test_lammps_friction_quick(tmp_path):
     assert (tmp_path / "figure.png").stat().st_size > 10_000
     study.main(["--from-data", "--out", str(tmp_path)])
     assert (tmp_path / "summary.md").read_text() == first
+
+
+def test_friction_time_step_study_reproduces_its_summary(tmp_path):
+    """The friction study's time-step run (``experiments/lammps_friction/dt_half``: the
+    collisional case at ``dt_per_collision = 100``) rewrites its stored summary byte for byte
+    from its data.h5 alone (the report's path for a run with its own time step)."""
+    import pathlib
+    import shutil
+
+    from helpers import load_experiment
+
+    stored = pathlib.Path(__file__).parent.parent / "experiments" / "lammps_friction" / "dt_half"
+    shutil.copy(stored / "data.h5", tmp_path / "data.h5")
+    load_experiment("lammps_friction").main(["--from-data", "--out", str(tmp_path)])
+    assert (tmp_path / "summary.md").read_text() == (stored / "summary.md").read_text()
+    assert "dt_per_collision = 100" in (tmp_path / "summary.md").read_text()
+
+
+@needs_lmp
+def test_lammps_runs_in_a_relative_folder(tmp_path, monkeypatch):
+    """A study's ``--out`` may be relative: ``lmp`` runs in its folder, so the input and log
+    paths must not be relative to the caller's (a relative ``--out`` failed with MPI_ABORT and
+    no log before)."""
+    monkeypatch.chdir(tmp_path)
+    log, _ = lammps.run('print "RESULT 1.5"\n', "relative", "some/where")
+    assert lammps.printed(log, "RESULT")[-1] == [1.5]
+    assert (tmp_path / "some" / "where" / "log.relative").exists()

@@ -105,6 +105,7 @@ def run(script: str, name: str, workdir: str, exe: str | None = None) -> tuple[s
     exe = exe or executable()
     if exe is None:
         raise LammpsError("LAMMPS (`lmp`) is not on PATH; apt-get install lammps")
+    workdir = os.path.abspath(workdir)  # lmp runs in it: a relative path would not resolve
     os.makedirs(workdir, exist_ok=True)
     inp = os.path.join(workdir, f"in.{name}")
     log = os.path.join(workdir, f"log.{name}")
