@@ -853,7 +853,7 @@ def driven_bed(mp: Mapping, cfg, amplitude: float, r0, v0, n_periods: int, workd
     and the wall time. ``tag`` names the bed (its working directory ``bed_A<cm>cm<tag>``).
     """
     name = f"bed_A{amplitude * 100:g}cm{tag}" + ("" if damped else "_undamped")
-    sub = os.path.join(workdir, name)
+    sub = os.path.abspath(os.path.join(workdir, name))  # the deck names its files by path
     snapdir = os.path.join(sub, "snaps")
     os.makedirs(snapdir, exist_ok=True)
     for f in os.listdir(snapdir):
