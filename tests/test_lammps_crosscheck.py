@@ -410,6 +410,22 @@ def test_lammps_friction_quick(tmp_path):
     assert (tmp_path / "summary.md").read_text() == first
 
 
+def test_friction_time_step_study_reproduces_its_summary(tmp_path):
+    """The friction study's time-step run (``experiments/lammps_friction/dt_half``: the
+    collisional case at ``dt_per_collision = 100``) rewrites its stored summary byte for byte
+    from its data.h5 alone (the report's path for a run with its own time step)."""
+    import pathlib
+    import shutil
+
+    from helpers import load_experiment
+
+    stored = pathlib.Path(__file__).parent.parent / "experiments" / "lammps_friction" / "dt_half"
+    shutil.copy(stored / "data.h5", tmp_path / "data.h5")
+    load_experiment("lammps_friction").main(["--from-data", "--out", str(tmp_path)])
+    assert (tmp_path / "summary.md").read_text() == (stored / "summary.md").read_text()
+    assert "dt_per_collision = 100" in (tmp_path / "summary.md").read_text()
+
+
 @needs_lmp
 def test_lammps_runs_in_a_relative_folder(tmp_path, monkeypatch):
     """A study's ``--out`` may be relative: ``lmp`` runs in its folder, so the input and log
