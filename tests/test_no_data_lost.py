@@ -259,6 +259,15 @@ def test_a_real_full_tmpfs_gives_one_line_and_a_file_that_resumes(tmp_path):
 
 # -- Ctrl-C ----------------------------------------------------------------------------------
 
+#: A process that ignores SIGINT (a background job of a non-interactive shell: ``pytest ... &``)
+#: cannot be sent a Ctrl-C, and jaxdamp then installs nothing, by design (:mod:`jaxdamp.interrupt`):
+#: the in-process Ctrl-C tests are skipped there rather than failed.
+needs_sigint = pytest.mark.skipif(
+    signal.getsignal(signal.SIGINT) is signal.SIG_IGN,
+    reason="SIGINT is ignored in this process (a background job): Ctrl-C cannot be tested")
+
+
+@needs_sigint
 def test_ctrl_c_is_a_request_acted_on_at_the_next_safe_point():
     interrupt.install()
     try:
@@ -272,6 +281,7 @@ def test_ctrl_c_is_a_request_acted_on_at_the_next_safe_point():
     assert not interrupt.asked()
 
 
+@needs_sigint
 def test_outside_the_command_line_a_chunk_holds_ctrl_c_until_it_is_done():
     done = []
     with pytest.raises(KeyboardInterrupt):
