@@ -418,6 +418,10 @@ print "RESULT $(v_v{c}:%.17g)"
     return dict(v=v, restitution=-sign * vc / v, duration=int(np.sum(gap < R)) * dt)
 
 
+#: The side of the resting cube of the oblique impacts [m] (both codes).
+OBLIQUE_BOX = 0.08
+
+
 def oblique_collision(mp: Mapping, kind: str, vn: float, vt: float, workdir: str,
                       exe=None) -> dict:
     """An oblique impact in LAMMPS: ``kind = "wall"``, one grain touching the floor (centre at
@@ -425,7 +429,7 @@ def oblique_collision(mp: Mapping, kind: str, vn: float, vt: float, workdir: str
     moving ``(vn/2, 0, vt/2)`` and grain 2 the opposite. No spin at the start, no gravity, the
     time step ``mp.dt``, run until the contact has ended. Returns grain 1's final ``v`` and
     ``w`` (box frame of :func:`jaxdamp_oblique`)."""
-    R, dt, L = mp.R, mp.dt, 0.08
+    R, dt, L = mp.R, mp.dt, OBLIQUE_BOX
     m_eff, k = (mp.mass, mp.k_pw) if kind == "wall" else (mp.mass / 2, mp.k_pp)
     steps = int(4 * 3.2 * (m_eff / k) ** 0.4 * vn**-0.2 / dt) + 20
     r, v = _oblique_start(mp.R, kind, vn, vt, L)
@@ -474,9 +478,9 @@ def _oblique_start(R: float, kind: str, vn: float, vt: float, L: float):
 
 def jaxdamp_oblique(cfg, mp: Mapping, kind: str, vn: float, vt: float, steps: int) -> dict:
     """:func:`oblique_collision` in jaxdamp: the configuration ``cfg``'s grains and walls
-    (its tangential law), one or two grains in a resting cube of 8 cm without gravity, its
-    JAX engine at LAMMPS' time step ``mp.dt`` for ``steps`` steps. Grain 1's final ``v``,
-    ``w``."""
+    (its tangential law; a box configuration), one or two grains in the resting cube of
+    :data:`OBLIQUE_BOX` without gravity, its JAX engine at LAMMPS' time step ``mp.dt`` for
+    ``steps`` steps. Grain 1's final ``v``, ``w``."""
     import jax.numpy as jnp
 
     from jaxdamp.config import apply_overrides
@@ -484,12 +488,12 @@ def jaxdamp_oblique(cfg, mp: Mapping, kind: str, vn: float, vt: float, steps: in
     from jaxdamp.physics.model import build
 
     n = 1 if kind == "wall" else 2
-    c = apply_overrides(cfg, {"grains.0.count": n, "gravity": 0.0, "box.Lx": 0.08,
-                              "box.Ly": 0.08, "box.Lz": 0.08, "container": None,
-                              "drive.amplitude": 0.0})
+    L = OBLIQUE_BOX
+    c = apply_overrides(cfg, {"grains.0.count": n, "gravity": 0.0, "box.Lx": L, "box.Ly": L,
+                              "box.Lz": L, "container": None, "drive.amplitude": 0.0})
     model, params = build(c)
     params = dataclasses.replace(params, dt=jnp.asarray(mp.dt))
-    r, v = (np.asarray(x, float)[None] for x in _oblique_start(mp.R, kind, vn, vt, 0.08))
+    r, v = (np.asarray(x, float)[None] for x in _oblique_start(mp.R, kind, vn, vt, L))
     q = np.zeros((1, n, 4))
     q[..., 0] = 1.0
     zero = np.zeros(1)
