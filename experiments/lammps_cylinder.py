@@ -36,8 +36,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from jaxdamp.studies import scaffold
 
 try:  # imported as experiments.lammps_cylinder (the tests), or run as a script from experiments/
@@ -78,7 +76,9 @@ def compute(quick: bool, log, ctx):
 def within_target(r: dict) -> bool:
     """Whether the paired 95 % interval of amplitude row ``r`` lies inside ±:data:`TARGET` of
     jaxdamp's mean."""
-    return bool(np.isfinite(r["rel_hw"]) and abs(r["rel"]) + r["rel_hw"] <= TARGET)
+    from jaxdamp.peers.lammps import within
+
+    return within(r, TARGET)
 
 
 def verdict(r: dict) -> str:

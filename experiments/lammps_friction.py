@@ -247,7 +247,7 @@ def law_difference(table: dict, case: str) -> dict:
 
 def within_target(r: dict) -> bool:
     """Whether a law's paired 95 % interval lies inside ±:data:`TARGET` of jaxdamp's mean."""
-    return bool(np.isfinite(r["rel_hw"]) and abs(r["rel"]) + r["rel_hw"] <= TARGET)
+    return lammps.within(r, TARGET)
 
 
 def report(data, out) -> None:

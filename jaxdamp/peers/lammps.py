@@ -1136,6 +1136,12 @@ def analyse_amplitude(A: float, beds: list[dict], e_max: float) -> dict:
                 rel=ed.mean / ej.mean, rel_hw=ed.ci95 / ej.mean)
 
 
+def within(r: dict, target: float) -> bool:
+    """Whether the paired 95 % interval of a row ``r`` of :func:`analyse_amplitude` lies
+    inside ±``target`` (relative) of jaxdamp's mean: the cross-check studies' agreement rule."""
+    return bool(np.isfinite(r["rel_hw"]) and abs(r["rel"]) + r["rel_hw"] <= target)
+
+
 def analyse_group(A: float, g, s: dict, T: float) -> dict:
     """:func:`analyse_amplitude` of an amplitude's group of ``data.h5`` (:func:`write_case`)."""
     beds = [analyse_bed(g[f"bed_{k}"], s, T, g.attrs["dt"]) for k in range(len(g["seed"]))]
