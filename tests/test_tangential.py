@@ -172,7 +172,7 @@ def test_jax_form_equals_scalar_form():
     assert 20 < sliding.sum() < 180  # both regimes
     for i in range(197):
         out = tg.spring_scalar(*s[i], *nrm[i], *v[i], *u[i], dt, kt[i], gt[i], fn[i], mu[i],
-                               rescale[i])
+                               rescale[i] ** 2, 1.0)
         np.testing.assert_allclose(jf[i], out[:3], rtol=1e-12, atol=1e-18)
         np.testing.assert_allclose(jh[i], out[3:6], rtol=1e-12, atol=1e-22)
         for k, name in enumerate(("energy", "turned", "damping", "slip")):

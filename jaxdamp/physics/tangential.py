@@ -205,21 +205,32 @@ def spring_jax(fs: Vec, n: Vec, v_slide: Vec, dt, kt, gt, f_normal, mu, touching
 
 @scalar_form
 def spring_scalar(fx, fy, fz, nx, ny, nz, vx, vy, vz, ux, uy, uz, dt, kt, gt, f_normal, mu,
-                  rescale):
+                  shrunk, peak):
     """Scalar form of :func:`spring_jax` for one touching contact (``kt > 0``), its
-    ``step_slide`` ``(ux, uy, uz)`` and ``rescale`` given (``v_slide`` and 1 for none).
+    ``step_slide`` ``(ux, uy, uz)`` given (``v_slide`` for none) and its ``rescale`` as
+    ``sqrt(shrunk/peak)`` (``0 < shrunk ≤ peak``; equal: none; for Mindlin's stiffness ``ξ`` and
+    ``max(ξ_old, ξ)``, :func:`unloading`).
 
     Returns the force on ``i`` ``(tx, ty, tz)``, the new history (spring force) ``(hx, hy,
     hz)``, the spring's energy, the turned energy, the damping and slip losses and whether it
-    slipped (:class:`Spring`)."""
+    slipped (:class:`Spring`).
+
+    The same arithmetic as :func:`spring_jax` in fewer of the divider's operations (the
+    native kernel's cost per contact, issue 39): the turn's length factor and the rescaling
+    share one division, ``q = |F_s|²/(|F_r|² peak)``, ``keep = sqrt(q peak)``, ``keep ·
+    rescale = sqrt(q shrunk)``, and neither branches (an unloading contact is as likely as a
+    loading one: a branch on it is mispredicted half the time). A fresh spring (``F_s = 0``)
+    turns to zero through the same arithmetic (``|F_r|²`` floored at 1e-200 N²)."""
     fn_ = fx * nx + fy * ny + fz * nz
     rx, ry, rz = fx - fn_ * nx, fy - fn_ * ny, fz - fn_ * nz
     old2 = fx * fx + fy * fy + fz * fz
     new2 = rx * rx + ry * ry + rz * rz
-    keep = math.sqrt(old2) / math.sqrt(new2) if new2 > 0.0 else 1.0
-    ax, ay, az = rx * keep * rescale, ry * keep * rescale, rz * keep * rescale
+    q = old2 / (max(new2, 1e-200) * peak)
+    keep = math.sqrt(q * peak)
+    kr = math.sqrt(q * shrunk)  # keep · rescale
+    ax, ay, az = rx * kr, ry * kr, rz * kr
     # the rescaled-off part's work over the step (see Spring.turned)
-    off = 0.5 * dt * (1.0 - rescale) * keep * (rx * ux + ry * uy + rz * uz)
+    off = 0.5 * dt * (keep - kr) * (rx * ux + ry * uy + rz * uz)
     kd = kt * dt
     gx, gy, gz = ax - kd * ux, ay - kd * uy, az - kd * uz
     tx, ty, tz = gx - gt * vx, gy - gt * vy, gz - gt * vz
@@ -266,13 +277,13 @@ def mindlin_scalar(law, xi, nx, ny, nz, vx, vy, vz, sx, sy, sz, qx, qy, qz, px, 
                 0.5 * dt * keep * (rx * ux + ry * uy + rz * uz), 0.0, 0.0)
     _, xi_dot, f_el, f_n, e_el = normal_force_scalar(law, xi, nx, ny, nz, vx, vy, vz, k, g)
     wx, wy, wz = slide_scalar(nx, ny, nz, vx, vy, vz, sx, sy, sz)
-    # the step's stiffness and the rescaling of an unloading contact (:func:`unloading`)
+    # the step's stiffness and the rescaling of an unloading contact (:func:`unloading`):
+    # sqrt(ξ/ξ_old) where the contact shrank, without a branch
     xi_old = max(xi - dt * xi_dot, 0.0)
-    rescale = math.sqrt(xi / xi_old) if xi_old > xi else 1.0
     kt = stiffness_scalar(G_star, r_eff, 0.5 * (xi + xi_old))
     (tx, ty, tz, gx, gy, gz, e_s, turned, damp, slip, _) = spring_scalar(
         hx, hy, hz, nx, ny, nz, wx, wy, wz, ux, uy, uz, dt, kt, damping_scalar(kt, k, g), f_n,
-        mu, rescale)
+        mu, xi, max(xi_old, xi))
     return (f_n * nx + tx, f_n * ny + ty, f_n * nz + tz, tx, ty, tz, e_el + e_s,
             (f_n - f_el) * xi_dot, damp + slip, gx, gy, gz, turned, slip, e_s)
 
@@ -382,10 +393,11 @@ def oblique_impact(normal: Callable, kt_of: Callable, m: float, R: float, vn: fl
             fn = normal(xi)
             u = vx - R * wy  # the contact point's tangential velocity (along x)
             xi_step = 0.5 * (xi + xi_old)  # as the engines (:func:`unloading`), any kt_of
-            rescale = kt_of(xi) / kt_of(xi_old) if xi_old > xi else 1.0
+            kt = kt_of(xi)  # the rescaling (kt/kt_old)² of an unloading contact
+            kt_peak = max(kt_of(xi_old), kt) if xi_old > xi else kt
             (fx, _, _, s0, s1, s2, en, turned, damp, sl, _) = spring_scalar(
                 s[0], s[1], s[2], 0.0, 0.0, 1.0, u, 0.0, 0.0, u, 0.0, 0.0, dt, kt_of(xi_step),
-                gt, fn, mu, rescale)
+                gt, fn, mu, kt * kt, kt_peak * kt_peak)
             work += (0.5 * (s[0] + s0) * u - damp) * dt
             s = (s0, s1, s2)
             xi_old = xi
