@@ -77,25 +77,17 @@ def engine_precision_error(engine: str, precision: str) -> str | None:
     return None
 
 
-def engine_tangential_error(engine: str, tangential: str, cells: int = 1,
-                            grains: int = 0) -> str | None:
-    """Why ``engine`` cannot run the tangential law ``tangential`` for a damper of ``cells``
-    cells and ``grains`` grains in all, or ``None``: the tangential spring with history
-    (``"mindlin"``) runs on the JAX engine and, for a one-cell damper of fewer than
-    :data:`jaxdamp.engine.native.LARGE` grains, on the native kernel (the fused device step
-    has the viscous law only)."""
+def engine_tangential_error(engine: str, tangential: str) -> str | None:
+    """Why ``engine`` cannot run the tangential law ``tangential``, or ``None``: the
+    tangential spring with history (``"mindlin"``) runs on the JAX engine and the native
+    kernel (beds of any size, any number of cells); the fused device step has the viscous
+    law only."""
     if tangential == "viscous" or engine in ("jax", "auto"):
         return None
     if engine == "fused":
         return (f"tangential_law = {tangential!r} runs on the JAX engine and the native kernel "
                 "(the fused kernel has the viscous tangential law): set numerics.engine = "
                 "'native', 'jax' or 'auto'")
-    from jaxdamp.engine.native import LARGE
-
-    if cells > 1 or grains >= LARGE:
-        return (f"tangential_law = {tangential!r} on the native kernel needs a one-cell damper "
-                f"of fewer than {LARGE} grains (got cells = {cells}, {grains} grains): set "
-                "numerics.engine = 'jax' or 'auto'")
     return None
 
 
@@ -512,9 +504,6 @@ def validate(config: Config) -> Config:
         if why is not None:
             raise ConfigError(why)
     config = resolve(config)  # counts from mass ratios and fill fractions
-    if (why := engine_tangential_error(num.engine, config.tangential_law, config.cells,
-                                       config.n_grains)) is not None:
-        raise ConfigError(why)
     volume = 0.0
     for i, sp in enumerate(config.grains):
         name = f"grains.{i}"

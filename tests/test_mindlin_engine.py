@@ -265,9 +265,8 @@ def test_resumes_bit_identically_from_a_checkpoint(engine):
 
 def test_configuration_refuses_what_the_spring_cannot_do():
     """``tangential_law`` names a law; the spring needs the Hertz law, and runs on the JAX
-    engine and, for one-cell dampers below the large-bed size, on the native kernel, not on
-    the fused device step (``auto`` picks accordingly); the messages name the parameters and
-    the limits."""
+    engine and the native kernel (any bed, any cells), not on the fused device step (``auto``
+    picks accordingly); the messages name the parameters and the limits."""
     base = config(n=2, radius=R, material=STEEL)
     with pytest.raises(ConfigError, match="tangential_law = 'coulomb'"):
         validate(dataclasses.replace(base, tangential_law="coulomb"))
@@ -279,18 +278,12 @@ def test_configuration_refuses_what_the_spring_cannot_do():
         validate(_mindlin(base, engine="fused"))
     assert validate(_mindlin(base, engine="native")).numerics.engine == "native"
     assert validate(_mindlin(base, engine="auto")).tangential_law == "mindlin"
-    for cells, grains in ((2, 500), (1, 16000)):  # the native kernel's spring: small, one cell
-        with pytest.raises(ValueError, match=f"one-cell damper of fewer than 16000 grains "
-                                             f"\\(got cells = {cells}, {grains} grains\\)"):
-            choose("native", tangential="mindlin", cells=cells, grains=grains)
-        assert choose("auto", "float64", 1, backend="cpu", device_kind="cpu", have_native=True,
-                      tangential="mindlin", cells=cells, grains=grains).engine == "jax"
+    assert choose("native", tangential="mindlin").engine == "native"
     for law in ("mindlin", "viscous"):
         assert choose("auto", "float64", 1, backend="cpu", device_kind="cpu", have_native=True,
-                      tangential=law, grains=250).engine == "native"
+                      tangential=law).engine == "native"
     assert choose("auto", "float64", 16384, backend="gpu", device_kind="NVIDIA H200",
-                  have_native=True, have_fused=True, tangential="mindlin",
-                  grains=250).engine != "fused"
+                  have_native=True, have_fused=True, tangential="mindlin").engine != "fused"
 
 
 def test_a_run_says_which_settings_the_spring_does_not_use():

@@ -98,30 +98,25 @@ def nearest(device_kind: str) -> tuple[Crossover | None, bool]:
 
 def choose(engine: str, precision: str = "float64", batch: int = 1, backend: str | None = None,
            device_kind: str | None = None, have_native: bool | None = None,
-           have_fused: bool | None = None, *, tangential: str = "viscous", cells: int = 1,
-           grains: int = 0) -> Choice:
+           have_fused: bool | None = None, *, tangential: str = "viscous") -> Choice:
     """The engine for a batch of ``batch`` systems: ``engine`` itself unless ``"auto"``
     (checked against ``precision``), else the rule of this module. ``backend`` and
     ``device_kind``: JAX's default backend and its first device's kind (looked up when
     ``None``); ``have_native``: whether numba is installed, ``have_fused``: whether the fused
     step can run here (numba-cuda and a GPU; both looked up when ``None``); ``tangential``:
     the tangential law (``Config.tangential_law``; the spring with history runs on the JAX
-    engine and, for ``cells = 1`` and fewer than :data:`jaxdamp.engine.native.LARGE`
-    ``grains``, on the native kernel)."""
+    engine and the native kernel, not the fused one)."""
     if engine not in ENGINES:
         raise ValueError(f"engine = {engine!r}: expected one of {ENGINES}")
     if (why := engine_precision_error(engine, precision)) is not None:
         raise ValueError(why)
-    if (why := engine_tangential_error(engine, tangential, cells, grains)) is not None:
+    if (why := engine_tangential_error(engine, tangential)) is not None:
         raise ValueError(why)
     if engine != "auto":
         return Choice(engine, f"numerics.engine = {engine!r}")
     if precision != "float64":
         return Choice("jax", f"auto: {precision} runs on the JAX engine only")
     springs = tangential != "viscous"
-    if springs and engine_tangential_error("native", tangential, cells, grains) is not None:
-        return Choice("jax", f"auto: tangential_law = {tangential!r} runs on the JAX engine "
-                             f"for {cells} cells of {grains} grains in all")
     if have_native is None:
         from jaxdamp.engine import native
 
@@ -164,10 +159,9 @@ def _fused_usable() -> bool:
 
 
 def resolve_engine(engine: str, precision: str = "float64", batch: int = 1, *,
-                   tangential: str = "viscous", cells: int = 1, grains: int = 0) -> str:
+                   tangential: str = "viscous") -> str:
     """The engine name of :func:`choose` (``"jax"``, ``"native"`` or ``"fused"``)."""
-    return choose(engine, precision, batch, tangential=tangential, cells=cells,
-                  grains=grains).engine
+    return choose(engine, precision, batch, tangential=tangential).engine
 
 
 def stored_choice(attrs, current: Choice) -> Choice:

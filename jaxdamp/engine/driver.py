@@ -171,8 +171,7 @@ def start(model: Model, params: Params, r, v, w, q, z, zd, t: float = 0.0, *,
         states = dataclasses.replace(states, e_start=jnp.asarray(e_start, jnp.float64))
     nbrs = _allocate(model, states, params, multiplier)
     engine = resolve_engine(engine, model.precision, int(states.t.shape[0]),
-                            tangential=model.tangential, cells=model.cells,
-                            grains=model.n)
+                            tangential=model.tangential)
     return _placed(Batch(model, params, states, nbrs, engine, multiplier, place))
 
 
@@ -182,8 +181,7 @@ def attach(model: Model, params: Params, states: State, *, engine: str = "auto",
     least ``at_least`` neighbours per grain)."""
     nbrs = _allocate(model, states, params, multiplier, at_least)
     engine = resolve_engine(engine, model.precision, int(states.t.shape[0]),
-                            tangential=model.tangential, cells=model.cells,
-                            grains=model.n)
+                            tangential=model.tangential)
     return _placed(Batch(model, params, states, nbrs, engine, multiplier, place))
 
 
@@ -203,8 +201,7 @@ def restore(model: Model, params: Params, arrays: dict, *, engine: str = "auto",
     if states.t.ndim == 0:  # a single system's checkpoint
         states, nbrs = batched(states), batched(nbrs)
     engine = resolve_engine(engine, model.precision, int(states.t.shape[0]),
-                            tangential=model.tangential, cells=model.cells,
-                            grains=model.n)
+                            tangential=model.tangential)
     return _placed(Batch(model, params, states, nbrs, engine, multiplier, place))
 
 

@@ -289,22 +289,23 @@ if AVAILABLE:
         return (fx, fy, fz, ny * tz - nz * ty, nz * tx - nx * tz, nx * ty - ny * tx, e, ln, lf)
 
     @_kernel(inline="always")
-    def pair_spring(law, dx, dy, dz, d2, rs, vx, vy, vz, sx, sy, sz, k, g, mu, sp, p, i, j):
+    def pair_spring(law, dx, dy, dz, d2, rs, vx, vy, vz, sx, sy, sz, k, g, mu, G_star, r_eff, sp,
+                    p, i, j):
         """:func:`pair_contact` with the tangential spring of listed pair ``p`` (grains ``i``,
-        ``j``; :func:`jaxdamp.physics.tangential.mindlin_scalar`), for a pair that touches or
-        held a spring after the last step (:func:`held_pair`). ``sp = (hp, pg, vh, sh, tot,
-        dt)``: the pairs' springs ``hp (P, 3)`` (read and written in place), their ``(G*,
-        R*)`` ``pg (P, 2)``, the half-step velocities ``vh`` and spins ``sh = R ω`` with which
-        they grow, the step's totals ``tot`` (added to; as the walls',
+        ``j``; its ``G*`` and ``R*``; :func:`jaxdamp.physics.tangential.mindlin_scalar`), for a
+        pair that touches or held a spring after the last step (:func:`held_pair`). ``sp =
+        (hp, vh, sh, tot, dt)``: the listed pairs' springs ``hp (P, 3)`` (read and written in
+        place), the half-step velocities ``vh`` and spins ``sh = R ω`` with which they grow,
+        the step's totals ``tot`` (added to; as the walls',
         :func:`~jaxdamp.physics.containers._scalar.add_wall_scalar`) and the time step."""
-        hp, pg, vh, sh, tot, dt = sp
+        hp, vh, sh, tot, dt = sp
         d = math.sqrt(d2)
         inv = 1.0 / d
         nx, ny, nz = dx * inv, dy * inv, dz * inv
         (fx, fy, fz, tx, ty, tz, e, ln, lf, h0, h1, h2, turned, slip, e_s) = mindlin_scalar(
             law, rs - d, nx, ny, nz, vx, vy, vz, sx, sy, sz, vh[i, 0] - vh[j, 0],
             vh[i, 1] - vh[j, 1], vh[i, 2] - vh[j, 2], sh[i, 0] + sh[j, 0], sh[i, 1] + sh[j, 1],
-            sh[i, 2] + sh[j, 2], k, g, pg[p, 0], pg[p, 1], mu, dt, hp[p, 0], hp[p, 1], hp[p, 2])
+            sh[i, 2] + sh[j, 2], k, g, G_star, r_eff, mu, dt, hp[p, 0], hp[p, 1], hp[p, 2])
         hp[p, 0], hp[p, 1], hp[p, 2] = h0, h1, h2
         tot[0] += turned
         tot[1] += slip
@@ -491,6 +492,26 @@ if AVAILABLE:
                 part[i, m + 1] = q
                 rows[i, m + 1, 0], rows[i, m + 1, 1], rows[i, m + 1, 2] = h0, h1, h2
         return lost
+
+    @_kernel()
+    def _csr_pairs(n, ps, pe, pj, perm, hp, ci, cj, ch, to_list):
+        """A large bed's listed pairs (the half lists ``ps``, ``pe``, ``pj`` of its grains in
+        cell order, :func:`_list_block`) as a flat list in the user's numbering, for
+        :func:`_springs_out` and :func:`_springs_in`: the ``q``-th pair's grains ``ci[q] =
+        perm[i]``, ``cj[q] = perm[pj[p]]`` and its spring ``ch[q] = hp[p]`` (or, where
+        ``to_list``, the other way: ``hp[p] = ch[q]``). Returns the number of pairs."""
+        q = 0
+        for i in range(n):
+            for p in range(ps[i], pe[i]):
+                ci[q] = perm[i]
+                cj[q] = perm[pj[p]]
+                for c in range(3):
+                    if to_list:
+                        hp[p, c] = ch[q, c]
+                    else:
+                        ch[q, c] = hp[p, c]
+                q += 1
+        return q
 
     @_kernel()
     def _springs_in(pi, pj, hp, pg, npairs, part, rows, table, sid, R):
@@ -786,10 +807,11 @@ if AVAILABLE:
                 fx, fy, fz, cx, cy, cz, e, ln, lf = pair_contact(
                     law, dx, dy, dz, d2, rs, vx, vy, vz, sx, sy, sz, pc[p, 1], pc[p, 2],
                     pc[p, 3], pc[p, 4])
-            else:
+            else:  # sp = (hp, pg, vh, sh, tot, dt): pg the pairs' (G*, R*)
+                pg = sp[1]
                 fx, fy, fz, cx, cy, cz, e, ln, lf = pair_spring(
                     law, dx, dy, dz, d2, rs, vx, vy, vz, sx, sy, sz, pc[p, 1], pc[p, 2],
-                    pc[p, 4], sp, p, i, j)
+                    pc[p, 4], pg[p, 0], pg[p, 1], (sp[0], sp[2], sp[3], sp[4], sp[5]), p, i, j)
             F[i, 0] += fx
             F[i, 1] += fy
             F[i, 2] += fz
@@ -1010,19 +1032,41 @@ if AVAILABLE:
     @_kernel()
     def _walls_block(k, bb, out, dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law,
                      r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T,
-                     ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
+                     ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2, sp):
         """Pass 1 of block ``k`` (grains ``bb[k] … bb[k + 1] − 1``): the predictor and
         :func:`grain_walls` (``F``, ``T`` set to the walls' forces); its sums into ``out[k]``
-        (the last: whether a grain moved more than skin/2)."""
+        (the last: whether a grain moved more than skin/2). ``sp``: ``None`` (the viscous
+        law), or the walls' tangential springs ``(hw, vhf, shf, vh, sh, wg, zds)``
+        (:func:`~jaxdamp.physics.containers._scalar.add_wall_scalar`; ``vhf``, ``shf`` the flat
+        forms of ``vh``, ``sh``, set here for the block's grains), the block's spring totals
+        into ``out[k, 12:16]``."""
         g0, g1 = U(bb[k]), U(bb[k + 1])  # unsigned indices (:data:`U`)
         for j in range(U(3) * g0, U(3) * g1):
             r1f[j] = rf[j] + dt * vf[j] + hdt2 * af[j]
             vpf[j] = vf[j] + dt * af[j]
         for j in range(U(3) * g0, U(3) * g1):
             rwf[j] = R3[j] * (wf[j] + dt * alf[j])
+        if sp is not None:  # the springs: every grain's walls (a spring held away from them
+            # too), the container and the cells as constants
+            hw, vhf, shf, vh, sh, wg, zds = sp
+            for j in range(U(3) * g0, U(3) * g1):
+                vhf[j] = vf[j] + 0.5 * dt * af[j]
+                shf[j] = R3[j] * (wf[j] + 0.5 * dt * alf[j])
+            tot = out[k, 12:]
+            for c in range(4):
+                tot[c] = 0.0
+            spw = (hw, vh, sh, wg, tot, zds, cgw, dt)
+            if shifted:
+                s = walls_of(shape, law, g0, g1, U(1), r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
+                             True, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, (grav, drag),
+                             half_skin2, spw)
+            else:
+                s = walls_of(shape, law, g0, g1, U(1), r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
+                             False, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, (grav, drag),
+                             half_skin2, spw)
         # three copies, as in _advance_one: the container and the cells as constants fold the
         # branches of the common damper away (its walls pass: 34 -> 16.7 ns per grain, 50 000)
-        if shape == _BOX and not shifted:
+        elif shape == _BOX and not shifted:
             s = box_walls(law, g0, g1, r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, gs, cgw,
                           frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
         elif not shifted:
@@ -1039,12 +1083,12 @@ if AVAILABLE:
 
     def _walls_each(bb, out, dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law, r1,
                     vp, rw, Rw, mw, ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex,
-                    ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
+                    ey, ez, z1, zdp, Lz, grav, drag, half_skin2, sp):
         """:func:`_walls_block` of every block (:func:`_over_cores`)."""
         for k in prange(bb.shape[0] - 1):  # k as int64: one compiled _walls_block for all
             _walls_block(np.int64(k), bb, out, dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf,
                          shape, law, r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, shifted, gs,
-                         cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
+                         cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2, sp)
 
     _walls_par, _walls_ser = _over_cores(_walls_each)
 
@@ -1060,33 +1104,58 @@ if AVAILABLE:
                 s[11] > 0.0)
 
     @_kernel()
+    def _block_sums(nb, out, c0):
+        """The sums of columns ``c0 … c0 + 3`` of blocks ``0 … nb − 1`` of ``out`` (the
+        springs' totals of :func:`_walls_block` and :func:`_pair_block`), block after block."""
+        s0 = 0.0
+        s1 = 0.0
+        s2 = 0.0
+        s3 = 0.0
+        for k in range(nb):
+            s0 += out[k, c0]
+            s1 += out[k, c0 + 1]
+            s2 += out[k, c0 + 2]
+            s3 += out[k, c0 + 3]
+        return s0, s1, s2, s3
+
+    @_kernel()
     def _walls_all(inner, bb, out, dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law,
                    r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T, ex,
-                   ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
+                   ey, ez, z1, zdp, Lz, grav, drag, half_skin2, sp):
         """Pass 1 of a large bed alone (:func:`_walls_block`; at the start of a call and after
         a rebuild: otherwise it runs in the previous step's sweep, :func:`_sweep_all`), the
-        blocks over the cores where ``inner``; returns :func:`grain_walls`' sums."""
+        blocks over the cores where ``inner``; returns :func:`grain_walls`' sums (``sp``: the
+        walls' springs, :func:`_walls_block`; their totals stay in ``out[:, 12:16]``,
+        :func:`_block_sums`)."""
         if inner:
             _walls_par(bb, out, dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law,
                        r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T,
-                       ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
+                       ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2, sp)
         else:
             _walls_ser(bb, out, dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape, law,
                        r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, shifted, gs, cgw, frames, F, T,
-                       ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
+                       ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2, sp)
         return _walls_sums(bb.shape[0] - 1, out)
 
     @_kernel()
-    def _pair_block(k, bb, out, law, r, v, rw, R, m, sid, table, ps, pe, pj, F, T, gl, lossy):
+    def _pair_block(k, bb, out, law, r, v, rw, R, m, sid, table, ps, pe, pj, F, T, gl, lossy,
+                    sp):
         """Pass 2 of block ``k``: the forces and torques of its grains' listed pairs (half
         list in cell order, :func:`_list_block`; Newton's third law), added to ``F``, ``T``;
         the pair's constants formed where it touches (:func:`pair_constants`, as the device
         kernel does: a large bed's per-pair table would be streamed from memory every step).
-        ``out[k]``: ``(elastic energy, normal loss, friction loss)``; where ``lossy`` (several
-        damper cells), each grain's pairs' loss added to ``gl`` (as in :func:`_pair_forces`)."""
+        ``out[k]``: ``(elastic energy, normal loss, friction loss)`` and, with springs, the
+        block's spring totals (:func:`pair_spring`'s ``tot``) in ``out[k, 3:7]``; where
+        ``lossy`` (several damper cells), each grain's pairs' loss added to ``gl`` (as in
+        :func:`_pair_forces`). ``sp``: ``None`` (the viscous law), or the tangential springs
+        ``(hp, vh, sh, dt)``, ``hp`` a spring per slot of ``pj`` (:func:`pair_spring`)."""
         e_sum = 0.0
         ln_sum = 0.0
         lf_sum = 0.0
+        tot = out[k, 3:]
+        if sp is not None:
+            for c in range(4):
+                tot[c] = 0.0
         for i in range(U(bb[k]), U(bb[k + 1])):  # unsigned indices (:data:`U`)
             xi, yi, zi = r[i, 0], r[i, 1], r[i, 2]
             Ri = R[i]
@@ -1104,14 +1173,21 @@ if AVAILABLE:
                 dz = zi - r[j, 2]
                 d2 = dx * dx + dy * dy + dz * dz
                 rs = Ri + R[j]
-                if d2 >= rs * rs:
+                if d2 >= rs * rs and not held_pair(sp, p):
                     continue
                 rs, kk, g, gamma_s, mu = pair_constants(law, table, U(sid[i]), U(sid[j]), Ri,
                                                         R[j], m[i], m[j])
-                fx, fy, fz, cx, cy, cz, e, ln, lf = pair_contact(
-                    law, dx, dy, dz, d2, rs, v[i, 0] - v[j, 0], v[i, 1] - v[j, 1],
-                    v[i, 2] - v[j, 2], rw[i, 0] + rw[j, 0], rw[i, 1] + rw[j, 1],
-                    rw[i, 2] + rw[j, 2], kk, g, gamma_s, mu)
+                if sp is None:
+                    fx, fy, fz, cx, cy, cz, e, ln, lf = pair_contact(
+                        law, dx, dy, dz, d2, rs, v[i, 0] - v[j, 0], v[i, 1] - v[j, 1],
+                        v[i, 2] - v[j, 2], rw[i, 0] + rw[j, 0], rw[i, 1] + rw[j, 1],
+                        rw[i, 2] + rw[j, 2], kk, g, gamma_s, mu)
+                else:
+                    fx, fy, fz, cx, cy, cz, e, ln, lf = pair_spring(
+                        law, dx, dy, dz, d2, rs, v[i, 0] - v[j, 0], v[i, 1] - v[j, 1],
+                        v[i, 2] - v[j, 2], rw[i, 0] + rw[j, 0], rw[i, 1] + rw[j, 1],
+                        rw[i, 2] + rw[j, 2], kk, g, mu, table[U(sid[i]), U(sid[j]), G_STAR],
+                        Ri * R[j] / rs, (sp[0], sp[1], sp[2], tot, sp[3]), p, i, j)
                 fxi += fx
                 fyi += fy
                 fzi += fz
@@ -1170,12 +1246,12 @@ if AVAILABLE:
             if nxt:
                 _walls_block(k, bb, wout, dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf, shape,
                              law, r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, shifted, gs, cgw,
-                             frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
+                             frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2, None)
 
     def _sweep_each(phase, cb, bb, nxt, pout, hout, wout, law, r1, vp, rw, Rw, mw, sid, table,
                     ps, pe, pj, F, T, gl, dt, hdt2, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf,
                     alf, rf, r1f, qs, qn, R3, vpf, rwf, shape, ref, wk, wks, sec, ogw, shifted,
-                    gs, cgw, frames, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
+                    gs, cgw, frames, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2, sp):
         """One phase of a step's sweep (:func:`_sweep_all`; :func:`_over_cores`). A block is
         *done* by its corrector (:func:`_correct_block`) and, where ``nxt``, the next step's
         pass 1 (:func:`_walls_block`), once its forces are whole: after its own pairs and
@@ -1194,7 +1270,7 @@ if AVAILABLE:
                     if k == e - 1 and c < nc - 1:
                         break
                     _pair_block(k, bb, pout, law, r1, vp, rw, Rw, mw, sid, table, ps, pe, pj, F,
-                                T, gl, shifted)
+                                T, gl, shifted, sp)
                     if k > s or c == 0:
                         _done_blocks(k, k + 1, bb, nxt, hout, wout, dt, hdt2, w2, al2, wm, Ff,
                                      Tf, im3, iI3, vf, af, wf, alf, rf, r1f, qs, qn, R3, vpf, rwf,
@@ -1205,7 +1281,7 @@ if AVAILABLE:
             for c in prange(nc - 1):
                 b = cb[c + 1]
                 _pair_block(b - 1, bb, pout, law, r1, vp, rw, Rw, mw, sid, table, ps, pe, pj, F,
-                            T, gl, shifted)
+                            T, gl, shifted, sp)
                 _done_blocks(b - 1, b + 1, bb, nxt, hout, wout, dt, hdt2, w2, al2, wm, Ff, Tf,
                              im3, iI3, vf, af, wf, alf, rf, r1f, qs, qn, R3, vpf, rwf, shape, law,
                              r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, shifted, gs, cgw, frames,
@@ -1217,7 +1293,7 @@ if AVAILABLE:
     def _sweep_all(inner, cb, bb, nxt, pout, hout, wout, law, r1, vp, rw, Rw, mw, sid, table,
                    ps, pe, pj, F, T, gl, dt, hdt2, w2, al2, wm, Ff, Tf, im3, iI3, vf, af, wf,
                    alf, rf, r1f, qs, qn, R3, vpf, rwf, shape, ref, wk, wks, sec, ogw, shifted,
-                   gs, cgw, frames, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
+                   gs, cgw, frames, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2, sp):
         """The rest of a large bed's step after pass 1 (:func:`_sweep_each`, the chunks over
         the cores where ``inner``): pass 2 (the pairs; their loss per grain into ``gl`` where
         ``shifted``), pass 3 (the corrector and the rotation into ``qn``) and, where ``nxt``,
@@ -1232,13 +1308,13 @@ if AVAILABLE:
                            table, ps, pe, pj, F, T, gl, dt, hdt2, w2, al2, wm, Ff, Tf, im3, iI3,
                            vf, af, wf, alf, rf, r1f, qs, qn, R3, vpf, rwf, shape, ref, wk, wks,
                            sec, ogw, shifted, gs, cgw, frames, ex, ey, ez, z1, zdp, Lz, grav,
-                           drag, half_skin2)
+                           drag, half_skin2, sp)
             else:
                 _sweep_ser(phase, cb, bb, nxt, pout, hout, wout, law, r1, vp, rw, Rw, mw, sid,
                            table, ps, pe, pj, F, T, gl, dt, hdt2, w2, al2, wm, Ff, Tf, im3, iI3,
                            vf, af, wf, alf, rf, r1f, qs, qn, R3, vpf, rwf, shape, ref, wk, wks,
                            sec, ogw, shifted, gs, cgw, frames, ex, ey, ez, z1, zdp, Lz, grav,
-                           drag, half_skin2)
+                           drag, half_skin2, sp)
         nb = bb.shape[0] - 1
         e = 0.0
         ln = 0.0
@@ -1252,6 +1328,51 @@ if AVAILABLE:
         return e, ln, lf, h, _walls_sums(nb if nxt else 0, wout)
 
     @_kernel()
+    def _springs_csr(to_rows, n, ps, pe, pj, perm, hp, part, rows, table, sid, R):
+        """A large bed's pair springs between its half lists (grains in cell order,
+        :func:`_list_block`; ``hp`` a spring per slot of ``pj``) and the state's rows (the
+        user's numbering): onto the rows where ``to_rows`` (:func:`_springs_out`), else from
+        them onto the lists, by pair identity (:func:`_springs_in`). Returns the springs
+        lost (no room in the rows, or no listed pair for a held one)."""
+        P = pj.shape[0]
+        ci = np.empty(P, np.int64)
+        cj = np.empty(P, np.int64)
+        ch = np.zeros((P, 3))
+        nq = _csr_pairs(n, ps, pe, pj, perm, hp, ci, cj, ch, False)
+        if to_rows:
+            return _springs_out(ci, cj, ch, nq, part, rows)
+        lost = _springs_in(ci, cj, ch, np.empty((P, 2)), nq, part, rows, table, sid, R)
+        _csr_pairs(n, ps, pe, pj, perm, hp, ci, cj, ch, True)
+        return lost
+
+    @_kernel()
+    def _moved(n, rf, vf, af, dt, hdt2, r1f, ref, bx, by, bz, half_skin2):
+        """The predictor's positions ``r1f`` (as pass 1's, :func:`_walls_block`) and whether a
+        grain moved more than skin/2 since the lists were built (box frame at ``(bx, by,
+        bz)``): a large bed with springs decides its rebuild before pass 1, whose walls'
+        springs must step once."""
+        far = False
+        for i in range(n):
+            x = rf[3 * i] + dt * vf[3 * i] + hdt2 * af[3 * i]
+            y = rf[3 * i + 1] + dt * vf[3 * i + 1] + hdt2 * af[3 * i + 1]
+            z = rf[3 * i + 2] + dt * vf[3 * i + 2] + hdt2 * af[3 * i + 2]
+            r1f[3 * i], r1f[3 * i + 1], r1f[3 * i + 2] = x, y, z
+            dx = x - bx - ref[i, 0]
+            dy = y - by - ref[i, 1]
+            dz = z - bz - ref[i, 2]
+            far = far | (dx * dx + dy * dy + dz * dz > half_skin2)
+        return far
+
+    @_kernel(inline="always")
+    def _cell_steps(cdof, z, z1, yv, y1, dt, zds):
+        """Each damper cell's walls' mean velocity along ``e`` over the step from ``(z, y)``
+        to the predicted ``(z1, y1)`` (its degree of freedom ``cdof[c]``), into ``zds``: the
+        velocity with which the walls' springs grow (as the JAX engine's ``step_vw``)."""
+        for c in range(cdof.shape[0]):
+            d = cdof[c]
+            zds[c] = ((z1 - z) if d == 0 else (y1[d - 1] - yv[d - 1])) / dt
+
+    @_kernel()
     def _cell_sums_by_grain(x, cg, out):
         """``out[c]`` = the sum of ``x`` over the grains of damper cell ``c`` (``cg``: each
         grain's cell; the large-bed path, whose grains are not stored cell after cell)."""
@@ -1262,12 +1383,14 @@ if AVAILABLE:
 
     @_kernel()
     def _reorder(p, bx, by, bz, cutoff, K, curved, r1f, rf, vf, wf, af, alf, qs, R3, im3, iI3,
-                 Rw, mw, wk, wks, ogw, sidw, cgw, perm):
+                 Rw, mw, wk, wks, ogw, sidw, cgw, perm, sp):
         """Put a large bed's grains in cell order (:func:`_spatial_order` of the positions
         ``p``, box frame minus ``(bx, by, bz)``): every per-grain array of the kernel's
         working state is permuted alike (``perm``: the user's number of the grain at each
-        place; ``wks`` only where the sides are ``curved``, else it is ``wk``). Returns
-        ``(ok, key, start, dims)`` of :func:`_spatial_order` (not ``ok``: left as it was)."""
+        place; ``wks`` only where the sides are ``curved``, else it is ``wk``; ``sp``: ``None``,
+        or with tangential springs the walls' springs ``(N, 2 + W, 3)`` and the grains' spring
+        constants ``wg (N, 3)``). Returns ``(ok, key, start, dims)`` of :func:`_spatial_order`
+        (not ``ok``: left as it was)."""
         n = perm.shape[0]
         ok, order, key, start, dims = _spatial_order(p, bx, by, bz, cutoff, cgw, K)
         if not ok:
@@ -1282,6 +1405,11 @@ if AVAILABLE:
         if curved:
             _permute(order, wks, tmp)
         _permute(order, ogw, tmp)
+        if sp is not None:
+            hw, wg = sp
+            _permute(order, wg, tmp)
+            wide = hw.reshape((n, hw.shape[1] * 3))
+            _permute(order, wide, np.empty(wide.size))
         itmp = np.empty(n, np.int64)
         _permute(order, sidw.reshape((n, 1)), itmp)
         _permute(order, cgw.reshape((n, 1)), itmp)
@@ -1364,12 +1492,16 @@ if AVAILABLE:
         as the mount has responded (the large path's sweep needs them).
 
         ``springs``: ``None`` (the viscous tangential law: no code for springs is compiled), or
-        with tangential springs (:mod:`jaxdamp.physics.tangential`; small beds of one cell)
+        with tangential springs (:mod:`jaxdamp.physics.tangential`; any bed, any cells)
         ``(B,)`` integers, set to the number of springs a system lost (its state's rows were
         full, :func:`_springs_out`: the runner redoes the chunk with larger lists). The
         pairs' springs ride on the half list by pair identity (:func:`_springs_in` at the
         start and after each rebuild, :func:`_springs_out` before each rebuild and at the
-        end), the walls' are the state's own rows, updated in place."""
+        end), the walls' are the state's own rows, updated in place. A large bed keeps its
+        pairs' springs one per slot of its lists (:func:`_springs_csr`) and its walls' in cell
+        order (permuted with the grains), and runs pass 1 at the top of each step, after any
+        rebuild (:func:`_moved`), not in the last step's sweep: pass 1 steps the walls'
+        springs, so it must run once per step (the viscous law redoes it after a rebuild)."""
         n = sid.shape[0]
         row = st[b]  # so.NAME, po.NAME: where the field NAME starts in the rows
         prow = pm[b]
@@ -1452,11 +1584,13 @@ if AVAILABLE:
         vh, sh = vhf.reshape((ns, 3)), shf.reshape((ns, 3))
         wg = np.empty((ns, 3))  # per grain (G*, R* of a plane, R* of the sides)
         tot = np.zeros(4)  # a step's turned energy, slip losses (pairs, walls), energy
+        zds = np.zeros(K)
         inc = np.zeros(N_CHANNELS)
         lost = 0
         e_spring = 0.0
         if springs is not None:
-            lost = _springs_in(pi, pj, hp, pg, npairs, spq, spp, tab, sid, Rb)
+            if not large:
+                lost = _springs_in(pi, pj, hp, pg, npairs, spq, spp, tab, sid, Rb)
             for i in range(n):
                 wg[i, 0] = wtab[sid[i], G_STAR]
                 wg[i, 1] = Rb[i]
@@ -1511,8 +1645,12 @@ if AVAILABLE:
         ps = np.zeros(n, np.int64)
         pe = np.zeros(n, np.int64)
         pl = np.empty(0, np.int32)
-        wout = np.empty((MAX_BLOCKS + 1, 12))
-        pout = np.empty((MAX_BLOCKS + 1, 3))
+        wout = np.zeros((MAX_BLOCKS + 1, 16))  # pass 1's sums per block (and its springs')
+        pout = np.zeros((MAX_BLOCKS + 1, 7))  # pass 2's (and its springs')
+        # a large bed's springs: the walls' in cell order, the pairs' one per slot of its lists
+        hwl = hw.copy() if large and springs is not None else hw
+        hpl = np.zeros((0, 3))
+        wsp = (0.0, 0.0, 0.0, 0.0)  # the walls' spring totals of the step's pass 1
         hout = np.empty(MAX_BLOCKS + 1)
         gn = np.zeros((n, 2))  # a large bed's gs of the next step (its sweep's pass 1)
         frames_rec = np.zeros((K, 2))
@@ -1522,19 +1660,26 @@ if AVAILABLE:
         t1 = t + dt
         z1, zdp = _predict(mount, t1, dt, hdt2, z, zd, zdd, prow, po, yv, ydv, yddv, y1, ydp,
                            one_cell, cdof, frames)
+        if springs is not None:
+            _cell_steps(cdof, z, z1, yv, y1, dt, zds)
         ws = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, False)
         if large:
             rf, vf, wf, af, alf = rf.copy(), vf.copy(), wf.copy(), af.copy(), alf.copy()
             ok, key, start, gdims = _reorder(rf.reshape((n, 3)), ex * z, ey * z, ez * z, cutoff,
                                              K, kappa != 0.0, r1f, rf, vf, wf, af, alf, qs, R3,
-                                             im3, iI3, Rw, mw, wk, wks, ogw, sidw, cgw, perm)
+                                             im3, iI3, Rw, mw, wk, wks, ogw, sidw, cgw, perm,
+                                             with_springs(springs, (hwl, wg)))
             bb, cb, per, pl = _relist(ok, rf.reshape((n, 3)), ex * z, ey * z, ez * z,
                                       cutoff - 2.0 * r_max, key, start, gdims, K, Rw, ref, ps,
                                       pe, pl, per, inner, dims.large, dims.chunk)
-            ws = _walls_all(inner, bb, wout, dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf, rwf,
-                            shape, law, r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, not one_cell,
-                            gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag,
-                            half_skin2)
+            if springs is not None:  # the pairs' springs onto the lists; pass 1 in the step
+                hpl = np.zeros((pl.shape[0], 3))
+                lost += _springs_csr(False, n, ps, pe, pl, perm, hpl, spq, spp, tab, sid, Rb)
+            else:
+                ws = _walls_all(inner, bb, wout, dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf,
+                                rwf, shape, law, r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
+                                not one_cell, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz,
+                                grav, drag, half_skin2, None)
         r2, v2 = rf.reshape((n, 3)), vf.reshape((n, 3))
         w2, al2 = wf.reshape((n, 3)), alf.reshape((n, 3))
         e_el = 0.0
@@ -1549,12 +1694,38 @@ if AVAILABLE:
             for it in range(record_every):
                 last = k_rec == n_records - 1 and it == record_every - 1
                 # pass 1: predictor, body force, walls, drag power, displacement since the build
-                if large:  # done by the last step's sweep; a rebuild re-sorts the grains and
+                if large and springs is not None:  # the rebuild first, then pass 1 once (it
+                    # steps the walls' springs), never in the last step's sweep
+                    if _moved(n, rf, vf, af, dt, hdt2, r1f, ref, ex * z1, ey * z1, ez * z1,
+                              half_skin2) and n > 1:
+                        lost += _springs_csr(True, n, ps, pe, pl, perm, hpl, spq, spp, tab, sid,
+                                             Rb)
+                        ok, key, start, gdims = _reorder(
+                            r1, ex * z1, ey * z1, ez * z1, cutoff, K, kappa != 0.0, r1f, rf, vf,
+                            wf, af, alf, qs, R3, im3, iI3, Rw, mw, wk, wks, ogw, sidw, cgw, perm,
+                            (hwl, wg))
+                        bb, cb, per, pl = _relist(ok, r1, ex * z1, ey * z1, ez * z1,
+                                                  cutoff - 2.0 * r_max, key, start, gdims, K, Rw,
+                                                  ref, ps, pe, pl, per, inner, dims.large,
+                                                  dims.chunk)
+                        if hpl.shape[0] < pl.shape[0]:
+                            hpl = np.zeros((pl.shape[0], 3))
+                        lost += _springs_csr(False, n, ps, pe, pl, perm, hpl, spq, spp, tab, sid,
+                                             Rb)
+                    ws = _walls_all(inner, bb, wout, dt, hdt2, rf, vf, af, wf, alf, R3, r1f, vpf,
+                                    rwf, shape, law, r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
+                                    not one_cell, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz,
+                                    grav, drag, half_skin2, (hwl, vhf, shf, vh, sh, wg, zds))
+                    wsp = _block_sums(bb.shape[0] - 1, wout, 12)
+                    (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
+                     pdrag, far) = ws
+                elif large:  # done by the last step's sweep; a rebuild re-sorts the grains and
                     # redoes it
                     if ws[11] and n > 1:
                         ok, key, start, gdims = _reorder(
                             r1, ex * z1, ey * z1, ez * z1, cutoff, K, kappa != 0.0, r1f, rf, vf,
-                            wf, af, alf, qs, R3, im3, iI3, Rw, mw, wk, wks, ogw, sidw, cgw, perm)
+                            wf, af, alf, qs, R3, im3, iI3, Rw, mw, wk, wks, ogw, sidw, cgw, perm,
+                            None)
                         bb, cb, per, pl = _relist(ok, r1, ex * z1, ey * z1, ez * z1,
                                                   cutoff - 2.0 * r_max, key, start, gdims, K, Rw,
                                                   ref, ps, pe, pl, per, inner, dims.large,
@@ -1562,7 +1733,7 @@ if AVAILABLE:
                         ws = _walls_all(inner, bb, wout, dt, hdt2, rf, vf, af, wf, alf, R3, r1f,
                                         vpf, rwf, shape, law, r1, vp, rw, Rw, mw, ref, wk, wks,
                                         sec, ogw, not one_cell, gs, cgw, frames, F, T, ex, ey,
-                                        ez, z1, zdp, Lz, grav, drag, half_skin2)
+                                        ez, z1, zdp, Lz, grav, drag, half_skin2, None)
                     (e_el, pw_n, pw_f, box_z, floor_lid, n_floor, n_lid, n_wall, l_floor, l_lid,
                      pdrag, far) = ws
                 else:
@@ -1577,7 +1748,7 @@ if AVAILABLE:
                             shf[j] = R3[j] * (wf[j] + 0.5 * dt * alf[j])
                         for c in range(4):
                             tot[c] = 0.0
-                    sp_w = with_springs(springs, (hw, vh, sh, wg, tot, (z1 - z) / dt, dt))
+                    sp_w = with_springs(springs, (hw, vh, sh, wg, tot, zds, cg, dt))
                     # the walls compiled apart (walls_of), the container and the cells constants
                     # of the compiled code where they fold the branches: the common damper's box
                     # (its one cell), another one-cell container, several cells
@@ -1628,15 +1799,28 @@ if AVAILABLE:
                 t1 = t + dt
                 z1, zdp = _predict(mount, t1, dt, hdt2, z, zd, zdd, prow, po, yv, ydv, yddv, y1,
                                    ydp, one_cell, cdof, frames)
+                if springs is not None:
+                    _cell_steps(cdof, z, z1, yv, y1, dt, zds)
                 # pass 2, the grain pairs, and pass 3, the corrector and the rotation; a large
-                # bed also does the next step's pass 1 while each block is in the cache
+                # bed also does the next step's pass 1 while each block is in the cache (not
+                # with springs: see above)
                 if large:
+                    nxt = not last
+                    if springs is not None:
+                        nxt = False
                     pp_e, pp_n, pp_f, h, ws = _sweep_all(
-                        inner, cb, bb, not last, pout, hout, wout, law, r1, vp, rw, Rw, mw, sidw,
-                        tab, ps, pe, pl, F, T, gs[:, 0], dt, hdt2, w2, al2,
+                        inner, cb, bb, nxt, pout, hout, wout, law, r1, vp, rw, Rw, mw, sidw, tab,
+                        ps, pe, pl, F, T, gs[:, 0], dt, hdt2, w2, al2,
                         wm, Ff, Tf, im3, iI3, vf, af, wf, alf, rf, r1f, qs, qn, R3, vpf, rwf,
                         shape, ref, wk, wks, sec, ogw, not one_cell, gn, cgw, frames, ex, ey, ez,
-                        z1, zdp, Lz, grav, drag, half_skin2)
+                        z1, zdp, Lz, grav, drag, half_skin2,
+                        with_springs(springs, (hpl, vh, sh, dt)))
+                    if springs is not None:  # the step's spring totals: the walls', the pairs'
+                        p0, p1, _, p3 = _block_sums(bb.shape[0] - 1, pout, 3)
+                        tot[0] = wsp[0] + p0
+                        tot[1] = p1
+                        tot[2] = wsp[2]
+                        tot[3] = wsp[3] + p3
                     if not one_cell:
                         _cell_sums_by_grain(gs[:, 0], cgw, pwc)
                         gs, gn = gn, gs
@@ -1709,7 +1893,11 @@ if AVAILABLE:
         row[so.e_elastic], row[so.f_floor_lid], row[so.f_box] = e_el, floor_lid, box_z
         row[so.n_floor], row[so.n_lid], row[so.n_side] = n_floor, n_lid, n_side
         if springs is not None:
-            if n > 1:
+            if large:  # the pairs' springs and the walls' (cell order) into the state's rows
+                if n > 1:
+                    lost += _springs_csr(True, n, ps, pe, pl, perm, hpl, spq, spp, tab, sid, Rb)
+                _unsort(perm, hwl.reshape((n, 3 * NW)), hw.reshape((n, 3 * NW)))
+            elif n > 1:
                 lost += _springs_out(pi, pj, hp, npairs, spq, spp)
             springs[b] = lost
             row[so.e_spring] = e_spring
@@ -1837,9 +2025,6 @@ def advance_packed(model, state_packed, params_packed, state_layout, param_layou
     dims, so, po, sid, bounds, cg, cdof, width = kernel_args(model, state_layout, param_layout)
     rec = np.empty((st.shape[0], int(n_records), width))
     lost = np.zeros(st.shape[0], np.int64)
-    if model.springs and (dims.large or dims.cells > 1):
-        raise ValueError(f"the native kernel's tangential springs need one cell and fewer than "
-                         f"{LARGE} grains (got {dims.cells} cells, {model.n} grains)")
     args = (int(n_records), int(record_every), dims, model.skin, st, pm, so, po, sid, bounds, cg,
             cdof, rec)
     springs = lost if model.springs else None  # None: no spring code compiled in

@@ -42,8 +42,7 @@ def chunk_fn(model: Model, n_records: int, record_every: int, remat: bool = Fals
     jit partitions by itself, the kernels advance every local shard in its own host thread
     and put the results back on the shards' devices.
     """
-    resolved = resolve_engine(engine, model.precision, tangential=model.tangential,
-                              cells=model.cells, grains=model.n)
+    resolved = resolve_engine(engine, model.precision, tangential=model.tangential)
     if resolved in ("native", "fused"):
         return _packed_chunk(model, n_records, record_every, sharding, resolved)
     block = _jax_block(model, record_every)

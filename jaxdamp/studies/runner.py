@@ -160,8 +160,7 @@ def batch_budget(config: Config, sched: Schedule, systems: int = 1, out: str | N
         samples=sched.n_chunks * sched.records_per_chunk,
         sample_bytes=8 * (24 + 4 * len(config.grains) + dofs),
         engine=resolve_engine(num.engine, num.precision, systems,
-                              tangential=config.tangential_law, cells=config.cells,
-                              grains=config.n_grains), snapshots=snapshots,
+                              tangential=config.tangential_law), snapshots=snapshots,
         out=out is not None, tangential=config.tangential_law)
 
 
@@ -229,8 +228,7 @@ def run(
     params = dataclasses.replace(params, t_window=jnp.asarray(t_window))
     pb = driver.batched(params)
     choice = choose(config.numerics.engine, config.numerics.precision, batch=1,
-                    tangential=config.tangential_law, cells=config.cells,
-                    grains=config.n_grains)
+                    tangential=config.tangential_law)
     radii = np.asarray(params.radius)
     masses = np.asarray(params.mass)
     m_grains = float(masses.sum())

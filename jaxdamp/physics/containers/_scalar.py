@@ -44,22 +44,24 @@ def add_wall_scalar(law, xi, nx, ny, nz, vx, vy, vz, sx, sy, sz, Ri, k, g, gamma
 
     ``sp``: ``None`` (the viscous tangential force, ``xi > 0``; the compiled code has no
     other branch), or the tangential springs (:func:`jaxdamp.physics.tangential.mindlin_scalar`,
-    ``xi > 0`` or :func:`held`) ``(hw, vh, sh, wg, tot, zds, dt)``: the springs ``hw (N, 2 + W,
-    3)`` (read and written in place), the half-step velocities ``vh`` and spins ``sh = R ω``
-    ``(N, 3)`` with which they grow, per grain ``wg (N, 3) = (G*, R*`` of a plane, ``R*`` of
-    the sides``)``, the step's totals ``tot`` (added to: ``[0]`` the turned energy, ``[1]``,
-    ``[2]`` the pairs' and the walls' slip losses, ``[3]`` the springs' energy), the walls'
-    mean velocity along ``e`` over the step ``zds`` and the time step."""
+    ``xi > 0`` or :func:`held`) ``(hw, vh, sh, wg, tot, zds, cg, dt)``: the springs ``hw (N,
+    2 + W, 3)`` (read and written in place), the half-step velocities ``vh`` and spins ``sh =
+    R ω`` ``(N, 3)`` with which they grow, per grain ``wg (N, 3) = (G*, R*`` of a plane, ``R*``
+    of the sides``)``, the step's totals ``tot`` (added to: ``[0]`` the turned energy, ``[1]``,
+    ``[2]`` the pairs' and the walls' slip losses, ``[3]`` the springs' energy), each damper
+    cell's walls' mean velocity along ``e`` over the step ``zds (K,)`` (cells on several
+    degrees of freedom move apart), each grain's cell ``cg (N,)`` and the time step."""
     fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z, nc = acc
     if sp is None:
         gx, gy, gz, ax, ay, az, e, ln, lf = contact_scalar(law, xi, nx, ny, nz, vx, vy, vz, sx,
                                                            sy, sz, k, g, gamma_s, mu)
         touching = 1.0
     else:
-        hw, vh, sh, wg, tot, zds, dt = sp
+        hw, vh, sh, wg, tot, zds, cg, dt = sp
+        zc = zds[cg[i]]  # the grain's cell's walls
         (gx, gy, gz, ax, ay, az, e, ln, lf, h0, h1, h2, turned, slip, e_s) = mindlin_called(
-            law, xi, nx, ny, nz, vx, vy, vz, sx, sy, sz, vh[i, 0] - ex * zds,
-            vh[i, 1] - ey * zds, vh[i, 2] - ez * zds, sh[i, 0], sh[i, 1], sh[i, 2], k, g,
+            law, xi, nx, ny, nz, vx, vy, vz, sx, sy, sz, vh[i, 0] - ex * zc,
+            vh[i, 1] - ey * zc, vh[i, 2] - ez * zc, sh[i, 0], sh[i, 1], sh[i, 2], k, g,
             wg[i, 0], wg[i, 1] if w < 2 else wg[i, 2], mu, dt, hw[i, w, 0], hw[i, w, 1],
             hw[i, w, 2])
         hw[i, w, 0], hw[i, w, 1], hw[i, w, 2] = h0, h1, h2
