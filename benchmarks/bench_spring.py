@@ -4,6 +4,8 @@ side by side, as ratios.
 
     python benchmarks/bench_spring.py                     # 3 interleaved rounds
     python benchmarks/bench_spring.py --rounds 5 --json benchmarks/results/bench_spring.json
+    python benchmarks/bench_spring.py --n 50000 --steps 400 --batch 1 --no-lammps
+                                                          # a large bed (one system)
 
 The bed is ``bench_lammps.py``'s ``thesis`` bed in motion (250 grains, driven at 3 cm and
 15 Hz, after 0.4 s); the spring's copy starts from the same state with fresh springs (they
@@ -16,6 +18,11 @@ damping multiplier kept, which changes the physics but not the work per contact)
 interleaved and each measurement waits for a quiet machine; medians over rounds with the
 spread, and the spring's cost over the viscous law's per code (issue 39: at most 1.3× in the
 native kernel). Do not run while other jobs use the cores.
+
+With ``--n N`` the bed is ``bench_large.py``'s instead: the thesis bed scaled in base area to
+``N`` grains, settled and driven (its warmed state from that benchmark's cache), timed as one
+system (the kernel's large-bed path from ``jaxdamp.engine.native.LARGE`` grains on, where the
+spring also moves the walls' pass out of the sweep).
 """
 
 from __future__ import annotations
@@ -63,13 +70,25 @@ def main(argv=None):
     ap.add_argument("--steps", type=int, default=10000, help="steps per measurement")
     ap.add_argument("--batch", type=int, default=8)
     ap.add_argument("--json", help="write the measurements here")
+    ap.add_argument("--n", type=int, help="bench_large.py's bed of N grains instead of the "
+                    "thesis bed")
+    ap.add_argument("--no-lammps", action="store_true")
     args = ap.parse_args(argv)
 
-    cfg, model, params, st = moving_bed("thesis")
+    if args.n:
+        import bench_large as big
+
+        from jaxdamp.physics.model import build
+
+        cfg = big.bed_config(args.n, 0.03)
+        st, _ = big.warm_state(cfg, 0.04, 100, big.DEFAULT_CACHE)
+        model, params = build(cfg)
+    else:
+        cfg, model, params, st = moving_bed("thesis")
     spring_model, spring_st = with_springs(model, params, st)
     every = 100
     work = tempfile.mkdtemp(prefix="bench_spring_")
-    lmp = shutil.which("lmp")
+    lmp = shutil.which("lmp") if not args.no_lammps else None
     decks = {}
     if lmp:
         path = lammps_input(cfg, params, st, args.steps, work)
@@ -82,7 +101,7 @@ def main(argv=None):
         decks["mindlin"] = os.path.join(work, "in.spring")
         with open(decks["mindlin"], "w") as fh:
             fh.write(spring)
-    cases = {("native", law, b): (m, s) for b in (1, args.batch)
+    cases = {("native", law, b): (m, s) for b in sorted({1, args.batch})
              for law, m, s in (("viscous", model, st), ("mindlin", spring_model, spring_st))}
     runs = {k: [] for k in list(cases) + [("lammps", law, 1) for law in decks]}
     for _ in range(args.rounds):
@@ -94,8 +113,9 @@ def main(argv=None):
             wait_quiet()
             runs[("lammps", law, 1)].append(lammps_us(path, args.steps))
     med = {k: float(np.median(v)) for k, v in runs.items()}
-    print(f"thesis bed in motion (250 grains), {args.steps} steps per measurement, {args.rounds} "
-          "rounds; µs per system-step, median [min, max]:")
+    print(f"{'thesis bed' if not args.n else 'scaled bed'} in motion ({model.n} grains), "
+          f"{args.steps} steps per measurement, {args.rounds} rounds; µs per system-step, "
+          "median [min, max]:")
     for (code, law, b), v in runs.items():
         print(f"  {code:7s} {law:8s} batch {b:3d}: {med[(code, law, b)]:8.2f} "
               f"[{min(v):.2f}, {max(v):.2f}]")
