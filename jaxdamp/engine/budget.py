@@ -73,10 +73,11 @@ LARGE_BED_FACTOR = 1.2
 #: the viscous law's grain-step, per engine (the moving thesis bed, float64, 2 cores;
 #: benchmarks/RESULTS.md): the JAX engine 8.5× (1332.8 against 157.7 µs per system-step at
 #: batch 32, ``python benchmarks/bench_jax_engine.py --precision float64 --tangential both
-#: --batch 32 --steps 400 --rounds 3``), the native kernel 3.5× (20.5 against 5.8 at batch 8;
-#: 2.7× for one system, ``python benchmarks/bench_spring.py --rounds 3 --steps 5000``).
+#: --batch 32 --steps 400 --rounds 3``), the native kernel 2.5× (14.8 against 6.0 µs at batch
+#: 8, 2.4× for one system, ``python benchmarks/bench_spring.py --rounds 3 --steps 5000``; one
+#: system of 16 000 and 50 000 grains on the large-bed path 2.9× and 2.5×, ``--n N``).
 TANGENTIAL_FACTOR = {"jax": {"viscous": 1.0, "mindlin": 8.5},
-                     "native": {"viscous": 1.0, "mindlin": 3.5}}
+                     "native": {"viscous": 1.0, "mindlin": 2.5}}
 #: HDF5 chunking and metadata over the raw bytes of a run file (measured 1.2).
 FILE_OVERHEAD = 1.3
 #: Refuse a batch above this fraction of the memory this process may use.
