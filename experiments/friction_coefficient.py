@@ -13,6 +13,11 @@ differences against μ = 0.3 with their 95 % (Welch) and 90 % (the equivalence t
 intervals. Whether "unchanged" holds is decided by the scoreboard's rule (equivalence against
 the systematic budget's margin: ``python -m experiments.scoreboard``, row D16). Writes ``data.h5``,
 ``figure.png``, ``summary.md``.
+
+``--tangential-law mindlin`` asks the same question under the Hertz–Mindlin spring with history
+instead of the thesis' viscous law (issue 39; ``--out`` another folder, e.g.
+``experiments/friction_coefficient/mindlin``): the spring's sticking contacts hold a
+tangential force the viscous law does not, so μ could matter where it did not.
 """
 
 from __future__ import annotations
@@ -43,12 +48,23 @@ def settings(quick: bool) -> dict:
                 duration=1.5, settle=0.3, R=3)
 
 
+def options(ap):
+    ap.add_argument("--tangential-law", default="viscous", choices=["viscous", "mindlin"],
+                    help="the tangential law of every run (default: the thesis' viscous law)")
+
+
 def compute(quick: bool, log, ctx):
     s = settings(quick)
+    law = ctx.args.tangential_law
+    over = {}
+    if law != "viscous":  # (the viscous law's settings keep their stored form)
+        s["tangential_law"] = law
+        over["tangential_law"] = law
     mu, f = zip(*[(m, x) for m in s["mus"] for x in s["freqs"]])
     # the preset's walls are of the grains' material (box.wall unset), so μ is both
     axes = Points({"grains.0.material.mu": list(mu), "frequency": list(f)})
-    res = reuse_or_run(optimal(s), axes, ctx.raw(f"sweep_mu_R{s['R']}.h5"),
+    tag = "" if law == "viscous" else f"_{law}"
+    res = reuse_or_run(optimal(s, **over), axes, ctx.raw(f"sweep_mu_R{s['R']}{tag}.h5"),
                        progress=ctx.progress, replicates=s["R"])
     shape = (len(s["mus"]), len(s["freqs"]), s["R"])
     Z, fb_z = steady_or_window(res, "amplitude")
@@ -119,8 +135,14 @@ def report(data, out):
                              f"90 %: ± {100 * d['h90']:.2f}; SE {100 * d['se']:.2f}, "
                              f"ν {d['dof']:.1f})")
         rows.append(cells)
-    lines = scaffold.head("Friction coefficient and the FRF at the optimum (thesis §5.3.1)", prov,
-                          prov["sweep_wall_s"])
+    law = s.get("tangential_law", "viscous")
+    title = "Friction coefficient and the FRF at the optimum (thesis §5.3.1)"
+    lines = scaffold.head(title if law == "viscous" else
+                          f"{title}, under the Hertz–Mindlin spring", prov, prov["sweep_wall_s"])
+    if law != "viscous":
+        lines += [f"Tangential law: `tangential_law = {law!r}` (the spring with history, "
+                  "docs/physics.md §2; the materials' γ_s unused), not the thesis' viscous "
+                  "law.", ""]
     lines += [f"`sanchez2012-optimal` (Lz = 0.1225 m, C = 7.6 N s/m, N = 250, E = 2.03e9), "
               f"grain and wall μ ∈ {list(mus)}, frequencies {list(freqs)} Hz × **R = {s['R']} "
               f"independently poured beds**, {s['duration']} s per run after settling; steady "
@@ -135,7 +157,7 @@ def report(data, out):
     scaffold.write_summary(out, lines)
 
 
-main = scaffold.entry(__file__, __doc__, compute, report=report)
+main = scaffold.entry(__file__, __doc__, compute, options=options, report=report)
 
 
 if __name__ == "__main__":

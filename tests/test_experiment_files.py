@@ -44,14 +44,23 @@ NOT_IN_STORED_DATA = {"binary_mixtures": {"snapshots.png"}, "decay_vs_sine": {"f
                       "random_vs_sine": {"figure.png"}, "two_mode_structure": {"figure.png"}}
 
 
-@pytest.mark.parametrize("name", [n for n in STUDIES if (EXPERIMENTS / n / "data.h5").exists()])
-def test_stored_data_reproduce_their_summaries(name, tmp_path):
-    """``--from-data`` computes nothing: from the stored ``data.h5`` alone it writes the stored
-    ``summary.md`` byte for byte and every stored figure (but those of
-    :data:`NOT_IN_STORED_DATA`), and leaves the data file as it was."""
+#: Every stored result: ``experiments/<study>/data.h5`` and a study's other runs in folders of
+#: its own (``experiments/<study>/<run>/data.h5``: another time step, another law).
+STORED = sorted(p.parent.relative_to(EXPERIMENTS).as_posix()
+                for p in list(EXPERIMENTS.glob("*/data.h5")) + list(EXPERIMENTS.glob("*/*/data.h5"))
+                if p.relative_to(EXPERIMENTS).parts[0] in STUDIES)
+
+
+@pytest.mark.parametrize("run", STORED)
+def test_stored_data_reproduce_their_summaries(run, tmp_path):
+    """``--from-data`` computes nothing: from the stored ``data.h5`` alone (a study's main
+    result or another run of it) it writes the stored ``summary.md`` byte for byte and every
+    stored figure (but those of :data:`NOT_IN_STORED_DATA`), and leaves the data file as it
+    was."""
     import shutil
 
-    stored = EXPERIMENTS / name
+    name = run.split("/")[0]
+    stored = EXPERIMENTS / run
     shutil.copy(stored / "data.h5", tmp_path / "data.h5")
     before = (tmp_path / "data.h5").read_bytes()
     importlib.import_module(f"experiments.{name}").main(

@@ -410,24 +410,6 @@ def test_lammps_friction_quick(tmp_path):
     assert (tmp_path / "summary.md").read_text() == first
 
 
-@pytest.mark.parametrize("run, per_collision", [("dt_half", 100), ("dt_quarter", 200)])
-def test_friction_time_step_study_reproduces_its_summary(run, per_collision, tmp_path):
-    """The friction study's time-step runs (``experiments/lammps_friction/dt_half``: the
-    collisional case at ``dt_per_collision = 100``, both laws; ``dt_quarter``: at 200, the
-    spring alone) rewrite their stored summaries byte for byte from their data.h5 alone (the
-    report's path for a run with its own time step, and with one law)."""
-    import pathlib
-    import shutil
-
-    from helpers import load_experiment
-
-    stored = pathlib.Path(__file__).parent.parent / "experiments" / "lammps_friction" / run
-    shutil.copy(stored / "data.h5", tmp_path / "data.h5")
-    load_experiment("lammps_friction").main(["--from-data", "--out", str(tmp_path)])
-    assert (tmp_path / "summary.md").read_text() == (stored / "summary.md").read_text()
-    assert f"dt_per_collision = {per_collision}" in (tmp_path / "summary.md").read_text()
-
-
 @needs_lmp
 def test_lammps_runs_in_a_relative_folder(tmp_path, monkeypatch):
     """A study's ``--out`` may be relative: ``lmp`` runs in its folder, so the input and log
