@@ -36,6 +36,26 @@ def _chunk(cfg, r, v, w, large: int, block: int = 8, batch: int = 1, n_records=6
             {k: np.asarray(x) for k, x in rec.items()})
 
 
+def _mixture_bed(system, extras):
+    """The two-species bed of 50 grains (fast, spinning) as ``system`` with the overrides
+    ``extras``: copied into each cell at its corner (``cells``, species after species), or
+    moved into the circle of a cylinder (``container.radius``; the lattice is 9 mm about its
+    centre). Returns ``(config, r, v, w)``."""
+    cells = extras.get("cells", 1)
+    cfg = apply_overrides(mixture(system, "harmonic", counts=(20 // cells, 30 // cells)), extras)
+    r, v, w = mixture_bed(50 // cells)
+    if cells > 1:
+        from jaxdamp.physics.model import build
+
+        big = 20 // cells
+        src = np.r_[np.tile(np.arange(big), cells), np.tile(np.arange(big, len(r)), cells)]
+        origin = np.asarray(build(cfg)[1].origin)
+        r, v, w = r[src] + np.c_[origin, np.zeros(len(src))], v[src], w[src]
+    if "container.radius" in extras:
+        r = r + [extras["container.radius"] - 0.009, extras["container.radius"] - 0.009, 0.0]
+    return cfg, r, v, w
+
+
 @pytest.mark.parametrize("system, extras", [
     ("primary", {}), ("driven", {}), ("primary", BASE_EXTRAS), ("primary", STRUCTURE),
     ("driven", {"cells": 2}),
@@ -47,18 +67,7 @@ def test_large_path_equals_small_path(system, extras):
     meet): states and samples agree to round-off (the paths add the forces in another
     order), in the user's numbering of the grains; also with several damper cells, a 3-DOF
     structure and curved sides."""
-    cells = extras.get("cells", 1)
-    cfg = apply_overrides(mixture(system, "harmonic", counts=(20 // cells, 30 // cells)), extras)
-    r, v, w = mixture_bed(50 // cells)
-    if cells > 1:  # the bed copied into each cell (at its corner), species after species
-        from jaxdamp.physics.model import build
-
-        big = 20 // cells
-        src = np.r_[np.tile(np.arange(big), cells), np.tile(np.arange(big, len(r)), cells)]
-        origin = np.asarray(build(cfg)[1].origin)
-        r, v, w = r[src] + np.c_[origin, np.zeros(len(src))], v[src], w[src]
-    if "container.radius" in extras:  # the lattice (9 mm about its centre) in the circle
-        r = r + [extras["container.radius"] - 0.009, extras["container.radius"] - 0.009, 0.0]
+    cfg, r, v, w = _mixture_bed(system, extras)
     (sa, ra), (sb, rb) = (_chunk(cfg, r, v, w, large) for large in (10**9, 2))
     assert sa["work"][0][2] > 0  # grain pairs touched
     for f in FIELDS:
@@ -86,19 +95,7 @@ def test_large_path_with_springs_equals_small_path(system, extras):
     path to round-off, in the user's numbering; in two cells and in a cylinder too (the
     pairs' springs slip in all three, the walls' in the box and the cells; the springs held
     at the end compared by pair identity)."""
-    cells = extras.get("cells", 1)
-    cfg = apply_overrides(mixture(system, "harmonic", counts=(20 // cells, 30 // cells)),
-                          {**extras, "tangential_law": "mindlin"})
-    r, v, w = mixture_bed(50 // cells)
-    if cells > 1:  # the bed copied into each cell (at its corner), species after species
-        from jaxdamp.physics.model import build
-
-        big = 20 // cells
-        src = np.r_[np.tile(np.arange(big), cells), np.tile(np.arange(big, len(r)), cells)]
-        origin = np.asarray(build(cfg)[1].origin)
-        r, v, w = r[src] + np.c_[origin, np.zeros(len(src))], v[src], w[src]
-    if "container.radius" in extras:
-        r = r + [extras["container.radius"] - 0.009, extras["container.radius"] - 0.009, 0.0]
+    cfg, r, v, w = _mixture_bed(system, {**extras, "tangential_law": "mindlin"})
     (sa, ra), (sb, rb) = (_chunk(cfg, r, v, w, large, fields=FIELDS + SPRINGS)
                           for large in (10**9, 2))
     from jaxdamp.physics.model import CH

@@ -670,6 +670,18 @@ if AVAILABLE:
     walls_of = _kernel()(_grain_walls)
 
     @_kernel(inline="always")
+    def walls_in_cells(shifted, shape, law, g0, g1, r1, vp, rw, Rb, mb, ref, wk, wks, sec, og, gs,
+                       cg, frames, F, T, ex, ey, ez, z1, zdp, Lz, gd, half_skin2, sp):
+        """:data:`walls_of` of grains ``g0 … g1 − 1`` with ``shifted`` (several cells) as the
+        constant it must be for its branches to fold: a copy for each value."""
+        if shifted:
+            return walls_of(shape, law, g0, g1, U(1), r1, vp, rw, Rb, mb, ref, wk, wks, sec, og,
+                            True, gs, cg, frames, F, T, ex, ey, ez, z1, zdp, Lz, gd, half_skin2,
+                            sp)
+        return walls_of(shape, law, g0, g1, U(1), r1, vp, rw, Rb, mb, ref, wk, wks, sec, og,
+                        False, gs, cg, frames, F, T, ex, ey, ez, z1, zdp, Lz, gd, half_skin2, sp)
+
+    @_kernel(inline="always")
     def box_walls(law, g0, g1, r1, vp, rw, Rb, mb, ref, wk, wks, sec, og, gs, cg, frames, F, T,
                   ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2):
         """:func:`grain_walls` of grains ``g0 … g1 − 1`` of a one-cell box (a large bed's
@@ -1055,28 +1067,18 @@ if AVAILABLE:
             tot = out[k, 12:]
             for c in range(4):
                 tot[c] = 0.0
-            spw = (hw, vh, sh, wg, tot, zds, cgw, dt)
-            if shifted:
-                s = walls_of(shape, law, g0, g1, U(1), r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
-                             True, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, (grav, drag),
-                             half_skin2, spw)
-            else:
-                s = walls_of(shape, law, g0, g1, U(1), r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
-                             False, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, (grav, drag),
-                             half_skin2, spw)
+            s = walls_in_cells(shifted, shape, law, g0, g1, r1, vp, rw, Rw, mw, ref, wk, wks, sec,
+                               ogw, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, (grav, drag),
+                               half_skin2, (hw, vh, sh, wg, tot, zds, cgw, dt))
         # three copies, as in _advance_one: the container and the cells as constants fold the
         # branches of the common damper away (its walls pass: 34 -> 16.7 ns per grain, 50 000)
         elif shape == _BOX and not shifted:
             s = box_walls(law, g0, g1, r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw, gs, cgw,
                           frames, F, T, ex, ey, ez, z1, zdp, Lz, grav, drag, half_skin2)
-        elif not shifted:
-            s = walls_of(shape, law, g0, g1, U(1), r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
-                         False, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, (grav, drag),
-                         half_skin2, None)
         else:
-            s = walls_of(shape, law, g0, g1, U(1), r1, vp, rw, Rw, mw, ref, wk, wks, sec, ogw,
-                         True, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, (grav, drag),
-                         half_skin2, None)
+            s = walls_in_cells(shifted, shape, law, g0, g1, r1, vp, rw, Rw, mw, ref, wk, wks, sec,
+                               ogw, gs, cgw, frames, F, T, ex, ey, ez, z1, zdp, Lz, (grav, drag),
+                               half_skin2, None)
         (out[k, 0], out[k, 1], out[k, 2], out[k, 3], out[k, 4], out[k, 5], out[k, 6], out[k, 7],
          out[k, 8], out[k, 9], out[k, 10], far) = s
         out[k, 11] = 1.0 if far else 0.0
