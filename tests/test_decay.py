@@ -79,6 +79,7 @@ def test_bad_free_decay_input_is_refused_before_compute():
         validate(apply_overrides(presets.get("sanchez2012-impact"), {"primary.z0": 0.01}))
 
 
+@pytest.mark.long  # 39 s on 2 cores: CI's second step
 def test_decay_cli_quick_writes_curves_and_figure(tmp_path):
     """250 grains, 2 beds: the file holds each bed's cycles and the mean curve, the grains damp
     more than the empty box at some amplitude, the figure is written; bad input is refused

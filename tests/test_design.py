@@ -236,6 +236,7 @@ def test_s3_descent_walks_out_of_the_irregular_region():
     assert abs(d["lz"] - h_bed - best) / best < 0.02, (d, best)
 
 
+@pytest.mark.long  # 40 s on 2 cores: CI's second step
 def test_cli_optimize_default_objective_does_not_run_to_a_bound(tmp_path, capsys):
     """`jaxdamp optimize` on a DEM damper with no objective flag (C_eq at f0, trust region
     from the S3 proposal; small bed, --quick) ends at an interior optimum well inside the

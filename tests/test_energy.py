@@ -91,8 +91,8 @@ def test_sliding_sphere_ends_rolling_at_five_sevenths(engine):
     assert loss == pytest.approx(0.5 * m * v0**2 * 2 / 7, rel=0.02)
 
 
-@pytest.mark.parametrize("engine", [  # float32: 37 s each on 2 cores, in CI's second step
-    pytest.param(e, marks=pytest.mark.long) if e == "float32" else e
+@pytest.mark.parametrize("engine", [  # float32 37 s, jax 50 s each on 2 cores: CI's second step
+    pytest.param(e, marks=pytest.mark.long) if e in ("float32", "jax") else e
     for e in ENGINES_UNSIMULATED])
 @pytest.mark.parametrize("system", ["primary", "driven"])
 def test_energy_balance_closes_in_driven_damper(system, engine):

@@ -54,6 +54,7 @@ def _two_processes(out: str, partial: bool) -> list[dict]:
     return results
 
 
+@pytest.mark.long  # 35–40 s each on 2 cores: CI's second step
 @pytest.mark.parametrize("partial", [False, True], ids=["whole", "killed-and-resumed"])
 def test_sweep_across_two_processes_equals_one_process(tmp_path, partial):
     from test_sweep import _small_grid

@@ -87,6 +87,7 @@ def test_sharded_sweep_equals_unsharded(engine, tmp_path):
     assert res["work"] <= 1e-9 * max(res["loss"])
 
 
+@pytest.mark.long  # 56 s on 2 cores: CI's second step
 def test_killed_sweep_resumes_without_recomputing(tmp_path):
     cfg, axes = _small_grid()
     full = sweep(cfg, axes, progress=False, echo=None)
@@ -104,6 +105,7 @@ def test_killed_sweep_resumes_without_recomputing(tmp_path):
     assert res.summary["amplitude"].shape == (3, 2)
 
 
+@pytest.mark.long  # 32 s on 2 cores: CI's second step
 def test_reuse_or_run_reads_back_resumes_or_replaces(tmp_path):
     """Experiments' raw sweeps: a finished file of the same sweep is read back without
     computing (same results, its compute time kept), a partial one is resumed, a file holding
