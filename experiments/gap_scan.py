@@ -106,8 +106,9 @@ def force_coefficients(res, t0) -> dict:
     phase (:func:`~jaxdamp.analysis.response.grain_force_coefficients`) from ``t0`` [s] on."""
     f, rec, L = np.asarray(res.axes["frequency"], float), res.records, t0.shape[1]
     rows = [(i, res.point(i * L + j, r), t0[i, j, r]) for i, j, r in np.ndindex(t0.shape)]
-    c = [response.grain_force_coefficients(rec["t"][k], rec["z_box"][k], rec["force_box"][k],
-                                           f[i], t_start=t) for i, k, t in rows]
+    c = [response.grain_force_coefficients(  # force samples: means over the sample spacing
+        rec["t"][k], rec["z_box"][k], rec["force_box"][k], f[i], t_start=t,
+        interval=float(rec["t"][k][1] - rec["t"][k][0])) for i, k, t in rows]
     return {q: np.reshape([x[q] for x in c], t0.shape) for q in ("m_add", "c_add", "phase")}
 
 

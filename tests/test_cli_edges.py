@@ -185,7 +185,9 @@ def test_file_errors_answer_before_jax_is_imported(tmp_path):
              ["frf", "--preset", "sanchez2012-optimal", "--png", f"{tmp_path}/no/x.png"],
              ["optimize", "--preset", "sanchez2012-optimal", "--out", str(old)],
              ["plot", str(old), "--kind", "band", "--out", str(old)],
-             ["efficiency", "--preset", "varela2023-reference", "--png", f"{tmp_path}/no/x"]]
+             ["efficiency", "--preset", "varela2023-reference", "--png", f"{tmp_path}/no/x"],
+             ["map", "--preset", "sanchez2012-optimal", "--png", f"{tmp_path}/no/x"],
+             ["map", "--preset", "sanchez2012-optimal", "--amplitudes", "-1"]]
     code = ("import json, sys\nfrom jaxdamp.cli import main\n"
             f"codes = [main(a) for a in {cases!r}]\n"
             "print(json.dumps([codes, 'jax' in sys.modules, 'numba' in sys.modules]))")

@@ -24,6 +24,7 @@ def _small(**extra):
     return apply_overrides(presets.get("sanchez2012-optimal"), dict(SMALL, **extra))
 
 
+@pytest.mark.long  # half a minute (the marker's definition)
 def test_points_sweep_equals_the_grid_it_lists():
     """The same two configurations as a 1 x 2 grid and as Points: identical records (the
     layout only decides which configurations run, not how)."""

@@ -132,6 +132,7 @@ def test_dissipation_channels_close_the_energy_balance_of_a_driven_box():
     assert np.all(rec["n_floor_species"].sum(-1) == rec["n_floor"])
 
 
+@pytest.mark.long  # half a minute (the marker's definition)
 def test_efficiency_cli_quick_writes_data_and_figures(tmp_path):
     out = tmp_path / "b.h5"
     cmd = [sys.executable, "-m", "jaxdamp", "efficiency", "--preset", "varela2023-b",

@@ -128,6 +128,7 @@ def test_fused_equals_jax_on_fifty_grains():
     _agree(sb, sa, rb, ra)
 
 
+@pytest.mark.long  # half a minute (the marker's definition)
 def test_overflowing_lists_rerun_the_chunk_identically(monkeypatch):
     """Lists with room for one neighbour overflow; the chunk runs again from its inputs with
     room for the most any grain needed, and the result is bit for bit the one with room to

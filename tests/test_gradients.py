@@ -29,7 +29,7 @@ def _setup():
     return start(cfg, r, v, dt=2e-6)
 
 
-@pytest.mark.parametrize("remat", [False, True])
+@pytest.mark.parametrize("remat", [False, pytest.param(True, marks=pytest.mark.long)])
 def test_gradient_of_dissipation_wrt_lid_height(remat):
     model, pb, st, nbrs = _setup()
     fn = chunk_fn(model, 6, 50, remat=remat)
@@ -49,6 +49,7 @@ def test_gradient_of_dissipation_wrt_lid_height(remat):
     assert grad == pytest.approx(float(fd), rel=1e-4)
 
 
+@pytest.mark.long  # half a minute (the marker's definition)
 def test_gradients_finite_for_every_parameter():
     """No NaN from sqrt or norms at zero overlap / zero sliding speed, for all parameters."""
     model, pb, st, nbrs = _setup()

@@ -17,6 +17,7 @@ def _small(**extra):
         **extra))
 
 
+@pytest.mark.long  # half a minute (the marker's definition)
 def test_info_describes_sweep_run_and_optimiser_files(tmp_path, capsys):
     from jaxdamp.design import Objective, S3Problem, optimize
     from jaxdamp.studies.sweep import sweep

@@ -60,6 +60,8 @@ PSI = (0.5, 3.0, 10.0)
 #: The engines with the spring: the JAX engine and the native kernel (its first use compiles
 #: the kernel's spring form, about three minutes on 2 cores cold: long).
 ENGINES = ("jax", pytest.param("native", marks=pytest.mark.long))
+#: Both engines long: tests of half a minute on the JAX engine too.
+LONG_ENGINES = (pytest.param("jax", marks=pytest.mark.long), ENGINES[1])
 
 
 @pytest.mark.parametrize("engine", ENGINES)
@@ -165,7 +167,7 @@ def _squeezed(fraction, law="mindlin", engine="jax"):
     return t, x, stuck
 
 
-@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize("engine", LONG_ENGINES)
 def test_a_squeezed_grain_sticks_below_the_friction_limit_and_slides_above(engine):
     """Static friction, the spring's reason to be. At a quarter of the friction limit the grain
     sticks: its displacement in the box follows the analytic stuck oscillator (the box starts
@@ -197,7 +199,7 @@ def _gas_run(law, steps=10000, material=None, engine="jax"):
     return st, rec, float(st.e_start[0])
 
 
-@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize("engine", LONG_ENGINES)
 def test_energy_balance_closes_in_a_frictional_gas(engine):
     """27 grains colliding with friction in a free box, elastic normal law: the tangential
     springs dissipate by slip (and store, and give back), their stiffness work is booked in

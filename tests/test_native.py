@@ -43,6 +43,7 @@ def test_native_equals_jax_on_a_mixture(system, mixing, law, extras):
                                    err_msg=k)
 
 
+@pytest.mark.long  # half a minute (the marker's definition)
 def test_runs_with_both_engines_agree():
     """A damper run through the runner gives the same result with either engine over 0.02 s
     (grains dropped from the lattice, no settling: a settling bed is chaotic and amplifies

@@ -162,6 +162,7 @@ def test_bad_random_and_shock_input_is_refused_before_compute():
         rnd.measure(apply_overrides(cfg, BAND), [1.0], duration=3.0, progress=False, echo=None)
 
 
+@pytest.mark.long  # half a minute (the marker's definition)
 def test_random_command_writes_h1_and_refuses_bad_input(tmp_path):
     out = tmp_path / "rand.h5"
     cmd = [sys.executable, "-m", "jaxdamp", "random", "--preset", "sanchez2012-optimal",

@@ -73,6 +73,7 @@ def test_per_period_of_a_harmonic_signal():
     assert est["amplitude"].n == 2 and est["amplitude"].se == 0.0
 
 
+@pytest.mark.long  # half a minute (the marker's definition)
 def test_replicated_sweep_has_independent_beds_and_a_detected_steady_state():
     """A 1-point sweep of a small damper with R = 3 replicates: the beds differ (seeds
     0, 1, 2), replicate 0 is the unreplicated run to round-off, and every steady-state

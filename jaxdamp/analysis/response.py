@@ -43,7 +43,7 @@ def first_harmonic(t, x, f):
     return float(np.hypot(c, s)), float(np.arctan2(-s, c))
 
 
-def grain_force_coefficients(t, z_box, force, f, t_start=None) -> dict:
+def grain_force_coefficients(t, z_box, force, f, t_start=None, interval: float = 0.0) -> dict:
     """The grains' force on the box as an added mass and damper, from its phase.
 
     With the box at ``z = Re(Ẑ e^{iΩt})`` and the grains' vertical force on it
@@ -57,8 +57,16 @@ def grain_force_coefficients(t, z_box, force, f, t_start=None) -> dict:
     the box along its displacement — a mass; −90°: against its velocity — a damper; 180°: a
     negative mass). A bed locked to the box gives ``m_add = m_p``, ``c_add = 0``.
 
+    A recorded force is the mean over the sampling interval ``Δ`` ending at its sample
+    (``force_box``, :func:`jaxdamp.physics.energy.record`: impulse / interval): its first
+    harmonic is the force's times ``H = (1 − e^{−iΩΔ})/(iΩΔ) = e^{−iΩΔ/2} sin(ΩΔ/2)/(ΩΔ/2)``,
+    a lag of half an interval, which ``interval = Δ`` divides out (without it a bed moving
+    with the box would show a spurious ``c_add ≈ m_p Ω² Δ/2``: 1 N s/m for the thesis' bed at
+    15 Hz sampled every ms).
+
     Args: t [s], z_box [m], force [N] (positive upwards), f [Hz]; t_start [s]: first sample
-    used (the steady state). Returns ``{"m_add" [kg], "c_add" [N s/m], "phase" [rad]}``.
+    used (the steady state); interval [s]: the interval each force sample is the mean over (0:
+    instantaneous values). Returns ``{"m_add" [kg], "c_add" [N s/m], "phase" [rad]}``.
 
     >>> import numpy as np
     >>> t = np.linspace(0, 2, 4001); w = 2 * np.pi * 10
@@ -74,6 +82,9 @@ def grain_force_coefficients(t, z_box, force, f, t_start=None) -> dict:
     aF, pF = first_harmonic(t, F, f)
     ratio = aF / az * np.exp(1j * (pF - pz))
     Om = 2 * np.pi * f
+    if interval > 0:
+        x = 0.5 * Om * interval
+        ratio = ratio / (np.exp(-1j * x) * np.sin(x) / x)
     return {"m_add": float(ratio.real / Om**2), "c_add": float(-ratio.imag / Om),
             "phase": float(np.angle(ratio))}
 

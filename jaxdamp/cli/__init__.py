@@ -1,5 +1,5 @@
 """The ``jaxdamp`` command line: one module per subcommand (``run``, ``frf``, ``decay``, ``random``, ``optimize``,
-``efficiency``, ``materials``) and one for the file commands (``presets``, ``info``, ``plot``,
+``efficiency``, ``map``, ``materials``) and one for the file commands (``presets``, ``info``, ``plot``,
 ``export``).
 Side effects (files, printing) live here and in the studies; heavy imports (JAX) happen
 inside the commands, after the configuration is built and every output file is checked, so
@@ -16,7 +16,7 @@ import os
 import sys
 
 from jaxdamp import __version__, interrupt
-from jaxdamp.cli import decay, efficiency, files, frf, materials, optimize, random, run
+from jaxdamp.cli import decay, efficiency, files, frf, maps, materials, optimize, random, run
 from jaxdamp.config import ConfigError
 
 
@@ -41,7 +41,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="run batches whose estimated memory or file size exceeds what this "
                         "machine has (default: refuse them before computing, in one line)")
     sub = p.add_subparsers(dest="command", required=True)
-    for command in (run, frf, decay, random, optimize, efficiency, files, materials):
+    for command in (run, frf, decay, random, optimize, efficiency, maps, files, materials):
         command.register(sub)
     return p
 

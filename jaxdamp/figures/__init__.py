@@ -23,6 +23,9 @@ dimensionless quantities say what they are a ratio of (``"amplitude ratio Z / U"
   several instants (:func:`snapshot_grid_figure`), and :func:`animate`.
 - :mod:`jaxdamp.figures.efficiency` — dissipation efficiency versus drive amplitude
   (:func:`efficiency_figure`) and phase-resolved panels (:func:`phase_figure`).
+- :mod:`jaxdamp.figures.maps` — the damper's effective-field maps with their uncertainty
+  (:func:`map_figure`) and the response they predict by harmonic balance
+  (:func:`prediction_figure`).
 """
 
 from __future__ import annotations
@@ -42,6 +45,7 @@ from jaxdamp.figures.dynamics import (
     spectrum_figure,
 )
 from jaxdamp.figures.efficiency import efficiency_figure, phase_figure
+from jaxdamp.figures.maps import map_figure, prediction_figure
 from jaxdamp.figures.response import (
     BAND_PERIODS,
     band_figure,
@@ -61,4 +65,4 @@ __all__ = ["DPI", "FIGSIZE", "SPECIES_COLOURS", "figure", "save",
            "energy_figure", "energy_from_file", "decay_figure", "random_figure",
            "poincare_figure", "poincare_from_file", "spectrum_figure", "kantz_figure",
            "draw_snapshot", "snapshot_figure", "snapshot_from_file", "snapshot_grid_figure",
-           "animate", "efficiency_figure", "phase_figure"]
+           "animate", "efficiency_figure", "phase_figure", "map_figure", "prediction_figure"]

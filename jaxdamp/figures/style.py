@@ -13,7 +13,7 @@ FIGSIZE = {"frf": (7.0, 4.5), "band": (9.0, 6.0), "energy": (8.0, 7.5),
            "poincare": (6.5, 5.5), "spectrum": (7.0, 4.0), "kantz": (6.0, 4.0),
            "efficiency": (6.5, 4.3), "phase": (13.0, 4.0), "snapshot": (6.0, 8.0),
            "snapshot_panel": (2.6, 2.9), "animation": (5.0, 6.5),
-           "decay": (10.0, 4.0), "random": (7.0, 6.0)}
+           "decay": (10.0, 4.0), "random": (7.0, 6.0), "map": (11.0, 8.0)}
 #: colours of grain species 0, 1, 2, ... (the 2023 paper: red large, green small)
 SPECIES_COLOURS = ("tab:red", "tab:green", "tab:blue", "tab:orange", "tab:purple", "tab:brown",
                    "tab:pink", "tab:olive", "tab:cyan", "tab:gray")

@@ -97,10 +97,12 @@ def subplots(nrows: int = 1, ncols: int = 1, figsize=(7.0, 4.5), **kwargs):
 
 
 def save_figure(fig, out: str, name: str = "figure.png", dpi: int = 120) -> str:
-    """Lay out and write ``out/name`` (:func:`jaxdamp.figures.save`); returns the path."""
+    """Lay out (unless the figure has its own layout engine) and write ``out/name``
+    (:func:`jaxdamp.figures.save`); returns the path."""
     from jaxdamp.figures import save
 
-    fig.tight_layout()
+    if fig.get_layout_engine() is None:
+        fig.tight_layout()
     return save(fig, os.path.join(out, name), dpi=dpi)
 
 
