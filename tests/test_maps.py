@@ -173,11 +173,17 @@ def test_map_command_needs_a_structure_to_predict(capsys):
     assert "no structure to insert the map into" in capsys.readouterr().err
 
 
-def test_a_map_needs_grains_and_one_cell():
+def test_a_map_is_the_whole_damper_of_one_degree_of_freedom():
+    """The cells of a damper move as one in a map (all of them, on one degree of freedom);
+    cells on several degrees of freedom are refused, naming them."""
     from jaxdamp.studies.maps import alone
 
-    with pytest.raises(ConfigError, match="cells = 2"):
-        alone(apply_overrides(presets.get("sanchez2012-optimal"), ["cells=2"]))
+    cells = alone(presets.get("sanchez2012-cells"), 0.01)
+    assert cells.system == "driven" and cells.cells == 4 and cells.primary is None
+    spread = apply_overrides(presets.get("sanchez2012-chain"), ["cells=2",
+                                                                "structure.attach=[0, 1]"])
+    with pytest.raises(ConfigError, match=r"degrees of freedom \[0, 1\]"):
+        alone(spread)
 
 
 @pytest.mark.long

@@ -67,7 +67,8 @@ SAMPLES_PER_PERIOD = 64
 
 def alone(config: Config, amplitude: float | None = None) -> Config:
     """The damper of ``config`` alone: its container(s) and grains under the prescribed motion
-    ``z = A cos Ωt`` (system ``driven``), the primary, structure and any base excitation
+    ``z = A cos Ωt`` (system ``driven``; all its cells, which must then share one degree of
+    freedom: the map is the whole damper's), the primary, structure and any base excitation
     dropped. ``amplitude`` [m]: the drive's (default: the config's drive, or the primary's
     ``U``)."""
     if config.system == "impact":
@@ -75,9 +76,13 @@ def alone(config: Config, amplitude: float | None = None) -> Config:
                           "single particle; use a box or container preset)")
     if not config.grains:
         raise ConfigError("map: the configuration has no grains (grains = [])")
-    if config.cells != 1:
-        raise ConfigError(f"map: cells = {config.cells}: map one cell (cells = 1); a damper of "
-                          "k identical cells on one degree of freedom is k times its map")
+    from jaxdamp.physics.structure import attachments
+
+    if len(set(attachments(config))) > 1:
+        raise ConfigError(f"map: the {config.cells} cells sit on degrees of freedom "
+                          f"{list(attachments(config))} (structure.attach): a map moves the "
+                          "whole damper as one; map the cells of one degree of freedom (set "
+                          "cells and structure.attach to them)")
     if amplitude is None:
         amplitude = (config.drive.amplitude if config.drive is not None
                      else config.primary.U if config.primary is not None else 0.0)
