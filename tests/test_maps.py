@@ -64,6 +64,23 @@ def test_the_map_file_reads_back_what_was_measured(small_map):
     assert back.grain_mass == field.grain_mass and back.config == field.config
 
 
+@pytest.mark.long
+def test_a_bed_resting_in_a_cylinder_moves_as_its_mass():
+    """Every container: the cylinder's resting bed (Γ = 0.29) is its mass to 1 %, with no
+    damping (as the box's, :func:`test_a_bed_resting_on_the_floor_moves_as_its_mass`)."""
+    from jaxdamp.studies import maps
+
+    cfg = apply_overrides(presets.get("sanchez2012-cylinder"),
+                          ["grains.0.count=40", "grains.0.mass_ratio=None",
+                           "numerics.settle_time=0.3"])
+    field = maps.measure(cfg, [0.0005], [12.0], periods=4, transient=1, replicates=1,
+                         progress=False, echo=None)
+    assert field.config.container.shape == "cylinder"
+    m_p, W = field.grain_mass, 2 * math.pi * 12.0
+    assert field.values["m_eff"][0, 0, 0] == pytest.approx(m_p, rel=0.01)
+    assert abs(field.values["c_eff"][0, 0, 0]) < 0.01 * m_p * W
+
+
 def test_force_samples_averaged_over_their_interval_are_unlagged():
     """A force that is a mass and a damper, sampled as interval means (the records'
     ``force_box``): with ``interval`` the coefficients come back exactly; without it the
