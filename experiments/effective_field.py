@@ -233,8 +233,7 @@ def report(data, out) -> None:
         L.append(f"- C = {C:g} N s/m: " + ", ".join(f"{k} at {n} frequenc"
                                                     f"{'y' if n == 1 else 'ies'}"
                                                     for k, n in tally.items() if n) + ".")
-    if s.get("quick_mode", False):
-        L.append("- Quick mode: runs far shorter than the protocol — the estimates are rough.")
+    L += scaffold.quick_note(s)
     scaffold.write_summary(out, L)
 
 

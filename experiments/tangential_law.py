@@ -141,8 +141,7 @@ def report(data, out) -> None:
     L.append(f"- The resonance frequency shifts by "
              f"{pm(100 * fr['delta'], 100 * fr['ci95'], '+.2f', '.2f')} % "
              f"(u = {100 * fr['u']:.2f} %).")
-    if s.get("quick_mode", False):
-        L.append("- Quick mode: runs far shorter than the protocol — the estimates are rough.")
+    L += scaffold.quick_note(s)
     scaffold.write_summary(out, L)
 
 

@@ -224,8 +224,7 @@ def report(data, out) -> None:
     if edges:
         L.append("- Not bracketed by the heights (best sample at an end of the grid, the "
                  "optimum is that end): " + "; ".join(edges) + ".")
-    if s.get("quick_mode", False):
-        L.append("- Quick mode: runs far shorter than the protocol — the estimates are rough.")
+    L += scaffold.quick_note(s)
     scaffold.write_summary(out, L)
 
 

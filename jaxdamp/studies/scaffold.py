@@ -106,6 +106,12 @@ def save_figure(fig, out: str, name: str = "figure.png", dpi: int = 120) -> str:
     return save(fig, os.path.join(out, name), dpi=dpi)
 
 
+def quick_note(settings: dict) -> list[str]:
+    """The summary's line saying a run was quick (``settings["quick_mode"]``), or none."""
+    return (["- Quick mode: runs far shorter than the protocol — the estimates are rough."]
+            if settings.get("quick_mode", False) else [])
+
+
 def table(header, rows) -> list[str]:
     """A markdown table's lines: ``header`` (cells) and ``rows`` (each a list of cells, any
     value ``str``-ed)."""
