@@ -2,13 +2,13 @@
 mapped alone, the map inserted into the thesis' primary by harmonic balance, against the
 coupled DEM FRF of the same damper (issue 40).
 
-    python experiments/effective_field.py          # 7 amplitudes x 6 frequencies x 3 beds,
-                                                    # 5 + 20 periods at 12 Hz (~25 min on 2 cores)
+    python experiments/effective_field.py          # 6 amplitudes x 6 frequencies x 3 beds,
+                                                    # 5 + 15 periods at 12 Hz (~20 min on 2 cores)
     python experiments/effective_field.py --quick  # 2 x 2 x 2, 1 + 3 periods (minutes)
 
 **The map** (:func:`jaxdamp.studies.maps.measure`): ``sanchez2012-optimal`` (``Lz`` = 0.1225
 m), its box alone moved as ``z = A cos Ωt`` over the amplitudes the coupled box reaches near
-resonance (4–32 mm) and ``gap_scan``'s frequencies from 12 to 18.5 Hz, 3 beds, one batch:
+resonance (7–33 mm) and ``gap_scan``'s frequencies from 12 to 18.5 Hz, 3 beds, one batch:
 ``E_diss``, ``m_eff``, ``c_eff``, ``ψ`` per point with mean ± SE.
 
 **The prediction** (:func:`jaxdamp.analysis.harmonic_balance.predict`): each bed's map in the
@@ -58,8 +58,8 @@ def settings(quick: bool) -> dict:
     if quick:
         return dict(quick_mode=True, amplitudes=(0.01, 0.03), frequencies=(14.5, 15.25),
                     periods=3, transient=1, R=2, settle=0.15, C=(7.6, 26.3))
-    return dict(amplitudes=(0.004, 0.006, 0.009, 0.013, 0.018, 0.024, 0.032),
-                frequencies=(12.0, 13.5, 14.5, 15.25, 16.0, 18.5), periods=20, transient=5,
+    return dict(amplitudes=(0.007, 0.010, 0.014, 0.020, 0.026, 0.033),
+                frequencies=(12.0, 13.5, 14.5, 15.25, 16.0, 18.5), periods=15, transient=5,
                 R=3, settle=0.3, C=(7.6, 26.3))
 
 
