@@ -118,6 +118,10 @@ def test_a_constant_map_is_a_linear_added_mass_and_damper():
         exact = abs(K + 1j * W * C) * U / abs(K - W * W * (M + 0.227) + 1j * W * (C + 4.0))
         assert b.where == "inside" and len(b.roots) == 1
         assert b.single == pytest.approx(exact, rel=1e-10)
+    shuffled = hb.solve(A[::-1], m[::-1], c[::-1], 10.0, [[M]], [[K]], [[C]], [1.0], [0.0], U,
+                        0, f[::-1])  # nodes in any order
+    assert shuffled.roots == hb.solve(A, m, c, 10.0, [[M]], [[K]], [[C]], [1.0], [0.0], U, 0,
+                                      f).roots
     Ms, Ks, Cs, r, bf = _linear_structure()
     for attach in (0, 1):
         W = 2 * np.pi * 12.0

@@ -88,8 +88,9 @@ def solve(amplitudes, m_eff, c_eff, frequency: float, M, K, C, r, b, U: float,
     m_eff, c_eff = (np.asarray(x, float).reshape(len(A), len(f_map)) for x in (m_eff, c_eff))
     if not f_map.min() - 1e-9 <= frequency <= f_map.max() + 1e-9:
         return Balance((), "outside")
-    order = np.argsort(A)
-    A, m_eff, c_eff = A[order], m_eff[order], c_eff[order]
+    order, cols = np.argsort(A), np.argsort(f_map)  # nodes ascending, as interpolation needs
+    A, f_map = A[order], f_map[cols]
+    m_eff, c_eff = m_eff[order][:, cols], c_eff[order][:, cols]
     m_of, c_of = _interp(A, m_eff, f_map, frequency), _interp(A, c_eff, f_map, frequency)
     W = 2.0 * math.pi * frequency
     M, K, C = (np.atleast_2d(np.asarray(x, float)) for x in (M, K, C))
