@@ -91,8 +91,8 @@ def compute(quick: bool, log, ctx):
                         f_peak=a["f_peak"], Z_peak=a["Z_peak"],
                         stationary=a["stationary"], runs=a["runs"])
         o = a["optimum"][gs.OPT]
-        log(f"{law}: Lz* {o['mean']:.4f} ± {o['se']:.4f} m; {a['stationary']}/{a['runs']} "
-            "runs stationary")
+        log(f"{law}: Lz* {scaffold.pm(o['mean'], o['se'], 4, unit='m')}; "
+            f"{a['stationary']}/{a['runs']} runs stationary")
     return out, lambda path, prov: record(out, s, path, prov)
 
 

@@ -19,14 +19,13 @@ SMALL = ["grains.0.count=40", "numerics.settle_time=0.3"]
 def small_map(tmp_path_factory):
     """A resting bed (A = 0.5 mm at 12 Hz: Γ = A Ω²/g = 0.29 < 1) and a flying one (5 mm:
     Γ = 2.9), two beds each, written to a sweep file and read back."""
-    from jaxdamp.io import maps as map_file
     from jaxdamp.studies import maps
 
     cfg = apply_overrides(presets.get("sanchez2012-optimal"), SMALL)
     path = str(tmp_path_factory.mktemp("map") / "map.h5")
     field = maps.measure(cfg, [0.0005, 0.005], [12.0], periods=8, transient=2, replicates=2,
                          out=path, progress=False, echo=None)
-    return field, map_file.read(path)
+    return field, maps.read(path)
 
 
 def test_a_bed_resting_on_the_floor_moves_as_its_mass(small_map):

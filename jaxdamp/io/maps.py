@@ -11,11 +11,10 @@ import numpy as np
 from jaxdamp.io.common import put
 
 
-def write(path: str, field, periods: int, transient: int) -> None:
+def write(path: str, field, periods: int, transient: int, units: dict, labels: dict) -> None:
     """Store ``field`` (:class:`jaxdamp.studies.maps.EffectiveField`) in the ``/map`` group of
-    the sweep file ``path`` (replacing one there)."""
-    from jaxdamp.studies.maps import LABELS, UNITS
-
+    the sweep file ``path`` (replacing one there); the quantities' ``units`` and ``labels``
+    (:data:`jaxdamp.studies.maps.UNITS`, :data:`~jaxdamp.studies.maps.LABELS`)."""
     with h5py.File(path, "a") as h5:
         if "map" in h5:
             del h5["map"]
@@ -33,25 +32,25 @@ def write(path: str, field, periods: int, transient: int) -> None:
         put(g, "start", field.start, "s", dims=dims,
             what="each bed's steady start (MSER on its per-period losses), or where its "
                  "fixed fallback window began")
-        for q, unit in UNITS.items():
-            put(g, f"values/{q}", field.values[q], unit, dims=dims, what=LABELS[q])
+        for q, unit in units.items():
+            put(g, f"values/{q}", field.values[q], unit, dims=dims, what=labels[q])
             put(g, f"mean/{q}", field.mean(q), unit, dims="amplitude, frequency")
             put(g, f"se/{q}", field.se(q), unit, dims="amplitude, frequency",
                 what="standard error over the beds")
 
 
-def read(path: str):
-    """The :class:`jaxdamp.studies.maps.EffectiveField` stored by :func:`write`."""
-    from jaxdamp.config import ConfigError, from_json
-    from jaxdamp.studies.maps import UNITS, EffectiveField
+def read(path: str) -> dict:
+    """The fields of the :class:`jaxdamp.studies.maps.EffectiveField` stored by :func:`write`
+    (the configuration as JSON under ``config_json``; :func:`jaxdamp.studies.maps.read` builds
+    the map)."""
+    from jaxdamp.config import ConfigError
 
     with h5py.File(path, "r") as h5:
         if "map" not in h5:
             raise ConfigError(f"{path} holds no map (write one with `jaxdamp map --out FILE`)")
         g = h5["map"]
-        return EffectiveField(
-            amplitudes=g["amplitude"][()], frequencies=g["frequency"][()],
-            values={q: g["values"][q][()] for q in UNITS},
-            stationary=np.asarray(g["stationary"][()], bool), start=g["start"][()],
-            grain_mass=float(g.attrs["grain_mass"]), config=from_json(g.attrs["config"]),
-            wall_time=float(g.attrs["wall_time"]))
+        return dict(amplitudes=g["amplitude"][()], frequencies=g["frequency"][()],
+                    values={q: g["values"][q][()] for q in g["values"]},
+                    stationary=np.asarray(g["stationary"][()], bool), start=g["start"][()],
+                    grain_mass=float(g.attrs["grain_mass"]), config_json=g.attrs["config"],
+                    wall_time=float(g.attrs["wall_time"]))

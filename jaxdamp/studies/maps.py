@@ -139,7 +139,7 @@ def protocol(config: Config, amplitudes, frequencies, periods: int = 20,
 
 @dataclasses.dataclass(frozen=True)
 class EffectiveField:
-    """A measured map (:func:`measure`; read back by :func:`jaxdamp.io.maps.read`).
+    """A measured map (:func:`measure`; read back by :func:`read`).
 
     Attributes:
       amplitudes: drive amplitudes ``A`` [m], ``(A,)``.
@@ -254,5 +254,15 @@ def measure(config: Config, amplitudes, frequencies, periods: int = 20, transien
     if out:
         from jaxdamp.io import maps as map_file
 
-        map_file.write(out, field, periods=periods, transient=transient)
+        map_file.write(out, field, periods=periods, transient=transient, units=UNITS,
+                       labels=LABELS)
     return field
+
+
+def read(path: str) -> EffectiveField:
+    """The map :func:`measure` stored in the sweep file ``path`` (its ``/map`` group)."""
+    from jaxdamp.config import from_json
+    from jaxdamp.io import maps as map_file
+
+    d = map_file.read(path)
+    return EffectiveField(config=from_json(d.pop("config_json")), **d)
