@@ -48,8 +48,9 @@ def _run(cfg, r_box, v, w, zd0, engine, steps=6000):
             {k: v[0] for k, v in recs.items()})
 
 
-@pytest.mark.parametrize("engine", ["jax", "native"])
-@pytest.mark.parametrize("system", ["primary", "driven"])
+@pytest.mark.parametrize("engine, system", [
+    pytest.param("jax", "primary", marks=pytest.mark.long),  # half a minute
+    ("jax", "driven"), ("native", "primary"), ("native", "driven")])
 def test_drive_along_x_is_the_drive_along_z_rotated(engine, system):
     """No gravity: a gas of 27 grains in a cube driven along z, and the same gas rotated by
     the cyclic permutation (x, y, z) -> (z, x, y) (a proper rotation taking z to x) driven

@@ -247,7 +247,7 @@ def _packed_bed(vessel="box", mu=0.3, law="mindlin"):
     return start(cfg, r, v, w)
 
 
-@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize("engine", LONG_ENGINES)
 def test_resumes_bit_identically_from_a_checkpoint(engine):
     """With springs in the state: 2 000 steps after 2 000 equal 2 000 after a checkpoint of
     the same state (host arrays) and a restore, in every field (springs, partners, work); 27
@@ -331,7 +331,7 @@ def test_energy_balance_closes_in_a_damper_run_end_to_end(system):
     assert s["balance_error"] < 1e-3
 
 
-@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize("engine", LONG_ENGINES)
 def test_springs_follow_their_pairs_into_reallocated_lists(engine):
     """Lists re-allocated larger (``driver.grow``, as after an overflow: another capacity,
     other slots) take the springs over by pair identity: the next 2 000 steps equal those on
