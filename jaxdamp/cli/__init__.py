@@ -1,6 +1,6 @@
 """The ``jaxdamp`` command line: one module per subcommand (``run``, ``frf``, ``decay``, ``random``, ``optimize``,
-``efficiency``, ``map``, ``materials``) and one for the file commands (``presets``, ``info``, ``plot``,
-``export``).
+``efficiency``, ``map``, ``materials``) and one for the file commands (``presets``, ``info``,
+``plot``, ``export``).
 Side effects (files, printing) live here and in the studies; heavy imports (JAX) happen
 inside the commands, after the configuration is built and every output file is checked, so
 ``--help``, configuration errors and file errors answer at once.

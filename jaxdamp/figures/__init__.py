@@ -65,4 +65,5 @@ __all__ = ["DPI", "FIGSIZE", "SPECIES_COLOURS", "figure", "save",
            "energy_figure", "energy_from_file", "decay_figure", "random_figure",
            "poincare_figure", "poincare_from_file", "spectrum_figure", "kantz_figure",
            "draw_snapshot", "snapshot_figure", "snapshot_from_file", "snapshot_grid_figure",
-           "animate", "efficiency_figure", "phase_figure", "map_figure", "prediction_figure"]
+           "animate", "efficiency_figure", "phase_figure", "map_figure",
+           "prediction_figure"]
