@@ -48,7 +48,7 @@ from test_sweep import _small_grid
 from jaxdamp.config import apply_overrides
 from jaxdamp.studies.sweep import sweep
 cfg, axes = _small_grid()
-cfg = apply_overrides(cfg, ["numerics.engine={engine!r}"])
+cfg = apply_overrides(cfg, ["numerics.engine={engine!r}", "tangential_law={law!r}"])
 a = sweep(cfg, axes, progress=False, echo=None, shard=True, out={out!r})
 b = sweep(cfg, axes, progress=False, echo=None, shard=False)
 with h5py.File({out!r}) as h:
@@ -68,14 +68,16 @@ print("RESULT", json.dumps(out))
 
 
 @pytest.mark.long
-@pytest.mark.parametrize("engine", ["jax", "native"])
-def test_sharded_sweep_equals_unsharded(engine, tmp_path):
+@pytest.mark.parametrize("engine, law", [("jax", "viscous"), ("native", "viscous"),
+                                         ("native", "mindlin")])
+def test_sharded_sweep_equals_unsharded(engine, law, tmp_path):
     """4 forced host devices: the 6-point grid (padded to 8) sharded over them gives the same
     numbers as the unsharded batch, on either engine — the native one runs its kernel on
-    every device's shard (the file records the engine that ran and the device count) — and a
-    sharded sweep killed halfway resumes bit-identically."""
+    every device's shard (the file records the engine that ran and the device count), with
+    the tangential springs too (their rows rekeyed per shard) — and a sharded sweep killed
+    halfway resumes bit-identically."""
     env = dict(os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=4")
-    code = SHARD_SCRIPT.format(tests=os.path.dirname(__file__), engine=engine,
+    code = SHARD_SCRIPT.format(tests=os.path.dirname(__file__), engine=engine, law=law,
                                out=str(tmp_path / "sharded.h5"))
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
                          timeout=900)
