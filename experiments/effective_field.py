@@ -37,7 +37,6 @@ import os
 import numpy as np
 
 from jaxdamp.analysis.harmonic_balance import Balance, predict
-from jaxdamp.analysis.verdicts import Check, outcome
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides, from_dict
 from jaxdamp.io.common import put
@@ -157,11 +156,9 @@ def comparison(pred: dict, dem, margin: float) -> list[dict]:
         if not np.all(np.isfinite(Z)):
             rows.append(dict(f=f, result="no single root"))
             continue
-        sh = sy.shift(Z, dem[j], paired=False)
-        o = outcome(Check("equivalent", sh["delta"], sh["se"], n=max(int(sh["dof"]), 1) + 1,
-                          margin=margin))
-        rows.append(dict(f=f, result={"pass": "agrees", "fail": "disagrees"}.get(
-            o.result, "undecided"), half=o.h, **sh))
+        e = sy.equivalent_shift(Z, dem[j], margin)
+        rows.append(dict(e, f=f, result={"pass": "agrees", "fail": "disagrees"}.get(
+            e["outcome"], "undecided")))
     return rows
 
 

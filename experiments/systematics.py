@@ -284,6 +284,19 @@ def shift(x, ref, paired: bool) -> dict:
                 ci95=t_quantile(0.975, dof) * se)
 
 
+def equivalent_shift(x, ref, margin: float) -> dict:
+    """:func:`shift` of ``x`` against ``ref`` (unpaired, Welch) tested for equivalence against
+    the relative ``margin`` (:func:`jaxdamp.analysis.verdicts.outcome`, ``equivalent``: two
+    one-sided tests at 5 %): the shift's fields plus ``outcome`` (``pass``: equivalent,
+    ``fail``: differs beyond the margin, ``undecided``), ``half`` (t₀.₉₅ SE) and ``margin``."""
+    from jaxdamp.analysis.verdicts import Check, outcome
+
+    sh = shift(x, ref, paired=False)
+    o = outcome(Check("equivalent", sh["delta"], sh["se"], n=max(int(sh["dof"]), 1) + 1,
+                      margin=margin))
+    return dict(sh, outcome=o.result, half=o.h, margin=margin)
+
+
 #: What the budget measures at each point: the first is the point's default (the quantity its
 #: rows quote most).
 QUANTITIES = {"thesis_optimum": {"Z_res": "resonant amplitude Z_res",

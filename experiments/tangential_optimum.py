@@ -36,7 +36,6 @@ import os
 import numpy as np
 
 from jaxdamp.analysis.stats import replicate_extrema
-from jaxdamp.analysis.verdicts import Check, outcome
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.io.common import put
@@ -145,11 +144,9 @@ def verdicts(values: dict, m: dict) -> dict:
     margin (module docstring)."""
     out = {}
     for q, *_ in QUANTITIES:
-        sh = sy.shift(values["mindlin"][q], values["viscous"][q], paired=False)
-        o = outcome(Check("equivalent", sh["delta"], sh["se"], n=max(int(sh["dof"]), 1) + 1,
-                          margin=m[q], what=q))
-        out[q] = dict(sh, result={"pass": "unchanged", "fail": "changed"}.get(
-            o.result, "undecided"), half=o.h, margin=m[q])
+        e = sy.equivalent_shift(values["mindlin"][q], values["viscous"][q], m[q])
+        out[q] = dict(e, result={"pass": "unchanged", "fail": "changed"}.get(e["outcome"],
+                                                                             "undecided"))
     return out
 
 
