@@ -38,7 +38,8 @@ import numpy as np
 
 from jaxdamp.analysis.harmonic_balance import Balance, predict
 from jaxdamp.cases import presets
-from jaxdamp.config import apply_overrides, from_dict
+from jaxdamp.config import apply_overrides
+from jaxdamp.io import maps as map_file
 from jaxdamp.io.common import put
 from jaxdamp.studies import maps, scaffold
 
@@ -94,16 +95,8 @@ def record(result: dict, s: dict, out: str, prov: dict) -> None:
     field = result["field"]
     prov = dict(prov, sweep_wall_s=field.wall_time)
     with scaffold.data_file(out, prov, settings=s) as h:
-        g = h.create_group("map")
-        g.attrs.update(config=field.config.to_json(), grain_mass=field.grain_mass,
-                       wall_time=field.wall_time)
-        put(g, "amplitude", field.amplitudes, "m")
-        put(g, "frequency", field.frequencies, "Hz")
-        put(g, "stationary", field.stationary, "1", dims="amplitude, frequency, replicate")
-        put(g, "start", field.start, "s", dims="amplitude, frequency, replicate")
-        for q, unit in maps.UNITS.items():
-            put(g, f"values/{q}", field.values[q], unit, dims="amplitude, frequency, replicate",
-                what=maps.LABELS[q])
+        map_file.put_map(h, field, periods=s["periods"], transient=s["transient"],
+                         units=maps.UNITS, labels=maps.LABELS)
         for C, r in result["C"].items():
             c = h.create_group(f"C_{C:g}")
             roots = np.full((field.replicates, len(field.frequencies), MAX_ROOTS), np.nan)
@@ -119,15 +112,8 @@ def record(result: dict, s: dict, out: str, prov: dict) -> None:
 
 
 def field_of(data) -> maps.EffectiveField:
-    """The map stored in a ``data.h5`` (read back by :func:`jaxdamp.io.study.load`, which
-    parses the configuration's JSON)."""
-    g = data["map"]
-    return maps.EffectiveField(
-        amplitudes=np.asarray(g["amplitude"]), frequencies=np.asarray(g["frequency"]),
-        values={q: np.asarray(g["values"][q]) for q in maps.UNITS},
-        stationary=np.asarray(g["stationary"], bool), start=np.asarray(g["start"]),
-        grain_mass=float(g.attrs["grain_mass"]), config=from_dict(g.attrs["config"]),
-        wall_time=float(g.attrs["wall_time"]))
+    """The map stored in a ``data.h5`` (as :func:`jaxdamp.io.study.load` reads it)."""
+    return maps.from_group(data["map"])
 
 
 def prediction_of(data, C: float) -> dict:

@@ -261,8 +261,21 @@ def measure(config: Config, amplitudes, frequencies, periods: int = 20, transien
 
 def read(path: str) -> EffectiveField:
     """The map :func:`measure` stored in the sweep file ``path`` (its ``/map`` group)."""
-    from jaxdamp.config import from_json
     from jaxdamp.io import maps as map_file
 
-    d = map_file.read(path)
-    return EffectiveField(config=from_json(d.pop("config_json")), **d)
+    return _field(map_file.read(path))
+
+
+def from_group(g) -> EffectiveField:
+    """The map in a ``map`` group (:func:`jaxdamp.io.maps.put_map`): an open h5py group, or a
+    study file's as :func:`jaxdamp.io.study.load` reads it."""
+    from jaxdamp.io import maps as map_file
+
+    return _field(map_file.fields(g))
+
+
+def _field(d: dict) -> EffectiveField:
+    from jaxdamp.config import from_dict, from_json
+
+    c = d.pop("config")
+    return EffectiveField(config=from_json(c) if isinstance(c, str) else from_dict(c), **d)
