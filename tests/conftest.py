@@ -6,3 +6,14 @@ import os
 # (a CPU-only machine; set NUMBA_ENABLE_CUDASIM=0 to run them on a GPU). numba.cuda reads this
 # once, when first imported, so it is set before any test imports it.
 os.environ.setdefault("NUMBA_ENABLE_CUDASIM", "1")
+
+# JAX's persistent compilation cache, shared by the xdist workers and by CI's two pytest steps
+# (and by the command lines the tests start): a program compiled once (most of them are the
+# same few jitted time loops at a handful of batch shapes) is read back instead of compiled
+# again. Keyed by JAX on the program, its options and the jax/jaxlib version, so a stale entry
+# is never used; kept in the git-ignored .pytest_cache; JAX_COMPILATION_CACHE_DIR="" turns it
+# off.
+os.environ.setdefault("JAX_COMPILATION_CACHE_DIR",
+                      os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
+                                   ".pytest_cache", "jax-compile"))
+os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0.3")

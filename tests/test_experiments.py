@@ -60,6 +60,7 @@ def test_gap_scan_quick(tmp_path):
         assert h["C_7.6/fit_absolute/M_reps"].attrs["units"] == "kg"
 
 
+@pytest.mark.slow  # not in CI (its time budget): pytest -m slow
 def test_stiffness_quick(tmp_path):
     """Thesis modulus and the preset's reduced one: dt follows t_c ∝ E^-2/5 exactly, both
     runs close their energy balance, and the short-run amplitudes agree within 25 %."""
@@ -127,6 +128,7 @@ def test_bed_dynamics_quick(tmp_path):
     assert "regime z_cm" in (tmp_path / "summary.md").read_text()
 
 
+@pytest.mark.slow  # not in CI (its time budget): pytest -m slow
 def test_gap_optimisation_quick(tmp_path):
     """Every part of the gap-optimisation study on tiny settings: S3 exact gradients equal
     central differences (1 %), the DEM window derivative equals central differences of the same
@@ -170,6 +172,7 @@ def test_gap_optimisation_quick(tmp_path):
     assert "Forward vs reverse" in text and "2 independently poured beds" in text
 
 
+@pytest.mark.slow  # not in CI (its time budget): pytest -m slow
 def test_design_optimisation_quick(tmp_path):
     """Every part of the design-optimisation study on tiny settings: the reference and the
     estimator give finite derivatives with standard errors, the scan, trust region and FD
@@ -190,6 +193,7 @@ def test_design_optimisation_quick(tmp_path):
     assert "## 3–5. Searches" in (tmp_path / "summary.md").read_text()
 
 
+@pytest.mark.slow  # not in CI (its time budget): pytest -m slow
 def test_wall_damping_quick(tmp_path):
     """Both grain–wall conventions on the reference box and class a (test-sized): under
     'calibrated' every species bounces off the wall with ε = 0.75 at 1 m/s, under 'mixed' the
@@ -208,6 +212,7 @@ def test_wall_damping_quick(tmp_path):
     assert "Relative change" in (tmp_path / "summary.md").read_text()
 
 
+@pytest.mark.slow  # not in CI (its time budget): pytest -m slow
 def test_design_starts_and_variables_quick(tmp_path):
     """Both parts on tiny settings (~1 min): the multi-fidelity optimiser from both starts reports optima with intervals and
     DEM seconds; SPSA, the equal-budget random search and the confirmation give finite
@@ -228,6 +233,7 @@ def test_design_starts_and_variables_quick(tmp_path):
     assert "## B. Three design variables" in (tmp_path / "summary.md").read_text()
 
 
+@pytest.mark.slow  # not in CI (its time budget): pytest -m slow
 @pytest.mark.skipif(__import__("shutil").which("lmp") is None,
                     reason="LAMMPS (`lmp`) is not on PATH; apt-get install lammps")
 def test_lammps_crosscheck_quick(tmp_path):
@@ -263,6 +269,7 @@ def test_lammps_crosscheck_quick(tmp_path):
     assert (tmp_path / "figure.png").stat().st_size > 10_000
 
 
+@pytest.mark.slow  # not in CI (its time budget): pytest -m slow
 def test_binary_mixtures_quick(tmp_path):
     """The 2023 paper's families at test size (σ = 0.5, 2 amplitudes, 1 + 2 periods, 2 beds):
     every family runs, the class builders' conserved quantities hold in the runs, the energy balance
@@ -298,6 +305,7 @@ def test_binary_mixtures_quick(tmp_path):
         assert h["varela2023-b/sigma_0.5/phase/vz_cm_species"].shape == (2, 100, 2)
 
 
+@pytest.mark.slow  # not in CI (its time budget): pytest -m slow
 def test_bed_dynamics_long_quick(tmp_path):
     """Twin pairs at 14.5 and 21 Hz, 1.2 s, on 2 independently poured beds (the package's
     replicate seeds 0, 1): every pair is bit-identical until the perturbation, the beds differ
@@ -371,6 +379,7 @@ def test_cylinder_packing_quick(tmp_path):
     assert (tmp_path / "summary.md").read_text() == first and "Dixon 1988" in first
 
 
+@pytest.mark.slow  # not in CI (its time budget): pytest -m slow
 def test_universality_limits_quick(tmp_path):
     """γ_n, γ_s at 0 and 1e4, steel and lead, 50 grains, 2 beds, 0.3 s: switching a damping
     constant off removes its loss channel (collisional share 0 with γ_n = 0, 1 with γ_s = 0);
@@ -406,6 +415,7 @@ def test_single_grain_frf_quick(tmp_path):
     assert "Verdict:" in (tmp_path / "summary.md").read_text()
 
 
+@pytest.mark.slow  # not in CI (its time budget): pytest -m slow
 def test_grain_number_quick(tmp_path):
     """Thesis §3.1 on small settings (N = 250, 500; 3 heights × 3 frequencies × 2 beds, 0.3 s):
     the energy balance closes; per N the middle height (0.11 m) damps the resonance more than
@@ -467,6 +477,7 @@ def test_frf_fit_quality(tmp_path):
     assert (tmp_path / "figure.png").stat().st_size > 10_000
 
 
+@pytest.mark.slow  # not in CI (its time budget): pytest -m slow
 def test_decay_vs_sine_quick(tmp_path):
     """Free decay and stepped sine on the thesis damper (2 beds each, short): both give the
     grains' damping ratio ΔW/(2πKZ²) on every bed; the sine points inside the decay's
@@ -501,6 +512,7 @@ def test_gap_minimum_quick(tmp_path):
     assert (tmp_path / "figure.png").stat().st_size > 10_000 and (tmp_path / "data.h5").exists()
 
 
+@pytest.mark.slow  # not in CI (its time budget): pytest -m slow
 def test_systematics_quick(tmp_path):
     """The budget reads its protocols from the first seconds (periods) of long runs: a run of
     the protocol's own length gives the same per-bed values, to round-off, at both points; and
@@ -552,6 +564,7 @@ def test_friction_coefficient_quick(tmp_path):
     assert "| 0.3 |" in text and "reference" in text and "90 %" in text
 
 
+@pytest.mark.slow  # not in CI (its time budget): pytest -m slow
 def test_bed_dynamics_details_quick(tmp_path):
     """7.5, 8 and 14.5 Hz × 2 short beds: every measure is finite per bed, the 8 Hz line share
     is a fraction, and the impact episodes are counted per period on lid and floor."""

@@ -61,13 +61,15 @@ def _agree(got, ref, records_got, records_ref, rtol=1e-9):
                                    err_msg=k)
 
 
+#: CI runs the driven and the cylinder case (long); the others, in the CUDA simulator half a
+#: minute to two minutes each, are `slow` (CI's time budget): `pytest -m slow tests/test_fused.py`
 @pytest.mark.parametrize("system, mixing, law, extras", [
-    ("primary", "arithmetic", "hertz", {}),
+    pytest.param("primary", "arithmetic", "hertz", {}, marks=pytest.mark.slow),
     pytest.param("driven", "harmonic", "hertz", {}, marks=pytest.mark.long),
-    pytest.param("driven", "geometric", "hertz", {}, marks=pytest.mark.long),
-    pytest.param("primary", "harmonic", "linear", {}, marks=pytest.mark.long),
-    pytest.param("primary", "arithmetic", "hertz", BASE_EXTRAS, marks=pytest.mark.long),
-    pytest.param("primary", "arithmetic", "hertz", STRUCTURE, marks=pytest.mark.long),
+    pytest.param("driven", "geometric", "hertz", {}, marks=pytest.mark.slow),
+    pytest.param("primary", "harmonic", "linear", {}, marks=pytest.mark.slow),
+    pytest.param("primary", "arithmetic", "hertz", BASE_EXTRAS, marks=pytest.mark.slow),
+    pytest.param("primary", "arithmetic", "hertz", STRUCTURE, marks=pytest.mark.slow),
     pytest.param("primary", "arithmetic", "hertz", ["container.shape=cylinder",
                                                     "container.radius=0.012",
                                                     "container.Lz=0.02"],
@@ -191,7 +193,7 @@ def test_fused_without_a_gpu_is_refused_before_any_compute(monkeypatch):
         validate(cfg)
 
 
-@pytest.mark.long
+@pytest.mark.slow  # seven minutes of PTX compiles: not in CI (its time budget)
 def test_the_kernel_compiles_for_a_device():
     """The kernel lowers to PTX for compute capability 9.0 (H100/H200) with numba-cuda's
     compiler on this CPU-only machine and links to SASS with nvJitLink (its registers and
@@ -228,7 +230,7 @@ def test_the_kernel_compiles_for_a_device():
     assert res.stdout.count("ptx") == 2
 
 
-@pytest.mark.long
+@pytest.mark.slow  # two minutes in the CUDA simulator: not in CI (its time budget)
 def test_a_fused_run_resumes_bit_identically(tmp_path):
     """``jaxdamp run`` on the fused engine (4 grains at 100 Hz, no settling, 4 chunks): stopped
     after 2 chunks and resumed, the file and the final state are the uninterrupted run's bit

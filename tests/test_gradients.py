@@ -29,7 +29,7 @@ def _setup():
     return start(cfg, r, v, dt=2e-6)
 
 
-@pytest.mark.parametrize("remat", [False, pytest.param(True, marks=pytest.mark.long)])
+@pytest.mark.parametrize("remat", [False, pytest.param(True, marks=pytest.mark.slow)])  # slow: CI budget
 def test_gradient_of_dissipation_wrt_lid_height(remat):
     model, pb, st, nbrs = _setup()
     fn = chunk_fn(model, 6, 50, remat=remat)
@@ -64,7 +64,7 @@ def test_gradients_finite_for_every_parameter():
         assert np.all(np.isfinite(np.asarray(g))), name
 
 
-@pytest.mark.long  # ~30 s: runs in CI's second step (examples or long)
+@pytest.mark.slow  # ~1-2 min: not in CI (its time budget): pytest -m slow
 def test_float32_contact_laws_give_the_float64_gradient():
     """With ``numerics.precision = 'float32'`` (contact laws in float32, geometry, state and
     sums in float64) the reverse-mode gradient of the dissipation with respect to the lid

@@ -388,6 +388,7 @@ def test_oblique_impacts_match_jaxdamp(law, tmp_path):
                                                               abs=1e-4)
 
 
+@pytest.mark.slow  # not in CI (its time budget): pytest -m slow
 @needs_lmp
 @pytest.mark.examples
 def test_lammps_friction_quick(tmp_path):

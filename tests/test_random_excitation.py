@@ -208,6 +208,7 @@ def test_random_vs_sine_experiment_quick(tmp_path):
     assert (tmp_path / "figure.png").stat().st_size > 10_000
 
 
+@pytest.mark.slow  # not in CI (its time budget): pytest -m slow
 @pytest.mark.examples
 def test_horizontal_drive_experiment_quick(tmp_path):
     """Vertical against horizontal base motion on test-sized settings: an FRF per direction

@@ -68,8 +68,9 @@ print("RESULT", json.dumps(out))
 
 
 @pytest.mark.long
-@pytest.mark.parametrize("engine, law", [("jax", "viscous"), ("native", "viscous"),
-                                         ("native", "mindlin")])
+@pytest.mark.parametrize("engine, law", [
+    ("jax", "viscous"), ("native", "viscous"),
+    pytest.param("native", "mindlin", marks=pytest.mark.slow)])  # slow: CI's time budget
 def test_sharded_sweep_equals_unsharded(engine, law, tmp_path):
     """4 forced host devices: the 6-point grid (padded to 8) sharded over them gives the same
     numbers as the unsharded batch, on either engine — the native one runs its kernel on
