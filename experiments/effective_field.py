@@ -5,6 +5,8 @@ coupled DEM FRF of the same damper (issue 40).
     python experiments/effective_field.py          # 6 amplitudes x 6 frequencies x 3 beds,
                                                     # 5 + 15 periods at 12 Hz (~20 min on 2 cores)
     python experiments/effective_field.py --quick  # 2 x 2 x 2, 1 + 3 periods (minutes)
+    python experiments/effective_field.py --amplitudes 7 10 14 18 20 22 24 26 28 30 33 \
+        --out experiments/effective_field/dense     # every 2 mm over 18-30 mm (~25 min)
 
 **The map** (:func:`jaxdamp.studies.maps.measure`): ``sanchez2012-optimal`` (``Lz`` = 0.1225
 m), its box alone moved as ``z = A cos Ωt`` over the amplitudes the coupled box reaches near
@@ -76,8 +78,19 @@ def coupled(C: float, frequencies) -> np.ndarray:
     return np.asarray(g["amplitude"])[idx, lz.index(LZ), :]
 
 
+def options(ap):
+    ap.add_argument("--amplitudes", type=float, nargs="+", metavar="MM",
+                    help="the map's amplitudes [mm] instead of the default grid (e.g. every 2 mm "
+                         "over 18-30 mm with --out experiments/effective_field/dense)")
+
+
 def compute(quick: bool, log, ctx):
     s = settings(quick)
+    if ctx.args.amplitudes:
+        A = sorted(ctx.args.amplitudes)
+        if A[0] <= 0:
+            raise SystemExit(f"--amplitudes: {A[0]:g} mm: must be > 0")
+        s["amplitudes"] = tuple(round(a * 1e-3, 9) for a in A)
     cfg = apply_overrides(presets.get(THESIS), {"numerics.settle_time": s["settle"]})
     field = maps.measure(cfg, s["amplitudes"], s["frequencies"], periods=s["periods"],
                          transient=s["transient"], replicates=s["R"],
@@ -220,7 +233,7 @@ def report(data, out) -> None:
     scaffold.write_summary(out, L)
 
 
-main = scaffold.entry(__file__, __doc__, compute, report=report)
+main = scaffold.entry(__file__, __doc__, compute, options=options, report=report)
 
 
 if __name__ == "__main__":
