@@ -29,7 +29,8 @@ def _setup():
     return start(cfg, r, v, dt=2e-6)
 
 
-@pytest.mark.parametrize("remat", [False, pytest.param(True, marks=pytest.mark.slow)])  # slow: CI budget
+# remat: slow (CI's time budget); without it, in the default suite
+@pytest.mark.parametrize("remat", [False, pytest.param(True, marks=pytest.mark.slow)])
 def test_gradient_of_dissipation_wrt_lid_height(remat):
     model, pb, st, nbrs = _setup()
     fn = chunk_fn(model, 6, 50, remat=remat)
