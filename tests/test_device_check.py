@@ -11,7 +11,7 @@ import pytest
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
-@pytest.mark.slow  # not in CI (its time budget); its thesis-scan sibling is
+@pytest.mark.slow  # not in CI (its time budget); its thesis-scan sibling stays
 def test_device_check_quick_runs_and_writes_its_rows(tmp_path):
     out = tmp_path / "device.json"
     done = subprocess.run([sys.executable, os.path.join(ROOT, "benchmarks", "device_check.py"),
