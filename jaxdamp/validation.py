@@ -77,20 +77,6 @@ def engine_precision_error(engine: str, precision: str) -> str | None:
     return None
 
 
-def engine_tangential_error(engine: str, tangential: str) -> str | None:
-    """Why ``engine`` cannot run the tangential law ``tangential``, or ``None``: the
-    tangential spring with history (``"mindlin"``) runs on the JAX engine and the native
-    kernel (beds of any size, any number of cells); the fused device step has the viscous
-    law only."""
-    if tangential == "viscous" or engine in ("jax", "auto"):
-        return None
-    if engine == "fused":
-        return (f"tangential_law = {tangential!r} runs on the JAX engine and the native kernel "
-                "(the fused kernel has the viscous tangential law): set numerics.engine = "
-                "'native', 'jax' or 'auto'")
-    return None
-
-
 #: Most lines a random base motion may have (``(f_n - f_1)/resolution``): every line costs a
 #: cosine and a sine per time step.
 MAX_LINES = 20000
@@ -470,8 +456,6 @@ def validate(config: Config) -> Config:
                           f"{PRECISIONS}")
     if (why := engine_precision_error(num.engine, num.precision)) is not None:
         raise ConfigError(why)
-    if (why := engine_tangential_error(num.engine, config.tangential_law)) is not None:
-        raise ConfigError(why)  # (the native kernel's size limit: once the counts are known)
     if num.engine == "native" and importlib.util.find_spec("numba") is None:
         raise ConfigError("numerics.engine = 'native' needs numba (pip install numba)")
     if num.engine == "fused":

@@ -197,9 +197,9 @@ def test_fused_without_a_gpu_is_refused_before_any_compute(monkeypatch):
 def test_the_kernel_compiles_for_a_device():
     """The kernel lowers to PTX for compute capability 9.0 (H100/H200) with numba-cuda's
     compiler on this CPU-only machine and links to SASS with nvJitLink (its registers and
-    shared memory within an SM's limits), for the thesis bed and for a cylinder: the device's
-    first minutes are not spent on compile errors. A process of its own: numba.cuda cannot
-    leave the simulator once imported."""
+    shared memory within an SM's limits), for the thesis bed, for a cylinder and with the
+    tangential springs: the device's first minutes are not spent on compile errors. A
+    process of its own: numba.cuda cannot leave the simulator once imported."""
     script = textwrap.dedent("""
         import jax, numpy as np
         jax.config.update("jax_enable_x64", True)
@@ -208,7 +208,7 @@ def test_the_kernel_compiles_for_a_device():
         from jaxdamp.engine import driver, fused
         from jaxdamp.physics.model import build
         for over in ([], ["container.shape=cylinder", "container.radius=0.021",
-                          "container.Lz=0.1225"]):
+                          "container.Lz=0.1225"], ["tangential_law=mindlin"]):
             cfg = apply_overrides(presets.get("sanchez2012-optimal"), over)
             model, params = build(cfg)
             n = model.n
@@ -227,7 +227,7 @@ def test_the_kernel_compiles_for_a_device():
     res = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,
                          text=True, timeout=900)
     assert res.returncode == 0, res.stderr[-3000:]
-    assert res.stdout.count("ptx") == 2
+    assert res.stdout.count("ptx") == 3
 
 
 @pytest.mark.slow  # two minutes in the CUDA simulator: not in CI (its time budget)

@@ -16,6 +16,12 @@ step for one system). This module advances a whole chunk in **one** kernel launc
   hold the pairs closer than ``R_i + R_j + skin`` (box frame, size-aware, as the CPU kernel)
   and are rebuilt, by every grain against all others, at a chunk's first step and whenever a
   grain moved more than ``skin / 2``; the skin is widened for fast grains as on the CPU;
+* with tangential springs (``tangential_law = "mindlin"``) each grain keeps its own copy of
+  a pair's spring beside its list (exactly the opposite of its partner's copy: the contact is
+  odd), steps it with the native kernel's ``pair_spring`` and, at a rebuild, carries it from
+  the old list to the new one through the state's rows (partners in increasing order, as the
+  other engines keep them), by pair identity; a spring the rows have no room for is counted
+  lost and the runner redoes the chunk with larger lists, as on the CPU;
 * per step: thread 0 predicts the mount, every thread predicts its grains, the lists are
   rebuilt if needed, every thread adds its grains' walls (:func:`~jaxdamp.engine.native.
   grain walls`) and pairs and applies the velocity-Verlet corrector and the rotation to
@@ -55,6 +61,7 @@ from collections import namedtuple
 import numpy as np
 
 from jaxdamp.engine import native
+from jaxdamp.physics.contact import G_STAR
 from jaxdamp.physics.containers import section_scalar, side_curvature_scalar
 from jaxdamp.physics.energy import record_row
 from jaxdamp.physics.integrate import rotate_scalar, rotate_series_scalar
@@ -80,23 +87,32 @@ MAX_REGISTERS: int | None = None
 #: Neighbours a grain's list holds at first; a chunk whose lists overflow is run again from
 #: its inputs with room for the most any grain needed (a pure function of its inputs).
 NEIGHBOURS = 16
-#: The values the block sums per step (a tree in shared memory).
+#: The values the block sums per step (a tree in shared memory); with tangential springs
+#: four more (:data:`_SPRING_SUMS`).
 _SUMS = ("e_walls", "pw_n", "pw_f", "box_z", "floor_lid", "n_floor", "n_lid", "n_wall",
          "l_floor", "l_lid", "drag", "pp_e", "pp_n", "pp_f", "health")
 N_SUMS = len(_SUMS)
+#: The springs' sums of a step (:func:`jaxdamp.engine.native.pair_spring`'s ``tot``): the
+#: turned energy, the pairs' and the walls' slip losses, the springs' energy. Each pair is
+#: visited from both its grains (full lists): its part enters at half weight.
+_SPRING_SUMS = ("turned", "pp_slip", "pw_slip", "e_spring")
 #: Where the sums of the pair pass start (the grain pass fills the ones before).
 _PAIR_SUMS = _SUMS.index("pp_e")
 _DRIVEN = DRIVEN.id
 _IN, _PRIM, _PPN, _PPF, _PWN, _PWF, _DRAG, _PW_FLOOR, _PW_LID, _PW_SIDE = (
     CH[k] for k in ("input", "primary_damping", "pp_normal", "pp_friction", "pw_normal",
                     "pw_friction", "drag", "pw_floor", "pw_lid", "pw_side"))
+_PP_SLIP, _PW_SLIP, _STIFF = (CH[k] for k in ("pp_slip", "pw_slip", "spring_stiffness"))
 #: Per-system scratch in device memory: per-grain rows ``(n, 3)`` / ``(n, 4)`` (the CPU
 #: kernel's layout: its grain pass runs on them), the structure's vectors, and for several
 #: cells each grain's loss power and force on its container (``grain`` ``(n, 2)``), each cell's
 #: (``pwc``, ``bzc`` ``(cells,)``), the cells' containers' positions and velocities
-#: (``frames`` ``(cells, 2)``) and the grains' forces on the degrees of freedom (``fdof``).
+#: (``frames`` ``(cells, 2)``) and the grains' forces on the degrees of freedom (``fdof``);
+#: with tangential springs, the half-step velocities ``vh`` and spins ``sh = R ω`` ``(n, 3)``
+#: with which they grow, per grain ``wg = (G*, R*`` of a plane, ``R*`` of the sides``)`` and
+#: each cell's walls' mean velocity over the step ``zds`` ``(cells,)`` (sized 0 without).
 _SCRATCH = ("r1", "vp", "rw", "ref", "F", "T", "wk", "wks", "y1", "ydp", "xs", "xds", "acc",
-            "tmp", "grain", "pwc", "bzc", "frames", "fdof")
+            "tmp", "grain", "pwc", "bzc", "frames", "fdof", "vh", "sh", "wg", "zds")
 Scratch = namedtuple("Scratch", _SCRATCH)
 
 
@@ -157,13 +173,16 @@ def available() -> tuple[bool, str]:
     return False, "numba-cuda finds no CUDA device (the fused engine runs on NVIDIA GPUs)"
 
 
-def scratch_layout(n: int, ndof: int, cells: int) -> tuple[Scratch, int]:
+def scratch_layout(n: int, ndof: int, cells: int, springs: bool = False
+                   ) -> tuple[Scratch, int]:
     """Offsets of :data:`_SCRATCH` in a system's scratch row and the row's length."""
+    ns = n if springs else 0
     sizes = {"r1": 3 * n, "vp": 3 * n, "rw": 3 * n, "ref": 3 * n, "F": 3 * n, "T": 3 * n,
              "wk": 4 * n, "wks": 4 * n,
              "y1": ndof - 1, "ydp": ndof - 1, "xs": ndof, "xds": ndof, "acc": ndof,
              "tmp": ndof, "grain": 2 * n, "pwc": cells, "bzc": cells, "frames": 2 * cells,
-             "fdof": ndof}
+             "fdof": ndof, "vh": 3 * ns, "sh": 3 * ns, "wg": 3 * ns,
+             "zds": cells if springs else 0}
     off, k = {}, 0
     for name in _SCRATCH:
         off[name] = k
@@ -191,18 +210,27 @@ def compile_note() -> str | None:
 
 
 @functools.lru_cache(maxsize=16)
-def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
+def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None,
+            springs: bool = False):
     """The kernel for the mount, contact law and container numbered ``mount``, ``law``,
     ``shape`` (``Dims``), compiled by numba-cuda on first use (for the device, or run in the
     simulator). The three are constants of the compiled code, so the paths of the others
     fold away: with every path in one kernel the thread spilled twice as much (1080 B of
     stores instead of 508 at 255 registers, sm_90: :func:`resources`,
-    ``benchmarks/RESULTS.md``)."""
+    ``benchmarks/RESULTS.md``). ``springs``: the tangential springs with history
+    (``tangential_law = "mindlin"``, :func:`_springs_to_list`), a constant too: the viscous
+    kernel has none of their code."""
     from numba import float64, njit
 
     grain_walls = native.grain_walls
     pair_constants = native.pair_constants
     pair_contact = native.pair_contact
+    pair_spring = native.pair_spring
+    held_pair = native.held_pair
+    cell_steps = native._cell_steps
+    increment_of = native._INCREMENT_OF
+    g_star = G_STAR
+    n_sums = N_SUMS + (len(_SPRING_SUMS) if springs else 0)
     wall_constants = native.wall_constants
     cell_sums = native.cell_sums
     cell_frames = native.cell_frames
@@ -235,13 +263,62 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
             cuda.syncthreads()
             s //= 2
 
+    @njit(inline="always")  # (a CPU form: numba-cuda compiles it into the kernel)
+    def springs_to_rows(i, n, nb, nc, cap, hsb, spq, spp):
+        """Grain ``i``'s springs from its list (``hsb[k, i]``, the spring of its ``k``-th
+        neighbour ``nb[k, i]``) into its state rows (``spq[i]``, ``spp[i]``: partners in
+        increasing order, padded with ``n``; the JAX engine's and the native kernel's form,
+        :mod:`jaxdamp.engine.history`); returns how many had no room (lost)."""
+        KS = spq.shape[1]
+        c = 0
+        lost = 0
+        for k in range(min(nc[i], cap)):
+            if hsb[k, i, 0] != 0.0 or hsb[k, i, 1] != 0.0 or hsb[k, i, 2] != 0.0:
+                if c < KS:
+                    spq[i, c] = nb[k, i]
+                    spp[i, c, 0], spp[i, c, 1], spp[i, c, 2] = (hsb[k, i, 0], hsb[k, i, 1],
+                                                                hsb[k, i, 2])
+                    c += 1
+                else:
+                    lost += 1
+        for m in range(c, KS):
+            spq[i, m] = n
+            spp[i, m, 0], spp[i, m, 1], spp[i, m, 2] = 0.0, 0.0, 0.0
+        return lost
+
+    @njit(inline="always")  # (a CPU form: numba-cuda compiles it into the kernel)
+    def springs_to_list(i, n, nb, nc, cap, hsb, spq, spp):
+        """Grain ``i``'s springs from its state rows onto its list, by pair identity (both in
+        increasing partner order: one merge); returns how many springs found no listed pair
+        (lost: a touching pair is always listed, so none unless a list overflowed)."""
+        KS = spq.shape[1]
+        c = 0
+        lost = 0
+        for k in range(min(nc[i], cap)):
+            j = nb[k, i]
+            while c < KS and spq[i, c] < j:
+                if spp[i, c, 0] != 0.0 or spp[i, c, 1] != 0.0 or spp[i, c, 2] != 0.0:
+                    lost += 1
+                c += 1
+            if c < KS and spq[i, c] == j:
+                hsb[k, i, 0], hsb[k, i, 1], hsb[k, i, 2] = spp[i, c, 0], spp[i, c, 1], spp[i, c, 2]
+                c += 1
+            else:
+                hsb[k, i, 0], hsb[k, i, 1], hsb[k, i, 2] = 0.0, 0.0, 0.0
+        while c < KS and spq[i, c] < n:
+            if spp[i, c, 0] != 0.0 or spp[i, c, 1] != 0.0 or spp[i, c, 2] != 0.0:
+                lost += 1
+            c += 1
+        return lost
+
     @cuda.jit(**({} if simulated() or max_registers is None else
                   {"max_registers": max_registers}))
     def advance(n_records, record_every, dims, skin0, st, pm, so, po, sid, bounds, cg, cdof, rec,
-                scr, sc, nbr, cnt, status):
+                scr, sc, nbr, cnt, status, hs, lostd):
         st, pm, sid, bounds, rec = plain(st), plain(pm), plain(sid), plain(bounds), plain(rec)
         cg, cdof = plain(cg), plain(cdof)
         scr, nbr, cnt, status = plain(scr), plain(nbr), plain(cnt), plain(status)
+        hs, lostd = plain(hs), plain(lostd)
         b = cuda.blockIdx.x
         tid = cuda.threadIdx.x
         nt = cuda.blockDim.x
@@ -301,15 +378,32 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
         bzc = s[sc.bzc:sc.bzc + K]
         frames = s[sc.frames:sc.frames + 2 * K].reshape((K, 2))
         fdof = s[sc.fdof:sc.fdof + ndof]
+        # the tangential springs (sized 0 without): the pairs' in the state's rows between
+        # launches and on the lists (hsb, a spring per slot) within one, the walls' in the rows
+        KS, NW = dims.slots, dims.walls
+        spq = row[so.spring_partner:so.spring_partner + n * KS].reshape((n, KS))
+        spp = row[so.spring_pair:so.spring_pair + 3 * n * KS].reshape((n, KS, 3))
+        hw = row[so.spring_wall:so.spring_wall + 3 * n * NW].reshape((n, NW, 3))
+        ns = n if springs else 0
+        vhs = s[sc.vh:sc.vh + 3 * ns].reshape((ns, 3))
+        shs = s[sc.sh:sc.sh + 3 * ns].reshape((ns, 3))
+        wg = s[sc.wg:sc.wg + 3 * ns].reshape((ns, 3))
+        zds = s[sc.zds:sc.zds + (K if springs else 0)]
+        hsb = hs[b]
+        wtot = cuda.local.array(4, float64)  # a step's spring sums: the walls', the pairs'
+        ptot = cuda.local.array(4, float64)
+        lost = 0
+        e_spring = row[so.e_spring] if springs else 0.0
         spread = False  # cells on several degrees of freedom (else all on the box's)
         for c in range(K):
             spread = spread | (cdof[c] != 0)
-        red = cuda.shared.array((N_SUMS, THREADS), float64)
+        red = cuda.shared.array((n_sums, THREADS), float64)
         sh = cuda.shared.array(4, float64)  # t1, z1, z'1 of the step; 1 once it blew up
         pw = cuda.local.array(N_CHANNELS, float64)
         for c in range(N_CHANNELS):  # the channels the step never sets (springs) stay 0
             pw[c] = 0.0
-        parts = cuda.local.array(N_SUMS, float64)
+        inc = cuda.local.array(N_CHANNELS, float64)
+        parts = cuda.local.array(n_sums, float64)
         ft = cuda.local.array(6, float64)  # a grain's force and torque
 
         # once per launch: the walls' constants of each grain, the skin from the fastest grain
@@ -328,6 +422,10 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
             r_max = max(r_max, Rb[i])
             for c in range(3):
                 ref[i, c] = 0.0  # set at the first step's build
+            if springs:
+                wg[i, 0] = wtab[sid[i], g_star]
+                wg[i, 1] = Rb[i]
+                wg[i, 2] = Rb[i] / (1.0 - Rb[i] * kappa)
         red[0, tid] = v2
         red[1, tid] = r_max
         block_sum(red, tid, nt, 2, True)
@@ -363,6 +461,8 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                         ydp[j] = ydv[j] + dt * yddv[j]
                     if cells:
                         cell_frames(cdof, z1, zdp, y1, ydp, frames)
+                    if springs:
+                        cell_steps(cdof, z, z1, yv, y1, dt, zds)
                     sh[0], sh[1], sh[2] = t1, z1, zdp
                 cuda.syncthreads()
                 z1, zdp = sh[1], sh[2]
@@ -374,13 +474,31 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                         r1[i, c] = rb[i, c] + dt * vb[i, c] + hdt2 * ab[i, c]
                         vp[i, c] = vb[i, c] + dt * ab[i, c]
                         rw[i, c] = Rb[i] * (wb[i, c] + dt * alb[i, c])
-                (parts[0], parts[1], parts[2], parts[3], parts[4], parts[5], parts[6], parts[7],
-                 parts[8], parts[9], parts[10],
-                 far) = grain_walls(shape, law, tid, n, nt, r1, vp, rw, Rb, mb, ref, wk, wks, sec,
-                                    og, cells, grain, cg, frames, Fs, Ts, ex, ey, ez, z1, zdp,
-                                    Lz, (grav, drag), half_skin2, None)
+                    if springs:  # the half-step velocities and R ω, with which they grow
+                        for c in range(3):
+                            vhs[i, c] = vb[i, c] + 0.5 * dt * ab[i, c]
+                            shs[i, c] = Rb[i] * (wb[i, c] + 0.5 * dt * alb[i, c])
+                for c in range(4):
+                    wtot[c] = 0.0
+                    ptot[c] = 0.0
+                if springs:
+                    (parts[0], parts[1], parts[2], parts[3], parts[4], parts[5], parts[6],
+                     parts[7], parts[8], parts[9], parts[10], far) = grain_walls(
+                        shape, law, tid, n, nt, r1, vp, rw, Rb, mb, ref, wk, wks, sec, og, cells,
+                        grain, cg, frames, Fs, Ts, ex, ey, ez, z1, zdp, Lz, (grav, drag),
+                        half_skin2, (hw, vhs, shs, wg, wtot, zds, cg, dt))
+                else:
+                    (parts[0], parts[1], parts[2], parts[3], parts[4], parts[5], parts[6],
+                     parts[7], parts[8], parts[9], parts[10], far) = grain_walls(
+                        shape, law, tid, n, nt, r1, vp, rw, Rb, mb, ref, wk, wks, sec, og, cells,
+                        grain, cg, frames, Fs, Ts, ex, ey, ez, z1, zdp, Lz, (grav, drag),
+                        half_skin2, None)
                 if cuda.syncthreads_or(1 if far else 0) or first:
-                    # the lists anew, from the predicted positions in the box frame
+                    # the lists anew, from the predicted positions in the box frame (the
+                    # springs off the old lists first, back onto the new ones after)
+                    if springs and not first:
+                        for i in range(tid, n, nt):
+                            lost += springs_to_rows(i, n, nb, nc, cap, hsb, spq, spp)
                     first = False
                     for i in range(tid, n, nt):
                         ref[i, 0] = r1[i, 0] - ex * z1
@@ -401,6 +519,8 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                         nc[i] = m
                         if m > cap:
                             cuda.atomic.max(status, b, m)
+                        if springs:
+                            lost += springs_to_list(i, n, nb, nc, cap, hsb, spq, spp)
                     cuda.syncthreads()
                 # this thread's grains: pairs, corrector, rotation
                 for k in range(_PAIR_SUMS, N_SUMS):
@@ -416,13 +536,25 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                         dz = r1[i, 2] - r1[j, 2]
                         d2 = dx * dx + dy * dy + dz * dz
                         rs = Rb[i] + Rb[j]
-                        if d2 < rs * rs:
+                        if springs:  # (its spring also where it held one: released)
+                            hsi = hsb[:, i, :]
+                            touch = d2 < rs * rs or held_pair((hsi,), k)
+                        else:
+                            touch = d2 < rs * rs
+                        if touch:
                             _, kk, gg, gs, mu = pair_constants(law, tab, sid[i], sid[j], Rb[i],
                                                                Rb[j], mb[i], mb[j])
-                            gx, gy, gz, cx, cy, cz, e, ln, lf = pair_contact(
-                                law, dx, dy, dz, d2, rs, ux - vp[j, 0], uy - vp[j, 1],
-                                uz - vp[j, 2], rw[i, 0] + rw[j, 0], rw[i, 1] + rw[j, 1],
-                                rw[i, 2] + rw[j, 2], kk, gg, gs, mu)
+                            if springs:
+                                gx, gy, gz, cx, cy, cz, e, ln, lf = pair_spring(
+                                    law, dx, dy, dz, d2, rs, ux - vp[j, 0], uy - vp[j, 1],
+                                    uz - vp[j, 2], rw[i, 0] + rw[j, 0], rw[i, 1] + rw[j, 1],
+                                    rw[i, 2] + rw[j, 2], kk, gg, mu, tab[sid[i], sid[j], g_star],
+                                    Rb[i] * Rb[j] / rs, (hsi, vhs, shs, ptot, dt), k, i, j)
+                            else:
+                                gx, gy, gz, cx, cy, cz, e, ln, lf = pair_contact(
+                                    law, dx, dy, dz, d2, rs, ux - vp[j, 0], uy - vp[j, 1],
+                                    uz - vp[j, 2], rw[i, 0] + rw[j, 0], rw[i, 1] + rw[j, 1],
+                                    rw[i, 2] + rw[j, 2], kk, gg, gs, mu)
                             fx += gx
                             fy += gy
                             fz += gz
@@ -458,9 +590,14 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                         qw, qx, qy, qz = rotate_scalar(qb[i, 0], qb[i, 1], qb[i, 2], qb[i, 3],
                                                        ox, oy, oz, dt)
                     qb[i, 0], qb[i, 1], qb[i, 2], qb[i, 3] = qw, qx, qy, qz
-                for k in range(N_SUMS):
+                if springs:  # a pair's part at half weight (both its grains list it)
+                    parts[N_SUMS] = wtot[0] + 0.5 * ptot[0]
+                    parts[N_SUMS + 1] = 0.5 * ptot[1]
+                    parts[N_SUMS + 2] = wtot[2]
+                    parts[N_SUMS + 3] = wtot[3] + 0.5 * ptot[3]
+                for k in range(n_sums):
                     red[k, tid] = parts[k]
-                block_sum(red, tid, nt, N_SUMS, False)
+                block_sum(red, tid, nt, n_sums, False)
                 if cells:  # each cell's loss and force, a thread per cell
                     cell_sums(grain[:, 0], bounds, pwc, tid, nt)
                     if spread:
@@ -485,13 +622,22 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
                         pwc[0] = pp_n + pp_f + pw_n + pw_f
                     health = box_z + e_el + pp_n + pp_f + pw_n + pw_f + z1 + zdp + zdd1
                     health += red[14, 0]
+                    if springs:  # the springs' slip and stiffness channels
+                        pw[_PP_SLIP] = red[N_SUMS + 1, 0]
+                        pw[_PW_SLIP] = red[N_SUMS + 2, 0]
+                        pw[_STIFF] = (e_spring - red[N_SUMS, 0]) / dt
                     if not math.isfinite(health):
                         zd = math.nan
                         sh[3] = 1.0
                     else:
+                        for c in range(N_CHANNELS):  # (a step's own energies taken whole at
+                            src = increment_of[c] if springs else -1  # its end: INCREMENT_OF)
+                            inc[c] = 0.5 * dt * (pw[src] - power[src]) if src >= 0 else 0.0
                         for c in range(N_CHANNELS):
-                            work[c] = work[c] + 0.5 * dt * (power[c] + pw[c])
+                            work[c] = work[c] + 0.5 * dt * (power[c] + pw[c]) + inc[c]
                             power[c] = pw[c]
+                        if springs:
+                            e_spring = red[N_SUMS + 3, 0]
                         for c in range(K):
                             work_cell[c] = work_cell[c] + 0.5 * dt * (power_cell[c] + pwc[c])
                             power_cell[c] = pwc[c]
@@ -527,6 +673,13 @@ def _kernel(mount: int, law: int, shape: int, max_registers: int | None = None):
             row[so.z_max], row[so.z_min], row[so.step] = zmax, zmin, step
             row[so.e_elastic], row[so.f_floor_lid], row[so.f_box] = e_el, floor_lid, box_z
             row[so.n_floor], row[so.n_lid], row[so.n_side] = n_floor, n_lid, n_side
+            if springs:
+                row[so.e_spring] = e_spring
+        if springs:  # the pairs' springs into the state's rows (the walls' are there)
+            for i in range(tid, n, nt):
+                lost += springs_to_rows(i, n, nb, nc, cap, hsb, spq, spp)
+            if lost:
+                cuda.atomic.add(lostd, b, lost)
 
     return advance
 
@@ -566,22 +719,25 @@ def _advance_packed(model, state_packed, params_packed, state_layout, param_layo
     dims, so, po, sid, bounds, cg, cdof, width = native.kernel_args(model, state_layout,
                                                                     param_layout)
     n, batch = model.n, st.shape[0]
-    sc, size = scratch_layout(n, dims.ndof, dims.cells)
-    kernel = _kernel(dims.mount, dims.law, dims.shape, MAX_REGISTERS)
+    sc, size = scratch_layout(n, dims.ndof, dims.cells, model.springs)
+    kernel = _kernel(dims.mount, dims.law, dims.shape, MAX_REGISTERS, model.springs)
     cap = NEIGHBOURS
     while True:
         d_st = cuda.to_device(st)
         d_rec = cuda.device_array((batch, int(n_records), width))
         status = cuda.to_device(np.zeros(batch, np.int64))
+        lost = cuda.to_device(np.zeros(batch, np.int64))
         kernel[batch, threads_per_block(n)](
             int(n_records), int(record_every), dims, float(model.skin), d_st, cuda.to_device(pm),
             so, po, cuda.to_device(sid), cuda.to_device(bounds), cuda.to_device(cg),
             cuda.to_device(cdof), d_rec,
             cuda.device_array((batch, size)), sc, cuda.device_array((batch, cap, n), np.int32),
-            cuda.device_array((batch, n), np.int32), status)
+            cuda.device_array((batch, n), np.int32), status,
+            # the pairs' springs, one per slot of the lists (a placeholder without)
+            cuda.device_array((batch, cap, n, 3) if model.springs else (batch, 1, 1, 3)), lost)
         need = int(status.copy_to_host().max())
-        if need <= cap:  # (no tangential springs here: nothing lost)
-            return d_st.copy_to_host(), d_rec.copy_to_host(), np.zeros(batch, np.int64)
+        if need <= cap:  # lost: springs the state's rows had no room for (larger lists)
+            return d_st.copy_to_host(), d_rec.copy_to_host(), lost.copy_to_host()
         cap = need + need // 4  # room for the most any grain needed, and some
 
 
@@ -597,14 +753,24 @@ def compile_ptx(model, states, params, cc: tuple[int, int] = (9, 0)) -> str:
         raise RuntimeError("compile_ptx needs numba-cuda's compiler: unset NUMBA_ENABLE_CUDASIM")
     dims, so, po, sid, bounds, cg, cdof, _ = native.kernel_args(model, native.layout(states),
                                                       native.layout(params))
-    sc, _ = scratch_layout(model.n, dims.ndof, dims.cells)
+    sc, _ = scratch_layout(model.n, dims.ndof, dims.cells, model.springs)
     f2 = numba.float64[:, ::1]
     sig = (numba.int64, numba.int64, numba.typeof(dims), numba.float64, f2, f2,
            numba.typeof(so), numba.typeof(po), numba.typeof(sid), numba.typeof(bounds),
            numba.typeof(cg), numba.typeof(cdof), numba.float64[:, :, ::1], f2,
-           numba.typeof(sc), numba.int32[:, :, ::1], numba.int32[:, ::1], numba.int64[::1])
-    kernel = _kernel(dims.mount, dims.law, dims.shape)
-    ptx, _ = cuda.compile_ptx(kernel.py_func, sig, cc=cc)
+           numba.typeof(sc), numba.int32[:, :, ::1], numba.int32[:, ::1], numba.int64[::1],
+           numba.float64[:, :, :, ::1], numba.int64[::1])
+    kernel = _kernel(dims.mount, dims.law, dims.shape, springs=model.springs)
+    # A function the kernel calls apart (the walls' spring, ``tangential.mindlin_called``) is
+    # compiled by numba-cuda for the current device's compute capability; without a device
+    # that is ``cc``'s (numba-cuda 0.30 asks the driver, which is absent here).
+    from unittest import mock
+
+    from numba.cuda import dispatcher
+
+    target = type("Target", (), {"compute_capability": tuple(cc)})
+    with mock.patch.object(dispatcher, "get_current_device", lambda: target):
+        ptx, _ = cuda.compile_ptx(kernel.py_func, sig, cc=cc)
     return ptx
 
 
