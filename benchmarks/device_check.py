@@ -4,6 +4,8 @@ command, under 5 minutes on an accelerator.
     python benchmarks/device_check.py                     # on the machine with the device
     python benchmarks/device_check.py --quick             # a smoke test of the script (CPU)
     python benchmarks/device_check.py --budget 200 --batches 1,256,4096
+    python benchmarks/device_check.py --tangential-law mindlin --precisions float64
+                                                          # the spring with history
 
 1. **A moving state made on the CPU.** The ``sanchez2012-optimal`` bed (250 grains), settled,
    32 copies at 8–25 Hz driven ``--warm`` seconds by the native kernel on the host (grains
@@ -23,7 +25,10 @@ command, under 5 minutes on an accelerator.
    device's float64 XLA step, and its fused step, beat the native kernel at the same batch
    (the native kernel's largest measured batch standing in for larger ones; the fused step
    only if it agreed with the CPU to 1e-9 m), printed as the
-   :data:`jaxdamp.engine.choice.MEASURED` entry for this device.
+   :data:`jaxdamp.engine.choice.MEASURED` entry for this device. With ``--tangential-law
+   mindlin`` every path runs the tangential spring with history (its springs loaded by the
+   warm-up): agreement and cost of the spring on the device; ``auto``'s table stays the
+   viscous law's (it does not pick the fused step for the spring).
 
 5. **The scan** (``--scan``): the 30-frequency × 10-height × 8-replicate thesis scan (2 400
    systems) as the one command a user types (``jaxdamp frf ... --replicates 8``), over
@@ -64,12 +69,13 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 EVERY = 100  # steps per sample: the production chunk's record interval
 
 
-def moving_state(copies: int, warm: float):
+def moving_state(copies: int, warm: float, tangential: str = "viscous"):
     """``(model, host states, host params, host reference positions)``: ``copies`` systems of
     the thesis bed at 8–25 Hz, settled and driven ``warm`` s by the native kernel (on the
-    host, whatever the default device)."""
+    host, whatever the default device), under the tangential law ``tangential``."""
     cfg = apply_overrides(presets.get("sanchez2012-optimal"), ["numerics.settle_time=0.3",
-                                                               "numerics.engine='native'"])
+                                                               "numerics.engine='native'",
+                                                               f"tangential_law={tangential!r}"])
     model, params = build(cfg)
     bed = settle(cfg, model, params)
     pb = jax.tree_util.tree_map(lambda x: jnp.stack([x] * copies), params)
@@ -208,6 +214,8 @@ def main(argv=None):
     ap.add_argument("--scan-duration", type=float, default=0.25,
                     help="simulated seconds per system of the scan (settling comes first)")
     ap.add_argument("--scan-engine", default="auto", help="numerics.engine of the scan")
+    ap.add_argument("--tangential-law", default="viscous", choices=("viscous", "mindlin"),
+                    help="the tangential law of every path (mindlin: the spring with history)")
     ap.add_argument("--quick", action="store_true",
                     help="tiny settings: a check that the script runs (any machine)")
     ap.add_argument("--json", help="output (default benchmarks/results/device_<device>_<date>"
@@ -222,6 +230,7 @@ def main(argv=None):
     kind = dev.device_kind
     info = {"jax": jax.__version__, "backend": jax.default_backend(), "device": kind,
             "devices": len(jax.devices()), "host_cores": os.cpu_count(),
+            "tangential_law": a.tangential_law,
             "date": datetime.date.today().isoformat(),
             "command": "python benchmarks/device_check.py " + " ".join(argv or [])}
     print(json.dumps(info), flush=True)
@@ -230,7 +239,8 @@ def main(argv=None):
         scan = thesis_scan(a.scan_duration, a.scan_engine, a.quick)
         _write(a, kind, info, {"scan": scan}, t_start)
         return
-    model, states, params, ref = moving_state(32 if not a.quick else 4, a.warm)
+    model, states, params, ref = moving_state(32 if not a.quick else 4, a.warm,
+                                              a.tangential_law)
     print(f"moving state: {states.t.shape[0]} systems of {model.n} grains driven {a.warm} s "
           f"({time.perf_counter() - t_start:.0f} s)", flush=True)
     agree = agreement(model, states, params, ref, a.agree_steps, precisions)
@@ -285,8 +295,12 @@ def main(argv=None):
               flush=True)
     entry = crossover(rows, kind, f"benchmarks/device_check.py, {info['date']}, jax "
                                   f"{info['jax']}", agree)
-    print("\njaxdamp.engine.choice.MEASURED entry for this device:\n  "
-          f"{entry.device_kind!r}: {entry!r},")
+    if a.tangential_law == "viscous":
+        print("\njaxdamp.engine.choice.MEASURED entry for this device:\n  "
+              f"{entry.device_kind!r}: {entry!r},")
+    else:  # auto's table is the viscous law's
+        print(f"\ncrossovers under tangential_law = {a.tangential_law!r} (not an entry of "
+              f"jaxdamp.engine.choice.MEASURED): {entry!r}")
     result = {"agreement": agree, "rows": rows, "crossover": entry._asdict()}
     if a.scan:
         result["scan"] = thesis_scan(a.scan_duration, a.scan_engine, a.quick)
@@ -337,7 +351,9 @@ def thesis_scan(duration: float, engine: str, quick: bool = False) -> dict:
 
 def _write(a, kind: str, info: dict, result: dict, t_start: float) -> None:
     out = a.json or os.path.join(HERE, "results", "device_" + re.sub(r"[^A-Za-z0-9]+", "_",
-                                 kind).strip("_") + f"_{info['date']}.json")
+                                 kind).strip("_") + f"_{info['date']}"
+                       + ("" if a.tangential_law == "viscous" else f"_{a.tangential_law}")
+                       + ".json")
     os.makedirs(os.path.dirname(os.path.abspath(out)), exist_ok=True)
     with open(out, "w") as fh:
         json.dump({"info": info, **result, "seconds": time.perf_counter() - t_start}, fh,
