@@ -64,7 +64,7 @@ def test_the_scalar_and_jax_forms_of_every_container_agree(name):
         acc = containers.side_contacts_scalar(
             vessel.id, law.id, x[i], y[i], sec, R, wk, 0, v[i, 0],
             v[i, 1], v[i, 2], R * w[i, 0], R * w[i, 1], R * w[i, 2], 0.0, 0.0, 1.0,
-            (0.0,) * 11, None)
+            (0.0,) * 11, None, None)
         jax_side = np.concatenate([np.asarray(f.force)[0], np.asarray(f.torque)[0],
                                    [float(f.elastic_energy), float(f.normal_loss),
                                     float(f.friction_loss), float(f.box_z)]])
@@ -481,7 +481,7 @@ def test_a_grain_pressed_on_the_curved_wall_rests_at_the_hertz_overlap_of_the_co
     acc = containers.side_contacts_scalar(
         containers.CYLINDER.id, law.id, centre[0], centre[1],
         containers.section_scalar(np.array([rc])), R, np.array([[k, g, row[0], row[1]]]), 0,
-        0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, (0.0,) * 11, None)
+        0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, (0.0,) * 11, None, None)
     np.testing.assert_allclose(acc[:2], -F * e, rtol=1e-10)
 
 

@@ -65,8 +65,9 @@ from jaxdamp.physics.containers import (
     section_scalar,
     side_contacts_scalar,
     side_curvature_scalar,
+    side_reach_scalar,
 )
-from jaxdamp.physics.containers._scalar import add_wall_scalar, held
+from jaxdamp.physics.containers._scalar import add_wall_scalar, held, rows_of
 from jaxdamp.physics.energy import cell_bounds, record_row
 from jaxdamp.physics.excitation import base_motion_scalar, drive_motion_scalar
 from jaxdamp.physics.integrate import body_force_scalar, rotate_scalar, rotate_series_scalar
@@ -593,6 +594,7 @@ if AVAILABLE:
         pdrag = 0.0
         far = False
         grav, drag = gd
+        hw = rows_of(sp)  # the walls' springs (or None): the loop's checks get the one array
         for i in range(lo, n, step):
             x, y, zz = r1[i, 0], r1[i, 1], r1[i, 2]
             ux, uy, uz = vp[i, 0], vp[i, 1], vp[i, 2]
@@ -627,14 +629,14 @@ if AVAILABLE:
             acc = (fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z, n_wall)
             lost = pw_n + pw_f  # the losses and the force before this grain's walls
             pushed = box_z
-            if floor < Ri or held(sp, i, 0):  # (or releasing its spring: sp)
+            if floor < Ri or held(hw, i, 0):  # (or releasing its spring: sp)
                 acc, gz, loss = add_wall_scalar(law, Ri - floor, 0.0, 0.0, 1.0, wx, wy, wz, sx,
                                                 sy, sz, Ri, wk[i, 0], wk[i, 1], wk[i, 2],
                                                 wk[i, 3], ex, ey, ez, acc, sp, i, 0)
                 floor_lid -= gz
                 n_floor += 1.0 if floor < Ri else 0.0
                 l_floor += loss
-            if Lz - floor < Ri or held(sp, i, 1):
+            if Lz - floor < Ri or held(hw, i, 1):
                 acc, gz, loss = add_wall_scalar(law, Ri - (Lz - floor), 0.0, 0.0, -1.0, wx, wy,
                                                 wz, sx, sy, sz, Ri, wk[i, 0], wk[i, 1],
                                                 wk[i, 2], wk[i, 3], ex, ey, ez, acc, sp, i, 1)
@@ -646,8 +648,10 @@ if AVAILABLE:
             if shifted:  # the sides of the grain's own cell (its corner at og[i], box frame)
                 cx = bx - og[i, 0]
                 cy = by - og[i, 1]
-            fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z, n_wall = side_contacts_scalar(
-                shape, law, cx, cy, sec, Ri, wks, i, wx, wy, wz, sx, sy, sz, ex, ey, ez, acc, sp)
+            if side_reach_scalar(shape, cx, cy, sec, Ri, hw, i):
+                acc = side_contacts_scalar(shape, law, cx, cy, sec, Ri, wks, i, wx, wy, wz, sx,
+                                           sy, sz, ex, ey, ez, acc, sp, hw)
+            fx, fy, fz, tx, ty, tz, e_el, pw_n, pw_f, box_z, n_wall = acc
             F[i, 0], F[i, 1], F[i, 2] = fx, fy, fz
             T[i, 0], T[i, 1], T[i, 2] = tx, ty, tz
             if shifted:

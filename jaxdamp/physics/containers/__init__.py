@@ -31,6 +31,7 @@ its entry in :data:`CONTAINERS` and in the scalar dispatch below.
 
 from __future__ import annotations
 
+import functools
 from typing import Callable, NamedTuple
 
 from jaxdamp.physics.contact import scalar_form
@@ -95,7 +96,7 @@ def container(config) -> Container:
 
 @scalar_form
 def side_contacts_scalar(shape, law, x, y, section, Ri, wk, i, vx, vy, vz, sx, sy, sz, ex, ey,
-                         ez, acc, sp):
+                         ez, acc, sp, hw):
     """The contacts of grain ``i`` (centre ``(x, y)`` in the box frame, radius ``Ri``, its
     side-wall constants ``wk[i] = (k, g, γ_s, μ)`` formed at the sides' curvature
     (:func:`side_curvature_scalar`), velocity ``v`` relative to the walls, spin ``R ω``) with
@@ -103,12 +104,26 @@ def side_contacts_scalar(shape, law, x, y, section, Ri, wk, i, vx, vy, vz, sx, s
     of :func:`section_scalar`), added to
     ``acc = (fx, fy, fz, tx, ty, tz, elastic energy, normal loss, friction loss, box_z,
     contacts)``; ``sp``: the tangential springs, or ``None`` for the viscous law
-    (:func:`jaxdamp.physics.containers._scalar.add_wall_scalar`)."""
+    (:func:`jaxdamp.physics.containers._scalar.add_wall_scalar`) and ``hw`` their walls' part
+    (:func:`~jaxdamp.physics.containers._scalar.rows_of`)."""
     if shape == _CYLINDER:
         return cylinder.side_contacts_scalar(law, x, y, section, Ri, wk, i, vx, vy, vz, sx, sy,
-                                             sz, ex, ey, ez, acc, sp)
+                                             sz, ex, ey, ez, acc, sp, hw)
     return box.side_contacts_scalar(law, x, y, section, Ri, wk, i, vx, vy, vz, sx, sy, sz, ex,
-                                    ey, ez, acc, sp)
+                                    ey, ez, acc, sp, hw)
+
+
+@functools.partial(scalar_form, inline=False)  # called: ``hw`` passed, not assigned
+def side_reach_scalar(shape, x, y, section, Ri, hw, i):
+    """Whether grain ``i`` (radius ``Ri``, centre ``(x, y)`` in the box frame) touches a side
+    wall of container number ``shape`` or held a spring with one (``hw``: the walls' springs
+    or ``None``, :func:`jaxdamp.physics.containers._scalar.rows_of`): the grains
+    :func:`side_contacts_scalar` must visit. The kernel asks first, so that a grain far from
+    the sides never hands the springs' tuple to the contacts (each of its arrays' reference
+    counts touched per grain: the spring step's largest cost, ``benchmarks/RESULTS.md``)."""
+    if shape == _CYLINDER:
+        return cylinder.side_reach_scalar(x, y, section, Ri, hw, i)
+    return box.side_reach_scalar(x, y, section, Ri, hw, i)
 
 
 #: How many section numbers (``Params.section``) the compiled kernel holds in registers: the

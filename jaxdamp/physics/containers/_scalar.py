@@ -4,30 +4,67 @@ native kernel does for the floor and the lid."""
 
 from __future__ import annotations
 
-from jaxdamp.physics.contact import contact_scalar, scalar_form
+from jaxdamp.physics.contact import HAVE_NUMBA, contact_scalar, scalar_form
 from jaxdamp.physics.tangential import mindlin_called
 
 
-@scalar_form
-def held(sp, i, w):
+def rows_of(sp):
+    """The walls' springs ``hw`` ``(N, 2 + W, 3)`` of the tangential springs ``sp``
+    (:func:`add_wall_scalar`'s), or ``None`` without springs: taken once per grain loop, so
+    that the loop's checks (:func:`held`) get the one array, not the tuple (a tuple handed to
+    an inlined function has each of its arrays' reference counts touched: 25 % of the spring
+    step's time in the thesis bed, ``benchmarks/RESULTS.md``)."""
+    return None if sp is None else sp[0]
+
+
+def held(hw, i, w):
     """Whether grain ``i`` held a tangential spring with wall ``w`` after the last step
-    (``sp``: the springs, :func:`add_wall_scalar`; ``None``: no springs, never): a contact
+    (``hw``: the walls' springs, :func:`rows_of`; ``None``: no springs, never): a contact
     that ended is visited once more, to release its spring."""
-    if sp is None:
-        return False
-    hw = sp[0]
-    return hw[i, w, 0] != 0.0 or hw[i, w, 1] != 0.0 or hw[i, w, 2] != 0.0
+    return hw is not None and (hw[i, w, 0] != 0.0 or hw[i, w, 1] != 0.0 or hw[i, w, 2] != 0.0)
 
 
-@scalar_form
-def held_sides(sp, i, n_walls):
+def held_sides(hw, i, n_walls):
     """Whether grain ``i`` held a spring with any of the side walls ``2 … n_walls + 1``."""
-    if sp is None:
+    if hw is None:
         return False
     for w in range(2, 2 + n_walls):
-        if held(sp, i, w):
+        if held(hw, i, w):
             return True
     return False
+
+
+if HAVE_NUMBA:
+    # Compiled for the arguments' types (``overload``), so that ``hw is None`` folds where
+    # ``hw`` is a variable of the caller typed ``None`` (an ``njit`` function inlined by numba
+    # is inlined before typing: its branch on ``None`` would not fold there; numba-cuda
+    # cannot inline an overload), and called: the array is passed, not assigned, so no
+    # reference count is touched, and LLVM inlines the call.
+    from numba.core import types as _types
+    from numba.extending import overload
+
+    rows_of = scalar_form(rows_of, inline=False)
+
+    def _none(x):
+        return isinstance(x, (_types.NoneType, _types.Omitted))
+
+    @overload(held)
+    def _held(hw, i, w):
+        if _none(hw):
+            return lambda hw, i, w: False
+        return lambda hw, i, w: hw[i, w, 0] != 0.0 or hw[i, w, 1] != 0.0 or hw[i, w, 2] != 0.0
+
+    @overload(held_sides)
+    def _held_sides(hw, i, n_walls):
+        if _none(hw):
+            return lambda hw, i, n_walls: False
+
+        def impl(hw, i, n_walls):
+            for w in range(2, 2 + n_walls):
+                if hw[i, w, 0] != 0.0 or hw[i, w, 1] != 0.0 or hw[i, w, 2] != 0.0:
+                    return True
+            return False
+        return impl
 
 
 @scalar_form

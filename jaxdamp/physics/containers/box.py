@@ -15,6 +15,8 @@ Example::
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from jaxdamp.physics.contact import scalar_form
@@ -45,9 +47,19 @@ def curvature(config) -> float:
 FIELDS = ()
 
 
+@functools.partial(scalar_form, inline=False)  # called: ``hw`` passed, not assigned
+def side_reach_scalar(x, y, section, Ri, hw, i):
+    """Whether a grain of radius ``Ri`` at ``(x, y)`` (box frame) touches a side wall or held
+    a spring with one (``hw``: the walls' springs or ``None``,
+    :func:`~jaxdamp.physics.containers._scalar.rows_of`): the grains
+    :func:`side_contacts_scalar` must visit."""
+    return (x < Ri or section[0] - x < Ri or y < Ri or section[1] - y < Ri
+            or held_sides(hw, i, 4))
+
+
 @scalar_form
 def side_contacts_scalar(law, x, y, section, Ri, wk, i, vx, vy, vz, sx, sy, sz, ex, ey, ez,
-                         acc, sp):
+                         acc, sp, hw):
     """Scalar form of the side walls' contacts of one grain at ``(x, y)`` (box frame), added
     to ``acc`` (:func:`jaxdamp.physics.containers._scalar.add_wall_scalar`; ``wk[i]``: the
     grain's plane-wall constants ``(k, g, γ_s, μ)``; ``sp``: the tangential springs or
@@ -55,20 +67,19 @@ def side_contacts_scalar(law, x, y, section, Ri, wk, i, vx, vy, vz, sx, sy, sz, 
     is visited too). The four walls unrolled, in the order of :data:`NORMALS` (walls 2–5):
     most grains touch none, so the common path is four compares (no array view is made per
     grain: its reference count would be touched by every thread)."""
-    if (x >= Ri and section[0] - x >= Ri and y >= Ri and section[1] - y >= Ri
-            and not held_sides(sp, i, 4)):
+    if not side_reach_scalar(x, y, section, Ri, hw, i):
         return acc
     k, g, gs, mu = wk[i, 0], wk[i, 1], wk[i, 2], wk[i, 3]
-    if x < Ri or held(sp, i, 2):
+    if x < Ri or held(hw, i, 2):
         acc, _, _ = add_wall_scalar(law, Ri - x, 1.0, 0.0, 0.0, vx, vy, vz, sx, sy, sz, Ri, k, g,
                                     gs, mu, ex, ey, ez, acc, sp, i, 2)
-    if section[0] - x < Ri or held(sp, i, 3):
+    if section[0] - x < Ri or held(hw, i, 3):
         acc, _, _ = add_wall_scalar(law, Ri - (section[0] - x), -1.0, 0.0, 0.0, vx, vy, vz, sx,
                                     sy, sz, Ri, k, g, gs, mu, ex, ey, ez, acc, sp, i, 3)
-    if y < Ri or held(sp, i, 4):
+    if y < Ri or held(hw, i, 4):
         acc, _, _ = add_wall_scalar(law, Ri - y, 0.0, 1.0, 0.0, vx, vy, vz, sx, sy, sz, Ri, k, g,
                                     gs, mu, ex, ey, ez, acc, sp, i, 4)
-    if section[1] - y < Ri or held(sp, i, 5):
+    if section[1] - y < Ri or held(hw, i, 5):
         acc, _, _ = add_wall_scalar(law, Ri - (section[1] - y), 0.0, -1.0, 0.0, vx, vy, vz, sx,
                                     sy, sz, Ri, k, g, gs, mu, ex, ey, ez, acc, sp, i, 5)
     return acc

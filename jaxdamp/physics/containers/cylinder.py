@@ -30,6 +30,7 @@ Example::
 
 from __future__ import annotations
 
+import functools
 import math
 
 import jax.numpy as jnp
@@ -67,9 +68,19 @@ def sides_jax(bx, by, section):
     return (Rc - d,), (nx[:, None], ny[:, None]), (CONTACT_CURVATURE / Rc,)
 
 
+@functools.partial(scalar_form, inline=False)  # called: ``hw`` passed, not assigned
+def side_reach_scalar(x, y, section, Ri, hw, i):
+    """Whether a grain of radius ``Ri`` at ``(x, y)`` (box frame) touches the side wall,
+    ``ρ² > (R_c − R)²``, or held a spring with it (``hw``: the walls' springs or ``None``)."""
+    Rc = section[0]
+    dx = x - Rc
+    dy = y - Rc
+    return dx * dx + dy * dy > (Rc - Ri) * (Rc - Ri) or held(hw, i, 2)
+
+
 @scalar_form
 def side_contacts_scalar(law, x, y, section, Ri, wk, i, vx, vy, vz, sx, sy, sz, ex, ey, ez,
-                         acc, sp):
+                         acc, sp, hw):
     """Scalar form of the side wall's contact of grain ``i`` at ``(x, y)`` (box frame), added
     to ``acc`` (:func:`jaxdamp.physics.containers._scalar.add_wall_scalar`; ``sp``: the
     tangential springs or ``None``): touching where ``ρ² > (R_c − R)²`` (no square root
@@ -80,7 +91,7 @@ def side_contacts_scalar(law, x, y, section, Ri, wk, i, vx, vy, vz, sx, sy, sz, 
     dx = x - Rc
     dy = y - Rc
     rho2 = dx * dx + dy * dy
-    if rho2 > (Rc - Ri) * (Rc - Ri) or held(sp, i, 2):
+    if side_reach_scalar(x, y, section, Ri, hw, i):
         d = math.sqrt(rho2)
         acc, _, _ = add_wall_scalar(law, Ri - (Rc - d), -dx / d, -dy / d, 0.0, vx, vy, vz, sx,
                                     sy, sz, Ri, wk[i, 0], wk[i, 1], wk[i, 2], wk[i, 3], ex, ey,
