@@ -14,7 +14,9 @@ everything about it side by side:
 * its scalar form for the compiled kernel, ``side_contacts_scalar``: the contacts of one
   grain with its side walls, added to the grain's sums (each wall by
   :func:`jaxdamp.physics.containers._scalar.add_wall_scalar`; the walls unrolled, so that a
-  grain touching none costs a few compares), dispatched by :func:`side_contacts_scalar`;
+  grain touching none costs a few compares), dispatched by :func:`side_contacts_scalar`, and
+  ``side_reach_scalar``, whether a grain touches a side or holds a spring with one (asked
+  first, by :func:`side_reach_scalar`);
 * its host-side geometry: ``section(config)`` (the numbers of ``Params.section``),
   ``extent`` and ``inside`` (pouring the lattice, :mod:`jaxdamp.engine.packing`),
   ``fit_error``, ``base_area`` and ``perimeter`` (the fit checks of :mod:`jaxdamp.validation`,
