@@ -17,3 +17,10 @@ os.environ.setdefault("JAX_COMPILATION_CACHE_DIR",
                       os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
                                    ".pytest_cache", "jax-compile"))
 os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0.3")
+# A program read back from that cache makes XLA:CPU log an ERROR line per entry on this AMD host
+# ("Loading XLA:CPU AOT result. Target machine feature +prefer-no-gather is not supported":
+# tuning flags it compiled with, absent from the host's feature list — the same machine), on
+# the stderr of the command lines the tests start, whose every line the tests check (a
+# Ctrl-C's and a full disk's one-line messages failed on it with a warm cache). XLA's own
+# logging off in the tests (TF_CPP_MIN_LOG_LEVEL=3: errors too); jaxdamp's messages are its own.
+os.environ.setdefault("TF_CPP_MIN_LOG_LEVEL", "3")
