@@ -103,6 +103,21 @@ def fill_fraction(config: Config, species: Species, count: int) -> float:
     return count * mean_grain_volume(species) / (packing_fraction(config, species) * V)
 
 
+def mass_ratio(config: Config) -> float:
+    """The whole damper's grain mass (every species, every cell) over the primary's mass ``M``
+    [-] of a configuration with counts (validated): the inverse of a fill stated by
+    ``mass_ratio``, for any statement."""
+    if config.primary is None:
+        raise ConfigError(f"mass ratio: system = {config.system!r} has no primary mass M")
+    mass = sum(sp.count * sp.material.density * mean_grain_volume(sp) for sp in config.grains)
+    return config.cells * mass / config.primary.M
+
+
+def cavity_volume(config: Config) -> float:
+    """The damper's cavity volume [m³]: every cell's (base area × ``Lz`` × ``cells``)."""
+    return cavity(config)[0] * config.cells
+
+
 def _given(sp: Species) -> list[str]:
     return [k for k in FILL_KEYS if getattr(sp, k) is not None]
 

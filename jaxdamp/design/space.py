@@ -35,6 +35,7 @@ Example::
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from dataclasses import dataclass
 
@@ -43,6 +44,7 @@ import numpy as np
 from jaxdamp.analysis.uncertainty import standard_error
 from jaxdamp.config import Config, ConfigError, apply_overrides, get_path
 from jaxdamp.physics.containers import container
+from jaxdamp.validation import validate
 
 
 @dataclass(frozen=True)
@@ -61,19 +63,30 @@ class Variable:
             return (container(config).lid_key,)
         if self.name == "base":
             return container(config).base_keys
+        if self.name == "mass_ratio":
+            return tuple(f"grains.{i}.mass_ratio" for i in range(len(config.grains)))
+        if self.name == "radius":
+            return ("grains.0.radius",)
         return tuple(f"grains.{i}.material.mu" for i in range(len(config.grains)))
 
     def value(self, config: Config) -> float:
+        if self.name == "mass_ratio":  # the whole damper's, however the fill is stated
+            from jaxdamp.cases.filling import mass_ratio
+
+            return mass_ratio(validate(config))
         return float(get_path(config, self.keys(config)[0]))
 
     def default_range(self, config: Config) -> tuple:
         """Range searched unless told: ``Lz`` 0.07–0.25 m, ``base`` ±25 % of the preset's
-        ``Lx`` (at most 0.8–1.25×), ``friction`` 0.05–0.8."""
+        ``Lx`` (at most 0.8–1.25×), ``friction`` 0.05–0.8, ``mass_ratio`` 0.02–0.2 (the
+        thesis' 0.096 inside), ``radius`` ±33 % of the preset's."""
         if self.name == "Lz":
             return 0.07, 0.25
-        if self.name == "base":
-            base = self.value(config)
-            return 0.8 * base, 1.25 * base
+        if self.name in ("base", "radius"):
+            v = self.value(config)
+            return (0.8 * v, 1.25 * v) if self.name == "base" else (0.67 * v, 1.33 * v)
+        if self.name == "mass_ratio":
+            return 0.02, 0.2
         return 0.05, 0.8
 
 
@@ -81,7 +94,12 @@ VARIABLES = {v.name: v for v in (
     Variable("Lz", "m", "box height"),
     Variable("base", "m", "side of the square base, Lx = Ly"),
     Variable("friction", "", "grains' Coulomb friction coefficient (all species)"),
+    Variable("mass_ratio", "", "the grains' mass over the primary's mass M (the fill)"),
+    Variable("radius", "m", "the grains' radius (one species; the fill kept by mass)"),
 )}
+#: Variables that change the grains, hence the batch's shape: designs differing in them run in
+#: separate batches (:meth:`DesignProblem.measure` groups the rows by their ``Model``).
+SHAPING = ("mass_ratio", "radius")
 
 
 def parse_bounds(text: str | None) -> dict:
@@ -105,7 +123,8 @@ class DesignSpace:
     above the bed."""
 
     def __init__(self, config: Config, names, lo, hi, h_ref: float = 0.0,
-                 base_ref: float | None = None, margin: float = 0.01):
+                 base_ref: float | None = None, margin: float = 0.01,
+                 mass_ref: float | None = None):
         self.config = config
         self.names = tuple(names)
         self.variables = [VARIABLES[n] for n in self.names]
@@ -113,6 +132,8 @@ class DesignSpace:
         self.hi = np.asarray(hi, float)
         self.h_ref = float(h_ref)
         self.base_ref = float(base_ref or VARIABLES["base"].value(config))
+        self.mass_ref = float(mass_ref or (VARIABLES["mass_ratio"].value(config)
+                                           if "mass_ratio" in self.names else 1.0))
         self.margin = float(margin)
 
     @classmethod
@@ -161,10 +182,14 @@ class DesignSpace:
         return np.array([v.value(c) for v in self.variables])
 
     def bed_height(self, x) -> float:
-        """``h_bed`` of design ``x`` [m] (module doc)."""
+        """``h_bed`` of design ``x`` [m] (module doc): ``h_ref (b_ref / b)² (μ / μ_ref)``, the
+        bed's volume kept but for the fill (the grains' radius at a fixed mass moves it only
+        through the packing fraction, a few per cent: not counted)."""
         x = np.asarray(x, float)
         b = x[self.names.index("base")] if "base" in self.names else self.base_ref
-        return self.h_ref * (self.base_ref / b) ** 2
+        mu = x[self.names.index("mass_ratio")] / self.mass_ref if "mass_ratio" in self.names \
+            else 1.0
+        return self.h_ref * (self.base_ref / b) ** 2 * mu
 
     def project(self, u, shrink: float = 0.0) -> np.ndarray:
         """Nearest feasible ``u``: inside ``[shrink, 1 − shrink]`` (room for perturbations of
@@ -195,7 +220,18 @@ class DesignSpace:
     def describe(self) -> dict:
         return {"variables": list(self.names), "units": [v.unit for v in self.variables],
                 "lo": self.lo.tolist(), "hi": self.hi.tolist(), "h_ref": self.h_ref,
-                "base_ref": self.base_ref, "margin": self.margin}
+                "base_ref": self.base_ref, "mass_ref": self.mass_ref, "margin": self.margin}
+
+
+def stated_by_mass(config: Config) -> Config:
+    """``config`` with every species' fill stated by its ``mass_ratio`` (the mass its count or
+    fraction gives): the fill a change of radius, density or cavity keeps."""
+    from jaxdamp.cases.filling import mass_ratio
+
+    cfg = validate(config)
+    return apply_overrides(cfg, {
+        f"grains.{i}.mass_ratio": mass_ratio(dataclasses.replace(cfg, grains=(sp,)))
+        for i, sp in enumerate(cfg.grains)})
 
 
 class DesignProblem:
@@ -216,16 +252,24 @@ class DesignProblem:
                  margin: float = 0.01, progress: bool = False):
         from jaxdamp.engine.packing import settle_many
         from jaxdamp.physics.model import build
-        from jaxdamp.validation import validate
 
         if config.system != "primary":
             raise ConfigError("a design of several variables needs an S1 configuration "
                               "(system = 'primary')")
         if not duration > 0:
             raise ConfigError(f"duration = {duration}: must be > 0 s")
-        self.config = validate(apply_overrides(config, {"numerics.duration": float(duration)}))
+        if "radius" in names and len(config.grains) != 1:
+            raise ConfigError(f"design variable radius: one species only ({len(config.grains)} "
+                              "given; a mixture's radii are not one knob)")
+        config = apply_overrides(config, {"numerics.duration": float(duration)})
+        if any(v in SHAPING for v in names):  # the fill stated by mass: a new radius keeps it
+            config = stated_by_mass(config)
+        self.config = validate(config)
         self.objective = objective
         self.freqs = objective.frequencies(self.config)
+        #: What each design runs at, one dict of overrides per condition, its bed shared (here
+        #: the objective's frequencies; an envelope's points in :mod:`jaxdamp.design.envelope`).
+        self.conditions = [{"frequency": float(f)} for f in self.freqs]
         self.duration = float(duration)
         self.progress = progress
         self.settle_time = self.config.numerics.settle_time
@@ -251,47 +295,64 @@ class DesignProblem:
 
     def measure(self, X, seeds, pairs: bool = False) -> dict:
         """Objective of every design ``X`` ``(n, d)`` [physical units] with its own bed
-        ``seeds`` ``(n,)``, one batch. ``pairs``: rows ``2k`` and ``2k+1`` share a seed and
-        one common steady window (a difference pair). Returns ``{"J": (n,), "Z", "E":
-        (F, n), "stationary": (n,) bool, "sim_seconds", "wall"}``."""
+        ``seeds`` ``(n,)`` at every condition (:attr:`conditions`: the objective's
+        frequencies; an envelope's points, :mod:`jaxdamp.design.envelope`), the bed shared by
+        a design's conditions. One batch, or one per shape where the designs change the grains
+        (:data:`SHAPING`: rows grouped by the grains they validate to). ``pairs``: rows ``2k``
+        and ``2k+1`` share a seed and one common steady window (a difference pair). Returns
+        ``{"J": (n,), "Z", "E": (C, n), "stationary": (n,) bool, "sim_seconds", "wall"}``
+        (``J``: :meth:`combine` of each row)."""
         from jaxdamp.analysis import stats
-        from jaxdamp.studies.grid import Points
+        from jaxdamp.studies.grid import Points, grid_configs
         from jaxdamp.studies.sweep import sweep
 
         X = np.atleast_2d(np.asarray(X, float))
-        n, F = len(X), len(self.freqs)
+        n, C = len(X), len(self.conditions)
         seeds = [int(s) for s in seeds]
-        cols: dict = {"frequency": [], "numerics.seed": []}
-        for f in self.freqs:
-            for x, s in zip(X, seeds):
-                for k, v in self.space.overrides(x).items():
-                    cols.setdefault(k, []).append(v)
-                cols["frequency"].append(float(f))
-                cols["numerics.seed"].append(s)
+        rows = [{**self.space.overrides(x), **cond, "numerics.seed": s}
+                for cond in self.conditions for x, s in zip(X, seeds)]  # condition-major
+        shaping = any(v in SHAPING for v in self.space.names)
+        key = [()] * len(rows)
+        if shaping:  # the grains each row validates to: one batch per distinct set
+            cfgs = grid_configs(self.config, Points({k: [r[k] for r in rows] for k in rows[0]}))
+            key = [tuple((sp.count, sp.radius, sp.radius_spread) for sp in c.grains)
+                   for c in cfgs]
         t0 = time.perf_counter()
-        res = sweep(self.config, Points(cols), progress=self.progress, echo=None)
-        Z, E = np.empty((F, n)), np.empty((F, n))
+        recs: dict = {}
+        for k in dict.fromkeys(key):
+            idx = [i for i, kk in enumerate(key) if kk == k]
+            res = sweep(self.config, Points({c: [rows[i][c] for i in idx] for c in rows[0]}),
+                        progress=self.progress, echo=None)
+            for name in ("t", "z_box", "work"):
+                a = np.asarray(res.records[name])
+                recs.setdefault(name, np.empty((len(rows),) + a.shape[1:], a.dtype))[idx] = a
+        Z, E = np.empty((C, n)), np.empty((C, n))
         ok = np.ones(n, bool)
         groups = [[2 * k, 2 * k + 1] for k in range(n // 2)] if pairs else [[i] for i in range(n)]
-        for fi, freq in enumerate(self.freqs):
+        for ci, cond in enumerate(self.conditions):
             for g in groups:
-                w = stats.rows_window(res.records, [fi * n + i for i in g], freq)
-                Z[fi, g] = w["amplitude"]
-                E[fi, g] = w["granular_loss_per_cycle"]
+                w = stats.rows_window(recs, [ci * n + i for i in g], cond["frequency"])
+                Z[ci, g] = w["amplitude"]
+                E[ci, g] = w["granular_loss_per_cycle"]
                 ok[g] &= w["stationary"]
-        J = np.asarray(self.objective.combine(Z, E, self.freqs), float)
+        J = np.asarray(self.combine(Z, E), float)
         geo = [i for i, nm in enumerate(self.space.names) if nm != "Lz"]  # Lz keeps the bed
         beds = len({(s, tuple(np.round(x[geo], 12))) for x, s in zip(X, seeds)})
-        cost = F * n * self.duration + beds * self.settle_time
+        cost = C * n * self.duration + beds * self.settle_time
         self.sim_seconds += cost
         out = {"X": X, "seeds": np.asarray(seeds), "J": J, "Z": Z, "E": E, "stationary": ok,
                "sim_seconds": cost, "wall": time.perf_counter() - t0}
         self.history.append(out)
         return out
 
+    def combine(self, Z, E):
+        """The objective of each row from its amplitudes ``Z`` and dissipations ``E`` ``(C,
+        n)`` at the conditions (the objective's frequencies)."""
+        return self.objective.combine(Z, E, self.freqs)
+
     def cost_per_system(self) -> float:
         """Simulated system-seconds of one design evaluated once (run + its bed)."""
-        return len(self.freqs) * self.duration + self.settle_time
+        return len(self.conditions) * self.duration + self.settle_time
 
     def evaluate(self, X, replicates: int) -> dict:
         """Every design of ``X`` ``(n, d)`` on ``replicates`` fresh independent beds, one
