@@ -36,7 +36,8 @@ import numpy as np
 from jaxdamp.analysis.stats import welch
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
-from jaxdamp.design.bayes import ToyProblem, batch_search, latin_hypercube
+from jaxdamp.design.bayes import ToyProblem, batch_search
+from jaxdamp.design.spsa import random_search
 from jaxdamp.design.envelope import Envelope, EnvelopeProblem
 from jaxdamp.io.study import load
 from jaxdamp.studies import scaffold
@@ -87,10 +88,10 @@ def part_c(s, log) -> dict:
     for k in range(s["toy_seeds"]):
         b = batch_search(ToyProblem(toy, d=2, noise=0.1, hetero=1.0, seed=k), n_start=8,
                          batch=4, rounds=3, replicates=2, seed=k)
-        r = latin_hypercube(ToyProblem(toy, d=2, noise=0.1, hetero=1.0, seed=100 + k), 20,
-                            replicates=2, seed=k)
+        r = random_search(ToyProblem(toy, d=2, noise=0.1, hetero=1.0, seed=100 + k), 40,
+                          replicates=2, seed=k)
         gp.append(fmax - float(toy(b.best_u)[0]))
-        lhs.append(fmax - float(toy(r.best_u)[0]))
+        lhs.append(fmax - float(toy(np.asarray(r.best["x"]))[0]))
     gp, lhs = np.asarray(gp), np.asarray(lhs)
     log(f"C: regret, search median {np.median(gp):.3g}, Latin hypercube {np.median(lhs):.3g}")
     return dict(gp=gp, lhs=lhs, designs=20, dem_designs=n)

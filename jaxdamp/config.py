@@ -779,11 +779,16 @@ def parse_value(text: str) -> Any:
 
 
 def get_path(config: Config, key: str) -> Any:
-    """The value at dotted ``key`` of ``config`` (``"box.Lz"``, ``"grains.0.radius"``), as
-    :func:`apply_overrides` names it."""
+    """The value at dotted ``key`` of ``config`` (``"box.Lz"``, ``"grains.0.radius"``, a
+    container's own dimension ``"container.radius"``), as :func:`apply_overrides` names it."""
     node: Any = config
     for part in key.split("."):
-        node = node[int(part)] if isinstance(node, (list, tuple)) else getattr(node, part)
+        if isinstance(node, (list, tuple)):
+            node = node[int(part)]
+        elif isinstance(node, Container) and not hasattr(node, part):
+            node = node.dimension(part)
+        else:
+            node = getattr(node, part)
     return node
 
 

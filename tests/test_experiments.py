@@ -625,3 +625,50 @@ def test_effective_field_chain_quick(tmp_path):
     (tmp_path / "summary.md").unlink()
     ef.main(["--from-data", "--out", str(tmp_path), "--no-progress"])
     assert (tmp_path / "summary.md").read_text() == text
+
+
+def test_envelope_design_quick(tmp_path):
+    """``envelope_design.py --quick``: the batched search over Lz against the worst point of a
+    2 × 2 envelope, the single-point and the envelope design confirmed on fresh beds, the
+    search-vs-Latin-hypercube measurement; stored, summarised, and the summary reproduced from
+    the data alone. The stored worst case is the smallest per-point mean of the stored C_eq,
+    and each C_eq is E / (π Ω Z²) of its point."""
+    import h5py
+
+    from jaxdamp.design.envelope import summarise
+
+    ed = _load("envelope_design")
+    ed.main(["--quick", "--out", str(tmp_path), "--no-progress"])
+    text = (tmp_path / "summary.md").read_text()
+    assert "## B. Confirmation on fresh beds" in text and "by the rule" in text
+    with h5py.File(tmp_path / "data.h5", "r") as h:
+        C, Z, E = (h[f"confirmation/{k}"][()] for k in ("C", "Z", "E"))
+        n = len(h["search/X"][()])
+    assert C.shape == (4, 2, 2) and n == 5
+    f = np.array([14.0, 15.16, 14.0, 15.16])[:, None, None]
+    np.testing.assert_allclose(C, E / (np.pi * 2 * np.pi * f * Z ** 2), rtol=1e-12)
+    s = summarise(C, "worst")
+    assert np.all(s["value"] == C.mean(axis=2).min(axis=0))
+    (tmp_path / "summary.md").unlink()
+    ed.main(["--from-data", "--out", str(tmp_path), "--no-progress"])
+    assert (tmp_path / "summary.md").read_text() == text
+
+
+def test_mass_front_quick(tmp_path):
+    """``mass_front.py --quick``: at two fills in the box and the cylinder, the optimal Lz
+    above the bed, C_eq confirmed on fresh beds; the fill that doubles the grains doubles the
+    mass ratio; summary reproduced from the data alone."""
+    import h5py
+
+    mf = _load("mass_front")
+    mf.main(["--quick", "--out", str(tmp_path), "--no-progress"])
+    text = (tmp_path / "summary.md").read_text()
+    with h5py.File(tmp_path / "data.h5", "r") as h:
+        for c in ("box", "cylinder"):
+            mu, n = h[f"{c}/mu"][()], h[f"{c}/grains"][()]
+            assert np.all(h[f"{c}/lz"][()] > h[f"{c}/h_bed"][()])
+            assert np.all(np.isfinite(h[f"{c}/C"][()])) and np.all(h[f"{c}/C"][()] > 0)
+            assert mu[1] / mu[0] == pytest.approx(n[1] / n[0])
+    (tmp_path / "summary.md").unlink()
+    mf.main(["--from-data", "--out", str(tmp_path), "--no-progress"])
+    assert (tmp_path / "summary.md").read_text() == text

@@ -26,8 +26,9 @@ batches on a :class:`~jaxdamp.design.space.DesignProblem` (or
 Why a library: scikit-learn's Gaussian process is a maintained implementation (kernel
 hyper-parameters by maximum marginal likelihood with restarts, per-point noise, posterior
 draws); what it costs here is milliseconds per fit at the tens of designs a DEM budget buys.
-Its search is measured against the equal-budget Latin hypercube in ``tests/test_bayes.py``
-(a known noisy function) and in ``experiments/envelope_design.py`` (the DEM).
+Its search is measured against the equal-budget Latin hypercube
+(:func:`jaxdamp.design.spsa.random_search`) on a known noisy function in
+``experiments/envelope_design.py`` (part C) and ``tests/test_envelope.py``.
 
 Example (a noisy 1-D problem with its optimum at x = 0.3)::
 
@@ -47,7 +48,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from jaxdamp.analysis.stats import t_quantile
 from jaxdamp.config import ConfigError
+from jaxdamp.design.status import FAILED, NOT_CONVERGED, Status
 
 #: Lower bound of each normalised length scale and the noise floor (in units of the
 #: objective's spread): keeps the fit away from interpolating a noisy design exactly.
@@ -76,6 +79,7 @@ class BatchSearchResult:
     sim_seconds: float
     wall: float
     evaluations: list = field(default_factory=list)
+    status: Status | None = None
 
 
 def _gp(U, y, se, seed):
@@ -100,14 +104,20 @@ def _gp(U, y, se, seed):
 
 
 def _feasible_sobol(space, problem, n, sampler):
-    """``n`` feasible points of the Sobol ``sampler`` (projected; outside a budget skipped)."""
+    """``n`` feasible points of the Sobol ``sampler``: points the projection would move (a bed
+    that does not fit) or outside a budget are skipped, so the points stay spread over the
+    feasible set instead of piling onto its edge; after many skips the projected point is
+    taken."""
     out, tries = [], 0
     while len(out) < n:
         tries += 1
         if tries > 50 * n + 100:
             raise ConfigError("the design search found no feasible design in its range within "
                               "the budgets: widen the bounds or the budgets")
-        u = space.project(sampler.random(1)[0])
+        raw = sampler.random(1)[0]
+        u = space.project(raw)
+        if not np.allclose(u, raw) and tries < 20 * n + 50:
+            continue
         if hasattr(problem, "feasible") and not problem.feasible(space.to_x(u))[0]:
             continue
         out.append(u)
@@ -161,35 +171,27 @@ def batch_search(problem, n_start: int = 8, batch: int = 4, rounds: int = 3,
         Ub = np.asarray(chosen)
         run(Ub, r)
         U = np.vstack([U, Ub])
+    if not np.isfinite(mean).all():
+        bad = int((~np.isfinite(mean)).sum())
+        return BatchSearchResult(
+            best_x=space.to_x(U[0]), best_u=U[0], best_pred=np.nan, best_pred_sd=np.nan,
+            X=space.to_x(U), U=U, mean=np.asarray(mean), se=np.asarray(se),
+            round_of=np.asarray(rnd), kernel="", wall=time.perf_counter() - t0,
+            sim_seconds=getattr(problem, "sim_seconds", 0.0) - sim0, evaluations=evals,
+            status=Status(FAILED, f"{bad} design(s) with a non-finite objective", rounds + 1))
     y = sign * np.asarray(mean)
     gp, mu, sd = _gp(U, y, np.asarray(se), seed + rounds + 1)
     m, s = gp.predict(U, return_std=True)
     best = int(np.argmax(m))
+    status = Status(NOT_CONVERGED, f"a budget of {len(U)} designs in {rounds + 1} batches "
+                    "(no convergence test): the surrogate's best run design is a candidate, "
+                    "to be confirmed on fresh beds", rounds + 1)
     return BatchSearchResult(
         best_x=space.to_x(U[best]), best_u=U[best], best_pred=float(sign * (mu + sd * m[best])),
         best_pred_sd=float(sd * s[best]), X=space.to_x(U), U=U, mean=np.asarray(mean),
         se=np.asarray(se), round_of=np.asarray(rnd), kernel=str(gp.kernel_),
         sim_seconds=getattr(problem, "sim_seconds", 0.0) - sim0,
-        wall=time.perf_counter() - t0, evaluations=evals)
-
-
-def latin_hypercube(problem, n: int, replicates: int = 2, seed: int = 0) -> BatchSearchResult:
-    """The equal-budget baseline: ``n`` feasible Latin-hypercube designs in one batch, the
-    best observed mean recommended (what a designer without a surrogate reports)."""
-    from scipy.stats import qmc
-
-    t0 = time.perf_counter()
-    space = problem.space
-    sim0 = getattr(problem, "sim_seconds", 0.0)
-    U = _feasible_sobol(space, problem, n, qmc.LatinHypercube(space.dim, seed=seed))
-    ev = problem.evaluate(space.to_x(U), replicates)
-    mean, se = np.asarray(ev["mean"], float), np.asarray(ev["se"], float)
-    best = int(np.argmax(mean) if problem.objective.maximise else np.argmin(mean))
-    return BatchSearchResult(
-        best_x=space.to_x(U[best]), best_u=U[best], best_pred=float(mean[best]),
-        best_pred_sd=float(se[best]), X=space.to_x(U), U=U, mean=mean, se=se,
-        round_of=np.zeros(n, int), kernel="", wall=time.perf_counter() - t0,
-        sim_seconds=getattr(problem, "sim_seconds", 0.0) - sim0, evaluations=[ev])
+        wall=time.perf_counter() - t0, evaluations=evals, status=status)
 
 
 class _UnitSpace:
@@ -231,4 +233,10 @@ class ToyProblem:
         self.sim_seconds += len(X) * replicates
         se = J.std(axis=1, ddof=1) / np.sqrt(replicates) if replicates > 1 else \
             np.full(len(X), np.nan)
-        return {"mean": J.mean(axis=1), "se": se, "J": J}
+        half = t_quantile(0.975, replicates - 1) * se if replicates > 1 else se
+        return {"mean": J.mean(axis=1), "se": se, "ci95": half, "J": J,
+                "sim_seconds": float(len(X) * replicates)}
+
+    def cost_per_system(self) -> float:
+        """One "system-second" per design and replicate (the random search's budget)."""
+        return 1.0
