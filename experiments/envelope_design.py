@@ -37,8 +37,8 @@ from jaxdamp.analysis.stats import welch
 from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides
 from jaxdamp.design.bayes import ToyProblem, batch_search
-from jaxdamp.design.spsa import random_search
 from jaxdamp.design.envelope import Envelope, EnvelopeProblem
+from jaxdamp.design.spsa import random_search
 from jaxdamp.io.study import load
 from jaxdamp.studies import scaffold
 

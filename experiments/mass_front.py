@@ -140,7 +140,7 @@ def report(data, out):
               "yes" if j in on else "no", f"{g['sim'][j]:.4g}",
               f"{int(g['stationary'][j])}/{C.shape[1]}"] for j in range(len(mu))])
         gain = np.diff(m) / np.diff(mu)
-        L += ["", f"- Marginal damping per unit mass ratio between successive fills: "
+        L += ["", "- Marginal damping per unit mass ratio between successive fills: "
               + ", ".join(f"{x:.4g}" for x in gain) + " N s/m.", ""]
     a1.set(xlabel="mass ratio μ = m_grains / M [-]", ylabel="C_eq at the optimal Lz [N s/m]",
            title="damping–mass front (± 1.96 SE)")

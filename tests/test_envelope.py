@@ -197,3 +197,105 @@ def test_the_base_of_a_cylinder_is_its_radius():
     assert s.lo[1] == pytest.approx(0.8 * 0.020734)
     got = apply_overrides(cyl, s.overrides([0.1, 0.018]))
     assert got.container.dimension("radius") == 0.018 and got.container.Lz == 0.1
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--envelope-frequencies", "14,15"], "--envelope-frequencies needs --envelope-levels"),
+    (["--mass-budget", "0.1"], "--mass-budget applies to an envelope"),
+    (["--envelope-frequencies", "14,15", "--envelope-levels", "0.002", "--frequency", "15"],
+     "--frequency is a single-point objective's"),
+    (["--envelope-frequencies", "14,x", "--envelope-levels", "0.002"],
+     "--envelope-frequencies"),
+    (["--envelope-frequencies", "14", "--envelope-levels", "0.002", "--statistic", "worst",
+      "--method", "batch", "--budget", "10"], "--budget applies to spsa and random"),
+])
+def test_cli_envelope_refuses_bad_input_in_one_line(argv, words, capsys):
+    from jaxdamp.cli import main
+
+    assert main(["optimize", "--preset", "sanchez2012-optimal", *argv]) == 2
+    err = capsys.readouterr().err
+    assert words in err and "Traceback" not in err
+
+
+@pytest.mark.long  # ~40 s
+def test_cli_optimize_an_envelope_by_the_batched_search(tmp_path, capsys):
+    """``jaxdamp optimize`` with an envelope and a mass budget on the small bed: the batched
+    search over Lz and the fill, the design confirmed on fresh beds with every point's C_eq
+    and its added mass within the budget, a ``jaxdamp-optimize/3`` log naming the envelope."""
+    import json
+
+    import h5py
+
+    from jaxdamp.cli import main
+
+    out = tmp_path / "env.h5"
+    sets = [a for k, v in SMALL.items() for a in ("--set", f"{k}={v}")]
+    assert main(["optimize", "--preset", "sanchez2012-optimal", "--vars", "Lz,mass_ratio",
+                 "--bounds", "Lz=0.04:0.1,mass_ratio=0.05:0.12", "--envelope-frequencies",
+                 "14,15.16", "--envelope-levels", "0.002,0.0045", "--mass-budget", "0.09",
+                 "--quick", "--duration", "0.3", *sets, "--out", str(out),
+                 "--no-progress"]) == 0
+    text = capsys.readouterr().out
+    assert "maximise the worst C_eq [N s/m] over 4 points" in text
+    assert "confirmed on 2 fresh beds (95 %): worst C_eq" in text and "per point (f, U)" in text
+    with h5py.File(out) as h:
+        assert h.attrs["method"] == "batch" and h.attrs["convergence"] == "not converged"
+        prob = json.loads(h.attrs["problem"])
+        assert prob["envelope"]["mass_budget"] == 0.09 and len(prob["envelope"]["points"]) == 4
+        X = h["confirmation/X"][()]
+        assert X.shape[1] == 2 and np.all(X[:, 1] <= 0.09 + 0.004)  # one grain's worth
+        assert len(h["evaluations/X"]) == 2 * (3 + 2) + 2 * len(X)
+
+
+def test_material_and_cells_are_whole_valued_design_variables():
+    """A categorical variable (``material``, choices by name) and an integer one (``cells``):
+    each value takes an equal share of its coordinate, ``to_u`` inverts ``to_x``, the
+    overrides name the material before any friction, and the bed's height follows the
+    density and the number of cells at a fixed mass."""
+    from jaxdamp.design.space import parse_bounds
+
+    cfg = stated_by_mass(apply_overrides(presets.get("sanchez2012-optimal"),
+                                         {"grains.0.material": "steel"}))
+    b = parse_bounds("material=steel/glass/lead,cells=1:4")
+    assert b == {"material": ("steel", "glass", "lead"), "cells": (1.0, 4.0)}
+    s = DesignSpace.of(cfg, ("friction", "material", "cells"), b, h_ref=0.04)
+    assert s.value(cfg).tolist() == [0.23, 0.0, 1.0]
+    xs = np.array([s.to_x([0.5, u, u]) for u in np.linspace(0, 1, 1201)])
+    assert np.bincount(xs[:, 1].astype(int)).tolist() == [400, 400, 401]
+    assert sorted(set(xs[:, 2])) == [1.0, 2.0, 3.0, 4.0]
+    for x in ([0.3, 2.0, 3.0], [0.1, 0.0, 1.0]):
+        np.testing.assert_allclose(s.to_x(s.to_u(x)), x)
+    ov = s.overrides([0.3, 1.0, 2.0])
+    assert list(ov) == ["grains.0.material", "grains.0.material.mu", "cells"]
+    assert ov["grains.0.material"] == "glass" and ov["cells"] == 2
+    got = validate(apply_overrides(cfg, ov))
+    assert got.grains[0].material.mu == 0.3 and got.grains[0].material.density == 2520.0
+    assert s.bed_height([0.3, 1.0, 2.0]) == pytest.approx(0.04 * 7810 / 2520 / 2)
+    assert s.label([0.3, 2.0, 3.0]) == ["friction = 0.3", "material = lead", "cells = 3"]
+    with pytest.raises(ConfigError, match="not an entry of the material table"):
+        DesignSpace.of(presets.get("sanchez2012-optimal"), ("material",)).value()
+    with pytest.raises(ConfigError, match="bounds of material"):
+        DesignSpace.of(cfg, ("material",), {"material": ("steel", "unobtainium")})
+    with pytest.raises(ConfigError, match="bounds of cells: whole numbers"):
+        DesignSpace.of(cfg, ("cells",), {"cells": (1.5, 3.0)})
+
+
+@pytest.mark.long  # ~25 s
+def test_designs_of_other_materials_and_cells_run_and_keep_their_fill():
+    """A batch of designs of two materials and one or two cells: each design's grains come
+    out of its own group with the fill kept by mass (the glass bed has ~3.1× the grains of the
+    steel one; two cells share the grains), and the rows come back in order (a repeat of the
+    same design and bed equals the first bit for bit)."""
+    cfg = apply_overrides(small(), {"grains.0.material": "steel"})
+    env = Envelope((15.16,), (0.004,))
+    prob = EnvelopeProblem(cfg, env, names=("Lz", "material", "cells"),
+                           bounds={"material": ("steel", "glass"), "cells": (1, 2)},
+                           duration=0.3, seed=3)
+    X = np.array([[0.06, 0, 1], [0.06, 1, 1], [0.06, 0, 2], [0.06, 0, 1]], float)
+    counts = [prob.design_config(x).grains[0].count * prob.design_config(x).cells for x in X]
+    assert counts[1] == pytest.approx(counts[0] * 7810 / 2520, rel=0.05)
+    assert abs(counts[2] - counts[0]) <= 1
+    m = prob.measure(X, [21, 22, 23, 21])
+    np.testing.assert_array_equal(m["Z"][:, 0], m["Z"][:, 3])
+    assert np.all(np.isfinite(m["Z"])) and np.all(m["E"] > 0)
+    assert len({tuple(np.round(z, 12)) for z in m["Z"].T}) == 3

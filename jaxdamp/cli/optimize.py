@@ -36,6 +36,38 @@ def band_option(text: str | None, objective: str) -> tuple | None:
     return tuple(values)
 
 
+def envelope_option(args):
+    """The :class:`~jaxdamp.design.envelope.Envelope` of ``--envelope-frequencies`` and
+    ``--envelope-levels`` (both or neither), ``--statistic`` and the budgets; ``None`` without
+    them. Refused, naming the option, beside a single-point objective's options."""
+    from jaxdamp.design.envelope import Envelope
+
+    given = [f for f, v in (("--envelope-frequencies", args.envelope_frequencies),
+                            ("--envelope-levels", args.envelope_levels)) if v is not None]
+    rest = [f for f, v in (("--statistic", args.statistic), ("--mass-budget", args.mass_budget),
+                           ("--volume-budget", args.volume_budget)) if v is not None]
+    if not given:
+        if rest:
+            raise ConfigError(f"{rest[0]} applies to an envelope: give --envelope-frequencies "
+                              "and --envelope-levels")
+        return None
+    if len(given) == 1:
+        other = ({"--envelope-frequencies", "--envelope-levels"} - set(given)).pop()
+        raise ConfigError(f"{given[0]} needs {other} too (the envelope is every frequency at "
+                          "every level)")
+    for flag, val, default in (("--objective", args.objective, "damping"),
+                               ("--frequency", args.frequency, None), ("--band", args.band, None)):
+        if val != default:
+            raise ConfigError(f"{flag} is a single-point objective's; an envelope scores C_eq "
+                              "at each of its points (--statistic worst or mean)")
+    f = float_list(args.envelope_frequencies, "--envelope-frequencies", "frequencies [Hz]",
+                   "13.5,15.16,16.5")
+    u = float_list(args.envelope_levels, "--envelope-levels", "base amplitudes U [m]",
+                   "0.0015,0.003,0.0045")
+    return Envelope(f, u, statistic=args.statistic or "worst", mass_budget=args.mass_budget,
+                    volume_budget=args.volume_budget)
+
+
 def cmd_optimize(args) -> int:
     import json
 
@@ -54,8 +86,9 @@ def cmd_optimize(args) -> int:
     objective = Objective(args.objective, frequency=args.frequency, band=band)
     impact = cfg.system == "impact"
     names = tuple(v.strip() for v in (args.vars or "Lz").split(",") if v.strip())
-    if names != ("Lz",) or args.method in ("spsa", "random"):
-        return _cmd_design(args, cfg, objective, names)
+    envelope = envelope_option(args)
+    if names != ("Lz",) or args.method in ("spsa", "random", "batch") or envelope is not None:
+        return _cmd_design(args, cfg, objective, names, envelope)
     if args.bounds:
         raise ConfigError("--bounds applies to several design variables (--vars); for Lz "
                           "alone use --lo/--hi")
@@ -229,24 +262,31 @@ def _not_an_optimum(status, prob, objective, best, gradient, what="best iterate"
     return f"{status.headline()} ({status.reason}{grad}); {where} — not an optimum"
 
 
-def _cmd_design(args, cfg, objective, names) -> int:
-    """Several design variables (``--vars Lz,base,friction``): SPSA or Latin-hypercube search
-    on the DEM, then a confirmation on fresh beds of the found design next to the start."""
+def _cmd_design(args, cfg, objective, names, envelope=None) -> int:
+    """Several design variables (``--vars Lz,base,friction``) or an operating envelope
+    (``--envelope-frequencies``, ``--envelope-levels``): SPSA, Latin-hypercube or the batched
+    Gaussian-process search on the DEM, then a confirmation on fresh beds of the found design
+    next to the start."""
     import numpy as np
 
     from jaxdamp.design import DEFAULTS
+    from jaxdamp.design.bayes import batch_search
+    from jaxdamp.design.envelope import EnvelopeProblem
     from jaxdamp.design.space import DesignProblem, DesignSpace, parse_bounds
     from jaxdamp.design.spsa import random_search, spsa
     from jaxdamp.design.status import EXIT_FAILED
     from jaxdamp.io import optimisation as optimisation_file
 
     if cfg.system != "primary":
-        raise ConfigError("--vars: several design variables need a DEM preset with a primary "
-                          "(S1, e.g. sanchez2012-optimal)")
-    method = args.method or "spsa"
-    if method not in ("spsa", "random"):
-        raise ConfigError(f"--method {method}: with several design variables use spsa "
-                          "(default) or random")
+        raise ConfigError("--vars and --envelope-*: design variables and envelopes need a DEM "
+                          "preset with a primary (S1, e.g. sanchez2012-optimal)")
+    method = args.method or ("batch" if envelope is not None else "spsa")
+    if method not in ("spsa", "random", "batch"):
+        raise ConfigError(f"--method {method}: with several design variables or an envelope "
+                          "use spsa, random or batch")
+    if method == "batch" and args.budget is not None:
+        raise ConfigError("--budget applies to spsa and random; the batch search spends "
+                          "--max-iter batches after its start (DEFAULTS)")
     for flag, val in (("--lo", args.lo), ("--hi", args.hi), ("--gap0", args.gap0),
                       ("--h", args.h), ("--lr", args.lr)):
         if val is not None:
@@ -256,7 +296,7 @@ def _cmd_design(args, cfg, objective, names) -> int:
         raise ConfigError("--estimator windows applies to Lz alone")
     s = dict(DEFAULTS["design-quick" if args.quick else "design"])
     for key, val in (("replicates", args.replicates), ("duration", args.duration),
-                     ("max_iter", args.max_iter)):
+                     ("rounds" if method == "batch" else "max_iter", args.max_iter)):
         if val is not None:
             if val <= 0:
                 raise ConfigError(f"--{key.replace('_', '-')} {val}: must be > 0")
@@ -266,6 +306,10 @@ def _cmd_design(args, cfg, objective, names) -> int:
     cfg = apply_overrides(cfg, {"numerics.settle_time": s["settle_time"]})
     bounds = parse_bounds(args.bounds)
     space = DesignSpace.of(cfg, names, bounds)  # refuse bad input before any compute
+    discrete = [v.name for v in space.variables if v.kind != "real"]
+    if method == "spsa" and discrete:
+        raise ConfigError(f"--method spsa perturbs continuous variables; {', '.join(discrete)} "
+                          "take whole values: use --method batch (or random)")
     if args.x0:
         x0 = np.asarray(float_list(args.x0, "--x0"), float)
         if len(x0) != space.dim:
@@ -276,12 +320,25 @@ def _cmd_design(args, cfg, objective, names) -> int:
                 raise ConfigError(f"--x0 {n} = {v:.5g}: outside its bounds [{a:.5g}, {b:.5g}]")
     else:  # the preset's design, moved into the bounds if they exclude it
         x0 = np.clip(space.value(), space.lo, space.hi)
-    prob = DesignProblem(cfg, objective, names, bounds=bounds, duration=s["duration"],
-                         seed=cfg.numerics.seed, progress=False)
+    if envelope is not None:
+        prob = EnvelopeProblem(cfg, envelope, names, bounds=bounds, duration=s["duration"],
+                               seed=cfg.numerics.seed, progress=False)
+        start_ok, which = prob.feasible(x0)
+        if not start_ok and args.x0:
+            bad = next(k for k, v in which.items() if not v)
+            raise ConfigError(f"--x0: outside the envelope's {bad.replace('_', '-')}")
+        target = (f"the {envelope.statistic} C_eq [N s/m] over {len(envelope.points)} points ("
+                  + ", ".join(f"{f:.4g}" for f in envelope.frequencies) + " Hz × U = "
+                  + ", ".join(f"{u:.4g}" for u in envelope.levels) + " m)")
+    else:
+        prob = DesignProblem(cfg, objective, names, bounds=bounds, duration=s["duration"],
+                             seed=cfg.numerics.seed, progress=False)
+        start_ok = True
+        target = (f"{objective.kind} [{objective.unit}] at "
+                  + ", ".join(f"{f:.4g}" for f in prob.freqs) + " Hz")
     space = prob.space
     what = "maximise" if objective.maximise else "minimise"
-    print(f"{what} {objective.kind} [{objective.unit}] at "
-          + ", ".join(f"{f:.4g}" for f in prob.freqs) + " Hz over "
+    print(f"{what} {target} over "
           + ", ".join(f"{n} in [{a:.4g}, {b:.4g}]" for n, a, b in zip(names, space.lo, space.hi))
           + f" by {method}; " + (f"{s['pairs']} pairs (own direction and bed) per iterate"
                                  if method == "spsa" else f"{s['replicates']} beds per design")
@@ -293,14 +350,18 @@ def _cmd_design(args, cfg, objective, names) -> int:
                    max_iter=s["max_iter"],
                    budget=budget, seed=cfg.numerics.seed, progress=not args.no_progress)
         design, found = res.x_average, "average of the last iterates"
+    elif method == "batch":
+        res = batch_search(prob, n_start=s["n_start"], batch=s["batch"], rounds=s["rounds"],
+                           replicates=s["replicates"], seed=cfg.numerics.seed,
+                           progress=None if args.no_progress else print)
+        design, found = res.best_x, "the surrogate's best run design"
     else:
         budget = budget or s["max_iter"] * per_iter
         res = random_search(prob, budget, replicates=s["replicates"], seed=cfg.numerics.seed)
         design, found = np.asarray(res.best["x"]), "best of the Latin hypercube"
         print(f"{len(res.X)} designs × {s['replicates']} beds in one batch")
     status = res.status
-    fmt = lambda x: ", ".join(f"{n} = {v:.5g}{(' ' + u) if u else ''}"
-                              for n, v, u in zip(names, x, [v.unit for v in space.variables]))
+    fmt = lambda x: ", ".join(space.label(x))  # noqa: E731
     search_cost = prob.sim_seconds
     if status.failed:
         print(f"FAILED: {status.reason} — no design to confirm")
@@ -316,11 +377,21 @@ def _cmd_design(args, cfg, objective, names) -> int:
         print(f"{status.headline()} ({status.reason}); {found}: {fmt(design)} — not an "
               "optimum")
     R = s["confirm"]
-    conf = prob.evaluate(np.stack([design, x0]), R)  # fresh beds: no winner's curse
-    conf.update(X=np.stack([design, x0]), labels=["found", "start"])
-    print(f"confirmed on {R} fresh beds (95 %): {objective.kind} = "
-          f"{pm(conf['mean'][0], conf['ci95'][0], unit=objective.unit)}; at the start "
-          f"({fmt(x0)}): {pm(conf['mean'][1], conf['ci95'][1])}")
+    X = np.stack([design, x0]) if start_ok else design[None]
+    conf = prob.evaluate(X, R)  # fresh beds: no winner's curse
+    conf.update(X=X, labels=["found", "start"][:len(X)])
+    kind = f"{envelope.statistic} C_eq" if envelope is not None else objective.kind
+    print(f"confirmed on {R} fresh beds (95 %): {kind} = "
+          f"{pm(conf['mean'][0], conf['ci95'][0], unit=objective.unit)}; "
+          + (f"at the start ({fmt(x0)}): {pm(conf['mean'][1], conf['ci95'][1])}" if start_ok
+             else f"the start ({fmt(x0)}) is outside the envelope's budgets: not run"))
+    if envelope is not None:
+        pts = envelope.points
+        print("  per point (f, U): " + "; ".join(
+            f"{f:.4g} Hz, {u:.4g} m: {pm(conf['point_mean'][p, 0], conf['point_se'][p, 0])}"
+            for p, (f, u) in enumerate(pts)) + " (mean ± SE over beds)")
+        b = conf["budgets"][0]
+        print(f"  added mass ratio {b['mass_ratio']:.4g}, cavity volume {b['volume']:.4g} m³")
     edge = [n for n, v, a, b in zip(names, space.to_u(design), space.lo, space.hi)
             if v < 0.02 or v > 0.98]
     if edge:
@@ -355,8 +426,12 @@ def register(sub) -> None:
         "Several design variables (--vars Lz,base,friction): 'spsa' (default) estimates the "
         "gradient from random +-c perturbation pairs, each pair its own direction and bed, all "
         "in one batch, and steps with optax Adam inside --bounds (the bed must fit under the "
-        "lid); 'random' is the Latin hypercube of equal cost; the design is then confirmed on "
-        "fresh beds next to the start.",
+        "lid); 'random' is the Latin hypercube of equal cost; 'batch' a Sobol start, a "
+        "Gaussian process with each design's noise and batches drawn by Thompson sampling; the "
+        "design is then confirmed on fresh beds next to the start. An operating envelope "
+        "(--envelope-frequencies x --envelope-levels, every frequency at every base "
+        "amplitude) scores a design by the worst (or mean) C_eq over its points, within "
+        "--mass-budget and --volume-budget.",
         epilog=textwrap.dedent("""\
             examples:
               jaxdamp optimize --preset sanchez2012-optimal --replicates 4 --out opt.h5
@@ -368,6 +443,13 @@ def register(sub) -> None:
                   --replicates 2 --budget 400 --out design.h5
                   three variables: SPSA gradients (all perturbations and beds in one batch)
                   fed to Adam, then the design confirmed on fresh beds next to the preset's
+              jaxdamp optimize --preset sanchez2012-optimal --vars Lz,mass_ratio \\
+                  --envelope-frequencies 13.5,15.16,16.5 --envelope-levels 0.0015,0.0045 \\
+                  --mass-budget 0.12 --out envelope.h5
+                  an operating envelope: the largest worst-point C_eq over the band and the
+                  levels within a mass budget, by the batched search (Sobol start, Gaussian
+                  process with the replicates' noise, Thompson batches; designs of other
+                  grain counts run in batches of their own), confirmed on fresh beds
 
             objectives:
               damping      (default) equivalent viscous damping added by the grains at
@@ -401,16 +483,30 @@ def register(sub) -> None:
     op.add_argument("--frequency", type=positive_float, metavar="HZ",
                     help="frequency of damping/amplitude/dissipation (default: the primary's f0)")
     op.add_argument("--band", metavar="F1,F2,...", help="frequencies of the band objective [Hz]")
-    op.add_argument("--method", choices=["trust", "scan", "gradient", "spsa", "random"],
+    op.add_argument("--method", choices=["trust", "scan", "gradient", "spsa", "random", "batch"],
                     help="search (Lz: DEM default trust, S3 default gradient; several --vars: "
-                         "spsa (default) or random, a Latin hypercube of equal cost)")
+                         "spsa (default), random (a Latin hypercube of equal cost) or batch "
+                         "(Sobol start, Gaussian process, Thompson batches; the envelope's "
+                         "default))")
     op.add_argument("--vars", metavar="NAMES", default="Lz",
                     help="design variables, comma separated: Lz (box height [m]), base (side "
-                         "of the square base Lx = Ly [m]), friction (grains' Coulomb "
-                         "coefficient); default Lz")
+                         "of the square base Lx = Ly, or a cylinder's radius [m]), friction "
+                         "(grains' Coulomb coefficient), mass_ratio (the fill: grains' mass / "
+                         "M), radius (the grains' radius [m], the fill kept by mass); default Lz")
     op.add_argument("--bounds", metavar="NAME=LO:HI,...",
                     help="ranges of the --vars (default Lz 0.07:0.25, base 0.8-1.25x the "
-                         "preset's, friction 0.05:0.8)")
+                         "preset's, friction 0.05:0.8, mass_ratio 0.02:0.2, radius 0.67-1.33x)")
+    op.add_argument("--envelope-frequencies", metavar="F1,F2,...",
+                    help="an operating envelope: the frequencies [Hz] the design must meet, "
+                         "at every --envelope-levels; the score is C_eq at each point")
+    op.add_argument("--envelope-levels", metavar="U1,U2,...",
+                    help="the envelope's base amplitudes U [m]")
+    op.add_argument("--statistic", choices=["worst", "mean"],
+                    help="envelope: maximise the worst point's C_eq (default) or the mean")
+    op.add_argument("--mass-budget", type=positive_float, metavar="MU",
+                    help="envelope: largest grains' mass over the primary's mass M")
+    op.add_argument("--volume-budget", type=positive_float, metavar="M3",
+                    help="envelope: largest cavity volume, every cell [m^3]")
     op.add_argument("--x0", metavar="V1,V2,...",
                     help="--vars: start design in the order of --vars (default the preset's)")
     op.add_argument("--replicates", type=positive_int, metavar="R",
@@ -425,7 +521,8 @@ def register(sub) -> None:
     op.add_argument("--lo", type=float, metavar="LZ", help="lowest Lz [m] (default bed + 5 mm)")
     op.add_argument("--hi", type=float, metavar="LZ", help="highest Lz [m] (default 0.4 DEM)")
     op.add_argument("--lr", type=positive_float, help="gradient: initial learning rate [m]")
-    op.add_argument("--max-iter", type=positive_int, help="gradient: most iterates")
+    op.add_argument("--max-iter", type=positive_int,
+                    help="gradient, spsa: most iterates; batch: batches after the start")
     op.add_argument("--estimator", choices=["steady", "windows"], default="steady",
                     help="DEM gradient: replicated steady states (default) or pathwise "
                          "derivatives over short windows (biased on the chaotic bed; kept for "

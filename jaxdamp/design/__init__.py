@@ -13,10 +13,16 @@
   the surrogate's proposal :func:`~jaxdamp.design.surrogate.propose`: multi-fidelity),
   all reporting an optimum with an interval (:mod:`~jaxdamp.design.surface`) and the simulated
   system-seconds they spent.
-* Several variables — :mod:`~jaxdamp.design.space` (``Lz``, ``base``, ``friction``: the
-  design space with projection, and :class:`~jaxdamp.design.space.DesignProblem`, one bed
-  per design) and :mod:`~jaxdamp.design.spsa` (replicated SPSA gradients fed to optax Adam;
-  the equal-budget Latin-hypercube baseline).
+* Several variables — :mod:`~jaxdamp.design.space` (``Lz``, ``base``, ``friction``, the fill
+  ``mass_ratio``, the grains' ``radius`` and ``material``, the ``cells``: the design space
+  with projection, and :class:`~jaxdamp.design.space.DesignProblem`, one bed per design,
+  designs of other grains in batches of their own), :mod:`~jaxdamp.design.spsa` (replicated
+  SPSA gradients fed to optax Adam; the equal-budget Latin-hypercube baseline) and
+  :mod:`~jaxdamp.design.bayes` (the batched search: Sobol start, a Gaussian process with the
+  replicates' noise, Thompson batches).
+* An operating envelope — :mod:`~jaxdamp.design.envelope` (a band of frequencies × base
+  amplitudes, the worst or mean ``C_eq`` over it, mass and volume budgets, the damping–mass
+  front).
 
 :func:`make_problem` builds the problem of a configuration with the settings of
 :data:`DEFAULTS`; ``jaxdamp optimize`` is its command line.
@@ -44,9 +50,10 @@ __all__ = ["DEFAULT", "OBJECTIVES", "DEFAULTS", "DEMProblem", "Estimate", "Objec
 #: burn-ins [s]; design (several variables): SPSA pairs per iterate, beds per design of the
 #: random search,
 #: duration [s], Adam's rate and decay and the perturbation ``c`` (normalised coordinates),
-#: iterations, beds of the confirmation run, settling. (S3 quick: 30 iterations, enough for the
-#: thesis' damper at f0 to meet the convergence rule, :mod:`jaxdamp.design.status`, from the
-#: default start: it needs 26.)
+#: iterations, beds of the confirmation run, settling; the batched search's Sobol start, its
+#: batch size and batches after the start (:mod:`jaxdamp.design.bayes`). (S3 quick: 30
+#: iterations, enough for the thesis' damper at f0 to meet the convergence rule,
+#: :mod:`jaxdamp.design.status`, from the default start: it needs 26.)
 DEFAULTS = {
     "s3": dict(duration=3.0, analysis_window=0.5, lr=0.015, decay=0.88, max_iter=40, xtol=5e-5),
     "s3-quick": dict(duration=3.0, analysis_window=0.5, lr=0.015, decay=0.88, max_iter=30,
@@ -56,9 +63,10 @@ DEFAULTS = {
     "steady-quick": dict(h=0.005, replicates=2, duration=0.6, lr=0.01, decay=0.85,
                          max_iter=2, xtol=5e-4, settle_time=0.2),
     "design": dict(pairs=4, replicates=2, duration=3.0, lr=0.08, decay=0.92, c=0.08,
-                   max_iter=10, confirm=4, settle_time=0.3),
+                   max_iter=10, confirm=4, settle_time=0.3, n_start=8, batch=4, rounds=3),
     "design-quick": dict(pairs=2, replicates=2, duration=0.5, lr=0.08, decay=0.92,
-                         c=0.08, max_iter=2, confirm=2, settle_time=0.2),
+                         c=0.08, max_iter=2, confirm=2, settle_time=0.2, n_start=3, batch=2,
+                         rounds=1),
     "windows": dict(window=0.002, n_windows=8, burn_in=1.0, warm_burn_in=0.4, lr=0.02,
                     decay=0.85, max_iter=12, xtol=5e-4, settle_time=0.3),
     "windows-quick": dict(window=0.001, n_windows=4, burn_in=0.3, warm_burn_in=0.1, lr=0.02,

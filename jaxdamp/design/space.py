@@ -55,33 +55,53 @@ class Variable:
     name: str
     unit: str
     description: str
+    #: ``"real"``, ``"integer"`` (rounded) or ``"choice"`` (a categorical variable: its value
+    #: is the index of one of :attr:`DesignSpace.choices`, its coordinate spread evenly).
+    kind: str = "real"
 
     def keys(self, config: Config) -> tuple:
         """The configuration keys this variable sets (the container's lid height, its base —
-        :class:`jaxdamp.physics.containers.Container` — or every species' ``μ``)."""
+        :class:`jaxdamp.physics.containers.Container` — every species' ``μ``, fill or
+        material, the first species' radius, the cells)."""
+        n = range(len(config.grains))
         if self.name == "Lz":
             return (container(config).lid_key,)
         if self.name == "base":
             return container(config).base_keys
         if self.name == "mass_ratio":
-            return tuple(f"grains.{i}.mass_ratio" for i in range(len(config.grains)))
+            return tuple(f"grains.{i}.mass_ratio" for i in n)
         if self.name == "radius":
             return ("grains.0.radius",)
-        return tuple(f"grains.{i}.material.mu" for i in range(len(config.grains)))
+        if self.name == "material":
+            return tuple(f"grains.{i}.material" for i in n)
+        if self.name == "cells":
+            return ("cells",)
+        return tuple(f"grains.{i}.material.mu" for i in n)
 
     def value(self, config: Config) -> float:
+        """The variable's value in ``config`` (a material: the name of the table's entry the
+        first species' material is, :func:`material_name`)."""
         if self.name == "mass_ratio":  # the whole damper's, however the fill is stated
             from jaxdamp.cases.filling import mass_ratio
 
             return mass_ratio(validate(config))
+        if self.name == "material":
+            return material_name(config.grains[0].material)
         return float(get_path(config, self.keys(config)[0]))
 
     def default_range(self, config: Config) -> tuple:
         """Range searched unless told: ``Lz`` 0.07–0.25 m, ``base`` ±25 % of the preset's
         ``Lx`` (at most 0.8–1.25×), ``friction`` 0.05–0.8, ``mass_ratio`` 0.02–0.2 (the
-        thesis' 0.096 inside), ``radius`` ±33 % of the preset's."""
+        thesis' 0.096 inside), ``radius`` ±33 % of the preset's, ``cells`` 1–8; ``material``:
+        every entry of the material table."""
         if self.name == "Lz":
             return 0.07, 0.25
+        if self.name == "material":
+            from jaxdamp import materials
+
+            return materials.names()
+        if self.name == "cells":
+            return 1, 8
         if self.name in ("base", "radius"):
             v = self.value(config)
             return (0.8 * v, 1.25 * v) if self.name == "base" else (0.67 * v, 1.33 * v)
@@ -96,17 +116,42 @@ VARIABLES = {v.name: v for v in (
     Variable("friction", "", "grains' Coulomb friction coefficient (all species)"),
     Variable("mass_ratio", "", "the grains' mass over the primary's mass M (the fill)"),
     Variable("radius", "m", "the grains' radius (one species; the fill kept by mass)"),
+    Variable("material", "", "the grains' material from the material table (every species; "
+             "the fill kept by mass)", kind="choice"),
+    Variable("cells", "", "identical cells of the damper, each its own cavity and bed (the "
+             "fill kept by mass)", kind="integer"),
 )}
 #: Variables that change the grains, hence the batch's shape: designs differing in them run in
-#: separate batches (:meth:`DesignProblem.measure` groups the rows by their ``Model``).
-SHAPING = ("mass_ratio", "radius")
+#: separate batches (:meth:`DesignProblem.measure` groups the rows by the grains they give).
+SHAPING = ("mass_ratio", "radius", "material", "cells")
+
+
+def material_name(material) -> str:
+    """The material table's name of ``material`` (a resolved :class:`~jaxdamp.config.Material`:
+    its density and modulus match the entry's), or a :class:`ConfigError` for one not from
+    the table."""
+    from jaxdamp import materials
+
+    for name in materials.names():
+        f = materials.lookup(name).fields()
+        if material.density == f["density"] and material.E == f["E"]:
+            return name
+    raise ConfigError(f"design variable material: the grains' material (E = {material.E:g} Pa, "
+                      f"density {material.density:g} kg/m³) is not an entry of the material "
+                      f"table ({', '.join(materials.names())}); set it by name first")
 
 
 def parse_bounds(text: str | None) -> dict:
-    """``"Lz=0.08:0.2,base=0.03:0.045"`` → ``{"Lz": (0.08, 0.2), "base": (0.03, 0.045)}``."""
+    """``"Lz=0.08:0.2,base=0.03:0.045"`` → ``{"Lz": (0.08, 0.2), "base": (0.03, 0.045)}``; a
+    categorical variable's choices by name, ``"material=steel/glass/lead"`` →
+    ``{"material": ("steel", "glass", "lead")}``."""
     out = {}
     for item in (text or "").split(","):
         if not item.strip():
+            continue
+        name, _, rng = item.partition("=")
+        if name.strip() in VARIABLES and VARIABLES[name.strip()].kind == "choice":
+            out[name.strip()] = tuple(v.strip() for v in rng.split("/") if v.strip())
             continue
         try:
             name, rng = item.split("=")
@@ -124,10 +169,14 @@ class DesignSpace:
 
     def __init__(self, config: Config, names, lo, hi, h_ref: float = 0.0,
                  base_ref: float | None = None, margin: float = 0.01,
-                 mass_ref: float | None = None):
+                 mass_ref: float | None = None, choices: dict | None = None):
         self.config = config
         self.names = tuple(names)
         self.variables = [VARIABLES[n] for n in self.names]
+        #: a categorical variable's values by name; its design value is the index
+        self.choices = dict(choices or {})
+        self.density_ref = config.grains[0].material.density if config.grains else 1.0
+        self.cells_ref = config.cells
         self.lo = np.asarray(lo, float)
         self.hi = np.asarray(hi, float)
         self.h_ref = float(h_ref)
@@ -152,9 +201,24 @@ class DesignSpace:
         stray = [n for n in bounds if n not in names]
         if stray:
             raise ConfigError(f"--bounds {', '.join(stray)}: not among --vars {','.join(names)}")
-        lo, hi = [], []
+        lo, hi, choices = [], [], {}
         for n in names:
+            if VARIABLES[n].kind == "choice":
+                from jaxdamp import materials
+
+                names_n = tuple(bounds.get(n, VARIABLES[n].default_range(config)))
+                bad = [c for c in names_n if c not in materials.names()]
+                if bad or len(names_n) < 2:
+                    raise ConfigError(f"bounds of {n}: give two or more of "
+                                      f"{', '.join(materials.names())} as NAME/NAME/..."
+                                      + (f" ({', '.join(bad)} not in the table)" if bad else ""))
+                choices[n] = names_n
+                lo.append(0.0)
+                hi.append(float(len(names_n) - 1))
+                continue
             a, b = bounds.get(n, VARIABLES[n].default_range(config))
+            if VARIABLES[n].kind == "integer" and (a != int(a) or b != int(b) or a < 1):
+                raise ConfigError(f"bounds of {n}: whole numbers ≥ 1, got {a:g}:{b:g}")
             if not (a < b):
                 raise ConfigError(f"bounds of {n}: lower {a:g} must be below upper {b:g}")
             if a <= 0:
@@ -164,22 +228,60 @@ class DesignSpace:
                                   "coefficient of grains is 0.05–1)")
             lo.append(a)
             hi.append(b)
-        return cls(config, names, lo, hi, **kw)
+        return cls(config, names, lo, hi, choices=choices, **kw)
 
     @property
     def dim(self) -> int:
         return len(self.names)
 
+    def _discrete(self):
+        """Columns of integer and categorical variables and their counts of values."""
+        return [(i, int(round(self.hi[i] - self.lo[i])) + 1)
+                for i, v in enumerate(self.variables) if v.kind != "real"]
+
     def to_x(self, u) -> np.ndarray:
-        return self.lo + np.asarray(u, float) * (self.hi - self.lo)
+        """Physical design of normalised ``u``; an integer or categorical variable of ``K``
+        values takes value ``k`` on ``u ∈ [k/K, (k+1)/K)`` (each value an equal share)."""
+        u = np.asarray(u, float)
+        x = self.lo + u * (self.hi - self.lo)
+        for i, K in self._discrete():
+            x[..., i] = self.lo[i] + np.minimum(np.floor(u[..., i] * K), K - 1)
+        return x
 
     def to_u(self, x) -> np.ndarray:
-        return (np.asarray(x, float) - self.lo) / (self.hi - self.lo)
+        """Normalised coordinates of ``x`` (a discrete value at the middle of its share)."""
+        x = np.asarray(x, float)
+        u = (x - self.lo) / (self.hi - self.lo)
+        for i, K in self._discrete():
+            u[..., i] = (x[..., i] - self.lo[i] + 0.5) / K
+        return u
 
     def value(self, config: Config | None = None) -> np.ndarray:
-        """The design of ``config`` (default: the base configuration) in physical units."""
+        """The design of ``config`` (default: the base configuration) in physical units (a
+        categorical variable: the index of its value among :attr:`choices`)."""
         c = config or self.config
-        return np.array([v.value(c) for v in self.variables])
+        out = []
+        for v in self.variables:
+            val = v.value(c)
+            if v.kind == "choice":
+                if val not in self.choices[v.name]:
+                    raise ConfigError(f"design variable {v.name}: the configuration's {val!r} "
+                                      f"is not among the choices {self.choices[v.name]}")
+                val = self.choices[v.name].index(val)
+            out.append(val)
+        return np.array(out, float)
+
+    def label(self, x) -> list:
+        """``["Lz = 0.12 m", "material = glass", ...]`` of design ``x``."""
+        out = []
+        for v, val in zip(self.variables, np.asarray(x, float)):
+            if v.kind == "choice":
+                out.append(f"{v.name} = {self.choices[v.name][int(val)]}")
+            elif v.kind == "integer":
+                out.append(f"{v.name} = {int(val)}")
+            else:
+                out.append(f"{v.name} = {val:.5g}{(' ' + v.unit) if v.unit else ''}")
+        return out
 
     def bed_height(self, x) -> float:
         """``h_bed`` of design ``x`` [m] (module doc): ``h_ref (b_ref / b)² (μ / μ_ref)``, the
@@ -189,6 +291,13 @@ class DesignSpace:
         b = x[self.names.index("base")] if "base" in self.names else self.base_ref
         mu = x[self.names.index("mass_ratio")] / self.mass_ref if "mass_ratio" in self.names \
             else 1.0
+        if "material" in self.names:  # the same mass of a lighter material: a taller bed
+            from jaxdamp import materials
+
+            name = self.choices["material"][int(x[self.names.index("material")])]
+            mu *= self.density_ref / materials.lookup(name).fields()["density"]
+        if "cells" in self.names:  # the mass shared by more cells: a lower bed in each
+            mu *= self.cells_ref / x[self.names.index("cells")]
         return self.h_ref * (self.base_ref / b) ** 2 * mu
 
     def project(self, u, shrink: float = 0.0) -> np.ndarray:
@@ -212,15 +321,22 @@ class DesignSpace:
         return u
 
     def overrides(self, x) -> dict:
-        out = {}
+        """The configuration keys of design ``x`` and their values (a material by name, set
+        before any ``μ`` so that a friction variable applies to it)."""
+        first, out = {}, {}
         for v, val in zip(self.variables, np.asarray(x, float)):
-            out.update({k: float(val) for k in v.keys(self.config)})
-        return out
+            if v.kind == "choice":
+                first.update({k: self.choices[v.name][int(val)] for k in v.keys(self.config)})
+            else:
+                out.update({k: int(val) if v.kind == "integer" else float(val)
+                            for k in v.keys(self.config)})
+        return {**first, **out}
 
     def describe(self) -> dict:
         return {"variables": list(self.names), "units": [v.unit for v in self.variables],
                 "lo": self.lo.tolist(), "hi": self.hi.tolist(), "h_ref": self.h_ref,
-                "base_ref": self.base_ref, "mass_ref": self.mass_ref, "margin": self.margin}
+                "base_ref": self.base_ref, "mass_ref": self.mass_ref, "margin": self.margin,
+                "choices": {k: list(v) for k, v in self.choices.items()}}
 
 
 def stated_by_mass(config: Config) -> Config:
@@ -315,17 +431,17 @@ class DesignProblem:
         key = [()] * len(rows)
         if shaping:  # the grains each row validates to: one batch per distinct set
             cfgs = grid_configs(self.config, Points({k: [r[k] for r in rows] for k in rows[0]}))
-            key = [tuple((sp.count, sp.radius, sp.radius_spread) for sp in c.grains)
-                   for c in cfgs]
+            key = [(c.cells,) + tuple((sp.count, sp.radius, sp.radius_spread)
+                                      for sp in c.grains) for c in cfgs]
         t0 = time.perf_counter()
-        recs: dict = {}
-        for k in dict.fromkeys(key):
+        recs: dict = {name: [None] * len(rows) for name in ("t", "z_box", "work")}
+        for k in dict.fromkeys(key):  # per row: batches may differ in dt, hence in samples
             idx = [i for i, kk in enumerate(key) if kk == k]
             res = sweep(self.config, Points({c: [rows[i][c] for i in idx] for c in rows[0]}),
                         progress=self.progress, echo=None)
-            for name in ("t", "z_box", "work"):
-                a = np.asarray(res.records[name])
-                recs.setdefault(name, np.empty((len(rows),) + a.shape[1:], a.dtype))[idx] = a
+            for name in recs:
+                for j, i in enumerate(idx):
+                    recs[name][i] = np.asarray(res.records[name][j])
         Z, E = np.empty((C, n)), np.empty((C, n))
         ok = np.ones(n, bool)
         groups = [[2 * k, 2 * k + 1] for k in range(n // 2)] if pairs else [[i] for i in range(n)]

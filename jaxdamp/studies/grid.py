@@ -78,7 +78,9 @@ def grid_shape(axes: dict) -> tuple:
 
 
 def _value(key: str, v):
-    return int(v) if key.endswith(".seed") else float(v)
+    if isinstance(v, str):  # a name: a material of the table
+        return v
+    return int(v) if key.endswith(".seed") or key == "cells" else float(v)
 
 
 def grid_configs(config: Config, axes: dict) -> list[Config]:
