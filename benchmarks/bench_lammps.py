@@ -86,9 +86,9 @@ def wait_quiet(limit: float = 0.05, timeout: float = 120.0) -> float:
 # ------------------------------------------------------------------------------- the moving bed
 
 
-def moving_bed(name: str):
+def moving_bed(name: str, extra: dict | None = None):
     """The driven configuration and its state after the warm-up: (config, model, params,
-    state dict of one system)."""
+    state dict of one system); ``extra``: further overrides of the bed (e.g. its fill)."""
     import jax
 
     from jaxdamp.cases import presets
@@ -103,6 +103,10 @@ def moving_bed(name: str):
     over = [f"frequency={b['frequency']}", "system='driven'",
             f"drive.amplitude={b['amplitude']}"]
     cfg = apply_overrides(cfg, over)
+    if extra:
+        from jaxdamp.validation import validate
+
+        cfg = validate(apply_overrides(cfg, extra))
     model, params = build(cfg)
     bed = settle(cfg, model, params)
     pb = driver.batched(params)

@@ -13,7 +13,7 @@ NOTEBOOK_DIR = pathlib.Path(__file__).parent.parent / "notebooks"
 NOTEBOOKS = sorted(NOTEBOOK_DIR.glob("*.ipynb"))
 #: the tutorials the README links to; each must exist (the glob above would silently skip one)
 EXPECTED = ("quickstart.ipynb", "frf_sweep.ipynb", "bed_dynamics.ipynb", "binary_mixtures.ipynb",
-            "gap_optimisation.ipynb")
+            "gap_optimisation.ipynb", "envelope_design.ipynb")
 
 
 def test_expected_notebooks_present():
