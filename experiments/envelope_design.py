@@ -25,6 +25,12 @@ C. **Why this search** (a measurement, not the DEM): on a known noisy 2-D functi
    ``f_max − f(recommended)``.
 
 Writes ``data.h5``, ``figure.png``, ``summary.md``.
+
+**Run-length check** (``--recheck S --out DIR``): the two designs of a stored result
+(``--designs``, default this study's ``data.h5``) confirmed again on fresh beds with runs of
+``S`` seconds, each point's C_eq set beside the stored one (Welch 95 %: the run length's
+systematic) and the verdict retaken; it writes its own ``data.h5``, ``figure.png`` and
+``summary.md`` into ``DIR`` (not the stored result's folder).
 """
 
 from __future__ import annotations
@@ -49,6 +55,7 @@ except ImportError:  # run as a file: python experiments/<name>.py
 
 SCAN_FILE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "design_optimisation",
                          "data.h5")
+DATA_FILE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "envelope_design", "data.h5")
 LABELS = ["single-point optimum", "envelope design"]
 
 
@@ -97,8 +104,46 @@ def part_c(s, log) -> dict:
     return dict(gp=gp, lhs=lhs, designs=20, dem_designs=n)
 
 
+def options(ap):
+    ap.add_argument("--recheck", type=float, metavar="S",
+                    help="confirm a stored result's two designs again with runs of S seconds")
+    ap.add_argument("--designs", default=DATA_FILE, metavar="DATA.h5",
+                    help="the stored result whose designs --recheck runs (default: this "
+                         "study's data.h5)")
+    ap.add_argument("--beds", type=int, help="--recheck: fresh beds per design (default: the "
+                                             "stored result's)")
+
+
+def recheck(s, base, log, ctx):
+    """The run-length check (module doc)."""
+    from jaxdamp.io.study import load
+
+    a = ctx.args
+    if os.path.abspath(ctx.out) == os.path.dirname(os.path.abspath(a.designs)):
+        raise SystemExit("--recheck writes its own result: give --out another folder than "
+                         f"the one of {a.designs}")
+    stored = load(a.designs)
+    X = np.asarray(stored["confirmation"]["X"])
+    old = np.asarray(stored["confirmation"]["C"])
+    st = stored.attrs["settings"]
+    env = Envelope(st["frequencies"], st["levels"], statistic="worst")
+    R = a.beds or old.shape[2]
+    prob = EnvelopeProblem(base, env, names=("Lz",), bounds={"Lz": tuple(st["bounds"]["Lz"])},
+                           duration=a.recheck, seed=s["seed"] + 50_000, progress=ctx.progress)
+    conf = prob.evaluate(X, R)
+    conf.update(sim=prob.sim_seconds, X=X)
+    log(f"recheck at {a.recheck} s: worst cases {conf['value']}")
+    return conf, old, st, env
+
+
 def compute(quick, log, ctx):
     s = settings(quick)
+    if ctx.args.recheck:
+        base = apply_overrides(presets.get("sanchez2012-optimal"), s["overrides"])
+        conf, old, st, env = recheck(s, base, log, ctx)
+        out = dict(conf=conf, old=old, st=st, env=env.describe(), duration=ctx.args.recheck,
+                   source=os.path.relpath(ctx.args.designs, os.getcwd()))
+        return out, lambda path, prov: record_recheck(out, path, prov)
     base = apply_overrides(presets.get("sanchez2012-optimal"), s["overrides"])
     env = Envelope(s["frequencies"], s["levels"], statistic="worst")
     prob = EnvelopeProblem(base, env, names=("Lz",), bounds=s["bounds"], duration=s["duration"],
@@ -150,6 +195,7 @@ def record(o, path, prov):
             g.create_dataset(k, data=conf[k]).attrs["units"] = {"C": "N s/m", "Z": "m",
                                                                 "E": "J per period"}[k]
         g.create_dataset("stationary", data=conf["stationary"])
+        g.create_dataset("stationary_each", data=conf["stationary_each"])
         g.create_dataset("envelope_mean", data=o["mean_stat"]).attrs["units"] = "N s/m"
         g.attrs.update(sim_seconds=conf["sim"])
         g = h.create_group("toy")
@@ -158,8 +204,75 @@ def record(o, path, prov):
         g.attrs.update(designs=o["toy"]["designs"])
 
 
+def record_recheck(o, path, prov):
+    conf = o["conf"]
+    with scaffold.data_file(path, prov, mode="recheck", settings=do.encode(o["st"]),
+                            envelope=do.encode(o["env"]), labels=do.encode(LABELS),
+                            duration=o["duration"], designs_from=o["source"]) as h:
+        g = h.create_group("confirmation")
+        g.create_dataset("X", data=conf["X"]).attrs["units"] = "m"
+        for k in ("C", "Z", "E"):
+            g.create_dataset(k, data=conf[k]).attrs["units"] = {"C": "N s/m", "Z": "m",
+                                                                "E": "J per period"}[k]
+        g.create_dataset("stationary_each", data=conf["stationary_each"])
+        g.attrs.update(sim_seconds=conf["sim"])
+        h.create_dataset("stored_C", data=o["old"]).attrs["units"] = "N s/m"
+
+
+def report_recheck(data, out):
+    from jaxdamp.design.envelope import summarise
+
+    env, labels, S = data.attrs["envelope"], data.attrs["labels"], data.attrs["duration"]
+    st = data.attrs["settings"]
+    C, old = np.asarray(data["confirmation"]["C"]), np.asarray(data["stored_C"])
+    new_s, old_s = summarise(C, "worst"), summarise(old, "worst")
+    pts = env["points"]
+    fig, ax = scaffold.subplots(1, 1, figsize=(9, 4.6))
+    xs = np.arange(len(pts))
+    for i, lab in enumerate(labels):
+        for j, (ss, d, mk) in enumerate(((old_s, st["duration"], "o"), (new_s, S, "s"))):
+            ax.errorbar(xs + 0.12 * (2 * i + j - 1.5), ss["point_mean"][:, i],
+                        yerr=1.96 * ss["point_se"][:, i], fmt=mk, color=f"C{i}",
+                        mfc="none" if j == 0 else f"C{i}", capsize=2, label=f"{lab}, {d:g} s runs")
+    ax.set_xticks(xs, [f"{f:g} Hz\n{1e3 * u:g} mm" for f, u in pts], fontsize=7)
+    ax.set(xlabel="envelope point (frequency, base amplitude U)", ylabel="C_eq [N s/m]",
+           title="run length: stored confirmation against fresh beds with longer runs (± 1.96 SE)")
+    ax.legend(fontsize=8)
+    scaffold.save_figure(fig, out)
+    each = np.asarray(data["confirmation"]["stationary_each"])
+    L = [*scaffold.head(f"Envelope design: the confirmation with {S:g} s runs (run-length "
+                        "check, issue 41)", data.attrs),
+         f"The designs of {data.attrs['designs_from']} (confirmed there with {st['duration']:g} "
+         f"s runs), on {C.shape[2]} fresh beds each with {S:g} s runs; cost "
+         f"{data['confirmation'].attrs['sim_seconds']:.4g} DEM system-seconds. Steady state "
+         f"detected at {int(each.sum())} of {each.size} (point, bed) runs.", ""]
+    rows = []
+    for p, (f, u) in enumerate(pts):
+        row = [f"{f:g} Hz, {1e3 * u:g} mm"]
+        for i in range(len(labels)):
+            d, h = welch(C[p, i], old[p, i])
+            row += [scaffold.pm(new_s["point_mean"][p, i], new_s["point_se"][p, i], ".4g", ".2g"),
+                    f"{d:+.3g} ± {h:.2g}"]
+        rows.append(row)
+    L += scaffold.table(["point (f, U)"] + [h for lab in labels for h in (
+        f"{lab}: C_eq at {S:g} s [N s/m]", f"− at {st['duration']:g} s (Welch 95 %)")], rows)
+    d, h = welch(C[new_s["worst_point"][1], 1], C[new_s["worst_point"][0], 0])
+    verdict = "wins" if d - h > 0 else "loses" if d + h < 0 else "undecided"
+    L += ["", "| design | worst point | worst-case C_eq [N s/m] |", "| --- | --- | --- |"]
+    for i, lab in enumerate(labels):
+        f, u = pts[int(new_s["worst_point"][i])]
+        L.append(f"| {lab} | {f:g} Hz, {1e3 * u:g} mm | "
+                 f"{scaffold.pm(new_s['value'][i], new_s['se'][i], '.4g', '.2g')} |")
+    L += ["", f"- Worst case at {S:g} s, envelope − single-point (Welch 95 %): {d:+.3g} ± "
+          f"{h:.2g} N s/m: the envelope design **{verdict}** by the stored result's rule."]
+    scaffold.write_summary(out, L)
+
+
 def report(data, out):
     from jaxdamp.design.envelope import summarise
+
+    if data.attrs.get("mode") == "recheck":
+        return report_recheck(data, out)
 
     env, v, labels = data.attrs["envelope"], data.attrs["verdicts"], data.attrs["labels"]
     c, sr, ty = data["confirmation"], data["search"], data["toy"]
@@ -224,13 +337,15 @@ def report(data, out):
                  f"{scaffold.pm(s['value'][i], s['se'][i], '.4g', '.2g')} | "
                  f"{scaffold.pm(*scaffold.mean_se(em[i]), '.4g', '.2g')} |")
     stat = np.asarray(c["stationary"])
+    each = np.asarray(c["stationary_each"]) if "stationary_each" in c else None
     L += ["", f"- Worst case, envelope − single-point (Welch 95 % on each design's worst point): "
           f"{v['worst_difference']:+.3g} ± {v['worst_ci']:.2g} N s/m: the envelope design "
           f"**{v['worst']}** by the rule (interval above zero: wins; below: loses).",
           f"- Envelope mean, envelope − single-point: {v['mean_difference']:+.3g} ± "
           f"{v['mean_ci']:.2g} N s/m.",
-          f"- Steady state detected in {int(stat.sum())} of {stat.size} confirmation beds (the "
-          "rest: the final window's mean).", "",
+          f"- Steady state detected in {int(stat.sum())} of {stat.size} confirmation beds at "
+          "every point" + ("" if each is None else f", at {int(each.sum())} of {each.size} "
+                           "(point, bed) runs") + " (the rest: the final window's mean).", "",
           "## C. Why a surrogate-guided batch search", "",
           f"A known 2-D function (main peak 1 at (0.62, 0.35), secondary 0.4 at (0.15, 0.85); "
           f"noise sd 0.1 (1 + u₀), two replicates per design), {len(gp)} seeds, "
@@ -241,7 +356,7 @@ def report(data, out):
     scaffold.write_summary(out, L)
 
 
-main = scaffold.entry(__file__, __doc__, compute, report=report)
+main = scaffold.entry(__file__, __doc__, compute, options=options, report=report)
 
 
 if __name__ == "__main__":

@@ -204,7 +204,8 @@ class EnvelopeProblem(DesignProblem):
         """Every design of ``X`` ``(n, d)`` at every point of the envelope on ``replicates``
         fresh beds (one batch per grain shape): :func:`summarise`'s dict with ``"mean"`` (=
         ``value``, the search's objective), ``"J"`` (``per_bed``), ``"C"`` ``(P, n, R)``,
-        ``"Z"``, ``"E"`` (same shape), ``"stationary"`` (n, R), ``"budgets"`` (per design),
+        ``"Z"``, ``"E"``, ``"stationary_each"`` (same shape: the steady state detected at that
+        point), ``"stationary"`` (n, R: at every point), ``"budgets"`` (per design),
         ``"sim_seconds"``. Refuses designs outside the budgets, naming the budget."""
         X = np.atleast_2d(np.asarray(X, float))
         R = int(replicates)
@@ -225,7 +226,8 @@ class EnvelopeProblem(DesignProblem):
         s = summarise(C, self.envelope.statistic)
         s.update({"mean": s["value"], "J": s["per_bed"], "C": C,
                   "Z": m["Z"].reshape(P, n, R), "E": m["E"].reshape(P, n, R),
-                  "stationary": m["stationary"].reshape(n, R), "budgets": budgets,
+                  "stationary": m["stationary"].reshape(n, R),
+                  "stationary_each": m["stationary_each"].reshape(P, n, R), "budgets": budgets,
                   "sim_seconds": m["sim_seconds"]})
         return s
 

@@ -416,8 +416,9 @@ class DesignProblem:
         a design's conditions. One batch, or one per shape where the designs change the grains
         (:data:`SHAPING`: rows grouped by the grains they validate to). ``pairs``: rows ``2k``
         and ``2k+1`` share a seed and one common steady window (a difference pair). Returns
-        ``{"J": (n,), "Z", "E": (C, n), "stationary": (n,) bool, "sim_seconds", "wall"}``
-        (``J``: :meth:`combine` of each row)."""
+        ``{"J": (n,), "Z", "E": (C, n), "stationary": (n,) bool (at every condition),
+        "stationary_each": (C, n) bool, "sim_seconds", "wall"}`` (``J``: :meth:`combine` of
+        each row)."""
         from jaxdamp.analysis import stats
         from jaxdamp.studies.grid import Points, grid_configs
         from jaxdamp.studies.sweep import sweep
@@ -443,21 +444,22 @@ class DesignProblem:
                 for j, i in enumerate(idx):
                     recs[name][i] = np.asarray(res.records[name][j])
         Z, E = np.empty((C, n)), np.empty((C, n))
-        ok = np.ones(n, bool)
+        each = np.ones((C, n), bool)
         groups = [[2 * k, 2 * k + 1] for k in range(n // 2)] if pairs else [[i] for i in range(n)]
         for ci, cond in enumerate(self.conditions):
             for g in groups:
                 w = stats.rows_window(recs, [ci * n + i for i in g], cond["frequency"])
                 Z[ci, g] = w["amplitude"]
                 E[ci, g] = w["granular_loss_per_cycle"]
-                ok[g] &= w["stationary"]
+                each[ci, g] = w["stationary"]
+        ok = each.all(axis=0)
         J = np.asarray(self.combine(Z, E), float)
         geo = [i for i, nm in enumerate(self.space.names) if nm != "Lz"]  # Lz keeps the bed
         beds = len({(s, tuple(np.round(x[geo], 12))) for x, s in zip(X, seeds)})
         cost = C * n * self.duration + beds * self.settle_time
         self.sim_seconds += cost
         out = {"X": X, "seeds": np.asarray(seeds), "J": J, "Z": Z, "E": E, "stationary": ok,
-               "sim_seconds": cost, "wall": time.perf_counter() - t0}
+               "stationary_each": each, "sim_seconds": cost, "wall": time.perf_counter() - t0}
         self.history.append(out)
         return out
 
