@@ -164,7 +164,7 @@ def compute(quick, log, ctx):
     dm, hm = welch(mean_stat[1], mean_stat[0])
     verdict = ("wins" if d - h > 0 else "loses" if d + h < 0 else "undecided")
     log(f"B: worst case {conf['value'][0]:.4g} → {conf['value'][1]:.4g} N s/m: "
-        f"difference {d:+.3g} ± {h:.2g} ({verdict})")
+        f"difference {scaffold.pm(d, h, '+.3g', '.2g')} ({verdict})")
     c = part_c(s, log)
     out = dict(s=s, env=env.describe(), space=prob.space.describe(), res=res, X=X,
                source=source, conf=conf, mean_stat=mean_stat,
@@ -252,7 +252,7 @@ def report_recheck(data, out):
         for i in range(len(labels)):
             d, h = welch(C[p, i], old[p, i])
             row += [scaffold.pm(new_s["point_mean"][p, i], new_s["point_se"][p, i], ".4g", ".2g"),
-                    f"{d:+.3g} ± {h:.2g}"]
+                    scaffold.pm(d, h, "+.3g", ".2g")]
         rows.append(row)
     L += scaffold.table(["point (f, U)"] + [h for lab in labels for h in (
         f"{lab}: C_eq at {S:g} s [N s/m]", f"− at {st['duration']:g} s (Welch 95 %)")], rows)
@@ -263,8 +263,9 @@ def report_recheck(data, out):
         f, u = pts[int(new_s["worst_point"][i])]
         L.append(f"| {lab} | {f:g} Hz, {1e3 * u:g} mm | "
                  f"{scaffold.pm(new_s['value'][i], new_s['se'][i], '.4g', '.2g')} |")
-    L += ["", f"- Worst case at {S:g} s, envelope − single-point (Welch 95 %): {d:+.3g} ± "
-          f"{h:.2g} N s/m: the envelope design **{verdict}** by the stored result's rule."]
+    L += ["", f"- Worst case at {S:g} s, envelope − single-point (Welch 95 %): "
+          f"{scaffold.pm(d, h, '+.3g', '.2g', unit='N s/m')}: the envelope design "
+          f"**{verdict}** by the stored result's rule."]
     scaffold.write_summary(out, L)
 
 
@@ -315,7 +316,8 @@ def report(data, out):
          f"{len(X)} designs × {st['replicates']} beds: Sobol start of {st['n_start']}, "
          f"{st['rounds']} batches of {st['batch']} by Thompson sampling on the Gaussian process "
          f"({sr.attrs['kernel']}). Recommended Lz = {sr.attrs['best_x'][0]:.4g} m (posterior "
-         f"worst-case C_eq {sr.attrs['best_pred']:.4g} ± {sr.attrs['best_pred_sd']:.2g} N s/m); "
+         "worst-case C_eq "
+         f"{scaffold.pm(sr.attrs['best_pred'], sr.attrs['best_pred_sd'], '.4g', '.2g')} N s/m); "
          f"cost {sr.attrs['sim_seconds']:.4g} DEM system-seconds (settling included), "
          f"{sr.attrs['wall'] / 60:.1f} min wall.", "",
          "## B. Confirmation on fresh beds", "",
@@ -339,10 +341,11 @@ def report(data, out):
     stat = np.asarray(c["stationary"])
     each = np.asarray(c["stationary_each"]) if "stationary_each" in c else None
     L += ["", f"- Worst case, envelope − single-point (Welch 95 % on each design's worst point): "
-          f"{v['worst_difference']:+.3g} ± {v['worst_ci']:.2g} N s/m: the envelope design "
+          f"{scaffold.pm(v['worst_difference'], v['worst_ci'], '+.3g', '.2g', unit='N s/m')}: "
+          "the envelope design "
           f"**{v['worst']}** by the rule (interval above zero: wins; below: loses).",
-          f"- Envelope mean, envelope − single-point: {v['mean_difference']:+.3g} ± "
-          f"{v['mean_ci']:.2g} N s/m.",
+          "- Envelope mean, envelope − single-point: "
+          f"{scaffold.pm(v['mean_difference'], v['mean_ci'], '+.3g', '.2g', unit='N s/m')}.",
           f"- Steady state detected in {int(stat.sum())} of {stat.size} confirmation beds at "
           "every point" + ("" if each is None else f", at {int(each.sum())} of {each.size} "
                            "(point, bed) runs") + " (the rest: the final window's mean).", "",

@@ -146,7 +146,8 @@ def report(data, out):
         L += ["", "- Marginal damping per unit mass ratio between successive fills: "
               + ", ".join(f"{x:.4g}" for x in gain) + " N s/m.",
               f"- C_eq / μ at the largest fill − at the smallest (Welch 95 %): "
-              f"{d:+.4g} ± {h:.2g} N s/m ({100 * d / np.mean(C[0] / mu[0]):+.1f} %).", ""]
+              f"{scaffold.pm(d, h, '+.4g', '.2g', unit='N s/m')} "
+              f"({100 * d / np.mean(C[0] / mu[0]):+.1f} %).", ""]
     a1.set(xlabel="mass ratio μ = m_grains / M [-]", ylabel="C_eq at the optimal Lz [N s/m]",
            title="damping–mass front (± 1.96 SE)")
     a1.legend(fontsize=8)
