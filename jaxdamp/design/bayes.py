@@ -49,6 +49,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from jaxdamp.analysis.stats import t_quantile
+from jaxdamp.analysis.uncertainty import standard_error
 from jaxdamp.config import ConfigError
 from jaxdamp.design.status import FAILED, NOT_CONVERGED, Status
 
@@ -231,8 +232,7 @@ class ToyProblem:
         sdv = self.noise * (1.0 + self.hetero * X[:, 0])
         J = true[:, None] + sdv[:, None] * self.rng.standard_normal((len(X), replicates))
         self.sim_seconds += len(X) * replicates
-        se = J.std(axis=1, ddof=1) / np.sqrt(replicates) if replicates > 1 else \
-            np.full(len(X), np.nan)
+        se = standard_error(J, axis=1)  # NaN with one replicate
         half = t_quantile(0.975, replicates - 1) * se if replicates > 1 else se
         return {"mean": J.mean(axis=1), "se": se, "ci95": half, "J": J,
                 "sim_seconds": float(len(X) * replicates)}
