@@ -468,6 +468,20 @@ class DesignProblem:
         n)`` at the conditions (the objective's frequencies)."""
         return self.objective.combine(Z, E, self.freqs)
 
+    #: Beds per design of :meth:`scan`.
+    scan_replicates = 2
+
+    def scan(self, xs):
+        """The searches' interface in one variable (:func:`jaxdamp.design.search.trust_region`,
+        :func:`~jaxdamp.design.search.adaptive_scan`): every design of ``xs`` on
+        :attr:`scan_replicates` fresh beds, ``(mean (L,), se (L,), J (L, R))`` (:meth:`evaluate`'s
+        ``J``: each bed's value)."""
+        if self.space.dim != 1 or self.space.variables[0].kind != "real":
+            raise ConfigError(f"scan: one continuous design variable (the space has "
+                              f"{', '.join(self.space.names)})")
+        ev = self.evaluate(np.asarray(xs, float)[:, None], self.scan_replicates)
+        return ev["mean"], ev["se"], ev["J"]
+
     def cost_per_system(self) -> float:
         """Simulated system-seconds of one design evaluated once (run + its bed)."""
         return len(self.conditions) * self.duration + self.settle_time
