@@ -189,33 +189,32 @@ def record(o, path, prov):
         g.create_dataset("round", data=res.round_of)
         g.attrs.update(best_x=res.best_x, best_pred=res.best_pred, best_pred_sd=res.best_pred_sd,
                        kernel=res.kernel, sim_seconds=res.sim_seconds, wall=res.wall)
-        g = h.create_group("confirmation")
-        g.create_dataset("X", data=o["X"]).attrs["units"] = "m"
-        for k in ("C", "Z", "E"):
-            g.create_dataset(k, data=conf[k]).attrs["units"] = {"C": "N s/m", "Z": "m",
-                                                                "E": "J per period"}[k]
+        g = put_confirmation(h, o["X"], conf)
         g.create_dataset("stationary", data=conf["stationary"])
-        g.create_dataset("stationary_each", data=conf["stationary_each"])
         g.create_dataset("envelope_mean", data=o["mean_stat"]).attrs["units"] = "N s/m"
-        g.attrs.update(sim_seconds=conf["sim"])
         g = h.create_group("toy")
         for k in ("gp", "lhs"):
             g.create_dataset(k, data=o["toy"][k])
         g.attrs.update(designs=o["toy"]["designs"])
 
 
+def put_confirmation(h, X, conf):
+    """The group ``confirmation`` of a result file: the designs ``X`` and, per point, design
+    and bed, C_eq, Z, E and whether the steady state was detected; its cost."""
+    g = h.create_group("confirmation")
+    g.create_dataset("X", data=X).attrs["units"] = "m"
+    for k, unit in (("C", "N s/m"), ("Z", "m"), ("E", "J per period")):
+        g.create_dataset(k, data=conf[k]).attrs["units"] = unit
+    g.create_dataset("stationary_each", data=conf["stationary_each"])
+    g.attrs.update(sim_seconds=conf["sim"])
+    return g
+
+
 def record_recheck(o, path, prov):
-    conf = o["conf"]
     with scaffold.data_file(path, prov, mode="recheck", settings=do.encode(o["st"]),
                             envelope=do.encode(o["env"]), labels=do.encode(LABELS),
                             duration=o["duration"], designs_from=o["source"]) as h:
-        g = h.create_group("confirmation")
-        g.create_dataset("X", data=conf["X"]).attrs["units"] = "m"
-        for k in ("C", "Z", "E"):
-            g.create_dataset(k, data=conf[k]).attrs["units"] = {"C": "N s/m", "Z": "m",
-                                                                "E": "J per period"}[k]
-        g.create_dataset("stationary_each", data=conf["stationary_each"])
-        g.attrs.update(sim_seconds=conf["sim"])
+        put_confirmation(h, o["conf"]["X"], o["conf"])
         h.create_dataset("stored_C", data=o["old"]).attrs["units"] = "N s/m"
 
 
