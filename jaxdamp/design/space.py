@@ -1,19 +1,31 @@
 """Designs of several variables: the design space and its replicated DEM objective.
 
-A designer sets more than the box height. :data:`VARIABLES` names the continuous knobs of an
-S1 damper that keep the grains (hence one static ``Model``) and so run together in one batch:
+A designer sets more than the box height. :data:`VARIABLES` names the knobs of an S1 damper.
+Three keep the grains (hence one static ``Model``) and so run together in one batch:
 
 * ``Lz`` — the box height [m];
-* ``base`` — the side of the square base, ``Lx = Ly`` [m] (the same grains in a wider box
-  make a flatter bed);
+* ``base`` — the side of the square base, ``Lx = Ly`` [m], or a cylinder's radius (the same
+  grains in a wider cavity make a flatter bed);
 * ``friction`` — the grains' Coulomb coefficient ``μ`` (every species; grain–grain and, for
   walls without their own material, grain–wall), a coating a designer chooses.
+
+Four change the grains (:data:`SHAPING`; the fill is then stated by mass,
+:func:`stated_by_mass`, and the designs of one grain set run in a batch of their own):
+
+* ``mass_ratio`` — the fill, the grains' mass over the primary's mass;
+* ``radius`` — the grains' radius [m] (one species), at the same mass;
+* ``material`` — the grains' material, categorical over the material table (or the
+  choices given), at the same mass;
+* ``cells`` — the number of identical cells (integer), the mass shared among them.
+
+A discrete variable of ``K`` values takes value ``k`` on ``u ∈ [k/K, (k+1)/K)``.
 
 :class:`DesignSpace` is the box ``[lo, hi]`` of the chosen variables with normalised
 coordinates ``u ∈ [0, 1]^d`` (every optimiser step is taken there, so that metres and a
 friction coefficient are comparable) and **projection** onto the feasible set: the box, and
-the bed must fit, ``Lz ≥ h_bed(base) + margin`` with ``h_bed(b) = h_ref (b_ref / b)²`` (the
-bed's volume is kept; ``h_ref`` measured on settled beds at the reference base).
+the bed must fit, ``Lz ≥ h_bed(x) + margin`` with ``h_bed = h_ref (b_ref / b)²`` (the bed's
+volume is kept; ``h_ref`` measured on settled beds at the reference base) times the fill's,
+the inverse density's and the inverse cell count's ratios to the reference.
 
 :class:`DesignProblem` evaluates the steady objective at scattered designs: every system is
 one design with its **own settled bed** (its own seed, :class:`jaxdamp.studies.grid.Points`),
