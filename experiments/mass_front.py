@@ -30,6 +30,7 @@ from jaxdamp.cases import presets
 from jaxdamp.config import apply_overrides, get_path
 from jaxdamp.design.bayes import batch_search
 from jaxdamp.design.envelope import Envelope, EnvelopeProblem, front
+from jaxdamp.physics.containers import container
 from jaxdamp.studies import scaffold
 
 try:
@@ -55,8 +56,8 @@ def damper(name, s, mu):
     """The preset ``name`` with the settings' overrides, its base scaled by ``base_scale``
     (quick mode: a small cavity) and the fill ``mu``."""
     cfg = apply_overrides(presets.get(CONTAINERS[name]), s["overrides"])
-    keys = ("box.Lx", "box.Ly") if name == "box" else ("container.radius",)
-    scale = {k: float(np.round(get_path(cfg, k) * s["base_scale"], 6)) for k in keys}
+    scale = {k: float(np.round(get_path(cfg, k) * s["base_scale"], 6))
+             for k in container(cfg).base_keys}  # the box's sides or the cylinder's radius
     return apply_overrides(cfg, {**scale, "grains.0.mass_ratio": float(mu)})
 
 
